@@ -1,0 +1,486 @@
+#include "cl_context.h"
+#include "kernel_sources.h"
+
+#include <ctype.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *clvr_cl_error_name(cl_int code)
+{
+    switch (code) {
+#define E(x) case x: return #x;
+        E(CL_SUCCESS) E(CL_DEVICE_NOT_FOUND) E(CL_DEVICE_NOT_AVAILABLE) E(CL_COMPILER_NOT_AVAILABLE)
+        E(CL_MEM_OBJECT_ALLOCATION_FAILURE) E(CL_OUT_OF_RESOURCES) E(CL_OUT_OF_HOST_MEMORY)
+        E(CL_PROFILING_INFO_NOT_AVAILABLE) E(CL_MEM_COPY_OVERLAP) E(CL_IMAGE_FORMAT_MISMATCH)
+        E(CL_IMAGE_FORMAT_NOT_SUPPORTED) E(CL_BUILD_PROGRAM_FAILURE) E(CL_MAP_FAILURE)
+        E(CL_MISALIGNED_SUB_BUFFER_OFFSET) E(CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST)
+        E(CL_COMPILE_PROGRAM_FAILURE) E(CL_LINKER_NOT_AVAILABLE) E(CL_LINK_PROGRAM_FAILURE)
+        E(CL_DEVICE_PARTITION_FAILED) E(CL_KERNEL_ARG_INFO_NOT_AVAILABLE) E(CL_INVALID_VALUE)
+        E(CL_INVALID_DEVICE_TYPE) E(CL_INVALID_PLATFORM) E(CL_INVALID_DEVICE) E(CL_INVALID_CONTEXT)
+        E(CL_INVALID_QUEUE_PROPERTIES) E(CL_INVALID_COMMAND_QUEUE) E(CL_INVALID_HOST_PTR)
+        E(CL_INVALID_MEM_OBJECT) E(CL_INVALID_IMAGE_FORMAT_DESCRIPTOR) E(CL_INVALID_IMAGE_SIZE)
+        E(CL_INVALID_SAMPLER) E(CL_INVALID_BINARY) E(CL_INVALID_BUILD_OPTIONS) E(CL_INVALID_PROGRAM)
+        E(CL_INVALID_PROGRAM_EXECUTABLE) E(CL_INVALID_KERNEL_NAME) E(CL_INVALID_KERNEL_DEFINITION)
+        E(CL_INVALID_KERNEL) E(CL_INVALID_ARG_INDEX) E(CL_INVALID_ARG_VALUE) E(CL_INVALID_ARG_SIZE)
+        E(CL_INVALID_KERNEL_ARGS) E(CL_INVALID_WORK_DIMENSION) E(CL_INVALID_WORK_GROUP_SIZE)
+        E(CL_INVALID_WORK_ITEM_SIZE) E(CL_INVALID_GLOBAL_OFFSET) E(CL_INVALID_EVENT_WAIT_LIST)
+        E(CL_INVALID_EVENT) E(CL_INVALID_OPERATION) E(CL_INVALID_GL_OBJECT) E(CL_INVALID_BUFFER_SIZE)
+        E(CL_INVALID_MIP_LEVEL) E(CL_INVALID_GLOBAL_WORK_SIZE) E(CL_INVALID_PROPERTY)
+        E(CL_INVALID_IMAGE_DESCRIPTOR) E(CL_INVALID_COMPILER_OPTIONS) E(CL_INVALID_LINKER_OPTIONS)
+        E(CL_INVALID_DEVICE_PARTITION_COUNT)
+#undef E
+    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL platform installed)";
+    default: return "unknown OpenCL error";
+    }
+}
+
+clvr_status clvr_cl_fail(clvr_error *err, const char *call, cl_int code, const char *file, int line)
+{
+    clvr_status st = (code == CL_MEM_OBJECT_ALLOCATION_FAILURE || code == CL_OUT_OF_RESOURCES ||
+                      code == CL_INVALID_BUFFER_SIZE)
+                         ? CLVR_ERR_DEVICE_MEMORY
+                         : CLVR_ERR_OPENCL;
+    const char *base = strrchr(file, '/');
+    return clvr_error_set(err, st, "OpenCL call %s failed with %s (%d) at %s:%d%s", call, clvr_cl_error_name(code),
+                          (int)code, base ? base + 1 : file, line,
+                          st == CLVR_ERR_DEVICE_MEMORY
+                              ? "; the device ran out of memory: try a smaller image or mesh, or another --device"
+                              : "");
+}
+
+int clvr_cl_fault(const char *call)
+{
+    const char *f = getenv("CLVR_FAIL");
+    return f && *f && strcmp(f, call) == 0;
+}
+
+/* Injected failures look exactly like the driver's: the wrappers below return
+ * this code instead of calling the driver. */
+#define CLVR_FAULT_CODE(call, code) (clvr_cl_fault(call) ? (code) : CL_SUCCESS)
+
+/* ------------------------------------------------------------ enumeration */
+
+typedef struct device_entry {
+    cl_platform_id platform;
+    cl_device_id device;
+    unsigned p, d;
+    char platform_name[256];
+    char device_name[256];
+    cl_device_type type;
+} device_entry;
+
+/* Lists all devices of all platforms into a malloc'ed array. */
+static clvr_status enumerate(device_entry **out, unsigned *count, clvr_error *err)
+{
+    cl_uint np = 0;
+    cl_platform_id *plats = NULL;
+    device_entry *list = NULL;
+    unsigned n = 0, cap = 0;
+    clvr_status s = CLVR_OK;
+    cl_int rc = CLVR_FAULT_CODE("clGetPlatformIDs", -1001);
+    if (rc == CL_SUCCESS) rc = clGetPlatformIDs(0, NULL, &np);
+    if (rc == -1001 || (rc == CL_SUCCESS && np == 0)) {
+        s = clvr_error_set(err, CLVR_ERR_NO_DEVICE,
+                           "no OpenCL platform is installed; install one, e.g. PoCL for the CPU "
+                           "(tools/setup-debian.sh, or apt-get install pocl-opencl-icd)");
+        goto cleanup;
+    }
+    CLVR_CL_CHECK(rc);
+    plats = calloc(np, sizeof *plats);
+    if (!plats) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory listing platforms"); goto cleanup; }
+    CLVR_CL_CHECK(clGetPlatformIDs(np, plats, NULL));
+    for (cl_uint p = 0; p < np; ++p) {
+        cl_uint nd = 0;
+        char pname[256] = "";
+        clGetPlatformInfo(plats[p], CL_PLATFORM_NAME, sizeof pname, pname, NULL);
+        if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 0, NULL, &nd) != CL_SUCCESS || nd == 0) continue;
+        cl_device_id *devs = calloc(nd, sizeof *devs);
+        if (!devs) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory listing devices"); goto cleanup; }
+        if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, nd, devs, NULL) != CL_SUCCESS) nd = 0;
+        for (cl_uint d = 0; d < nd; ++d) {
+            if (n == cap) {
+                cap = cap ? 2 * cap : 8;
+                device_entry *grown = realloc(list, cap * sizeof *list);
+                if (!grown) { free(devs); s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory"); goto cleanup; }
+                list = grown;
+            }
+            device_entry *e = &list[n++];
+            memset(e, 0, sizeof *e);
+            e->platform = plats[p];
+            e->device = devs[d];
+            e->p = p;
+            e->d = d;
+            snprintf(e->platform_name, sizeof e->platform_name, "%s", pname);
+            clGetDeviceInfo(devs[d], CL_DEVICE_NAME, sizeof e->device_name, e->device_name, NULL);
+            clGetDeviceInfo(devs[d], CL_DEVICE_TYPE, sizeof e->type, &e->type, NULL);
+        }
+        free(devs);
+    }
+    if (n == 0)
+        s = clvr_error_set(err, CLVR_ERR_NO_DEVICE,
+                           "OpenCL platforms exist but none has a device; install a driver, e.g. pocl-opencl-icd");
+cleanup:
+    free(plats);
+    if (s != CLVR_OK) { free(list); list = NULL; n = 0; }
+    *out = list;
+    *count = n;
+    return s;
+}
+
+static const char *type_name(cl_device_type t)
+{
+    if (t & CL_DEVICE_TYPE_GPU) return "GPU";
+    if (t & CL_DEVICE_TYPE_CPU) return "CPU";
+    if (t & CL_DEVICE_TYPE_ACCELERATOR) return "accelerator";
+    return "other";
+}
+
+clvr_status clvr_cl_list_devices(FILE *out, clvr_error *err)
+{
+    device_entry *list;
+    unsigned n;
+    clvr_status s = enumerate(&list, &n, err);
+    if (s != CLVR_OK) return s;
+    cl_platform_id last = NULL;
+    for (unsigned i = 0; i < n; ++i) {
+        const device_entry *e = &list[i];
+        if (e->platform != last) {
+            char vendor[256] = "", version[256] = "";
+            clGetPlatformInfo(e->platform, CL_PLATFORM_VENDOR, sizeof vendor, vendor, NULL);
+            clGetPlatformInfo(e->platform, CL_PLATFORM_VERSION, sizeof version, version, NULL);
+            fprintf(out, "platform %u: %s (%s, %s)\n", e->p, e->platform_name, vendor, version);
+            last = e->platform;
+        }
+        char vendor[256] = "", version[256] = "", driver[256] = "";
+        cl_uint cu = 0;
+        cl_ulong mem = 0, alloc = 0;
+        clGetDeviceInfo(e->device, CL_DEVICE_VENDOR, sizeof vendor, vendor, NULL);
+        clGetDeviceInfo(e->device, CL_DEVICE_VERSION, sizeof version, version, NULL);
+        clGetDeviceInfo(e->device, CL_DRIVER_VERSION, sizeof driver, driver, NULL);
+        clGetDeviceInfo(e->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, NULL);
+        clGetDeviceInfo(e->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
+        clGetDeviceInfo(e->device, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof alloc, &alloc, NULL);
+        fprintf(out,
+                "  device %u:%u  %s\n"
+                "      type %s, vendor %s, %s, driver %s\n"
+                "      %u compute units, %.2f GiB global memory, %.2f GiB max allocation\n",
+                e->p, e->d, e->device_name, type_name(e->type), vendor, version, driver, cu,
+                (double)mem / (1024.0 * 1024.0 * 1024.0), (double)alloc / (1024.0 * 1024.0 * 1024.0));
+    }
+    free(list);
+    return CLVR_OK;
+}
+
+static int contains_nocase(const char *hay, const char *needle)
+{
+    size_t nl = strlen(needle);
+    for (const char *h = hay; *h; ++h) {
+        size_t k = 0;
+        while (k < nl && h[k] && tolower((unsigned char)h[k]) == tolower((unsigned char)needle[k])) ++k;
+        if (k == nl) return 1;
+    }
+    return nl == 0;
+}
+
+static int is_pocl(const device_entry *e)
+{
+    return contains_nocase(e->platform_name, "portable computing language") || contains_nocase(e->platform_name, "pocl");
+}
+
+/* Returns the index of the device matching spec, or -1. */
+static int pick(const device_entry *list, unsigned n, const char *spec)
+{
+    if (!spec || !*spec) {
+        for (unsigned i = 0; i < n; ++i) if (list[i].type & CL_DEVICE_TYPE_GPU) return (int)i;
+        for (unsigned i = 0; i < n; ++i) if (is_pocl(&list[i])) return (int)i;
+        return n ? 0 : -1;
+    }
+    unsigned p, d;
+    char tail;
+    if (sscanf(spec, "%u:%u%c", &p, &d, &tail) == 2) {
+        for (unsigned i = 0; i < n; ++i) if (list[i].p == p && list[i].d == d) return (int)i;
+        return -1;
+    }
+    if (strcmp(spec, "pocl") == 0) {
+        for (unsigned i = 0; i < n; ++i) if (is_pocl(&list[i])) return (int)i;
+        return -1;
+    }
+    if (strcmp(spec, "gpu") == 0 || strcmp(spec, "cpu") == 0) {
+        cl_device_type want = spec[0] == 'g' ? CL_DEVICE_TYPE_GPU : CL_DEVICE_TYPE_CPU;
+        for (unsigned i = 0; i < n; ++i) if (list[i].type & want) return (int)i;
+        return -1;
+    }
+    for (unsigned i = 0; i < n; ++i)
+        if (contains_nocase(list[i].device_name, spec) || contains_nocase(list[i].platform_name, spec)) return (int)i;
+    return -1;
+}
+
+clvr_status clvr_cl_create(const char *spec, clvr_cl *out, clvr_error *err)
+{
+    device_entry *list = NULL;
+    unsigned n = 0;
+    clvr_status s;
+    cl_int rc;
+    memset(out, 0, sizeof *out);
+    out->kernel_dir = getenv("CLVR_KERNEL_DIR");
+    if (out->kernel_dir && !*out->kernel_dir) out->kernel_dir = NULL;
+    CLVR_TRY(enumerate(&list, &n, err));
+    int i = pick(list, n, spec);
+    if (i < 0) {
+        char avail[768] = "";
+        size_t used = 0;
+        for (unsigned k = 0; k < n && used < sizeof avail - 1; ++k)
+            used += (size_t)snprintf(avail + used, sizeof avail - used, "%s%u:%u %s (%s)", k ? "; " : "", list[k].p,
+                                     list[k].d, list[k].device_name, list[k].platform_name);
+        s = clvr_error_set(err, CLVR_ERR_NO_DEVICE,
+                           "--device %s matches no OpenCL device; available: %s (see clvr --list-devices)", spec,
+                           avail);
+        goto cleanup;
+    }
+    out->platform = list[i].platform;
+    out->device = list[i].device;
+    out->device_type = list[i].type;
+    snprintf(out->platform_name, sizeof out->platform_name, "%s", list[i].platform_name);
+    snprintf(out->device_name, sizeof out->device_name, "%s", list[i].device_name);
+    clGetDeviceInfo(out->device, CL_DEVICE_VERSION, sizeof out->device_version, out->device_version, NULL);
+    clGetDeviceInfo(out->device, CL_DRIVER_VERSION, sizeof out->driver_version, out->driver_version, NULL);
+    CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof out->global_mem_bytes,
+                                  &out->global_mem_bytes, NULL));
+    CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof out->max_alloc_bytes,
+                                  &out->max_alloc_bytes, NULL));
+    CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof out->max_work_group_size,
+                                  &out->max_work_group_size, NULL));
+    CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof out->compute_units,
+                                  &out->compute_units, NULL));
+    rc = CLVR_FAULT_CODE("clCreateContext", CL_OUT_OF_HOST_MEMORY);
+    if (rc == CL_SUCCESS) out->context = clCreateContext(NULL, 1, &out->device, NULL, NULL, &rc);
+    CLVR_CL_CHECK(rc);
+    out->queue = clCreateCommandQueue(out->context, out->device, CL_QUEUE_PROFILING_ENABLE, &rc);
+    CLVR_CL_CHECK(rc);
+cleanup:
+    free(list);
+    if (s != CLVR_OK) clvr_cl_destroy(out);
+    return s;
+}
+
+void clvr_cl_destroy(clvr_cl *cl)
+{
+    if (!cl) return;
+    if (cl->queue) clReleaseCommandQueue(cl->queue);
+    if (cl->context) clReleaseContext(cl->context);
+    cl->queue = NULL;
+    cl->context = NULL;
+}
+
+/* ------------------------------------------------------------ programs */
+
+typedef struct strbuf {
+    char *p;
+    size_t n, cap;
+} strbuf;
+
+static int sb_append(strbuf *b, const char *s, size_t n)
+{
+    if (b->n + n + 1 > b->cap) {
+        size_t cap = b->cap ? b->cap : 4096;
+        while (cap < b->n + n + 1) cap *= 2;
+        char *q = realloc(b->p, cap);
+        if (!q) return 1;
+        b->p = q;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, s, n);
+    b->n += n;
+    b->p[b->n] = 0;
+    return 0;
+}
+
+static int sb_printf(strbuf *b, const char *fmt, ...)
+{
+    char tmp[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    return k < 0 ? 1 : sb_append(b, tmp, (size_t)k < sizeof tmp ? (size_t)k : sizeof tmp - 1);
+}
+
+/* Reads kernels/<name> from disk (developer mode) or the embedded table.
+ * Returns malloc'ed text or NULL. */
+static char *read_source(const clvr_cl *cl, const char *name)
+{
+    if (cl->kernel_dir) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", cl->kernel_dir, name);
+        FILE *f = fopen(path, "rb");
+        if (!f) return NULL;
+        strbuf b = {0};
+        char chunk[65536];
+        size_t k;
+        while ((k = fread(chunk, 1, sizeof chunk, f)) > 0)
+            if (sb_append(&b, chunk, k)) { free(b.p); fclose(f); return NULL; }
+        fclose(f);
+        if (!b.p) sb_append(&b, "", 0);
+        return b.p;
+    }
+    for (unsigned i = 0; i < clvr_kernel_source_count; ++i)
+        if (strcmp(clvr_kernel_sources[i].name, name) == 0) {
+            char *t = malloc(clvr_kernel_sources[i].size + 1);
+            if (t) memcpy(t, clvr_kernel_sources[i].text, clvr_kernel_sources[i].size + 1);
+            return t;
+        }
+    return NULL;
+}
+
+/* Expands local `#include "x"` lines recursively (each file once, like
+ * #pragma once), framing every file with #line markers. */
+static clvr_status expand(const clvr_cl *cl, const char *name, strbuf *out, strbuf *seen, int depth, clvr_error *err)
+{
+    if (depth > 16) return clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "kernels/%s: includes nest too deeply", name);
+    char key[300];
+    snprintf(key, sizeof key, "|%s|", name);
+    if (seen->p && strstr(seen->p, key)) return CLVR_OK;
+    if (sb_append(seen, key, strlen(key))) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory");
+    char *text = read_source(cl, name);
+    if (!text)
+        return clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "kernel source kernels/%s not found%s%s", name,
+                              cl->kernel_dir ? " in CLVR_KERNEL_DIR=" : " among the embedded sources",
+                              cl->kernel_dir ? cl->kernel_dir : "");
+    clvr_status s = CLVR_OK;
+    int line = 1;
+    sb_printf(out, "#line 1 \"%s\"\n", name);
+    for (char *p = text; *p && s == CLVR_OK;) {
+        char *eol = strchr(p, '\n');
+        size_t len = eol ? (size_t)(eol - p) : strlen(p);
+        const char *q = p;
+        while (q < p + len && (*q == ' ' || *q == '\t')) ++q;
+        char inc[256];
+        if (sscanf(q, "#include \"%255[^\"]\"", inc) == 1) {
+            s = expand(cl, inc, out, seen, depth + 1, err);
+            sb_printf(out, "#line %d \"%s\"\n", line + 1, name);
+        } else {
+            if (sb_append(out, p, len) || sb_append(out, "\n", 1))
+                s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory");
+        }
+        ++line;
+        p = eol ? eol + 1 : p + len;
+    }
+    free(text);
+    return s;
+}
+
+clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, cl_program *out, clvr_error *err)
+{
+    strbuf src = {0}, seen = {0}, opts = {0};
+    cl_program prog = NULL;
+    clvr_status s = CLVR_OK;
+    cl_int rc;
+    *out = NULL;
+    CLVR_TRY(expand(cl, entry, &src, &seen, 0, err));
+    const char *text = src.p;
+    prog = clCreateProgramWithSource(cl->context, 1, &text, NULL, &rc);
+    CLVR_CL_CHECK(rc);
+    sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
+              options ? options : "");
+    rc = CLVR_FAULT_CODE("clBuildProgram", CL_BUILD_PROGRAM_FAILURE);
+    if (rc == CL_SUCCESS) rc = clBuildProgram(prog, 1, &cl->device, opts.p, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        size_t logsize = 0;
+        clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &logsize);
+        char *log = malloc(logsize + 1);
+        if (log) {
+            log[0] = 0;
+            clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, logsize, log, NULL);
+            log[logsize] = 0;
+        }
+        if (clvr_cl_fault("clBuildProgram") && log) snprintf(log, logsize + 1, "%s", "(injected by CLVR_FAIL)");
+        s = clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "building kernels/%s for %s failed (%s):\n%s", entry,
+                           cl->device_name, clvr_cl_error_name(rc), log && *log ? log : "(empty build log)");
+        free(log);
+        goto cleanup;
+    }
+    *out = prog;
+    prog = NULL;
+cleanup:
+    if (prog) clReleaseProgram(prog);
+    free(src.p);
+    free(seen.p);
+    free(opts.p);
+    return s;
+}
+
+clvr_status clvr_cl_kernel(cl_program prog, const char *name, cl_kernel *out, clvr_error *err)
+{
+    cl_int rc;
+    *out = clCreateKernel(prog, name, &rc);
+    if (rc != CL_SUCCESS) {
+        *out = NULL;
+        return clvr_error_set(err, CLVR_ERR_OPENCL, "clCreateKernel(%s) failed with %s", name, clvr_cl_error_name(rc));
+    }
+    return CLVR_OK;
+}
+
+/* ------------------------------------------------------------ buffers */
+
+clvr_status clvr_cl_buffer(clvr_cl *cl, cl_mem_flags flags, size_t bytes, void *host_ptr, const char *what,
+                           cl_mem *out, clvr_error *err)
+{
+    cl_int rc;
+    size_t n = bytes ? bytes : 16;
+    *out = NULL;
+    if ((cl_ulong)n > cl->max_alloc_bytes)
+        return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
+                              "%s needs %.3f GB in one buffer but %s allows at most %.3f GB per buffer "
+                              "(CL_DEVICE_MAX_MEM_ALLOC_SIZE); use a smaller mesh or image, or another --device",
+                              what, (double)n / 1e9, cl->device_name, (double)cl->max_alloc_bytes / 1e9);
+    if ((cl_ulong)n + cl->allocated_bytes > cl->global_mem_bytes)
+        return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
+                              "%s needs %.3f GB more device memory but %s has %.3f GB and %.3f GB is in use; "
+                              "use a smaller mesh or image, or another --device",
+                              what, (double)n / 1e9, cl->device_name, (double)cl->global_mem_bytes / 1e9,
+                              (double)cl->allocated_bytes / 1e9);
+    rc = CLVR_FAULT_CODE("clCreateBuffer", CL_MEM_OBJECT_ALLOCATION_FAILURE);
+    if (rc == CL_SUCCESS) *out = clCreateBuffer(cl->context, flags, n, bytes ? host_ptr : NULL, &rc);
+    if (rc != CL_SUCCESS) {
+        *out = NULL;
+        return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY, "clCreateBuffer for %s (%.3f GB) failed with %s on %s",
+                              what, (double)n / 1e9, clvr_cl_error_name(rc), cl->device_name);
+    }
+    cl->allocated_bytes += n;
+    return CLVR_OK;
+}
+
+void clvr_cl_release(clvr_cl *cl, cl_mem *buf)
+{
+    if (!buf || !*buf) return;
+    size_t n = 0;
+    if (clGetMemObjectInfo(*buf, CL_MEM_SIZE, sizeof n, &n, NULL) == CL_SUCCESS && cl && cl->allocated_bytes >= n)
+        cl->allocated_bytes -= n;
+    clReleaseMemObject(*buf);
+    *buf = NULL;
+}
+
+clvr_status clvr_cl_run1d(clvr_cl *cl, cl_kernel k, size_t n, size_t local, cl_event *evt, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    if (evt) *evt = NULL;
+    if (n == 0) return CLVR_OK;
+    if (local == 0) local = 64;
+    size_t global = (n + local - 1) / local * local;
+    cl_int rc = CLVR_FAULT_CODE("clEnqueueNDRangeKernel", CL_OUT_OF_RESOURCES);
+    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 1, NULL, &global, &local, 0, NULL, evt);
+    CLVR_CL_CHECK(rc);
+cleanup:
+    return s;
+}
+
+double clvr_cl_event_seconds(cl_event e)
+{
+    cl_ulong t0 = 0, t1 = 0;
+    if (!e) return 0.0;
+    clWaitForEvents(1, &e);
+    clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_START, sizeof t0, &t0, NULL);
+    clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_END, sizeof t1, &t1, NULL);
+    return t1 > t0 ? (double)(t1 - t0) * 1e-9 : 0.0;
+}

@@ -1,0 +1,55 @@
+/* mesh_io.h: reading meshes from files and writing clvr's own .bin.
+ * Files are untrusted: every reader checks magic, version, counts and
+ * offset + count * size <= file size before reading, and reports a distinct
+ * status with a message naming the file, the field and the fix.
+ * The .bin layout is specified in docs/bin-format.md. */
+#ifndef CLVR_MESH_IO_H
+#define CLVR_MESH_IO_H
+
+#include "mesh.h"
+
+typedef struct clvr_load_options {
+    const char *scalar_name;  /* attribute to use as the scalar; NULL: the file's first/only one */
+    int skip_validation;      /* nonzero: do not run clvr_mesh_validate (fuzzing, --info of broken files) */
+} clvr_load_options;
+
+/* Loads any supported file, chosen by content (magic) and then extension:
+ * .bin (clvr), .umesh (magics 0x234235566..0x234235569), legacy VTK .vtk
+ * unstructured grids (ASCII and binary; cell types 10, 12, 13, 14).
+ * On success *out owns its arrays (clvr_mesh_free), ranges are set and the
+ * mesh has been validated unless opt->skip_validation. opt may be NULL. */
+clvr_status clvr_mesh_load(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err);
+
+clvr_status clvr_mesh_load_bin(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err);
+clvr_status clvr_mesh_load_umesh(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err);
+clvr_status clvr_mesh_load_vtk(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err);
+
+/* Parsers over a memory buffer (what the fuzz targets call); `name` is used
+ * in messages only. Same contracts as the file loaders. */
+clvr_status clvr_mesh_parse_bin(const void *data, size_t size, const char *name, const clvr_load_options *opt,
+                                clvr_mesh *out, clvr_error *err);
+clvr_status clvr_mesh_parse_umesh(const void *data, size_t size, const char *name, const clvr_load_options *opt,
+                                  clvr_mesh *out, clvr_error *err);
+clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name, const clvr_load_options *opt,
+                                clvr_mesh *out, clvr_error *err);
+
+/* Writes m as .bin: to "path.tmp.<pid>" first, renamed onto path only when
+ * complete, so a failure never leaves a partial file or harms an older one. */
+clvr_status clvr_mesh_save_bin(const char *path, const clvr_mesh *m, clvr_error *err);
+
+/* Streaming .bin writer for generators that cannot hold the mesh: counts are
+ * fixed at open; the arrays may be appended in chunks, each array's chunks in
+ * order, arrays in any order (each has a known offset). close() checks that
+ * every array is complete, patches bounds and scalar range into the header,
+ * and renames the temporary file onto path. abort() removes it. */
+typedef struct clvr_bin_writer clvr_bin_writer;
+clvr_status clvr_bin_writer_open(const char *path, uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                                 const char *scalar_name, clvr_bin_writer **out, clvr_error *err);
+clvr_status clvr_bin_writer_positions(clvr_bin_writer *w, const float *xyz, uint64_t num_vertices, clvr_error *err);
+clvr_status clvr_bin_writer_scalars(clvr_bin_writer *w, const float *s, uint64_t num_vertices, clvr_error *err);
+clvr_status clvr_bin_writer_cells(clvr_bin_writer *w, uint32_t type, const uint32_t *idx, uint64_t num_cells,
+                                  clvr_error *err);
+clvr_status clvr_bin_writer_close(clvr_bin_writer *w, clvr_error *err); /* frees w in all cases */
+void clvr_bin_writer_abort(clvr_bin_writer *w);                          /* accepts NULL */
+
+#endif /* CLVR_MESH_IO_H */

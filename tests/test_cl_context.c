@@ -1,0 +1,98 @@
+/* Proves the OpenCL runtime: device selection by every spec form, a clear
+ * error for a spec that matches nothing, embedded-source builds with include
+ * expansion, build-log reporting, shared-struct layout agreement, and fault
+ * injection through CLVR_FAIL. */
+#include "cl_context.h"
+#include "clvr_shared.h"
+#include "test_util.h"
+
+int main(void)
+{
+    clvr_cl cl;
+    clvr_error err = {0};
+    tu_open_device(&cl);
+
+    /* Every spec form finds the PoCL device that the test machine has. */
+    const char *specs[] = {"pocl", "cpu", "0:0", "portable"};
+    for (unsigned i = 0; i < sizeof specs / sizeof specs[0]; ++i) {
+        clvr_cl other;
+        TU_CHECK_STATUS(clvr_cl_create(specs[i], &other, &err), CLVR_OK, &err);
+        clvr_cl_destroy(&other);
+    }
+    {
+        clvr_cl none;
+        TU_CHECK_STATUS(clvr_cl_create("no-such-device-xyz", &none, &err), CLVR_ERR_NO_DEVICE, &err);
+        TU_CHECK(strstr(err.msg, "no-such-device-xyz") != NULL && strstr(err.msg, "available") != NULL);
+        TU_CHECK_STATUS(clvr_cl_create("9:9", &none, &err), CLVR_ERR_NO_DEVICE, &err);
+    }
+
+    /* The embedded program builds and runs; shared struct sizes agree. */
+    cl_program prog = NULL;
+    TU_CHECK_STATUS(clvr_cl_build(&cl, "selftest.cl", NULL, &prog, &err), CLVR_OK, &err);
+    if (prog) {
+        enum { N = 1031 }; /* prime, not a multiple of any work-group size */
+        float a[N], b[N], c[N];
+        for (int i = 0; i < N; ++i) { a[i] = (float)i; b[i] = 0.5f * (float)i; c[i] = -1.0f; }
+        cl_mem ba, bb, bc, bs;
+        cl_kernel k, ks;
+        TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof a, a, "a", &ba, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof b, b, "b", &bb, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_WRITE_ONLY, sizeof c, NULL, "c", &bc, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_WRITE_ONLY, 2 * sizeof(cl_uint), NULL, "sizes", &bs, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_cl_kernel(prog, "clvr_selftest_add", &k, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_cl_kernel(prog, "clvr_selftest_sizes", &ks, &err), CLVR_OK, &err);
+        cl_uint n = N;
+        clSetKernelArg(k, 0, sizeof ba, &ba);
+        clSetKernelArg(k, 1, sizeof bb, &bb);
+        clSetKernelArg(k, 2, sizeof bc, &bc);
+        clSetKernelArg(k, 3, sizeof n, &n);
+        TU_CHECK_STATUS(clvr_cl_run1d(&cl, k, N, 64, NULL, &err), CLVR_OK, &err);
+        clEnqueueReadBuffer(cl.queue, bc, CL_TRUE, 0, sizeof c, c, 0, NULL, NULL);
+        int bad = 0;
+        for (int i = 0; i < N; ++i) bad += c[i] != 1.5f * (float)i;
+        TU_CHECK_EQ_U64(bad, 0);
+        clSetKernelArg(ks, 0, sizeof bs, &bs);
+        TU_CHECK_STATUS(clvr_cl_run1d(&cl, ks, 1, 1, NULL, &err), CLVR_OK, &err);
+        cl_uint sizes[2] = {0, 0};
+        clEnqueueReadBuffer(cl.queue, bs, CL_TRUE, 0, sizeof sizes, sizes, 0, NULL, NULL);
+        TU_CHECK_EQ_U64(sizes[0], sizeof(clvr_box));
+        TU_CHECK_EQ_U64(sizes[1], 8);
+        clReleaseKernel(k);
+        clReleaseKernel(ks);
+        clvr_cl_release(&cl, &ba);
+        clvr_cl_release(&cl, &bb);
+        clvr_cl_release(&cl, &bc);
+        clvr_cl_release(&cl, &bs);
+        TU_CHECK_EQ_U64(cl.allocated_bytes, 0);
+        clReleaseProgram(prog);
+    }
+
+    /* A missing entry file and a build failure both produce clear messages. */
+    TU_CHECK_STATUS(clvr_cl_build(&cl, "missing.cl", NULL, &prog, &err), CLVR_ERR_KERNEL_BUILD, &err);
+    TU_CHECK(strstr(err.msg, "missing.cl") != NULL);
+    TU_CHECK_STATUS(clvr_cl_build(&cl, "selftest.cl", "-DCLVR_NO_SUCH_TYPE=1 -Dfloat=nosuchtype", &prog, &err),
+                    CLVR_ERR_KERNEL_BUILD, &err);
+    TU_CHECK(strstr(err.msg, "selftest.cl") != NULL);
+
+    /* Oversized buffers are refused with the numbers, before the driver sees them. */
+    cl_mem big;
+    TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_WRITE, (size_t)cl.max_alloc_bytes + 1, NULL, "test buffer", &big, &err),
+                    CLVR_ERR_DEVICE_MEMORY, &err);
+    TU_CHECK(strstr(err.msg, "test buffer") != NULL && strstr(err.msg, "GB") != NULL);
+
+    /* Fault injection makes a chosen call fail as a driver would. */
+    setenv("CLVR_FAIL", "clBuildProgram", 1);
+    TU_CHECK_STATUS(clvr_cl_build(&cl, "selftest.cl", NULL, &prog, &err), CLVR_ERR_KERNEL_BUILD, &err);
+    setenv("CLVR_FAIL", "clCreateBuffer", 1);
+    TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_WRITE, 64, NULL, "small", &big, &err), CLVR_ERR_DEVICE_MEMORY, &err);
+    setenv("CLVR_FAIL", "clGetPlatformIDs", 1);
+    {
+        clvr_cl none;
+        TU_CHECK_STATUS(clvr_cl_create("pocl", &none, &err), CLVR_ERR_NO_DEVICE, &err);
+        TU_CHECK(strstr(err.msg, "pocl-opencl-icd") != NULL);
+    }
+    unsetenv("CLVR_FAIL");
+
+    clvr_cl_destroy(&cl);
+    return tu_finish("test_cl_context");
+}
