@@ -60,6 +60,57 @@ typedef struct clvr_box {
 } clvr_box;
 CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
 
+/* ---------------------------------------------------------------- clustered mesh
+ * The contract between preprocessing (which writes it), bvh/ (which builds
+ * trees over it) and the renderer (which reads it). Decisions, see DESIGN:
+ * - Each element type is sorted along its own Hilbert curve (same
+ *   quantization grid: the mesh bounds), so every cluster holds one element
+ *   type and elements are addressed with a fixed stride, no per-element tag.
+ * - Global sorted element ids are the concatenation of the four sorted
+ *   lists: tets [0, T), pyramids [T, T+P), wedges, hexes.
+ * - Instance clusters are consecutive runs of one type's sorted elements
+ *   whose referenced vertex count stays below 2^16 (then 16-bit indices) or
+ *   that fall back to 32-bit indices. Their vertices are copied (duplicates
+ *   across clusters kept, as in the paper) into one array of float4
+ *   (x, y, z, scalar), so one load gives position and value.
+ * - Leaf clusters are consecutive runs of leaf_size elements inside one
+ *   instance (the last one may be shorter); leaf i of instance c covers
+ *   elements c.first_element + (i - c.first_leaf) * leaf_size, ... .
+ * - Sampling clusters are consecutive runs of sampling_size elements inside
+ *   one element type, with bounds and the scalar range of their vertices. */
+
+/* Per-axis bits of the space-filling-curve keys (48-bit keys, as the paper). */
+#define CLVR_SFC_BITS 16u
+/* Instance clusters use 16-bit local indices when they reference fewer than
+ * this many vertices. */
+#define CLVR_INSTANCE_MAX_VERTS16 65536u
+
+typedef struct clvr_instance {
+    clvr_box bounds;          /* bounds of its elements (w lanes zero) */
+    clvr_u32 type;            /* CLVR_CELL_* of every element in it */
+    clvr_u32 index_bits;      /* 16: indices in idx16[]; 32: in idx32[] */
+    clvr_u32 first_element;   /* global sorted element id of its first element */
+    clvr_u32 num_elements;
+    clvr_u32 first_vertex;    /* into the clustered vertex array (float4 x y z scalar) */
+    clvr_u32 num_vertices;
+    clvr_u64 first_index;     /* into idx16[] or idx32[]; element e's indices start at
+                                 first_index + (e - first_element) * vertex_count(type),
+                                 each relative to first_vertex */
+    clvr_u32 first_leaf;      /* its leaf clusters: first_leaf .. first_leaf + num_leaves - 1 */
+    clvr_u32 num_leaves;
+    clvr_u32 bvh_root;        /* root of its bottom-level tree in the BLAS node array (bvh/) */
+    clvr_u32 pad0;
+} clvr_instance;
+CLVR_STATIC_ASSERT(sizeof(clvr_instance) == 80, "clvr_instance layout");
+
+/* A sampling cluster (paper 3.4.1): box with the scalar range in the w lanes:
+ * lo[3] = minimum scalar, hi[3] = maximum scalar of its elements' vertices. */
+typedef struct clvr_sampling_cluster {
+    float lo[4];
+    float hi[4];
+} clvr_sampling_cluster;
+CLVR_STATIC_ASSERT(sizeof(clvr_sampling_cluster) == 32, "clvr_sampling_cluster layout");
+
 /* ---------------------------------------------------------------- preprocess
  * (owned by the preprocessing module: kernels/bounds, sfc, sort, scan,
  * cluster, reindex) */
