@@ -1,9 +1,220 @@
+/* main.c: the clvr command line: load (or generate) a mesh, preprocess it
+ * into Quick Clusters on the OpenCL device, build the two-level BVH, render
+ * progressively and write the image and statistics. Only main() exits. */
+#include <math.h>
+#include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bvh.h"
+#include "camera.h"
 #include "cl_context.h"
+#include "cli.h"
+#include "image.h"
+#include "info.h"
+#include "mesh_io.h"
+#include "preprocess.h"
+#include "render.h"
+#include "scene.h"
+#include "stats.h"
+#include "tf.h"
+
+/* Set by SIGINT/SIGTERM: the render loop stops after the current frame and
+ * the image accumulated so far is written. A signal handler can only talk to
+ * the program through a static flag; this is the one piece of global state. */
+static volatile sig_atomic_t g_interrupted;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_interrupted = 1;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int fail(const clvr_error *err)
+{
+    fprintf(stderr, "clvr: %s\n", err->msg);
+    return clvr_status_exit_code(err->status);
+}
+
+/* Loads MESH or builds the default scene. */
+static clvr_status load_mesh(const clvr_options *o, clvr_mesh *m, clvr_error *err)
+{
+    if (!o->mesh_path) return clvr_scene_default(m, err);
+    clvr_load_options lo = {0};
+    lo.scalar_name = o->scalar_name;
+    return clvr_mesh_load(o->mesh_path, &lo, m, err);
+}
+
 int main(int argc, char **argv)
 {
-    (void)argc; (void)argv;
+    clvr_options o;
     clvr_error err = {0};
-    if (clvr_cl_list_devices(stdout, &err) != CLVR_OK) { fprintf(stderr, "clvr: %s\n", err.msg); return 4; }
-    return 0;
+    clvr_mesh mesh = {0};
+    clvr_cl cl = {0};
+    clvr_clustered clustered = {0};
+    clvr_bvh bvh = {0};
+    clvr_renderer *renderer = NULL;
+    clvr_tf tf = {0};
+    float *table = NULL, *pixels = NULL;
+    clvr_stats stats = {0};
+    int cl_ready = 0, rc = 0;
+    clvr_status s;
+
+    s = clvr_cli_parse(argc, argv, &o, &err);
+    if (s != CLVR_OK) {
+        fprintf(stderr, "clvr: %s\n", err.msg);
+        return clvr_status_exit_code(s);
+    }
+    if (o.help) { clvr_cli_print_help(stdout); return 0; }
+    if (o.version) { printf("clvr %s\n", CLVR_VERSION); return 0; }
+    if (o.list_devices) {
+        s = clvr_cl_list_devices(stdout, &err);
+        return s == CLVR_OK ? 0 : fail(&err);
+    }
+    if (o.kernel_dir) setenv("CLVR_KERNEL_DIR", o.kernel_dir, 1);
+
+    /* --- mesh */
+    double t0 = now_s();
+    s = load_mesh(&o, &mesh, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    stats.load_s = now_s() - t0;
+    const char *mesh_name = o.mesh_path ? o.mesh_path : "(built-in default scene)";
+    if (o.info) {
+        clvr_info_print(stdout, mesh_name, &mesh);
+        if (o.stats_json) {
+            stats.have_mesh = 1;
+            clvr_stats_from_mesh(&stats, &mesh);
+            s = clvr_stats_write_json(o.stats_json, &stats, &err);
+            if (s != CLVR_OK) rc = fail(&err);
+        }
+        goto cleanup;
+    }
+
+    /* --- device */
+    s = clvr_cl_create(o.device, &cl, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    cl_ready = 1;
+    if (!o.quiet)
+        fprintf(stderr, "clvr: %s: %llu elements on %s (%s)\n", mesh_name,
+                (unsigned long long)clvr_mesh_num_elements(&mesh), cl.device_name, cl.platform_name);
+
+    /* --- Quick Clusters */
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    po.leaf_size = o.leaf_size;
+    if (o.sampling_size) po.sampling_size = o.sampling_size;
+    t0 = now_s();
+    s = clvr_preprocess(&cl, &mesh, &po, &clustered, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    s = clvr_bvh_build(&cl, &clustered, &bvh, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    stats.preprocess_s = now_s() - t0;
+    stats.have_mesh = 1;
+    clvr_stats_from_mesh(&stats, &mesh);
+    clvr_stats_from_clusters(&stats, &clustered, &bvh);
+
+    /* --- transfer function and camera */
+    s = clvr_tf_from_options(&tf, o.colormap, o.tf_file, o.range_set, o.range_lo, o.range_hi, o.density,
+                             mesh.scalar_min, mesh.scalar_max, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    clvr_camera cam;
+    if (o.camera_set)
+        s = clvr_camera_look_at(&cam, o.camera, o.camera + 3, o.camera + 6, o.fovy, o.width, o.height, &err);
+    else
+        s = clvr_camera_frame_box(&cam, mesh.bounds_lo, mesh.bounds_hi, o.fovy, o.width, o.height, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+
+    /* The mesh's host copy is no longer needed: the device has it. */
+    clvr_mesh_free(&mesh);
+
+    clvr_render_settings rs;
+    clvr_render_settings_default(&rs);
+    rs.method = (uint32_t)o.method;
+    rs.width = o.width;
+    rs.height = o.height;
+    rs.seed = o.seed;
+    rs.shadows = o.shadows && o.method != CLVR_METHOD_MARCH;
+    rs.step = o.step;
+    rs.bins = o.bins;
+    rs.segments = o.segments;
+    rs.macrocells = o.macrocells;
+    memcpy(rs.light_dir, o.light_dir, sizeof rs.light_dir);
+    rs.light_intensity = o.light_intensity;
+    rs.ambient = o.ambient;
+    memcpy(rs.background, o.background, sizeof rs.background);
+    s = clvr_renderer_create(&cl, &clustered, &bvh, &rs, &renderer, &err);
+    if (s == CLVR_OK) s = clvr_renderer_set_camera(renderer, &cam, &err);
+    if (s == CLVR_OK) {
+        uint32_t n = clvr_tf_table_size(&tf);
+        table = malloc((size_t)n * 4 * sizeof(float));
+        if (!table) s = clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
+        else {
+            clvr_tf_bake(&tf, table, n);
+            s = clvr_renderer_set_tf(renderer, table, n, tf.range_lo, tf.range_hi, tf.density, &err);
+        }
+    }
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+
+    /* --- progressive rendering */
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    double start = now_s(), last_report = start;
+    uint32_t frame = 0;
+    for (; frame < o.spp && !g_interrupted; ++frame) {
+        s = clvr_renderer_frame(renderer, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+        double t = now_s();
+        if (!o.quiet && (t - last_report > 1.0 || frame + 1 == o.spp)) {
+            double per = (t - start) / (frame + 1);
+            fprintf(stderr, "clvr: frame %u/%u, %.2f s/frame, %.0f s left\n", frame + 1, o.spp, per,
+                    per * (o.spp - frame - 1));
+            last_report = t;
+        }
+    }
+    stats.render_wall_s = now_s() - start;
+
+    size_t npix = (size_t)o.width * o.height;
+    pixels = malloc(npix * 4 * sizeof(float));
+    if (!pixels) { clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the image"); rc = fail(&err); goto cleanup; }
+    clvr_render_counters counters;
+    s = clvr_renderer_read(renderer, pixels, &counters, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    s = clvr_image_write(o.output, o.width, o.height, pixels, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    stats.have_render = 1;
+    clvr_stats_from_render(&stats, &counters, (uint32_t)o.method, o.width, o.height);
+    if (!o.quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp)\n", o.output, o.width, o.height, frame);
+    if (o.stats) clvr_stats_print(stdout, &stats);
+    if (o.stats_json) {
+        s = clvr_stats_write_json(o.stats_json, &stats, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    }
+    if (g_interrupted) {
+        fprintf(stderr, "clvr: interrupted after %u of %u frames; the image holds what was accumulated\n", frame,
+                o.spp);
+        rc = 130;
+    }
+
+cleanup:
+    free(pixels);
+    free(table);
+    clvr_renderer_destroy(renderer);
+    if (cl_ready) {
+        clvr_bvh_release(&cl, &bvh);
+        clvr_clustered_release(&cl, &clustered);
+    }
+    clvr_tf_free(&tf);
+    clvr_cl_destroy(&cl);
+    clvr_mesh_free(&mesh);
+    return rc;
 }

@@ -121,4 +121,43 @@ CLVR_STATIC_ASSERT(sizeof(clvr_sampling_cluster) == 32, "clvr_sampling_cluster l
 /* ---------------------------------------------------------------- render
  * (owned by the renderer: camera, transfer function, light, frame params) */
 
+/* ---------------------------------------------------------------- frame
+ * (owned by the renderer: host/render.c, kernels/render.cl) */
+
+/* Methods, the values of clvr_frame.method (same order as host/cli.h). */
+#define CLVR_RENDER_MARCH 0u
+#define CLVR_RENDER_TRACK 1u
+#define CLVR_RENDER_BINS 2u
+#define CLVR_RENDER_DDA 3u
+/* Largest --bins (the paper's 32 ray payload registers). */
+#define CLVR_RENDER_MAX_BINS 32u
+
+/* Everything one frame of the render kernel needs besides the buffers.
+ * Vectors are float[4] with w unused, loaded with vload3. 144 bytes. */
+typedef struct clvr_frame {
+    float vol_lo[4];          /* bounds of the mesh */
+    float vol_hi[4];
+    float light_dir[4];       /* unit vector toward the directional light */
+    float background[4];      /* linear rgb of rays that leave the volume */
+    float ambient;            /* light that reaches every collision */
+    float light_intensity;    /* light from light_dir when the shadow ray gets through */
+    float step;               /* march step, world units */
+    float global_majorant;    /* track: max extinction over the whole volume */
+    float tf_lo, tf_hi;       /* scalar window of the transfer-function table */
+    float density;            /* extinction scale applied to the table's w */
+    clvr_u32 tf_size;         /* entries in the table */
+    clvr_u32 width, height;
+    clvr_u32 frame_index;     /* 0 for the first frame (overwrites the accumulator) */
+    clvr_u32 method;          /* CLVR_RENDER_* */
+    clvr_u32 seed_lo, seed_hi;
+    clvr_u32 shadows;         /* nonzero: shadow rays toward the light */
+    clvr_u32 bins, segments;  /* bins method: N bins per segment, M segments per ray */
+    clvr_u32 grid_res;        /* dda method: macrocells per axis */
+    clvr_u32 leaf_size;       /* elements per leaf cluster */
+    clvr_u32 tlas_root;       /* root node of the top-level tree */
+} clvr_frame;
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 144, "clvr_frame layout");
+
+/* [frame: types] */
+
 #endif /* CLVR_SHARED_H */

@@ -1,0 +1,255 @@
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *method_names[CLVR_METHOD_COUNT] = {"march", "track", "bins", "dda"};
+
+const char *clvr_method_name(clvr_method m)
+{
+    return (unsigned)m < CLVR_METHOD_COUNT ? method_names[m] : "?";
+}
+
+void clvr_cli_print_help(FILE *out)
+{
+    fputs(
+        "usage: clvr [options] [MESH]\n"
+        "\n"
+        "Renders an unstructured volumetric mesh (tets, pyramids, wedges, hexes; one scalar per\n"
+        "vertex) with Monte Carlo delta tracking and volumetric shadows, on any OpenCL device.\n"
+        "Without MESH, renders the built-in procedural scene. MESH: .bin (clvr), .umesh, legacy .vtk;\n"
+        "convert anything else VTK reads with tools/clvr-convert.\n"
+        "\n"
+        "Actions:\n"
+        "  --help                 this text\n"
+        "  --version              print the version\n"
+        "  --list-devices         list OpenCL platforms and devices\n"
+        "  --info                 print counts per element type, bounds, scalar range, bytes; no render\n"
+        "  --stats                print preprocessing and render statistics\n"
+        "  --stats-json FILE      write the same statistics as JSON\n"
+        "  --view                 open the interactive viewer (needs a display)\n"
+        "\n"
+        "Input and device:\n"
+        "  --device SPEC          pocl | cpu | gpu | P:D | substring of a device or platform name\n"
+        "                         (default: the first GPU, else PoCL)\n"
+        "  --scalar NAME          which per-vertex field to render (.umesh, .vtk)\n"
+        "  --kernel-dir DIR       load OpenCL sources from DIR instead of the embedded copies\n"
+        "\n"
+        "Output:\n"
+        "  -o FILE                image file: .png (sRGB), .exr (linear float RGBA), .pfm (float RGB)\n"
+        "                         (default clvr.png)\n"
+        "  --size WxH             image size (default 512x512)\n"
+        "  --spp N                samples per pixel = frames accumulated (default 64)\n"
+        "  --seed N               random seed (default 1); same seed, same image\n"
+        "  --quiet                no progress on stderr\n"
+        "\n"
+        "Rendering:\n"
+        "  --method M             march | track | bins | dda (default dda)\n"
+        "  --shadows on|off       volumetric shadow ray toward the light (default on)\n"
+        "  --step S               march step in world units (default: diagonal / 512)\n"
+        "  --bins N               bins per ray segment for --method bins, 1..32 (default 32)\n"
+        "  --segments M           ray segments for --method bins (default 4)\n"
+        "  --macrocells R         R^3 macrocell grid for --method dda (default 64)\n"
+        "  --leaf-size N          elements per leaf cluster: 1, 4, 8, 16, 32 (default 16)\n"
+        "  --sampling-size N      elements per adaptive sampling cluster (default: automatic)\n"
+        "\n"
+        "Scene:\n"
+        "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"
+        "                         (default: automatic framing of the mesh)\n"
+        "  --fovy DEG             vertical field of view (default 40)\n"
+        "  --colormap NAME        cool-warm | viridis | inferno | grayscale | jet (default cool-warm)\n"
+        "  --tf FILE              transfer function file (clvr text format or ParaView JSON)\n"
+        "  --range LO HI          scalar window mapped by the transfer function (default: data range)\n"
+        "  --density D            extinction scale (default 1)\n"
+        "  --light X,Y,Z          direction toward the directional light (default 1,2,1.5)\n"
+        "  --light-intensity I    (default 1)\n"
+        "  --ambient A            ambient light level (default 0.3)\n"
+        "  --background R,G,B     linear background colour (default 0.05,0.05,0.07)\n"
+        "\n"
+        "Exit status: 0 success, 2 bad command line, 3 bad input file, 4 OpenCL device problem,\n"
+        "5 cannot write output, 1 other errors. Messages go to stderr.\n",
+        out);
+}
+
+static void defaults(clvr_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->output = "clvr.png";
+    o->width = o->height = 512;
+    o->spp = 64;
+    o->seed = 1;
+    o->method = CLVR_METHOD_DDA;
+    o->bins = 32;
+    o->segments = 4;
+    o->macrocells = 64;
+    o->shadows = 1;
+    o->leaf_size = 16;
+    o->fovy = 40.0f;
+    o->colormap = "cool-warm";
+    o->density = 1.0f;
+    o->light_dir[0] = 1.0f;
+    o->light_dir[1] = 2.0f;
+    o->light_dir[2] = 1.5f;
+    o->light_intensity = 1.0f;
+    o->ambient = 0.3f;
+    o->background[0] = 0.05f;
+    o->background[1] = 0.05f;
+    o->background[2] = 0.07f;
+}
+
+static clvr_status parse_u64(const char *opt, const char *v, uint64_t lo, uint64_t hi, uint64_t *out, clvr_error *err)
+{
+    char *end;
+    errno = 0;
+    if (!v || !*v || *v == '-')
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects a whole number in [%llu, %llu], got '%s'", opt,
+                              (unsigned long long)lo, (unsigned long long)hi, v ? v : "");
+    unsigned long long x = strtoull(v, &end, 10);
+    if (errno || *end || x < lo || x > hi)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects a whole number in [%llu, %llu], got '%s'", opt,
+                              (unsigned long long)lo, (unsigned long long)hi, v);
+    *out = x;
+    return CLVR_OK;
+}
+
+static clvr_status parse_u32(const char *opt, const char *v, uint32_t lo, uint32_t hi, uint32_t *out, clvr_error *err)
+{
+    uint64_t x;
+    clvr_status s = parse_u64(opt, v, lo, hi, &x, err);
+    if (s == CLVR_OK) *out = (uint32_t)x;
+    return s;
+}
+
+static clvr_status parse_float(const char *opt, const char *v, float lo, float hi, float *out, clvr_error *err)
+{
+    char *end;
+    errno = 0;
+    float x = v ? strtof(v, &end) : 0.0f;
+    if (!v || !*v || errno || *end || !isfinite(x) || x < lo || x > hi)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects a number in [%g, %g], got '%s'", opt, lo, hi,
+                              v ? v : "");
+    *out = x;
+    return CLVR_OK;
+}
+
+/* Parses "a,b,c,..." with exactly n finite numbers. */
+static clvr_status parse_floats(const char *opt, const char *v, int n, float *out, clvr_error *err)
+{
+    const char *p = v ? v : "";
+    for (int i = 0; i < n; ++i) {
+        char *end;
+        errno = 0;
+        float x = strtof(p, &end);
+        if (end == p || errno || !isfinite(x) || (i + 1 < n ? *end != ',' : *end != 0))
+            return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects %d comma-separated numbers, got '%s'", opt, n,
+                                  v ? v : "");
+        out[i] = x;
+        p = end + 1;
+    }
+    return CLVR_OK;
+}
+
+clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    defaults(o);
+    for (int i = 1; i < argc && s == CLVR_OK; ++i) {
+        const char *a = argv[i];
+        /* value of an option that takes one argument */
+#define NEXT()                                                                                         \
+    (i + 1 < argc ? argv[++i]                                                                          \
+                  : (s = clvr_error_set(err, CLVR_ERR_USAGE, "%s needs a value (see clvr --help)", a), \
+                     (const char *)NULL))
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) o->help = 1;
+        else if (!strcmp(a, "--version")) o->version = 1;
+        else if (!strcmp(a, "--list-devices")) o->list_devices = 1;
+        else if (!strcmp(a, "--info")) o->info = 1;
+        else if (!strcmp(a, "--stats")) o->stats = 1;
+        else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) o->quiet = 1;
+        else if (!strcmp(a, "--view")) o->view = 1;
+        else if (!strcmp(a, "--device")) { const char *v = NEXT(); if (v) o->device = v; }
+        else if (!strcmp(a, "--scalar")) { const char *v = NEXT(); if (v) o->scalar_name = v; }
+        else if (!strcmp(a, "--kernel-dir")) { const char *v = NEXT(); if (v) o->kernel_dir = v; }
+        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { const char *v = NEXT(); if (v) o->output = v; }
+        else if (!strcmp(a, "--stats-json")) { const char *v = NEXT(); if (v) o->stats_json = v; }
+        else if (!strcmp(a, "--size")) {
+            const char *v = NEXT();
+            if (v) {
+                unsigned w = 0, h = 0;
+                char tail;
+                if (sscanf(v, "%ux%u%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--size expects WxH with 1 <= W, H <= 16384, got '%s'", v);
+                o->width = w;
+                o->height = h;
+            }
+        }
+        else if (!strcmp(a, "--spp")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 24, &o->spp, err); }
+        else if (!strcmp(a, "--seed")) { const char *v = NEXT(); if (v) s = parse_u64(a, v, 0, UINT64_MAX, &o->seed, err); }
+        else if (!strcmp(a, "--method")) {
+            const char *v = NEXT();
+            if (v) {
+                int found = -1;
+                for (int m = 0; m < CLVR_METHOD_COUNT; ++m) if (!strcmp(v, method_names[m])) found = m;
+                if (found < 0) s = clvr_error_set(err, CLVR_ERR_USAGE, "--method expects march, track, bins or dda, got '%s'", v);
+                else { o->method = (clvr_method)found; o->method_set = 1; }
+            }
+        }
+        else if (!strcmp(a, "--step")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 1e-9f, 1e30f, &o->step, err); }
+        else if (!strcmp(a, "--bins")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 32, &o->bins, err); }
+        else if (!strcmp(a, "--segments")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->segments, err); }
+        else if (!strcmp(a, "--macrocells")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->macrocells, err); }
+        else if (!strcmp(a, "--shadows")) {
+            const char *v = NEXT();
+            if (v) {
+                if (!strcmp(v, "on")) o->shadows = 1;
+                else if (!strcmp(v, "off")) o->shadows = 0;
+                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--shadows expects on or off, got '%s'", v);
+            }
+        }
+        else if (!strcmp(a, "--leaf-size")) {
+            const char *v = NEXT();
+            if (v) {
+                s = parse_u32(a, v, 1, 32, &o->leaf_size, err);
+                if (s == CLVR_OK && (o->leaf_size & (o->leaf_size - 1)) != 0 && o->leaf_size != 1)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--leaf-size expects 1, 4, 8, 16 or 32, got '%s'", v);
+                if (s == CLVR_OK && o->leaf_size == 2)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--leaf-size expects 1, 4, 8, 16 or 32, got '%s'", v);
+            }
+        }
+        else if (!strcmp(a, "--sampling-size")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 20, &o->sampling_size, err); }
+        else if (!strcmp(a, "--camera")) { const char *v = NEXT(); if (v) { s = parse_floats(a, v, 9, o->camera, err); o->camera_set = 1; } }
+        else if (!strcmp(a, "--fovy")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.1f, 179.0f, &o->fovy, err); }
+        else if (!strcmp(a, "--colormap")) { const char *v = NEXT(); if (v) o->colormap = v; }
+        else if (!strcmp(a, "--tf")) { const char *v = NEXT(); if (v) o->tf_file = v; }
+        else if (!strcmp(a, "--range")) {
+            const char *lo = NEXT();
+            const char *hi = lo ? NEXT() : NULL;
+            if (lo && hi) {
+                s = parse_float("--range LO", lo, -3e38f, 3e38f, &o->range_lo, err);
+                if (s == CLVR_OK) s = parse_float("--range HI", hi, -3e38f, 3e38f, &o->range_hi, err);
+                if (s == CLVR_OK && !(o->range_hi > o->range_lo))
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--range expects LO < HI, got %s %s", lo, hi);
+                o->range_set = 1;
+            }
+        }
+        else if (!strcmp(a, "--density")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->density, err); }
+        else if (!strcmp(a, "--light")) {
+            const char *v = NEXT();
+            if (v) {
+                s = parse_floats(a, v, 3, o->light_dir, err);
+                if (s == CLVR_OK && o->light_dir[0] == 0 && o->light_dir[1] == 0 && o->light_dir[2] == 0)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--light expects a non-zero direction, got '%s'", v);
+            }
+        }
+        else if (!strcmp(a, "--light-intensity")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->light_intensity, err); }
+        else if (!strcmp(a, "--ambient")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->ambient, err); }
+        else if (!strcmp(a, "--background")) { const char *v = NEXT(); if (v) s = parse_floats(a, v, 3, o->background, err); }
+        else if (a[0] == '-' && a[1] != 0) s = clvr_error_set(err, CLVR_ERR_USAGE, "unknown option '%s' (see clvr --help)", a);
+        else if (o->mesh_path) s = clvr_error_set(err, CLVR_ERR_USAGE, "more than one mesh given: '%s' and '%s'", o->mesh_path, a);
+        else o->mesh_path = a;
+#undef NEXT
+    }
+    return s;
+}

@@ -1,0 +1,68 @@
+/* cli.h: clvr's command line, parsed into plain options. Parsing is separate
+ * from running so that tests can check every option and every error. The
+ * command-line contract is documented in `clvr --help` and the README. */
+#ifndef CLVR_CLI_H
+#define CLVR_CLI_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "status.h"
+
+typedef enum clvr_method {
+    CLVR_METHOD_MARCH = 0, /* alpha-composited ray marching at a fixed step, no shadows */
+    CLVR_METHOD_TRACK = 1, /* delta tracking with one global majorant */
+    CLVR_METHOD_BINS = 2,  /* sampling-cluster majorants splatted into per-ray bins */
+    CLVR_METHOD_DDA = 3,   /* sampling-cluster majorants in a macrocell grid, 3D-DDA */
+    CLVR_METHOD_COUNT
+} clvr_method;
+
+const char *clvr_method_name(clvr_method m);
+
+typedef struct clvr_options {
+    /* actions */
+    int help, version, list_devices, info, stats, quiet, view;
+    /* input */
+    const char *mesh_path;       /* NULL: the built-in default scene */
+    const char *scalar_name;     /* --scalar */
+    const char *device;          /* --device SPEC, NULL: default */
+    const char *kernel_dir;      /* --kernel-dir: load kernels from disk (developers) */
+    /* output */
+    const char *output;          /* -o FILE; default "clvr.png" */
+    const char *stats_json;      /* --stats-json FILE */
+    uint32_t width, height;      /* --size WxH */
+    uint32_t spp;                /* --spp N: frames of 1 sample per pixel */
+    uint64_t seed;               /* --seed N */
+    /* renderer */
+    clvr_method method;          /* --method */
+    int method_set;              /* nonzero when --method was given */
+    float step;                  /* --step (march), world units; 0: automatic */
+    uint32_t bins, segments;     /* --bins N (<= 32), --segments M */
+    uint32_t macrocells;         /* --macrocells R */
+    int shadows;                 /* --shadows on|off */
+    /* clustering */
+    uint32_t leaf_size;          /* --leaf-size N: 1, 4, 8, 16, 32 */
+    uint32_t sampling_size;      /* --sampling-size N: elements per sampling cluster, 0: default */
+    /* scene */
+    int camera_set;
+    float camera[9];             /* --camera px,py,pz,lx,ly,lz,ux,uy,uz */
+    float fovy;                  /* --fovy degrees */
+    const char *colormap;        /* --colormap NAME */
+    const char *tf_file;         /* --tf FILE */
+    int range_set;
+    float range_lo, range_hi;    /* --range lo hi */
+    float density;               /* --density D */
+    float light_dir[3];          /* --light x,y,z (direction towards the light) */
+    float light_intensity;       /* --light-intensity I */
+    float ambient;               /* --ambient A */
+    float background[3];         /* --background r,g,b */
+} clvr_options;
+
+/* Fills defaults, then parses argv. On a bad command line returns
+ * CLVR_ERR_USAGE with a message naming the option and what it expects. */
+clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *err);
+
+/* The --help text. */
+void clvr_cli_print_help(FILE *out);
+
+#endif

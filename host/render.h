@@ -1,0 +1,78 @@
+/* render.h: the progressive renderer. Owns the device buffers of one frame
+ * (accumulator, counters, transfer-function table, majorants, macrocell
+ * grid) and dispatches kernels/render.cl and kernels/majorant.cl over a
+ * clustered mesh and its trees. One call of clvr_renderer_frame adds one
+ * sample per pixel; any change of settings, camera or transfer function
+ * restarts the accumulation. */
+#ifndef CLVR_RENDER_H
+#define CLVR_RENDER_H
+
+#include <stdint.h>
+
+#include "cl_context.h"
+#include "clvr_shared.h"
+#include "preprocess.h"
+#include "bvh.h"
+
+typedef struct clvr_render_settings {
+    uint32_t method;           /* CLVR_RENDER_* */
+    uint32_t width, height;
+    uint64_t seed;
+    int shadows;
+    float step;                /* march step; <= 0: mesh diagonal / 512 */
+    uint32_t bins, segments;   /* bins method (bins <= CLVR_RENDER_MAX_BINS) */
+    uint32_t macrocells;       /* dda method: grid resolution per axis */
+    float light_dir[3];        /* toward the light; normalised here */
+    float light_intensity;
+    float ambient;
+    float background[3];
+} clvr_render_settings;
+
+/* Sensible defaults (dda, 512x512, shadows on, ...). */
+void clvr_render_settings_default(clvr_render_settings *s);
+
+/* Per-frame figures, summed over the frames accumulated so far. */
+typedef struct clvr_render_counters {
+    uint64_t frames;
+    uint64_t rays;            /* primary + shadow rays */
+    uint64_t samples;         /* extinction lookups (point locations) */
+    uint64_t null_collisions; /* rejected samples of delta tracking */
+    double kernel_s;          /* device time of the render kernel, all frames */
+    double last_frame_s;      /* device time of the last frame */
+} clvr_render_counters;
+
+typedef struct clvr_renderer clvr_renderer;
+
+/* Creates a renderer over a preprocessed mesh and its trees (not owned: they
+ * must outlive the renderer). Builds the render and majorant programs. */
+clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const clvr_bvh *bvh,
+                                 const clvr_render_settings *settings, clvr_renderer **out, clvr_error *err);
+void clvr_renderer_destroy(clvr_renderer *r); /* accepts NULL */
+
+clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_settings *settings, clvr_error *err);
+clvr_status clvr_renderer_set_camera(clvr_renderer *r, const clvr_camera *cam, clvr_error *err);
+/* Uploads a baked transfer function (n entries of rgb + extinction over the
+ * scalar window [lo, hi], scaled by density) and recomputes every majorant on
+ * the device. */
+clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n, float lo, float hi, float density,
+                                 clvr_error *err);
+
+/* Renders one more sample per pixel. */
+clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err);
+
+/* Copies the running mean image (width * height * 4 floats, linear rgb and
+ * alpha = opacity, rows top to bottom) and the counters; either may be NULL. */
+clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counters *counters, clvr_error *err);
+
+/* The sum of per-frame samples (not the mean), for tests that need per-pixel
+ * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL). */
+clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float *rgba_sumsq, clvr_error *err);
+
+/* The majorant of every sampling cluster / macrocell (tests). */
+clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *global_majorant,
+                                         clvr_error *err);
+
+/* Device bytes held by the renderer. */
+uint64_t clvr_renderer_bytes(const clvr_renderer *r);
+
+#endif

@@ -1,0 +1,173 @@
+#include "stats.h"
+
+#include <errno.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bvh.h"
+#include "cli.h"
+#include "preprocess.h"
+#include "render.h"
+
+void clvr_stats_from_mesh(clvr_stats *s, const clvr_mesh *m)
+{
+    s->elements = clvr_mesh_num_elements(m);
+    s->vertices = m->num_vertices;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) s->cells[t] = m->num_cells[t];
+    s->bytes_vertices = clvr_mesh_vertex_bytes(m);
+    s->bytes_indices_before = clvr_mesh_index_bytes(m);
+}
+
+void clvr_stats_from_render(clvr_stats *s, const clvr_render_counters *rc, uint32_t method, uint32_t width,
+                            uint32_t height)
+{
+    s->method = method;
+    s->width = width;
+    s->height = height;
+    s->frames = rc->frames;
+    s->rays = rc->rays;
+    s->samples = rc->samples;
+    s->null_collisions = rc->null_collisions;
+    s->frame_s = rc->frames ? rc->kernel_s / (double)rc->frames : 0.0;
+    s->rays_per_s = rc->kernel_s > 0 ? (double)rc->rays / rc->kernel_s : 0.0;
+    s->samples_per_ray = rc->rays ? (double)rc->samples / (double)rc->rays : 0.0;
+    s->null_collisions_per_ray = rc->rays ? (double)rc->null_collisions / (double)rc->rays : 0.0;
+}
+
+static double per_element(uint64_t bytes, uint64_t elements)
+{
+    return elements ? (double)bytes / (double)elements : 0.0;
+}
+
+void clvr_stats_print(FILE *out, const clvr_stats *s)
+{
+    if (s->have_mesh) {
+        fprintf(out, "mesh: %llu elements (%llu tets, %llu pyramids, %llu wedges, %llu hexes), %llu vertices, "
+                     "loaded in %.3f s\n",
+                (unsigned long long)s->elements, (unsigned long long)s->cells[0], (unsigned long long)s->cells[1],
+                (unsigned long long)s->cells[2], (unsigned long long)s->cells[3], (unsigned long long)s->vertices,
+                s->load_s);
+    }
+    if (s->have_clusters) {
+        fprintf(out, "\n| memory (paper Table 1) | before | after | bytes/element before | after |\n");
+        fprintf(out, "|---|---:|---:|---:|---:|\n");
+        fprintf(out, "| vertices | %.3f MB | %.3f MB | %.2f | %.2f |\n", s->bytes_vertices / 1e6,
+                s->bytes_vertices_after / 1e6, per_element(s->bytes_vertices, s->elements),
+                per_element(s->bytes_vertices_after, s->elements));
+        fprintf(out, "| indices | %.3f MB | %.3f MB | %.2f | %.2f |\n", s->bytes_indices_before / 1e6,
+                s->bytes_indices_after / 1e6, per_element(s->bytes_indices_before, s->elements),
+                per_element(s->bytes_indices_after, s->elements));
+        fprintf(out, "| BVH (1 / %u elements per leaf) | %.3f MB | %.3f MB | %.2f | %.2f |\n", s->leaf_size,
+                s->bytes_bvh_one_per_leaf / 1e6, s->bytes_bvh / 1e6,
+                per_element(s->bytes_bvh_one_per_leaf, s->elements), per_element(s->bytes_bvh, s->elements));
+        fprintf(out, "| sampling clusters | | %.3f MB | | %.2f |\n", s->bytes_sampling / 1e6,
+                per_element(s->bytes_sampling, s->elements));
+        fprintf(out, "\nclusters: %llu instances (%llu with 16-bit indices), %llu leaves of %u, %llu sampling "
+                     "clusters of %u\n",
+                (unsigned long long)s->num_instances, (unsigned long long)s->num_instances16,
+                (unsigned long long)s->num_leaves, s->leaf_size, (unsigned long long)s->num_sampling,
+                s->sampling_size);
+        fprintf(out, "\n| preprocessing stage | seconds | elements/s |\n|---|---:|---:|\n");
+        for (int i = 0; i < s->num_stages; ++i)
+            fprintf(out, "| %s | %.4f | %.3g |\n", s->stage_name[i], s->stage_s[i],
+                    s->stage_s[i] > 0 ? (double)s->elements / s->stage_s[i] : 0.0);
+        fprintf(out, "| total (wall) | %.4f | %.3g |\n", s->preprocess_s,
+                s->preprocess_s > 0 ? (double)s->elements / s->preprocess_s : 0.0);
+    }
+    if (s->have_render) {
+        fprintf(out, "\nrender: %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
+                     "%.2f null collisions/ray\n",
+                clvr_method_name((clvr_method)s->method), s->width, s->height, (unsigned long long)s->frames,
+                s->frame_s, s->rays_per_s / 1e6, s->samples_per_ray, s->null_collisions_per_ray);
+    }
+}
+
+/* Writes one "key": number pair; values that are not finite become null. */
+static void jnum(FILE *f, const char *indent, const char *key, double v, int comma)
+{
+    if (v == v && v - v == 0.0)
+        fprintf(f, "%s\"%s\": %.17g%s\n", indent, key, v, comma ? "," : "");
+    else
+        fprintf(f, "%s\"%s\": null%s\n", indent, key, comma ? "," : "");
+}
+
+clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_error *err)
+{
+    char tmp[4096];
+    snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid());
+    FILE *f = fopen(tmp, "w");
+    if (!f) return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(errno));
+    struct { const char *k; double v; } b[] = {
+        {"vertices", (double)s->bytes_vertices},
+        {"vertices_after", (double)s->bytes_vertices_after},
+        {"indices_before", (double)s->bytes_indices_before},
+        {"indices_after", (double)s->bytes_indices_after},
+        {"bvh", (double)s->bytes_bvh},
+        {"bvh_one_per_leaf", (double)s->bytes_bvh_one_per_leaf},
+        {"sampling", (double)s->bytes_sampling},
+    };
+    struct { const char *k; double v; } r[] = {
+        {"rays_per_s", s->rays_per_s},
+        {"samples_per_ray", s->samples_per_ray},
+        {"null_collisions_per_ray", s->null_collisions_per_ray},
+        {"frame_s", s->frame_s},
+        {"frames", (double)s->frames},
+        {"rays", (double)s->rays},
+        {"width", (double)s->width},
+        {"height", (double)s->height},
+        {"wall_s", s->render_wall_s},
+    };
+    const size_t nb = sizeof b / sizeof b[0], nr = sizeof r / sizeof r[0];
+    fprintf(f, "{\n");
+    jnum(f, "  ", "elements", (double)s->elements, 1);
+    jnum(f, "  ", "vertices", (double)s->vertices, 1);
+    fprintf(f, "  \"cells\": {\"tets\": %llu, \"pyramids\": %llu, \"wedges\": %llu, \"hexes\": %llu},\n",
+            (unsigned long long)s->cells[0], (unsigned long long)s->cells[1], (unsigned long long)s->cells[2],
+            (unsigned long long)s->cells[3]);
+    fprintf(f, "  \"bytes\": {\n");
+    for (size_t i = 0; i < nb; ++i) jnum(f, "    ", b[i].k, b[i].v, i + 1 < nb);
+    fprintf(f, "  },\n");
+    fprintf(f, "  \"clusters\": {\"instances\": %llu, \"instances16\": %llu, \"leaves\": %llu, \"leaf_size\": %u, "
+               "\"sampling\": %llu, \"sampling_size\": %u},\n",
+            (unsigned long long)s->num_instances, (unsigned long long)s->num_instances16,
+            (unsigned long long)s->num_leaves, s->leaf_size, (unsigned long long)s->num_sampling, s->sampling_size);
+    fprintf(f, "  \"time\": {\n");
+    jnum(f, "    ", "load_s", s->load_s, 1);
+    for (int i = 0; i < s->num_stages; ++i) {
+        char key[96];
+        snprintf(key, sizeof key, "%s_s", s->stage_name[i]);
+        jnum(f, "    ", key, s->stage_s[i], 1);
+    }
+    jnum(f, "    ", "preprocess_s", s->preprocess_s, 0);
+    fprintf(f, "  },\n");
+    if (s->have_render) {
+        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n", clvr_method_name((clvr_method)s->method));
+        for (size_t i = 0; i < nr; ++i) jnum(f, "    ", r[i].k, r[i].v, i + 1 < nr);
+        fprintf(f, "  },\n");
+    }
+    /* Flat mirrors of the nested keys. */
+    for (size_t i = 0; i < nb; ++i) {
+        char key[96];
+        snprintf(key, sizeof key, "bytes.%s", b[i].k);
+        jnum(f, "  ", key, b[i].v, 1);
+    }
+    if (s->have_render)
+        for (size_t i = 0; i < nr; ++i) {
+            char key[96];
+            snprintf(key, sizeof key, "render.%s", r[i].k);
+            jnum(f, "  ", key, r[i].v, 1);
+        }
+    jnum(f, "  ", "time.preprocess_s", s->preprocess_s, 0);
+    fprintf(f, "}\n");
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad) {
+        remove(tmp);
+        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(errno));
+    }
+    if (rename(tmp, path) != 0) {
+        int e = errno;
+        remove(tmp);
+        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(e));
+    }
+    return CLVR_OK;
+}

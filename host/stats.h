@@ -1,0 +1,59 @@
+/* stats.h: the figures behind `--stats` and `--stats-json`: memory in the
+ * shape of the paper's Table 1 (vertices, indices and BVH before and after
+ * compression), preprocessing times per stage, and render throughput. */
+#ifndef CLVR_STATS_H
+#define CLVR_STATS_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "mesh.h"
+#include "status.h"
+
+struct clvr_clustered;
+struct clvr_bvh;
+struct clvr_render_counters;
+
+#define CLVR_STATS_MAX_STAGES 16
+
+typedef struct clvr_stats {
+    int have_mesh, have_clusters, have_render;
+    /* mesh */
+    uint64_t elements, vertices;
+    uint64_t cells[CLVR_CELL_TYPE_COUNT];
+    double load_s;
+    /* memory, bytes */
+    uint64_t bytes_vertices;        /* input: float3 position + float scalar per vertex */
+    uint64_t bytes_vertices_after;  /* clustered: float4 per (duplicated) vertex */
+    uint64_t bytes_indices_before;  /* 32-bit indices */
+    uint64_t bytes_indices_after;   /* 16/32-bit per instance cluster */
+    uint64_t bytes_bvh;             /* two-level BVH at the chosen leaf size */
+    uint64_t bytes_bvh_one_per_leaf;/* estimate for one element per leaf (Table 1 "pre") */
+    uint64_t bytes_sampling;        /* sampling clusters */
+    /* clusters */
+    uint64_t num_instances, num_instances16, num_leaves, num_sampling;
+    uint32_t leaf_size, sampling_size;
+    /* times, seconds */
+    double preprocess_s;            /* wall time: upload + clustering + BVH */
+    int num_stages;
+    const char *stage_name[CLVR_STATS_MAX_STAGES];
+    double stage_s[CLVR_STATS_MAX_STAGES];
+    /* render */
+    uint32_t method, width, height;
+    uint64_t frames, rays, samples, null_collisions;
+    double frame_s, rays_per_s, samples_per_ray, null_collisions_per_ray, render_wall_s;
+} clvr_stats;
+
+void clvr_stats_from_mesh(clvr_stats *s, const clvr_mesh *m);
+void clvr_stats_from_clusters(clvr_stats *s, const struct clvr_clustered *c, const struct clvr_bvh *b);
+void clvr_stats_from_render(clvr_stats *s, const struct clvr_render_counters *rc, uint32_t method, uint32_t width,
+                            uint32_t height);
+
+/* Human-readable tables on out. */
+void clvr_stats_print(FILE *out, const clvr_stats *s);
+/* JSON, written to a temporary file and renamed. Nested objects ("bytes":
+ * {"vertices": ...}) and, for tools that look keys up flat, the same values
+ * under dotted top-level keys ("bytes.vertices"). */
+clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_error *err);
+
+#endif

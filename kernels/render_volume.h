@@ -1,0 +1,263 @@
+/* render_volume.h: the volume seen by the renderer (extinction and colour at
+ * a point), the majorant segment iterator (track / dda / bins) and the
+ * delta-tracking and ray-marching integrators. OpenCL C only. */
+#ifndef CLVR_RENDER_VOLUME_H
+#define CLVR_RENDER_VOLUME_H
+
+#include "clvr_shared.h"
+#include "rng.h"
+#include "locate.h"
+
+typedef struct clvr_volume {
+    const clvr_frame *f;
+    __global const float4 *tf;
+    __global const float4 *vertices;
+    __global const ushort *idx16;
+    __global const uint *idx32;
+    __global const clvr_instance *instances;
+    __global const clvr_bvh_node *tlas;
+    __global const clvr_bvh_node *blas;
+    __global const float *grid;
+    __global const clvr_bvh_node *sampling_bvh;
+    __global const clvr_sampling_cluster *sampling;
+    __global const float *cluster_majorants;
+} clvr_volume;
+
+/* Transfer function at scalar s: rgb colour and extinction in w. Points
+ * outside the mesh have no medium (all zero). */
+inline float4 clvr_volume_tf(const clvr_volume *v, float s)
+{
+    return clvr_tf_sample4(v->tf, v->f->tf_size, v->f->tf_lo, v->f->tf_hi, v->f->density, s);
+}
+
+/* Point location + interpolation + transfer function. */
+inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
+{
+    float s;
+    if (!clvr_locate_point(p.x, p.y, p.z, v->tlas, v->blas, v->instances, v->vertices, v->idx16, v->idx32,
+                           v->f->leaf_size, v->f->tlas_root, &s))
+        return (float4)(0.0f);
+    return clvr_volume_tf(v, s);
+}
+
+/* Ray vs axis-aligned box, slab test; returns 0 when missed. */
+inline int clvr_ray_box(float3 org, float3 dir, float3 lo, float3 hi, float *t0, float *t1)
+{
+    float3 inv = 1.0f / dir;
+    float3 ta = (lo - org) * inv, tb = (hi - org) * inv;
+    float3 tn = fmin(ta, tb), tf = fmax(ta, tb);
+    float a = fmax(fmax(tn.x, tn.y), fmax(tn.z, *t0));
+    float b = fmin(fmin(tf.x, tf.y), fmin(tf.z, *t1));
+    *t0 = a;
+    *t1 = b;
+    return a <= b;
+}
+
+/* ------------------------------------------------------------ majorant segments */
+
+typedef struct clvr_segments {
+    uint method;
+    float t, tend;   /* next segment starts at t; the ray ends at tend */
+    int done;
+    /* dda */
+    int3 cell, step, res;
+    float3 tnext, tdelta;
+    /* bins */
+    uint seg, nbins, bin;
+    float seg_t0, bin_len;
+    float bins[32];
+} clvr_segments;
+
+inline void clvr_segments_begin(const clvr_volume *v, clvr_segments *it, float3 org, float3 dir, float t0, float t1)
+{
+    const clvr_frame *f = v->f;
+    it->method = f->method;
+    it->t = t0;
+    it->tend = t1;
+    it->done = !(t0 < t1);
+    if (it->method == CLVR_RENDER_DDA && !it->done) {
+        /* Amanatides-Woo setup at the entry point. */
+        float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
+        int r = (int)f->grid_res;
+        it->res = (int3)(r);
+        float3 cs = (hi - lo) / (float)r;
+        float3 p = org + dir * t0;
+        int3 c = convert_int3_rtn((p - lo) / cs);
+        c = clamp(c, (int3)(0), (int3)(r - 1));
+        it->cell = c;
+        it->step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
+        float3 inv = 1.0f / dir;
+        float3 next_bound = lo + convert_float3(c + max(it->step, (int3)(0))) * cs;
+        it->tnext = (next_bound - org) * inv;
+        it->tdelta = fabs(cs * inv);
+        /* Axes the ray does not move along never cross a boundary. */
+        if (dir.x == 0.0f) { it->tnext.x = INFINITY; it->tdelta.x = INFINITY; }
+        if (dir.y == 0.0f) { it->tnext.y = INFINITY; it->tdelta.y = INFINITY; }
+        if (dir.z == 0.0f) { it->tnext.z = INFINITY; it->tdelta.z = INFINITY; }
+    }
+    if (it->method == CLVR_RENDER_BINS) {
+        it->seg = 0;
+        it->nbins = f->bins;
+        it->bin = it->nbins; /* forces a fill of the first segment */
+        it->seg_t0 = t0;
+        it->bin_len = (t1 - t0) / (float)(f->segments * f->bins);
+    }
+}
+
+/* Splats the majorants of the sampling clusters hit over [a, b] into bins
+ * (paper 3.4.2: "rasterize" clusters into 1D segments along the ray). */
+inline void clvr_segments_fill_bins(const clvr_volume *v, clvr_segments *it, float3 org, float3 dir, float a, float b)
+{
+    for (uint k = 0; k < it->nbins; ++k) it->bins[k] = 0.0f;
+    clvr_bvh_ray_iter ri;
+    clvr_bvh_ray_begin(&ri, v->sampling_bvh, org.x, org.y, org.z, dir.x, dir.y, dir.z, a, b);
+    uint prim;
+    float c0, c1;
+    while (clvr_bvh_ray_next(&ri, v->sampling_bvh, &prim, &c0, &c1)) {
+        float m = v->cluster_majorants[prim];
+        if (!(m > 0.0f)) continue;
+        int k0 = (int)floor((fmax(c0, a) - a) / it->bin_len);
+        int k1 = (int)floor((fmin(c1, b) - a) / it->bin_len);
+        k0 = clamp(k0, 0, (int)it->nbins - 1);
+        k1 = clamp(k1, 0, (int)it->nbins - 1);
+        for (int k = k0; k <= k1; ++k) it->bins[k] = fmax(it->bins[k], m);
+    }
+}
+
+/* Next non-overlapping segment [*a, *b) with majorant *m; 0 at the end. */
+inline int clvr_segments_next(const clvr_volume *v, clvr_segments *it, float3 org, float3 dir, float *a, float *b,
+                              float *m)
+{
+    if (it->done) return 0;
+    if (it->method == CLVR_RENDER_DDA) {
+        int3 c = it->cell;
+        if (any(c < (int3)(0)) || any(c >= it->res)) { it->done = 1; return 0; }
+        float tx = fmin(fmin(it->tnext.x, it->tnext.y), it->tnext.z);
+        *a = it->t;
+        *b = fmin(tx, it->tend);
+        *m = v->grid[((uint)c.z * (uint)it->res.y + (uint)c.y) * (uint)it->res.x + (uint)c.x];
+        it->t = *b;
+        if (tx >= it->tend) it->done = 1;
+        if (it->tnext.x <= tx) { it->cell.x += it->step.x; it->tnext.x += it->tdelta.x; }
+        else if (it->tnext.y <= tx) { it->cell.y += it->step.y; it->tnext.y += it->tdelta.y; }
+        else { it->cell.z += it->step.z; it->tnext.z += it->tdelta.z; }
+        return 1;
+    }
+    if (it->method == CLVR_RENDER_BINS) {
+        if (it->bin == it->nbins) {
+            if (it->seg == v->f->segments) { it->done = 1; return 0; }
+            float a0 = it->seg_t0 + (float)it->seg * (float)it->nbins * it->bin_len;
+            float b0 = it->seg + 1 == v->f->segments ? it->tend : a0 + (float)it->nbins * it->bin_len;
+            clvr_segments_fill_bins(v, it, org, dir, a0, b0);
+            it->seg++;
+            it->bin = 0;
+        }
+        uint k = it->bin++;
+        float base = it->seg_t0 + (float)((it->seg - 1) * it->nbins + k) * it->bin_len;
+        *a = base;
+        *b = (it->seg == v->f->segments && it->bin == it->nbins) ? it->tend : base + it->bin_len;
+        *m = it->bins[k];
+        return 1;
+    }
+    /* track: one segment, the global majorant */
+    *a = it->t;
+    *b = it->tend;
+    *m = v->f->global_majorant;
+    it->done = 1;
+    return 1;
+}
+
+/* ------------------------------------------------------------ integrators */
+
+/* Delta tracking (Woodcock) along [t0, t1]: returns 1 and the collision's
+ * medium (rgb + extinction) when a real collision happens, 0 when the ray
+ * leaves. Free flights restart at segment boundaries, which is exact for an
+ * exponential distribution (memorylessness). */
+inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, clvr_rng *rng,
+                            float *t_hit, float4 *medium, uint *samples, uint *nulls)
+{
+    clvr_segments it;
+    clvr_segments_begin(v, &it, org, dir, t0, t1);
+    float a, b, m;
+    while (clvr_segments_next(v, &it, org, dir, &a, &b, &m)) {
+        if (!(m > 0.0f)) continue; /* empty space: skipped */
+        float t = a;
+        for (;;) {
+            t -= log(1.0f - clvr_rng_next(rng)) / m;
+            if (t >= b) break;
+            float4 med = clvr_volume_at(v, org + dir * t);
+            ++*samples;
+            if (clvr_rng_next(rng) * m < med.w) {
+                *t_hit = t;
+                *medium = med;
+                return 1;
+            }
+            ++*nulls;
+        }
+    }
+    return 0;
+}
+
+inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, uint *samples,
+                                 uint *nulls, uint *rays)
+{
+    const clvr_frame *f = v->f;
+    float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
+    float t0 = 0.0f, t1 = INFINITY;
+    float4 bg = (float4)(vload3(0, f->background), 0.0f);
+    if (!clvr_ray_box(org, dir, lo, hi, &t0, &t1)) return bg;
+    float t;
+    float4 med;
+    if (!clvr_delta_track(v, org, dir, t0, t1, rng, &t, &med, samples, nulls)) return bg;
+    float light = 1.0f;
+    if (f->shadows) {
+        float3 p = org + dir * t, ldir = vload3(0, f->light_dir);
+        float s0 = 0.0f, s1 = INFINITY;
+        ++*rays;
+        if (clvr_ray_box(p, ldir, lo, hi, &s0, &s1)) {
+            float ts;
+            float4 m2;
+            if (clvr_delta_track(v, p, ldir, s0, s1, rng, &ts, &m2, samples, nulls)) light = 0.0f;
+        }
+    }
+    float shade = f->ambient + f->light_intensity * light;
+    return (float4)(med.xyz * shade, 1.0f);
+}
+
+/* Front-to-back alpha compositing at a fixed step with a random offset per
+ * frame (so frames average to the continuous integral); no shadows. */
+inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, uint *samples)
+{
+    const clvr_frame *f = v->f;
+    float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
+    float t0 = 0.0f, t1 = INFINITY;
+    float4 bg = (float4)(vload3(0, f->background), 0.0f);
+    if (!clvr_ray_box(org, dir, lo, hi, &t0, &t1)) return bg;
+    float3 c = (float3)(0.0f);
+    float T = 1.0f;
+    const float shade = f->ambient + f->light_intensity;
+    for (float t = t0 + clvr_rng_next(rng) * f->step; t < t1 && T > 1e-6f; t += f->step) {
+        float4 med = clvr_volume_at(v, org + dir * t);
+        ++*samples;
+        float dt = fmin(f->step, t1 - t);
+        float alpha = 1.0f - exp(-med.w * dt);
+        c += T * alpha * med.xyz * shade;
+        T *= 1.0f - alpha;
+    }
+    return (float4)(c + T * bg.xyz, 1.0f - T);
+}
+
+/* Primary ray through pixel (x, y) with a random sub-pixel position. */
+inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
+                                    clvr_rng *rng, float3 *org, float3 *dir)
+{
+    float jx = clvr_rng_next(rng), jy = clvr_rng_next(rng);
+    clvr_camera c = *cam;
+    float o[3], d[3];
+    clvr_camera_ray(&c, (float)x + jx, (float)y + jy, o, d);
+    *org = vload3(0, o);
+    *dir = vload3(0, d);
+    (void)f;
+}
+
+#endif

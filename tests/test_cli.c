@@ -1,0 +1,87 @@
+/* Proves the command-line contract: defaults, every option's parsing, and a
+ * clear usage error (naming the option) for each kind of bad value. */
+#include "cli.h"
+#include "test_util.h"
+
+static clvr_status parse(clvr_options *o, clvr_error *err, int n, const char **args)
+{
+    char *argv[64];
+    if (n + 1 > 64) { fprintf(stderr, "test_cli: too many arguments\n"); exit(1); }
+    argv[0] = (char *)"clvr";
+    for (int i = 0; i < n; ++i) argv[i + 1] = (char *)args[i];
+    return clvr_cli_parse(n + 1, argv, o, err);
+}
+
+#define PARSE(o, err, ...)                                                                  \
+    parse(o, err, (int)(sizeof((const char *[]){__VA_ARGS__}) / sizeof(const char *)),      \
+          (const char *[]){__VA_ARGS__})
+
+/* The option named in a failure must appear in the message. */
+static void expect_usage(const char *opt, const char *value)
+{
+    clvr_options o;
+    clvr_error err = {0};
+    const char *args[2] = {opt, value};
+    clvr_status s = parse(&o, &err, value ? 2 : 1, args);
+    TU_CHECK_STATUS(s, CLVR_ERR_USAGE, &err);
+    if (!strstr(err.msg, opt)) {
+        ++tu_fail_;
+        fprintf(stderr, "message for %s %s does not name the option: %s\n", opt, value ? value : "", err.msg);
+    }
+}
+
+int main(void)
+{
+    clvr_options o;
+    clvr_error err = {0};
+
+    TU_CHECK_STATUS(PARSE(&o, &err, "mesh.bin"), CLVR_OK, &err);
+    TU_CHECK(o.mesh_path && strcmp(o.mesh_path, "mesh.bin") == 0);
+    TU_CHECK(strcmp(o.output, "clvr.png") == 0);
+    TU_CHECK_EQ_U64(o.width, 512);
+    TU_CHECK_EQ_U64(o.spp, 64);
+    TU_CHECK(o.method == CLVR_METHOD_DDA && o.shadows == 1 && o.leaf_size == 16);
+
+    TU_CHECK_STATUS(PARSE(&o, &err, "--device", "pocl", "--size", "640x480", "--spp", "7", "--seed", "99",
+                          "-o", "x.exr", "--scalar", "p", "--stats-json", "s.json", "--method", "bins",
+                          "--bins", "16", "--segments", "3", "--shadows", "off", "--range", "-1", "2.5",
+                          "--camera", "1,2,3,0,0,0,0,0,1", "--light", "0,0,1", "--background", "1,1,1",
+                          "--leaf-size", "8", "--macrocells", "32", "--fovy", "30", "--density", "2.5"),
+                    CLVR_OK, &err);
+    TU_CHECK(strcmp(o.device, "pocl") == 0 && strcmp(o.output, "x.exr") == 0 && strcmp(o.scalar_name, "p") == 0);
+    TU_CHECK_EQ_U64(o.width, 640);
+    TU_CHECK_EQ_U64(o.height, 480);
+    TU_CHECK_EQ_U64(o.spp, 7);
+    TU_CHECK_EQ_U64(o.seed, 99);
+    TU_CHECK(o.method == CLVR_METHOD_BINS && o.bins == 16 && o.segments == 3 && o.shadows == 0);
+    TU_CHECK(o.range_set && o.range_lo == -1.0f && o.range_hi == 2.5f);
+    TU_CHECK(o.camera_set && o.camera[0] == 1.0f && o.camera[8] == 1.0f);
+    TU_CHECK(o.leaf_size == 8 && o.macrocells == 32 && o.fovy == 30.0f && o.density == 2.5f);
+    TU_CHECK(o.light_dir[2] == 1.0f && o.background[0] == 1.0f);
+
+    TU_CHECK_STATUS(PARSE(&o, &err, "--info", "--list-devices", "--help", "--stats"), CLVR_OK, &err);
+    TU_CHECK(o.info && o.list_devices && o.help && o.stats && !o.mesh_path);
+
+    expect_usage("--size", "0x10");
+    expect_usage("--size", "12");
+    expect_usage("--size", "100000x2");
+    expect_usage("--spp", "0");
+    expect_usage("--spp", "-3");
+    expect_usage("--spp", "ten");
+    expect_usage("--method", "raymarch");
+    expect_usage("--bins", "33");
+    expect_usage("--shadows", "maybe");
+    expect_usage("--leaf-size", "3");
+    expect_usage("--leaf-size", "2");
+    expect_usage("--camera", "1,2,3");
+    expect_usage("--camera", "1,2,3,4,5,6,7,8,nan");
+    expect_usage("--light", "0,0,0");
+    expect_usage("--fovy", "180");
+    expect_usage("--density", "-1");
+    expect_usage("--device", NULL);
+    expect_usage("--bogus", NULL);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--range", "2", "1"), CLVR_ERR_USAGE, &err);
+    TU_CHECK_STATUS(PARSE(&o, &err, "a.bin", "b.bin"), CLVR_ERR_USAGE, &err);
+    TU_CHECK(strstr(err.msg, "b.bin") != NULL);
+    return tu_finish("test_cli");
+}
