@@ -9,7 +9,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "bvh.h"
+#include "accel.h"
 #include "camera.h"
 #include "cl_context.h"
 #include "cli.h"
@@ -62,7 +62,7 @@ int main(int argc, char **argv)
     clvr_mesh mesh = {0};
     clvr_cl cl = {0};
     clvr_clustered clustered = {0};
-    clvr_bvh bvh = {0};
+    clvr_accel bvh = {0};
     clvr_renderer *renderer = NULL;
     clvr_tf tf = {0};
     float *table = NULL, *pixels = NULL;
@@ -116,7 +116,7 @@ int main(int argc, char **argv)
     t0 = now_s();
     s = clvr_preprocess(&cl, &mesh, &po, &clustered, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    s = clvr_bvh_build(&cl, &clustered, &bvh, &err);
+    s = clvr_accel_build(&cl, &clustered, &bvh, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     stats.preprocess_s = now_s() - t0;
     stats.have_mesh = 1;
@@ -127,6 +127,7 @@ int main(int argc, char **argv)
     s = clvr_tf_from_options(&tf, o.colormap, o.tf_file, o.range_set, o.range_lo, o.range_hi, o.density,
                              mesh.scalar_min, mesh.scalar_max, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    clvr_tf_set_extent(&tf, mesh.bounds_lo, mesh.bounds_hi);
     clvr_camera cam;
     if (o.camera_set)
         s = clvr_camera_look_at(&cam, o.camera, o.camera + 3, o.camera + 6, o.fovy, o.width, o.height, &err);
@@ -210,7 +211,7 @@ cleanup:
     free(table);
     clvr_renderer_destroy(renderer);
     if (cl_ready) {
-        clvr_bvh_release(&cl, &bvh);
+        clvr_accel_release(&cl, &bvh);
         clvr_clustered_release(&cl, &clustered);
     }
     clvr_tf_free(&tf);

@@ -7,7 +7,7 @@
 struct clvr_renderer {
     clvr_cl *cl;
     const clvr_clustered *mesh;
-    const clvr_bvh *bvh;
+    const clvr_accel *bvh;
     clvr_render_settings set;
     clvr_frame frame;
     clvr_camera cam;
@@ -203,7 +203,7 @@ cleanup:
     return s;
 }
 
-clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const clvr_bvh *bvh,
+clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const clvr_accel *bvh,
                                  const clvr_render_settings *settings, clvr_renderer **out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -293,7 +293,7 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     r->frame.frame_index = (clvr_u32)r->frames;
     CLVR_TRY(upload_frame(r, err));
     const clvr_clustered *m = r->mesh;
-    const clvr_bvh *b = r->bvh;
+    const clvr_accel *b = r->bvh;
     cl_kernel k = r->k_render;
     cl_uint i = 0;
     ARG(k, i++, r->frame_buf);
@@ -303,8 +303,8 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     ARG(k, i++, m->idx16);
     ARG(k, i++, m->idx32);
     ARG(k, i++, m->instances);
-    ARG(k, i++, b->tlas);
-    ARG(k, i++, b->blas);
+    ARG(k, i++, b->two_level.tlas);
+    ARG(k, i++, b->two_level.blas);
     ARG(k, i++, r->grid_maj);
     ARG(k, i++, b->sampling_nodes);
     ARG(k, i++, m->sampling);

@@ -12,7 +12,7 @@
 #include "cl_context.h"
 #include "clvr_shared.h"
 #include "preprocess.h"
-#include "bvh.h"
+#include "accel.h"
 
 typedef struct clvr_render_settings {
     uint32_t method;           /* CLVR_RENDER_* */
@@ -45,7 +45,7 @@ typedef struct clvr_renderer clvr_renderer;
 
 /* Creates a renderer over a preprocessed mesh and its trees (not owned: they
  * must outlive the renderer). Builds the render and majorant programs. */
-clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const clvr_bvh *bvh,
+clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const clvr_accel *accel,
                                  const clvr_render_settings *settings, clvr_renderer **out, clvr_error *err);
 void clvr_renderer_destroy(clvr_renderer *r); /* accepts NULL */
 

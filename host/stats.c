@@ -4,7 +4,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bvh.h"
+#include "accel.h"
 #include "cli.h"
 #include "preprocess.h"
 #include "render.h"
@@ -32,6 +32,34 @@ void clvr_stats_from_render(clvr_stats *s, const clvr_render_counters *rc, uint3
     s->rays_per_s = rc->kernel_s > 0 ? (double)rc->rays / rc->kernel_s : 0.0;
     s->samples_per_ray = rc->rays ? (double)rc->samples / (double)rc->rays : 0.0;
     s->null_collisions_per_ray = rc->rays ? (double)rc->null_collisions / (double)rc->rays : 0.0;
+}
+
+void clvr_stats_from_clusters(clvr_stats *s, const clvr_clustered *c, const clvr_accel *a)
+{
+    s->have_clusters = 1;
+    s->bytes_vertices_after = c->bytes_vertices_after;
+    s->bytes_indices_after = c->bytes_indices_after;
+    if (c->bytes_indices_before) s->bytes_indices_before = c->bytes_indices_before;
+    s->bytes_bvh = clvr_accel_bvh_bytes(a);
+    /* Table 1's "pre" column: the same packed 4-wide tree with one element
+     * per leaf, i.e. over num_elements primitives. */
+    s->bytes_bvh_one_per_leaf =
+        (uint64_t)clvr_bvh_nodes_bound(c->num_elements > 0x7fffffffull ? 0x7fffffffu : (uint32_t)c->num_elements) *
+        sizeof(clvr_bvh_node);
+    s->bytes_sampling = c->bytes_sampling + (uint64_t)a->sampling_node_count * sizeof(clvr_bvh_node);
+    s->num_instances = c->num_instances;
+    s->num_instances16 = c->num_instances16;
+    s->num_leaves = c->num_leaves;
+    s->num_sampling = c->num_sampling;
+    s->leaf_size = c->leaf_size;
+    s->sampling_size = c->sampling_size;
+    s->num_stages = 0;
+    for (int i = 0; i < CLVR_PP_STAGE_COUNT && s->num_stages < CLVR_STATS_MAX_STAGES - 1; ++i) {
+        s->stage_name[s->num_stages] = clvr_pp_stage_name(i);
+        s->stage_s[s->num_stages++] = c->stage_s[i];
+    }
+    s->stage_name[s->num_stages] = "bvh";
+    s->stage_s[s->num_stages++] = a->two_level.build_seconds;
 }
 
 static double per_element(uint64_t bytes, uint64_t elements)

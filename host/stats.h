@@ -11,7 +11,7 @@
 #include "status.h"
 
 struct clvr_clustered;
-struct clvr_bvh;
+struct clvr_accel;
 struct clvr_render_counters;
 
 #define CLVR_STATS_MAX_STAGES 16
@@ -45,7 +45,7 @@ typedef struct clvr_stats {
 } clvr_stats;
 
 void clvr_stats_from_mesh(clvr_stats *s, const clvr_mesh *m);
-void clvr_stats_from_clusters(clvr_stats *s, const struct clvr_clustered *c, const struct clvr_bvh *b);
+void clvr_stats_from_clusters(clvr_stats *s, const struct clvr_clustered *c, const struct clvr_accel *a);
 void clvr_stats_from_render(clvr_stats *s, const struct clvr_render_counters *rc, uint32_t method, uint32_t width,
                             uint32_t height);
 

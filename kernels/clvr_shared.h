@@ -115,11 +115,234 @@ CLVR_STATIC_ASSERT(sizeof(clvr_sampling_cluster) == 32, "clvr_sampling_cluster l
  * (owned by the preprocessing module: kernels/bounds, sfc, sort, scan,
  * cluster, reindex) */
 
+/* Radix sort digits: 8 bits, so 48-bit curve keys plus the 2-bit type need
+ * at most 7 passes, fewer when a digit is the same for every key. */
+#define CLVR_PP_RADIX_BITS 8u
+#define CLVR_PP_RADIX 256u
+
+/* One instance cluster as the greedy split (kernels/reindex.cl) finds it,
+ * before the offsets of the clustered arrays are known. 24 bytes. */
+typedef struct clvr_pp_instance_rec {
+    clvr_u64 vsrc;            /* where its vertex ids (first-use order) start in the scratch vertex map */
+    clvr_u32 first_element;   /* global sorted element id */
+    clvr_u32 num_elements;
+    clvr_u32 num_vertices;    /* distinct vertices its elements reference */
+    clvr_u32 type;            /* CLVR_CELL_* */
+} clvr_pp_instance_rec;
+CLVR_STATIC_ASSERT(sizeof(clvr_pp_instance_rec) == 24, "clvr_pp_instance_rec layout");
+
+/* bvh_root of an instance before bvh/ has built its tree. */
+#define CLVR_PP_NO_ROOT 0xffffffffu
+
 /* ---------------------------------------------------------------- bvh
- * (owned by bvh/: node layout, sentinels) */
+ * (owned by bvh/: node layout, sentinels)
+ *
+ * A vertex of the clustered mesh: x, y, z and the scalar in w. On the device
+ * it is float4 (one 16-byte load); on the host a POD with the same fields, so
+ * code written against .x .y .z .w compiles on both sides. */
+#ifdef __OPENCL_VERSION__
+typedef float4 clvr_vec4;
+#else
+typedef struct clvr_vec4 {
+    float x, y, z, w;
+} clvr_vec4;
+CLVR_STATIC_ASSERT(sizeof(clvr_vec4) == 16, "clvr_vec4 layout");
+#endif
+
+/* Every tree (top level over instances, bottom level per instance over its
+ * leaf clusters, single level over sampling clusters) is a 4-wide BVH packed
+ * bottom-up from primitives in Hilbert order (a Hilbert R-tree, Kamel and
+ * Faloutsos 1994): primitives 4m..4m+3 form node m of the lowest level,
+ * nodes 4m..4m+3 of a level form node m of the next. A tree over n
+ * primitives has ceil(log4 n) levels (1 when n <= 4; an empty tree is one
+ * node with four empty slots). Nodes of one tree are stored root first,
+ * level by level, so the root is the tree's first node; child references
+ * are absolute indices into the node array the tree lives in.
+ *
+ * Node: the four child boxes as structure-of-arrays (one float4 per bound
+ * component) and four child references. 112 bytes, 16-byte aligned.
+ * About n/3 nodes per tree: ~37 bytes per primitive, so with leaf clusters of
+ * N elements the bottom level costs ~37/N bytes per element. */
+typedef struct clvr_bvh_node {
+    float lo_x[4], lo_y[4], lo_z[4];
+    float hi_x[4], hi_y[4], hi_z[4];
+    clvr_u32 child[4];  /* CLVR_BVH_EMPTY, an inner node index, or CLVR_BVH_LEAF_BIT | primitive id */
+} clvr_bvh_node;
+CLVR_STATIC_ASSERT(sizeof(clvr_bvh_node) == 112, "clvr_bvh_node layout");
+
+/* Children per node. */
+#define CLVR_BVH_WIDTH 4u
+/* child[] of an unused slot; its box is empty (lo = +inf, hi = -inf). */
+#define CLVR_BVH_EMPTY 0xffffffffu
+/* child[] with this bit set names a primitive (leaf cluster, instance or
+ * box), the other 31 bits its index: at most 2^31 - 1 primitives per tree. */
+#define CLVR_BVH_LEAF_BIT 0x80000000u
+#define CLVR_BVH_MAX_PRIMS 0x7fffffffu
+/* Element id reported by point location when no element contains the point. */
+#define CLVR_BVH_NOT_FOUND 0xffffffffu
+/* Traversal stack entries. A packed tree over n < 2^32 primitives has at
+ * most 16 levels and needs at most 3 * 16 + 1 entries. */
+#ifndef CLVR_BVH_STACK_SIZE
+#define CLVR_BVH_STACK_SIZE 52
+#endif
+/* Tolerances shared by containment and boxes. A point whose parametric
+ * coordinates are outside the element by at most CLVR_ELEMENT_EPS still
+ * counts as inside, so a point on a shared face, edge or vertex is found in
+ * every neighbour (never lost between them). Boxes are padded by
+ * CLVR_BVH_BOX_PAD_REL times their largest extent (plus a few ulps of their
+ * coordinates) so that such points also pass every box test on the way. */
+#define CLVR_ELEMENT_EPS 1e-5f
+#define CLVR_BVH_BOX_PAD_REL 1e-4f
+
+/* One tree in a node array, for the level-by-level builder (host reference
+ * and kernels/bvh.cl): primitives first_prim .. first_prim + num_prims - 1 of
+ * a box array, nodes from node_base. 16 bytes. */
+typedef struct clvr_bvh_tree {
+    clvr_u32 node_base;
+    clvr_u32 first_prim;
+    clvr_u32 num_prims;
+    clvr_u32 pad0;
+} clvr_bvh_tree;
+CLVR_STATIC_ASSERT(sizeof(clvr_bvh_tree) == 16, "clvr_bvh_tree layout");
 
 /* ---------------------------------------------------------------- render
  * (owned by the renderer: camera, transfer function, light, frame params) */
+
+/* camera + transfer function (host/camera.c, host/tf.c) */
+#ifdef __OPENCL_VERSION__
+#define CLVR_SQRTF sqrt
+#define CLVR_FLOORF floor
+#define CLVR_FMINF fmin
+#define CLVR_FMAXF fmax
+#else
+#include <math.h>
+#define CLVR_SQRTF sqrtf
+#define CLVR_FLOORF floorf
+#define CLVR_FMINF fminf
+#define CLVR_FMAXF fmaxf
+#endif
+
+/* A pinhole camera as the primary-ray generator reads it. Pixel (px, py) are
+ * continuous image coordinates: px in [0, width) from left to right, py in
+ * [0, height) from the TOP row down (rows are stored top to bottom), so pixel
+ * (x, y) with sub-pixel jitter (u, v) in [0, 1)^2 is (x + u, y + v) and its
+ * centre is (x + 0.5, y + 0.5). The image plane sits at distance 1 along
+ * `forward`; the ray through (px, py) has direction
+ * corner + px * du + py * dv (then normalised). Built by clvr_camera_look_at;
+ * vectors are float[4] with w = 0. 144 bytes. */
+typedef struct clvr_camera {
+    float origin[4];  /* eye position, world units */
+    float corner[4];  /* eye -> top-left corner of the image plane (pixel coordinates (0, 0)) */
+    float du[4];      /* image-plane step of one pixel to the right */
+    float dv[4];      /* image-plane step of one pixel down */
+    float forward[4]; /* unit view direction (eye -> target) */
+    float right[4];   /* unit, image x axis */
+    float up[4];      /* unit, image y axis (upwards), orthogonal to forward and right */
+    float target[4];  /* the look-at point (viewers orbit around it) */
+    float fovy;       /* vertical field of view, degrees, (0, 180) */
+    float aspect;     /* width / height */
+    clvr_u32 width, height;
+} clvr_camera;
+CLVR_STATIC_ASSERT(sizeof(clvr_camera) == 144, "clvr_camera layout");
+
+/* Primary ray through continuous pixel coordinates (px, py), see
+ * clvr_camera: org = eye, dir = unit direction. */
+CLVR_INLINE void clvr_camera_ray(const clvr_camera *cam, float px, float py, float *org, float *dir)
+{
+    float d0 = cam->corner[0] + px * cam->du[0] + py * cam->dv[0];
+    float d1 = cam->corner[1] + px * cam->du[1] + py * cam->dv[1];
+    float d2 = cam->corner[2] + px * cam->du[2] + py * cam->dv[2];
+    float inv = 1.0f / CLVR_SQRTF(d0 * d0 + d1 * d1 + d2 * d2);
+    org[0] = cam->origin[0];
+    org[1] = cam->origin[1];
+    org[2] = cam->origin[2];
+    dir[0] = d0 * inv;
+    dir[1] = d1 * inv;
+    dir[2] = d2 * inv;
+}
+
+/* The baked transfer function is a table of n >= 2 entries of 4 floats
+ * (linear r, g, b, then extinction per unit density in 1/world length; see
+ * docs/transfer-function.md), entry i at scalar lo + i * (hi - lo) / (n - 1).
+ * A scalar s maps to the continuous table position
+ *   p = clamp((s - lo) * (n - 1) / (hi - lo), 0, n - 1)
+ * (scalars outside the window take the end entries; NaN maps to 0) and the
+ * lookup interpolates linearly between entries floor(p) and floor(p) + 1
+ * (the last pair for p = n - 1). On the device pass the float4 table cast to
+ * (__global const float *). */
+#define CLVR_TF_DEFAULT_SIZE 256u
+
+/* Table position of scalar s (see above). Monotone non-decreasing in s, which
+ * the majorant relies on. */
+CLVR_INLINE float clvr_tf_position(float s, float lo, float hi, clvr_u32 n)
+{
+    float scale = hi > lo ? (float)(n - 1u) / (hi - lo) : 0.0f;
+    /* fmax/fmin return the other operand for NaN, so NaN lands on 0. */
+    return CLVR_FMINF(CLVR_FMAXF((s - lo) * scale, 0.0f), (float)(n - 1u));
+}
+
+/* First entry of the interpolation pair at position p (at most n - 2). */
+CLVR_INLINE clvr_u32 clvr_tf_entry(float p, clvr_u32 n)
+{
+    clvr_u32 i = (clvr_u32)p;
+    return n < 2u ? 0u : (i > n - 2u ? n - 2u : i);
+}
+
+/* Transfer function at scalar s: out = (r, g, b, density * extinction).
+ * a + f * (b - a) is used (not a * (1 - f) + b * f) so that equal neighbours
+ * give exactly their value. */
+CLVR_INLINE void clvr_tf_lookup(CLVR_GLOBAL const float *table, clvr_u32 n, float lo, float hi, float density,
+                                float s, float *out)
+{
+    float p = clvr_tf_position(s, lo, hi, n);
+    clvr_u32 i = clvr_tf_entry(p, n);
+    clvr_u32 j = n < 2u ? 0u : i + 1u;
+    float f = n < 2u ? 0.0f : p - (float)i;
+    CLVR_GLOBAL const float *a = table + 4u * i;
+    CLVR_GLOBAL const float *b = table + 4u * j;
+    out[0] = a[0] + f * (b[0] - a[0]);
+    out[1] = a[1] + f * (b[1] - a[1]);
+    out[2] = a[2] + f * (b[2] - a[2]);
+    out[3] = density * (a[3] + f * (b[3] - a[3]));
+}
+
+/* Relative slack of the majorant: covers the rounding of the interpolation
+ * (a few ulps, possibly fused differently on the device) so that the
+ * majorant is a true upper bound; it costs ~0.002% more null collisions. */
+#define CLVR_TF_MAJORANT_SLACK (1.0f + 1.0f / 65536.0f)
+
+/* Majorant: an upper bound of the looked-up extinction (clvr_tf_lookup's
+ * out[3]) for every scalar in [a, b] (a > b is treated as [b, a]; NaN ends
+ * as the position 0). It is the maximum over the table entries from the
+ * first entry of a's interpolation pair to the second entry of b's, times
+ * density and CLVR_TF_MAJORANT_SLACK. Cost: O(entries covered). */
+CLVR_INLINE float clvr_tf_majorant(CLVR_GLOBAL const float *table, clvr_u32 n, float lo, float hi, float density,
+                                   float a, float b)
+{
+    float pa = clvr_tf_position(a, lo, hi, n), pb = clvr_tf_position(b, lo, hi, n);
+    if (pa > pb) { float t = pa; pa = pb; pb = t; }
+    clvr_u32 i0 = clvr_tf_entry(pa, n);
+    clvr_u32 i1 = n < 2u ? 0u : clvr_tf_entry(pb, n) + 1u;
+    float m = 0.0f;
+    for (clvr_u32 i = i0; i <= i1; ++i) m = CLVR_FMAXF(m, table[4u * i + 3u]);
+    return m * density * CLVR_TF_MAJORANT_SLACK;
+}
+
+#ifdef __OPENCL_VERSION__
+/* Device conveniences over float4 tables. */
+inline float4 clvr_tf_sample4(__global const float4 *tf, uint n, float lo, float hi, float density, float s)
+{
+    float o[4];
+    clvr_tf_lookup((__global const float *)tf, n, lo, hi, density, s, o);
+    return (float4)(o[0], o[1], o[2], o[3]);
+}
+inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo, float hi, float density, float a,
+                                    float b)
+{
+    return clvr_tf_majorant((__global const float *)tf, n, lo, hi, density, a, b);
+}
+#endif
+/* end camera + transfer function */
 
 /* ---------------------------------------------------------------- frame
  * (owned by the renderer: host/render.c, kernels/render.cl) */

@@ -5,7 +5,6 @@
  * (once per mesh), then each cell's range is mapped the same way. Cells that
  * no cluster touches keep an empty range and get majorant 0 (skipped). */
 #include "clvr_shared.h"
-#include "tf_lookup.h"
 
 /* Float <-> uint mapping that preserves order, so atomic_min/atomic_max on
  * uints act as min/max on floats of any sign. */

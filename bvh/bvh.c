@@ -1,0 +1,271 @@
+/* bvh.c: host reference and device driver of the packed 4-wide BVH build
+ * (Hilbert R-tree packing of primitives already in Hilbert order, see
+ * kernels/bvh_build.h). Both run the same per-node code, level by level. */
+#include "bvh.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "../kernels/bvh_build.h"
+
+uint32_t clvr_bvh_nodes_bound(uint32_t num_prims) { return clvr_bvh_tree_size(num_prims); }
+
+uint64_t clvr_bvh_bytes(uint32_t tlas_nodes, uint32_t blas_nodes)
+{
+    return ((uint64_t)tlas_nodes + blas_nodes) * sizeof(clvr_bvh_node);
+}
+
+/* Lays trees out one after another from node `base`; returns the node count
+ * or fails when it passes 2^31 - 1 (child references keep the top bit). */
+static clvr_status layout_trees(clvr_bvh_tree *trees, uint32_t ntrees, uint32_t base, uint32_t *total, clvr_error *err)
+{
+    uint64_t at = base;
+    for (uint32_t t = 0; t < ntrees; ++t) {
+        trees[t].node_base = (uint32_t)at;
+        at += clvr_bvh_tree_size(trees[t].num_prims);
+        if (at > CLVR_BVH_MAX_PRIMS)
+            return clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                                  "bvh: %llu nodes exceed the 2^31 - 1 a node reference can address; use larger "
+                                  "leaf clusters (--leaf-size)",
+                                  (unsigned long long)at);
+    }
+    *total = (uint32_t)(at - base);
+    return CLVR_OK;
+}
+
+static uint32_t max_height(const clvr_bvh_tree *trees, uint32_t ntrees)
+{
+    uint32_t h = 0;
+    for (uint32_t t = 0; t < ntrees; ++t) {
+        const uint32_t ht = clvr_bvh_height(trees[t].num_prims);
+        if (ht > h) h = ht;
+    }
+    return h;
+}
+
+static void build_trees_host(clvr_bvh_node *nodes, const float *prim_boxes, const clvr_bvh_tree *trees,
+                             uint32_t ntrees)
+{
+    const uint32_t h = max_height(trees, ntrees);
+    for (uint32_t level = 0; level < h; ++level)
+        for (uint32_t t = 0; t < ntrees; ++t) {
+            const uint32_t m = clvr_bvh_level_size(trees[t].num_prims, level);
+            for (uint32_t i = 0; i < m; ++i) clvr_bvh_build_node(nodes, prim_boxes, trees[t], level, i);
+        }
+}
+
+clvr_status clvr_bvh_build_boxes(const void *boxes, uint32_t n, clvr_bvh_node *nodes, clvr_error *err)
+{
+    if (n > CLVR_BVH_MAX_PRIMS)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW, "bvh: %u boxes exceed the 2^31 - 1 a tree can hold", n);
+    clvr_bvh_tree t = {0, 0, n, 0};
+    build_trees_host(nodes, (const float *)boxes, &t, 1);
+    return CLVR_OK;
+}
+
+/* One tree per instance over its leaves; checks the instances' leaf ranges. */
+static clvr_status instance_trees(const clvr_instance *inst, uint32_t ninst, uint32_t num_leaves,
+                                  clvr_bvh_tree **out, uint32_t *total, clvr_error *err)
+{
+    clvr_bvh_tree *trees = calloc(ninst ? ninst : 1, sizeof *trees);
+    if (!trees) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for %u tree descriptors", ninst);
+    for (uint32_t i = 0; i < ninst; ++i) {
+        if ((uint64_t)inst[i].first_leaf + inst[i].num_leaves > num_leaves) {
+            free(trees);
+            return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                                  "bvh: instance %u has leaves %u..%u but there are %u leaf boxes; the clustering "
+                                  "and its leaf_boxes disagree",
+                                  i, inst[i].first_leaf, inst[i].first_leaf + inst[i].num_leaves, num_leaves);
+        }
+        trees[i].first_prim = inst[i].first_leaf;
+        trees[i].num_prims = inst[i].num_leaves;
+    }
+    clvr_status s = layout_trees(trees, ninst, 0, total, err);
+    if (s != CLVR_OK) {
+        free(trees);
+        return s;
+    }
+    *out = trees;
+    return CLVR_OK;
+}
+
+/* The top level over the instances' bounds, in host memory. */
+static clvr_status build_tlas_host(const clvr_instance *inst, uint32_t ninst, clvr_bvh_node **out, uint32_t *count,
+                                   clvr_error *err)
+{
+    const uint32_t nn = clvr_bvh_tree_size(ninst);
+    clvr_box *boxes = malloc((ninst ? ninst : 1) * sizeof *boxes);
+    clvr_bvh_node *nodes = malloc((size_t)nn * sizeof *nodes);
+    if (!boxes || !nodes) {
+        free(boxes);
+        free(nodes);
+        return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for the top level over %u instances", ninst);
+    }
+    for (uint32_t i = 0; i < ninst; ++i) boxes[i] = inst[i].bounds;
+    clvr_status s = clvr_bvh_build_boxes(boxes, ninst, nodes, err);
+    free(boxes);
+    if (s != CLVR_OK) {
+        free(nodes);
+        return s;
+    }
+    *out = nodes;
+    *count = nn;
+    return CLVR_OK;
+}
+
+clvr_status clvr_bvh_build_host(clvr_instance *instances, uint32_t num_instances, const clvr_box *leaf_boxes,
+                                uint32_t num_leaves, clvr_bvh_host *out, clvr_error *err)
+{
+    memset(out, 0, sizeof *out);
+    clvr_bvh_tree *trees = NULL;
+    uint32_t total = 0;
+    clvr_status s = instance_trees(instances, num_instances, num_leaves, &trees, &total, err);
+    if (s != CLVR_OK) return s;
+    out->blas = malloc((size_t)(total ? total : 1) * sizeof *out->blas);
+    if (!out->blas) {
+        free(trees);
+        return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for %u bottom-level nodes", total);
+    }
+    out->blas_nodes = total;
+    build_trees_host(out->blas, (const float *)leaf_boxes, trees, num_instances);
+    for (uint32_t i = 0; i < num_instances; ++i) instances[i].bvh_root = trees[i].node_base;
+    free(trees);
+    s = build_tlas_host(instances, num_instances, &out->tlas, &out->tlas_nodes, err);
+    if (s != CLVR_OK) {
+        clvr_bvh_host_free(out);
+        return s;
+    }
+    out->tlas_root = 0;
+    return CLVR_OK;
+}
+
+void clvr_bvh_host_free(clvr_bvh_host *b)
+{
+    if (!b) return;
+    free(b->tlas);
+    free(b->blas);
+    memset(b, 0, sizeof *b);
+}
+
+clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_error *err)
+{
+    memset(out, 0, sizeof *out);
+    clvr_status s = CLVR_OK;
+    CLVR_TRY(clvr_cl_build(cl, "bvh.cl", "", &out->program, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_build_level", &out->build_level, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_locate_points", &out->locate_points, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_hits", &out->ray_hits, err));
+    return CLVR_OK;
+cleanup:
+    clvr_bvh_kernels_destroy(out);
+    return s;
+}
+
+void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
+{
+    if (!k) return;
+    if (k->build_level) clReleaseKernel(k->build_level);
+    if (k->locate_points) clReleaseKernel(k->locate_points);
+    if (k->ray_hits) clReleaseKernel(k->ray_hits);
+    if (k->program) clReleaseProgram(k->program);
+    memset(k, 0, sizeof *k);
+}
+
+/* Runs the level kernel bottom-up over all trees into `nodes`. The level
+ * prefix is O(trees * levels) host arithmetic; the nodes are built on the
+ * device. Adds kernel time to *seconds. */
+static clvr_status build_trees_device(clvr_cl *cl, const clvr_bvh_kernels *k, cl_mem nodes, cl_mem prim_boxes,
+                                      const clvr_bvh_tree *trees, uint32_t ntrees, double *seconds, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem trees_mem = NULL, prefix_mem = NULL;
+    uint32_t *prefix = calloc((size_t)ntrees + 1, sizeof *prefix);
+    cl_event evt = NULL;
+    if (!prefix) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for %u tree prefixes", ntrees);
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)ntrees * sizeof *trees,
+                            (void *)trees, "bvh tree descriptors", &trees_mem, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, ((size_t)ntrees + 1) * sizeof *prefix, NULL, "bvh level prefix",
+                            &prefix_mem, err));
+    const uint32_t h = max_height(trees, ntrees);
+    for (uint32_t level = 0; level < h; ++level) {
+        for (uint32_t t = 0; t < ntrees; ++t) prefix[t + 1] = prefix[t] + clvr_bvh_level_size(trees[t].num_prims, level);
+        /* Blocking: prefix[] is rewritten for the next level. */
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, prefix_mem, CL_TRUE, 0, ((size_t)ntrees + 1) * sizeof *prefix,
+                                           prefix, 0, NULL, NULL));
+        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 0, sizeof(cl_mem), &nodes));
+        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 1, sizeof(cl_mem), &prim_boxes));
+        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 2, sizeof(cl_mem), &trees_mem));
+        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 3, sizeof(cl_mem), &prefix_mem));
+        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 4, sizeof(cl_uint), &ntrees));
+        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 5, sizeof(cl_uint), &level));
+        CLVR_TRY(clvr_cl_run1d(cl, k->build_level, prefix[ntrees], 64, &evt, err));
+        if (evt) {
+            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+            *seconds += clvr_cl_event_seconds(evt);
+            clReleaseEvent(evt);
+            evt = NULL;
+        }
+    }
+    CLVR_CL_CHECK(clFinish(cl->queue));
+cleanup:
+    if (evt) clReleaseEvent(evt);
+    clvr_cl_release(cl, &trees_mem);
+    clvr_cl_release(cl, &prefix_mem);
+    free(prefix);
+    return s;
+}
+
+clvr_status clvr_bvh_build_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_instance *host_instances,
+                                  uint32_t num_instances, cl_mem instances, cl_mem leaf_boxes, uint32_t num_leaves,
+                                  clvr_bvh_device *out, clvr_error *err)
+{
+    memset(out, 0, sizeof *out);
+    clvr_status s = CLVR_OK;
+    clvr_bvh_tree *trees = NULL;
+    clvr_bvh_node *tlas = NULL;
+    uint32_t total = 0;
+    CLVR_TRY(instance_trees(host_instances, num_instances, num_leaves, &trees, &total, err));
+    out->blas_nodes = total;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)total * sizeof(clvr_bvh_node), NULL,
+                            "bottom-level BVH nodes", &out->blas, err));
+    CLVR_TRY(build_trees_device(cl, k, out->blas, leaf_boxes, trees, num_instances, &out->build_seconds, err));
+    for (uint32_t i = 0; i < num_instances; ++i) host_instances[i].bvh_root = trees[i].node_base;
+    if (num_instances)
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, instances, CL_TRUE, 0, (size_t)num_instances * sizeof *host_instances,
+                                           host_instances, 0, NULL, NULL));
+    CLVR_TRY(build_tlas_host(host_instances, num_instances, &tlas, &out->tlas_nodes, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)out->tlas_nodes * sizeof *tlas, tlas,
+                            "top-level BVH nodes", &out->tlas, err));
+    out->tlas_root = 0;
+cleanup:
+    free(trees);
+    free(tlas);
+    if (s != CLVR_OK) clvr_bvh_device_release(cl, out);
+    return s;
+}
+
+void clvr_bvh_device_release(clvr_cl *cl, clvr_bvh_device *b)
+{
+    if (!b) return;
+    clvr_cl_release(cl, &b->tlas);
+    clvr_cl_release(cl, &b->blas);
+    memset(b, 0, sizeof *b);
+}
+
+clvr_status clvr_bvh_build_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, cl_mem boxes, uint32_t n,
+                                        cl_mem *out_nodes, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    *out_nodes = NULL;
+    double secs = 0.0;
+    if (n > CLVR_BVH_MAX_PRIMS)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW, "bvh: %u boxes exceed the 2^31 - 1 a tree can hold", n);
+    clvr_bvh_tree t = {0, 0, n, 0};
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)clvr_bvh_tree_size(n) * sizeof(clvr_bvh_node), NULL,
+                            "sampling-cluster BVH nodes", out_nodes, err));
+    CLVR_TRY(build_trees_device(cl, k, *out_nodes, boxes, &t, 1, &secs, err));
+    return CLVR_OK;
+cleanup:
+    clvr_cl_release(cl, out_nodes);
+    return s;
+}

@@ -1,0 +1,83 @@
+/* bvh.h: building the two-level BVH of the clustered mesh (bottom level per
+ * instance cluster over its leaf clusters, top level over the instances) and
+ * single-level BVHs over arbitrary boxes (sampling clusters), on the device
+ * (OpenCL, kernels/bvh.cl) or on the host (the C reference, same code).
+ * Node layout and sizes: clvr_shared.h, "bvh" section. Traversal:
+ * kernels/bvh_traverse.h (iterators), kernels/locate.h (point location),
+ * kernels/elements.h (containment and interpolation); all three compile on
+ * the host too. */
+#ifndef CLVR_BVH_H
+#define CLVR_BVH_H
+
+#include <stdint.h>
+
+#include "../kernels/clvr_shared.h"
+#include "cl_context.h"
+#include "status.h"
+
+/* Nodes of a tree over n primitives (n = 0 gives 1: an empty root).
+ * Worst case about n / 3 + log4(n) + 1. */
+uint32_t clvr_bvh_nodes_bound(uint32_t num_prims);
+
+/* Single-level tree over n boxes given with a 32-byte stride (clvr_box or
+ * clvr_sampling_cluster: lo xyz at floats 0..2, hi xyz at 4..6); the ray
+ * iterator reports primitive i for box i. nodes must hold
+ * clvr_bvh_nodes_bound(n); the root is node 0. */
+clvr_status clvr_bvh_build_boxes(const void *boxes, uint32_t n, clvr_bvh_node *nodes, clvr_error *err);
+
+/* The two-level tree in host memory. */
+typedef struct clvr_bvh_host {
+    clvr_bvh_node *tlas;
+    uint32_t tlas_nodes;
+    uint32_t tlas_root;   /* always 0 */
+    clvr_bvh_node *blas;  /* every instance's tree, instance order */
+    uint32_t blas_nodes;
+} clvr_bvh_host;
+
+/* Host build: instances[i].bvh_root is filled; leaf_boxes has num_leaves
+ * boxes (global leaf ids, as instances[].first_leaf count them). Caller frees
+ * with clvr_bvh_host_free. Fails with CLVR_ERR_BAD_FIELD when an instance's
+ * leaves fall outside leaf_boxes, CLVR_ERR_OVERFLOW past 2^31 - 1 nodes. */
+clvr_status clvr_bvh_build_host(clvr_instance *instances, uint32_t num_instances, const clvr_box *leaf_boxes,
+                                uint32_t num_leaves, clvr_bvh_host *out, clvr_error *err);
+void clvr_bvh_host_free(clvr_bvh_host *b);
+
+/* Compiled kernels/bvh.cl, made once per context. */
+typedef struct clvr_bvh_kernels {
+    cl_program program;
+    cl_kernel build_level;
+    cl_kernel locate_points;
+    cl_kernel ray_hits;
+} clvr_bvh_kernels;
+clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_error *err);
+void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k); /* accepts NULL and half-built */
+
+/* The two-level tree in device memory. */
+typedef struct clvr_bvh_device {
+    cl_mem tlas, blas;
+    uint32_t tlas_nodes, blas_nodes;
+    uint32_t tlas_root;   /* always 0 */
+    double build_seconds; /* kernel time (event profiling) of the bottom-level build */
+} clvr_bvh_device;
+
+/* Device build. host_instances (the host copy of the instances buffer) gets
+ * bvh_root filled and is written to `instances` (the device buffer of the
+ * same num_instances entries). The bottom level is built on the device from
+ * leaf_boxes (num_leaves clvr_box); the top level (a few hundred instances at
+ * most) on the host, then uploaded. Release with clvr_bvh_device_release. */
+clvr_status clvr_bvh_build_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_instance *host_instances,
+                                  uint32_t num_instances, cl_mem instances, cl_mem leaf_boxes, uint32_t num_leaves,
+                                  clvr_bvh_device *out, clvr_error *err);
+void clvr_bvh_device_release(clvr_cl *cl, clvr_bvh_device *b);
+
+/* Device build of a single-level tree over n boxes in a device buffer
+ * (32-byte stride, as clvr_bvh_build_boxes). *out_nodes receives a new
+ * buffer of clvr_bvh_nodes_bound(n) nodes, root 0 (release with
+ * clvr_cl_release). */
+clvr_status clvr_bvh_build_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, cl_mem boxes, uint32_t n,
+                                        cl_mem *out_nodes, clvr_error *err);
+
+/* Bytes of both levels. */
+uint64_t clvr_bvh_bytes(uint32_t tlas_nodes, uint32_t blas_nodes);
+
+#endif /* CLVR_BVH_H */

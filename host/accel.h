@@ -1,0 +1,28 @@
+/* accel.h: every acceleration structure the renderer traverses, built once
+ * per clustered mesh: the two-level BVH for point location (bvh/) and the
+ * single-level BVH over the adaptive-sampling clusters for the `bins`
+ * method's ray-vs-cluster queries. */
+#ifndef CLVR_ACCEL_H
+#define CLVR_ACCEL_H
+
+#include "bvh.h"
+#include "cl_context.h"
+#include "preprocess.h"
+
+typedef struct clvr_accel {
+    clvr_bvh_kernels kernels;
+    clvr_bvh_device two_level;   /* tlas, blas */
+    cl_mem sampling_nodes;       /* BVH over clustered->sampling */
+    uint32_t sampling_node_count;
+    uint32_t tlas_root;
+    double build_s;              /* wall seconds of clvr_accel_build */
+} clvr_accel;
+
+/* Builds both trees; fills c->host_instances[].bvh_root and the device copy. */
+clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, clvr_error *err);
+/* Releases everything; accepts NULL and half-built. */
+void clvr_accel_release(clvr_cl *cl, clvr_accel *a);
+/* Device bytes of the two-level BVH (the paper's "BVH size"). */
+uint64_t clvr_accel_bvh_bytes(const clvr_accel *a);
+
+#endif

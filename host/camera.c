@@ -1,0 +1,177 @@
+/* camera.c: pinhole camera construction, automatic framing of a box, and
+ * the --camera string parser. The ray generator itself lives in
+ * kernels/clvr_shared.h (clvr_camera_ray) so host and kernels agree. */
+#include "camera.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void sub3(const float *a, const float *b, float *o)
+{
+    o[0] = a[0] - b[0];
+    o[1] = a[1] - b[1];
+    o[2] = a[2] - b[2];
+}
+static float dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void cross3(const float *a, const float *b, float *o)
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+static float norm3(const float *a) { return sqrtf(dot3(a, a)); }
+static int finite3(const float *a) { return isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]); }
+
+clvr_status clvr_camera_look_at(clvr_camera *cam, const float eye[3], const float target[3], const float up[3],
+                                float fovy_deg, uint32_t width, uint32_t height, clvr_error *err)
+{
+    if (!finite3(eye) || !finite3(target) || !finite3(up))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: eye, look-at point and up vector must be finite numbers");
+    if (!(fovy_deg > 0.0f && fovy_deg < 180.0f))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: vertical field of view %g degrees is outside (0, 180)",
+                              (double)fovy_deg);
+    if (width == 0 || height == 0)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: image size %ux%u is empty", width, height);
+    float f[3], r[3], u[3];
+    sub3(target, eye, f);
+    float fl = norm3(f);
+    if (!(fl > 0.0f) || !isfinite(fl))
+        return clvr_error_set(err, CLVR_ERR_USAGE,
+                              "camera: eye (%g, %g, %g) and look-at point coincide; give two different points",
+                              (double)eye[0], (double)eye[1], (double)eye[2]);
+    for (int k = 0; k < 3; ++k) f[k] /= fl;
+    float ul = norm3(up);
+    cross3(f, up, r);
+    float rl = norm3(r);
+    /* Parallel within ~0.06 degrees: the basis would be dominated by
+     * rounding and the image would spin unpredictably. */
+    if (!(ul > 0.0f) || !(rl > 1e-3f * ul))
+        return clvr_error_set(err, CLVR_ERR_USAGE,
+                              "camera: up vector (%g, %g, %g) is zero or parallel to the view direction; "
+                              "choose an up vector across the line of sight",
+                              (double)up[0], (double)up[1], (double)up[2]);
+    for (int k = 0; k < 3; ++k) r[k] /= rl;
+    cross3(r, f, u);
+
+    memset(cam, 0, sizeof *cam);
+    float th = tanf(0.5f * fovy_deg * (float)M_PI / 180.0f);
+    float aspect = (float)width / (float)height;
+    float tw = th * aspect;
+    for (int k = 0; k < 3; ++k) {
+        cam->origin[k] = eye[k];
+        cam->target[k] = target[k];
+        cam->forward[k] = f[k];
+        cam->right[k] = r[k];
+        cam->up[k] = u[k];
+        cam->corner[k] = f[k] - tw * r[k] + th * u[k];
+        cam->du[k] = r[k] * (2.0f * tw / (float)width);
+        cam->dv[k] = -u[k] * (2.0f * th / (float)height);
+    }
+    cam->fovy = fovy_deg;
+    cam->aspect = aspect;
+    cam->width = width;
+    cam->height = height;
+    return CLVR_OK;
+}
+
+float clvr_camera_project(const clvr_camera *cam, const float p[3], float *px, float *py)
+{
+    float q[3];
+    sub3(p, cam->origin, q);
+    float depth = dot3(q, cam->forward);
+    float th = tanf(0.5f * cam->fovy * (float)M_PI / 180.0f), tw = th * cam->aspect;
+    float x = dot3(q, cam->right) / depth, y = dot3(q, cam->up) / depth;
+    *px = (x + tw) / (2.0f * tw) * (float)cam->width;
+    *py = (th - y) / (2.0f * th) * (float)cam->height;
+    return depth;
+}
+
+clvr_status clvr_camera_frame_box(clvr_camera *cam, const float lo[3], const float hi[3], float fovy_deg,
+                                  uint32_t width, uint32_t height, clvr_error *err)
+{
+    if (!finite3(lo) || !finite3(hi) || lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2])
+        return clvr_error_set(err, CLVR_ERR_BAD_VALUE,
+                              "camera: cannot frame the box (%g, %g, %g)-(%g, %g, %g): bounds must be finite with lo <= hi",
+                              (double)lo[0], (double)lo[1], (double)lo[2], (double)hi[0], (double)hi[1], (double)hi[2]);
+    if (!(fovy_deg > 0.0f && fovy_deg < 180.0f))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: vertical field of view %g degrees is outside (0, 180)",
+                              (double)fovy_deg);
+    if (width == 0 || height == 0)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: image size %ux%u is empty", width, height);
+    const float world_up[3] = {0.0f, 1.0f, 0.0f};
+    float d[3] = {CLVR_CAMERA_VIEW_X, CLVR_CAMERA_VIEW_Y, CLVR_CAMERA_VIEW_Z};
+    float dl = norm3(d);
+    for (int k = 0; k < 3; ++k) d[k] /= dl;
+    float c[3], f[3] = {-d[0], -d[1], -d[2]}, r[3], u[3];
+    for (int k = 0; k < 3; ++k) c[k] = 0.5f * lo[k] + 0.5f * hi[k];
+    cross3(f, world_up, r);
+    float rl = norm3(r);
+    for (int k = 0; k < 3; ++k) r[k] /= rl;
+    cross3(r, f, u);
+    /* A corner q (relative to the centre) seen from eye = c + t d has depth
+     * t - q.d and image offsets q.r, q.u; it fits when |q.r| <= tw * depth
+     * and |q.u| <= th * depth, i.e. t >= q.d + |q.r| / tw (and the same with
+     * th). The distance is the largest such bound over the corners, computed
+     * in double so the fit is exact up to float rounding. */
+    double th = tan(0.5 * fovy_deg * M_PI / 180.0) * CLVR_CAMERA_FRAME_FILL;
+    double tw = th * (double)width / (double)height;
+    double t = 0.0;
+    for (int i = 0; i < 8; ++i) {
+        double q[3];
+        for (int k = 0; k < 3; ++k) q[k] = (double)((i >> k) & 1 ? hi[k] : lo[k]) - (double)c[k];
+        double qd = q[0] * d[0] + q[1] * d[1] + q[2] * d[2];
+        double qr = q[0] * r[0] + q[1] * r[1] + q[2] * r[2];
+        double qu = q[0] * u[0] + q[1] * u[1] + q[2] * u[2];
+        double need = qd + fmax(fabs(qr) / tw, fabs(qu) / th);
+        if (need > t) t = need;
+    }
+    /* Leave room for the rounding of the float camera: 0.1% farther. */
+    t *= 1.001;
+    if (!(t > 0.0)) t = 1.0; /* a point: any distance shows it */
+    float eye[3];
+    for (int k = 0; k < 3; ++k) eye[k] = (float)((double)c[k] + t * (double)d[k]);
+    return clvr_camera_look_at(cam, eye, c, world_up, fovy_deg, width, height, err);
+}
+
+clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err)
+{
+    static const char *names[9] = {"eye x", "eye y", "eye z", "look-at x", "look-at y", "look-at z", "up x", "up y", "up z"};
+    const char *p = text;
+    if (!text) return clvr_error_set(err, CLVR_ERR_USAGE, "--camera: missing value");
+    for (int i = 0; i < 9; ++i) {
+        while (*p == ' ' || *p == '\t') ++p;
+        char *end = NULL;
+        errno = 0;
+        double v = strtod(p, &end);
+        if (end == p)
+            return clvr_error_set(err, CLVR_ERR_USAGE,
+                                  "--camera \"%s\": value %d (%s) at character %d is not a number; expected "
+                                  "px,py,pz,lx,ly,lz,ux,uy,uz",
+                                  text, i + 1, names[i], (int)(p - text) + 1);
+        if (!isfinite(v) || fabs(v) > 3.0e38)
+            return clvr_error_set(err, CLVR_ERR_USAGE, "--camera \"%s\": value %d (%s) %.*s is not a finite float",
+                                  text, i + 1, names[i], (int)(end - p), p);
+        out[i] = (float)v;
+        p = end;
+        while (*p == ' ' || *p == '\t') ++p;
+        if (i < 8) {
+            if (!*p)
+                return clvr_error_set(err, CLVR_ERR_USAGE,
+                                      "--camera \"%s\": only %d of 9 values; expected px,py,pz,lx,ly,lz,ux,uy,uz",
+                                      text, i + 1);
+            if (*p != ',')
+                return clvr_error_set(err, CLVR_ERR_USAGE,
+                                      "--camera \"%s\": expected ',' after value %d (%s), found '%c'; expected 9 "
+                                      "comma-separated numbers px,py,pz,lx,ly,lz,ux,uy,uz",
+                                      text, i + 1, names[i], *p);
+            ++p;
+        } else if (*p) {
+            return clvr_error_set(err, CLVR_ERR_USAGE,
+                                  "--camera \"%s\": unexpected \"%s\" after the 9th value; expected exactly 9 numbers",
+                                  text, p);
+        }
+    }
+    return CLVR_OK;
+}

@@ -1,0 +1,52 @@
+/* camera.h: the pinhole camera (kernels/clvr_shared.h: clvr_camera, and
+ * clvr_camera_ray, shared with the render kernel). Built from eye, look-at
+ * point and up vector, or framed automatically around a bounding box.
+ * World units are the mesh's; angles are degrees. */
+#ifndef CLVR_CAMERA_H
+#define CLVR_CAMERA_H
+
+#include <stdint.h>
+
+#include "../kernels/clvr_shared.h"
+#include "status.h"
+
+/* Margin kept by clvr_camera_frame_box: the box's projection stays inside
+ * this fraction of the half-width and half-height of the image. */
+#define CLVR_CAMERA_FRAME_FILL 0.9f
+
+/* Builds a camera at eye looking at target; up need not be orthogonal to the
+ * view direction (it is orthogonalised) but must not be parallel to it.
+ * fovy_deg in (0, 180) is the vertical field of view; width, height >= 1.
+ * Errors (CLVR_ERR_USAGE): non-finite input, eye == target, up parallel to
+ * the view direction or zero, fov out of range, empty image. */
+clvr_status clvr_camera_look_at(clvr_camera *cam, const float eye[3], const float target[3], const float up[3],
+                                float fovy_deg, uint32_t width, uint32_t height, clvr_error *err);
+
+/* Default oblique view direction of clvr_camera_frame_box, from the target
+ * towards the eye (unnormalised): front-right-above, about 23 degrees of
+ * elevation, with +y up (VTK/ParaView convention). */
+#define CLVR_CAMERA_VIEW_X 1.0f
+#define CLVR_CAMERA_VIEW_Y 0.8f
+#define CLVR_CAMERA_VIEW_Z 1.6f
+
+/* Frames the box [lo, hi]: looks at its centre from the default oblique
+ * direction with +y up, at the smallest distance at which all 8 corners
+ * project inside CLVR_CAMERA_FRAME_FILL of the image (exact for the box, not
+ * a bounding-sphere estimate). A degenerate box (a point) is viewed from
+ * distance 1. Errors: non-finite or inverted bounds (CLVR_ERR_BAD_VALUE),
+ * bad fov/size as clvr_camera_look_at. */
+clvr_status clvr_camera_frame_box(clvr_camera *cam, const float lo[3], const float hi[3], float fovy_deg,
+                                  uint32_t width, uint32_t height, clvr_error *err);
+
+/* Parses "px,py,pz,lx,ly,lz,ux,uy,uz" (eye, look-at point, up; 9 finite
+ * decimal numbers separated by commas, spaces around them allowed) into
+ * out[9]. Errors name the position and the text: CLVR_ERR_USAGE. */
+clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err);
+
+/* Projects world point p into continuous pixel coordinates (px, py) (same
+ * convention as clvr_camera_ray) and returns its depth along forward;
+ * depth <= 0 means behind the eye (px, py then meaningless). For tests and
+ * viewers. */
+float clvr_camera_project(const clvr_camera *cam, const float p[3], float *px, float *py);
+
+#endif /* CLVR_CAMERA_H */

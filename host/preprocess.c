@@ -1,0 +1,678 @@
+/* preprocess.c: drives kernels/preprocess.cl: bounds -> keys -> radix sort
+ * -> gather -> sampling clusters -> greedy instance split with local
+ * re-indexing -> flagged select of the instance records -> scans of their
+ * vertex and leaf counts -> instance table -> clustered vertices -> leaf
+ * boxes -> instance bounds. See preprocess.h for the contracts. */
+#include "preprocess.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define ARG(k, i, v) CLVR_CL_CHECK(clSetKernelArg((k), (i), sizeof(v), &(v)))
+
+static double wall_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void clvr_preprocess_options_default(clvr_preprocess_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->leaf_size = 16;
+    o->sampling_size = 256;
+    o->morton = 0;
+    o->index_bits = 16;
+    o->max_instance_elements = 0;
+    o->keep_order = 0;
+}
+
+clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_preprocess_options *out, clvr_error *err)
+{
+    if (in) *out = *in;
+    else clvr_preprocess_options_default(out);
+    if (out->leaf_size < 1 || out->leaf_size > 128)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: leaf_size %u is outside 1..128 (paper: 16)",
+                              out->leaf_size);
+    if (out->sampling_size < 1)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: sampling_size must be at least 1 (default 256)");
+    if (out->index_bits != 16 && out->index_bits != 32)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: index_bits is %u; use 16 or 32", out->index_bits);
+    if (out->max_instance_elements == 0) out->max_instance_elements = out->index_bits == 16 ? 1u << 20 : 1u << 16;
+    return CLVR_OK;
+}
+
+const char *clvr_pp_stage_name(int stage)
+{
+    static const char *names[CLVR_PP_STAGE_COUNT] = {"upload", "bounds", "keys", "sort", "gather",
+                                                     "sampling", "split", "instances", "vertices", "leaves"};
+    return stage >= 0 && stage < CLVR_PP_STAGE_COUNT ? names[stage] : "?";
+}
+
+void clvr_pp_layout_make(clvr_pp_layout *l, const uint64_t count[CLVR_CELL_TYPE_COUNT])
+{
+    uint64_t e = 0, s = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        l->count[t] = count[t];
+        l->first[t] = e;
+        l->slot[t] = s;
+        e += count[t];
+        s += count[t] * clvr_cell_vertex_count(t);
+    }
+    l->num_elements = e;
+    l->num_slots = s;
+}
+
+float clvr_pp_scale(const clvr_box *b)
+{
+    float ext = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        float d = b->hi[k] - b->lo[k];
+        if (d > ext) ext = d;
+    }
+    return ext > 0.0f ? 65536.0f / ext : 0.0f;
+}
+
+void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, const clvr_preprocess_options *o,
+                             uint32_t compute_units, uint64_t num_vertices)
+{
+    memset(p, 0, sizeof *p);
+    uint32_t cu = compute_units ? compute_units : 1;
+    p->max_elems = o->max_instance_elements;
+    if (o->index_bits == 16) p->vlimit = CLVR_INSTANCE_MAX_VERTS16 - 1u;
+    else {
+        uint64_t v = (uint64_t)p->max_elems * CLVR_CELL_MAX_VERTS;
+        if (v > num_vertices) v = num_vertices;
+        p->vlimit = v < 8 ? 8u : (uint32_t)v;
+    }
+    /* Load factor at most 1/2 keeps the linear probes short. */
+    p->log2cap = 4;
+    while ((1ull << p->log2cap) < 2ull * ((uint64_t)p->vlimit + CLVR_CELL_MAX_VERTS)) ++p->log2cap;
+    uint64_t epoch = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        uint64_t n = l->count[t];
+        uint64_t seg = (n + 4ull * cu - 1) / (4ull * cu);
+        if (seg < (1ull << 20)) seg = 1ull << 20;
+        p->seg_len[t] = (uint32_t)(seg > 0xffffffffull ? 0xffffffffull : seg);
+        p->nseg[t] = n ? (uint32_t)((n + p->seg_len[t] - 1) / p->seg_len[t]) : 0;
+        uint32_t vpe = clvr_cell_vertex_count(t);
+        uint32_t m = (p->vlimit - vpe + 1) / vpe;
+        if (m > p->max_elems) m = p->max_elems;
+        if (m < 1) m = 1;
+        uint64_t seg_elems = n < p->seg_len[t] ? n : p->seg_len[t];
+        if (seg_elems / m + 2 > p->rec_max) p->rec_max = (uint32_t)(seg_elems / m + 2);
+        p->rec_base[t] = p->total_segments;
+        p->total_segments += p->nseg[t];
+        if (p->nseg[t] > p->max_segments) p->max_segments = p->nseg[t];
+    }
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        p->epoch0[t] = epoch;
+        epoch += p->rec_max;
+    }
+}
+
+/* ------------------------------------------------------------ program */
+
+clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    memset(pp, 0, sizeof *pp);
+    pp->cl = cl;
+    uint32_t cu = cl->compute_units ? cl->compute_units : 1;
+    /* A few tiles per compute unit balance the load on a CPU; GPUs want many. */
+    pp->max_tiles = cl->device_type & CL_DEVICE_TYPE_GPU ? 4096u : 8u * cu;
+    if (pp->max_tiles > 4096u) pp->max_tiles = 4096u;
+    /* Elements per work-item of the per-element kernels: long runs on a CPU, one on a GPU. */
+    pp->per_item = cl->device_type & CL_DEVICE_TYPE_GPU ? 1u : 1024u;
+    {
+        const char *e = getenv("CLVR_PP_PER_ITEM"); /* tuning experiments */
+        if (e && atoi(e) > 0) pp->per_item = (uint32_t)atoi(e);
+    }
+    CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", NULL, &pp->prog, err));
+    struct { cl_kernel *k; const char *name; } ks[] = {
+        {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->element_keys, "clvr_pp_element_keys"},
+        {&pp->scan_reduce, "clvr_pp_scan_reduce"},   {&pp->scan_sums, "clvr_pp_scan_sums"},
+        {&pp->scan_apply, "clvr_pp_scan_apply"},     {&pp->select_scatter, "clvr_pp_select_scatter"},
+        {&pp->radix_andor, "clvr_pp_radix_andor"},   {&pp->radix_hist, "clvr_pp_radix_hist"},
+        {&pp->radix_scatter, "clvr_pp_radix_scatter"}, {&pp->gather, "clvr_pp_gather"},
+        {&pp->sampling, "clvr_pp_sampling"},         {&pp->leaf_boxes, "clvr_pp_leaf_boxes"},
+        {&pp->instance_bounds, "clvr_pp_instance_bounds"}, {&pp->split, "clvr_pp_split"},
+        {&pp->rec_flags, "clvr_pp_rec_flags"},       {&pp->inst_counts, "clvr_pp_inst_counts"},
+        {&pp->inst_write, "clvr_pp_inst_write"},     {&pp->vertices, "clvr_pp_vertices"},
+    };
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i) CLVR_TRY(clvr_cl_kernel(pp->prog, ks[i].name, ks[i].k, err));
+cleanup:
+    if (s != CLVR_OK) clvr_pp_destroy(pp);
+    return s;
+}
+
+void clvr_pp_destroy(clvr_pp *pp)
+{
+    if (!pp) return;
+    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->element_keys, &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply,
+                       &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
+                       &pp->sampling, &pp->leaf_boxes, &pp->instance_bounds, &pp->split, &pp->rec_flags,
+                       &pp->inst_counts, &pp->inst_write, &pp->vertices};
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
+        if (*ks[i]) { clReleaseKernel(*ks[i]); *ks[i] = NULL; }
+    if (pp->prog) clReleaseProgram(pp->prog);
+    pp->prog = NULL;
+}
+
+uint32_t clvr_pp_tiles(const clvr_pp *pp, uint64_t n)
+{
+    uint64_t t = (n + 4095) / 4096;
+    if (t > pp->max_tiles) t = pp->max_tiles;
+    return t ? (uint32_t)t : 1u;
+}
+
+/* Runs k over n items (local size `local`), adding device time to *sec. */
+static clvr_status launch(clvr_pp *pp, cl_kernel k, uint64_t n, size_t local, double *sec, clvr_error *err)
+{
+    cl_event ev = NULL;
+    clvr_status s = clvr_cl_run1d(pp->cl, k, (size_t)n, local, sec ? &ev : NULL, err);
+    if (s == CLVR_OK && ev) *sec += clvr_cl_event_seconds(ev);
+    if (ev) clReleaseEvent(ev);
+    return s;
+}
+
+/* ------------------------------------------------------------ stages */
+
+clvr_status clvr_pp_bounds(clvr_pp *pp, cl_mem pos, cl_mem scal, uint64_t n, clvr_box *out, double *sec,
+                           clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem part = NULL;
+    clvr_box *host = NULL;
+    cl_ulong nn = n;
+    cl_uint tiles = clvr_pp_tiles(pp, n);
+    cl_ulong chunk = (n + tiles - 1) / tiles;
+    for (int k = 0; k < 4; ++k) { out->lo[k] = INFINITY; out->hi[k] = -INFINITY; }
+    if (n == 0) return CLVR_OK;
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, tiles * sizeof(clvr_box), NULL, "bounds tiles", &part, err));
+    cl_kernel k = pp->bounds_tiles;
+    ARG(k, 0, pos); ARG(k, 1, scal); ARG(k, 2, nn); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, part);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    host = malloc(tiles * sizeof *host);
+    if (!host) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for bounds"); goto cleanup; }
+    CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, part, CL_TRUE, 0, tiles * sizeof *host, host, 0, NULL, NULL));
+    for (cl_uint t = 0; t < tiles; ++t)
+        for (int c = 0; c < 4; ++c) {
+            if (host[t].lo[c] < out->lo[c]) out->lo[c] = host[t].lo[c];
+            if (host[t].hi[c] > out->hi[c]) out->hi[c] = host[t].hi[c];
+        }
+cleanup:
+    free(host);
+    clvr_cl_release(pp->cl, &part);
+    return s;
+}
+
+clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layout *l, const clvr_box *b,
+                         int morton, cl_mem keys, cl_mem vals, double *sec, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_kernel k = pp->element_keys;
+    cl_uint n = (cl_uint)l->num_elements, e1 = (cl_uint)l->first[1], e2 = (cl_uint)l->first[2],
+            e3 = (cl_uint)l->first[3];
+    cl_ulong s1 = l->slot[1], s2 = l->slot[2], s3 = l->slot[3];
+    cl_float gx = b->lo[0], gy = b->lo[1], gz = b->lo[2], scale = clvr_pp_scale(b);
+    cl_int mo = morton;
+    cl_uint per = pp->per_item;
+    int i = 0;
+    ARG(k, i++, pos); ARG(k, i++, idx); ARG(k, i++, n); ARG(k, i++, per); ARG(k, i++, e1); ARG(k, i++, e2);
+    ARG(k, i++, e3); ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, gx); ARG(k, i++, gy);
+    ARG(k, i++, gz); ARG(k, i++, scale); ARG(k, i++, mo); ARG(k, i++, keys); ARG(k, i++, vals);
+    CLVR_TRY(launch(pp, k, ((uint64_t)n + per - 1) / per, 1, sec, err));
+cleanup:
+    return s;
+}
+
+/* Per-tile sums (flags: counts of nonzero) scanned in place into sums[0..tiles]. */
+static clvr_status tile_sums(clvr_pp *pp, cl_mem in, uint64_t n, cl_uint tiles, cl_ulong chunk, int flags,
+                             cl_mem sums, double *sec, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_ulong nn = n;
+    cl_int f = flags;
+    cl_kernel k = pp->scan_reduce;
+    ARG(k, 0, in); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, f); ARG(k, 5, sums);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    k = pp->scan_sums;
+    ARG(k, 0, sums); ARG(k, 1, tiles);
+    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+cleanup:
+    return s;
+}
+
+clvr_status clvr_pp_scan(clvr_pp *pp, cl_mem in, cl_mem out, uint64_t n, uint32_t *total, double *sec,
+                         clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem sums = NULL;
+    cl_uint tiles = clvr_pp_tiles(pp, n);
+    cl_ulong chunk = (n + tiles - 1) / tiles, nn = n;
+    if (total) *total = 0;
+    if (n == 0) return CLVR_OK;
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, (tiles + 1) * sizeof(cl_uint), NULL, "scan sums", &sums, err));
+    CLVR_TRY(tile_sums(pp, in, n, tiles, chunk, 0, sums, sec, err));
+    cl_kernel k = pp->scan_apply;
+    ARG(k, 0, in); ARG(k, 1, out); ARG(k, 2, nn); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, sums);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    if (total)
+        CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, sums, CL_TRUE, tiles * sizeof(cl_uint), sizeof(cl_uint),
+                                          total, 0, NULL, NULL));
+cleanup:
+    clvr_cl_release(pp->cl, &sums);
+    return s;
+}
+
+clvr_status clvr_pp_select(clvr_pp *pp, cl_mem flags, cl_mem values, cl_mem out, uint64_t n, uint32_t *count,
+                           double *sec, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem sums = NULL;
+    cl_uint tiles = clvr_pp_tiles(pp, n);
+    cl_ulong chunk = (n + tiles - 1) / tiles, nn = n;
+    cl_int use_ids = values == NULL;
+    *count = 0;
+    if (n == 0) return CLVR_OK;
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, (tiles + 1) * sizeof(cl_uint), NULL, "select sums", &sums, err));
+    CLVR_TRY(tile_sums(pp, flags, n, tiles, chunk, 1, sums, sec, err));
+    cl_kernel k = pp->select_scatter;
+    cl_mem vals = values ? values : flags; /* any valid buffer when ids are selected */
+    ARG(k, 0, flags); ARG(k, 1, vals); ARG(k, 2, use_ids); ARG(k, 3, nn); ARG(k, 4, chunk); ARG(k, 5, tiles);
+    ARG(k, 6, sums); ARG(k, 7, out);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, sums, CL_TRUE, tiles * sizeof(cl_uint), sizeof(cl_uint), count, 0,
+                                      NULL, NULL));
+cleanup:
+    clvr_cl_release(pp->cl, &sums);
+    return s;
+}
+
+clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
+                         double *sec, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem andor = NULL, hist = NULL, sums = NULL;
+    cl_ulong *ao = NULL;
+    if (n < 2) return CLVR_OK;
+    if (n > 0xffffffffull)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW, "radix sort of %llu items: at most 2^32 - 1 are supported",
+                              (unsigned long long)n);
+    cl_uint tiles = clvr_pp_tiles(pp, n);
+    cl_ulong chunk = (n + tiles - 1) / tiles, nn = n;
+    cl_uint hn = tiles * CLVR_PP_RADIX;
+    cl_ulong hnn = hn;
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * tiles * sizeof(cl_ulong), NULL, "sort and/or", &andor, err));
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, hn * sizeof(cl_uint), NULL, "sort histograms", &hist, err));
+    /* The histogram table is scanned with scan.cl's kernels: one tile is enough for it. */
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * sizeof(cl_uint), NULL, "sort scan sums", &sums, err));
+    cl_kernel k = pp->radix_andor;
+    ARG(k, 0, *keys); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, andor);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    ao = malloc(2 * tiles * sizeof *ao);
+    if (!ao) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory in sort"); goto cleanup; }
+    CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, andor, CL_TRUE, 0, 2 * tiles * sizeof *ao, ao, 0, NULL, NULL));
+    cl_ulong all_and = ~0ull, any_or = 0;
+    for (cl_uint t = 0; t < tiles; ++t) { all_and &= ao[2 * t]; any_or |= ao[2 * t + 1]; }
+    const cl_ulong varying = all_and ^ any_or; /* bits that differ between some keys */
+    for (cl_uint shift = 0; shift < 64; shift += CLVR_PP_RADIX_BITS) {
+        if (((varying >> shift) & (CLVR_PP_RADIX - 1)) == 0) continue; /* digit constant: order kept */
+        k = pp->radix_hist;
+        ARG(k, 0, *keys); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, shift); ARG(k, 5, hist);
+        CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+        cl_uint one = 1;
+        cl_int noflags = 0;
+        k = pp->scan_reduce;
+        ARG(k, 0, hist); ARG(k, 1, hnn); ARG(k, 2, hnn); ARG(k, 3, one); ARG(k, 4, noflags); ARG(k, 5, sums);
+        CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+        k = pp->scan_sums;
+        ARG(k, 0, sums); ARG(k, 1, one);
+        CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+        k = pp->scan_apply;
+        ARG(k, 0, hist); ARG(k, 1, hist); ARG(k, 2, hnn); ARG(k, 3, hnn); ARG(k, 4, one); ARG(k, 5, sums);
+        CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+        k = pp->radix_scatter;
+        ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, nn); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, shift);
+        ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp);
+        CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+        cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
+        t = *vals; *vals = *vals_tmp; *vals_tmp = t;
+    }
+cleanup:
+    free(ao);
+    clvr_cl_release(pp->cl, &andor);
+    clvr_cl_release(pp->cl, &hist);
+    clvr_cl_release(pp->cl, &sums);
+    return s;
+}
+
+/* ------------------------------------------------------------ pipeline */
+
+void clvr_clustered_release(clvr_cl *cl, clvr_clustered *c)
+{
+    if (!c) return;
+    clvr_cl_release(cl, &c->vertices);
+    clvr_cl_release(cl, &c->idx16);
+    clvr_cl_release(cl, &c->idx32);
+    clvr_cl_release(cl, &c->instances);
+    clvr_cl_release(cl, &c->leaf_boxes);
+    clvr_cl_release(cl, &c->sampling);
+    clvr_cl_release(cl, &c->order);
+    free(c->host_instances);
+    memset(c, 0, sizeof *c);
+}
+
+/* Fills the byte and average figures from the counts. */
+static void fill_stats(clvr_clustered *c, const clvr_mesh *m)
+{
+    c->bytes_vertices_before = m->num_vertices * 16ull;
+    c->bytes_vertices_after = c->num_vertices * 16ull;
+    c->bytes_indices_before = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+        c->bytes_indices_before += m->num_cells[t] * clvr_cell_vertex_count(t) * 4ull;
+    c->bytes_indices_after = c->num_idx16 * 2ull + c->num_idx32 * 4ull;
+    c->bytes_leaf_boxes = c->num_leaves * sizeof(clvr_box);
+    c->bytes_instances = c->num_instances * sizeof(clvr_instance);
+    c->bytes_sampling = c->num_sampling * sizeof(clvr_sampling_cluster);
+    c->num_instances16 = 0;
+    for (uint64_t i = 0; i < c->num_instances; ++i) c->num_instances16 += c->host_instances[i].index_bits == 16;
+    c->avg_instance_elements = c->num_instances ? (double)c->num_elements / (double)c->num_instances : 0.0;
+    c->avg_instance_vertices = c->num_instances ? (double)c->num_vertices / (double)c->num_instances : 0.0;
+    c->avg_leaf_elements = c->num_leaves ? (double)c->num_elements / (double)c->num_leaves : 0.0;
+}
+
+clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o, clvr_clustered *out,
+                            clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_pp pp = {0};
+    clvr_preprocess_options opt;
+    clvr_pp_layout L;
+    clvr_pp_split_plan plan;
+    cl_mem pos = NULL, scal = NULL, idx_in = NULL, keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL,
+           idx_sorted = NULL, tk = NULL, tv = NULL, recs = NULL, rec_counts = NULL, flags = NULL, sel = NULL,
+           nverts = NULL, nleaves = NULL, vsrc = NULL;
+    double t_start = wall_now();
+    double *st;
+    memset(out, 0, sizeof *out);
+    st = out->stage_s;
+    CLVR_TRY(clvr_pp_options_resolve(o, &opt, err));
+    clvr_pp_layout_make(&L, m->num_cells);
+    if (L.num_elements == 0) { s = clvr_error_set(err, CLVR_ERR_EMPTY, "preprocess: the mesh has no elements"); goto cleanup; }
+    if (L.num_elements > 0xffffffffull || m->num_vertices > 0xffffffffull) {
+        s = clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                           "preprocess: %llu elements and %llu vertices; the clustered mesh addresses at most "
+                           "2^32 - 1 of each (clvr_instance.first_element)",
+                           (unsigned long long)L.num_elements, (unsigned long long)m->num_vertices);
+        goto cleanup;
+    }
+    const int bits32 = opt.index_bits == 32;
+    out->leaf_size = opt.leaf_size;
+    out->sampling_size = opt.sampling_size;
+    out->index_bits = opt.index_bits;
+    out->morton = opt.morton;
+    out->num_elements = L.num_elements;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = L.count[t]; out->first_cell[t] = L.first[t]; }
+
+    double tb = wall_now();
+    CLVR_TRY(clvr_pp_create(cl, &pp, err));
+    out->build_s = wall_now() - tb;
+    clvr_pp_split_plan_make(&plan, &L, &opt, cl->compute_units, m->num_vertices);
+
+    /* --- upload */
+    const uint64_t V = m->num_vertices, N = L.num_elements, S = L.num_slots;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, V * 12, NULL, "vertex positions", &pos, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, V * 4, NULL, "vertex scalars", &scal, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "element indices", &idx_in, err));
+    {
+        cl_event ev[2 + CLVR_CELL_TYPE_COUNT] = {0};
+        int ne = 0;
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, pos, CL_FALSE, 0, V * 12, m->positions, 0, NULL, &ev[ne++]));
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, scal, CL_FALSE, 0, V * 4, m->scalars, 0, NULL, &ev[ne++]));
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+            if (L.count[t])
+                CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, idx_in, CL_FALSE, L.slot[t] * 4,
+                                                   L.count[t] * clvr_cell_vertex_count(t) * 4, m->indices[t], 0,
+                                                   NULL, &ev[ne++]));
+        for (int i = 0; i < ne; ++i) { st[CLVR_PP_STAGE_UPLOAD] += clvr_cl_event_seconds(ev[i]); clReleaseEvent(ev[i]); }
+    }
+
+    /* --- bounds, keys, sort */
+    CLVR_TRY(clvr_pp_bounds(&pp, pos, scal, V, &out->bounds, &st[CLVR_PP_STAGE_BOUNDS], err));
+    out->scalar_min = out->bounds.lo[3];
+    out->scalar_max = out->bounds.hi[3];
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 8, NULL, "sort keys", &keys, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 4, NULL, "sort values", &vals, err));
+    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, &out->bounds, opt.morton, keys, vals, &st[CLVR_PP_STAGE_KEYS], err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 8, NULL, "sort keys (scratch)", &keys_tmp, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 4, NULL, "sort values (scratch)", &vals_tmp, err));
+    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, N, &st[CLVR_PP_STAGE_SORT], err));
+    clvr_cl_release(cl, &keys);
+    clvr_cl_release(cl, &keys_tmp);
+    clvr_cl_release(cl, &vals_tmp);
+
+    /* --- gather in curve order */
+    cl_uint n32 = (cl_uint)N, e1 = (cl_uint)L.first[1], e2 = (cl_uint)L.first[2], e3 = (cl_uint)L.first[3];
+    cl_ulong s1 = L.slot[1], s2 = L.slot[2], s3 = L.slot[3];
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "sorted element indices", &idx_sorted, err));
+    {
+        cl_kernel k = pp.gather;
+        int i = 0;
+        ARG(k, i++, vals); ARG(k, i++, idx_in); ARG(k, i++, idx_sorted); ARG(k, i++, n32); ARG(k, i++, e1);
+        ARG(k, i++, e2); ARG(k, i++, e3); ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3);
+        CLVR_TRY(launch(&pp, k, N, 64, &st[CLVR_PP_STAGE_GATHER], err));
+    }
+    if (opt.keep_order) { out->order = vals; vals = NULL; }
+    else clvr_cl_release(cl, &vals);
+
+    /* --- sampling clusters (from the sorted lists and the mesh's own vertices) */
+    {
+        uint64_t cfirst[CLVR_CELL_TYPE_COUNT], nc = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            cfirst[t] = nc;
+            nc += (L.count[t] + opt.sampling_size - 1) / opt.sampling_size;
+        }
+        out->num_sampling = nc;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nc * sizeof(clvr_sampling_cluster), NULL,
+                                "sampling clusters", &out->sampling, err));
+        cl_uint ncl = (cl_uint)nc, size = opt.sampling_size, c1 = (cl_uint)cfirst[1], c2 = (cl_uint)cfirst[2],
+                c3 = (cl_uint)cfirst[3];
+        cl_kernel k = pp.sampling;
+        int i = 0;
+        ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, idx_sorted); ARG(k, i++, ncl); ARG(k, i++, size);
+        ARG(k, i++, c1); ARG(k, i++, c2); ARG(k, i++, c3); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
+        ARG(k, i++, n32); ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, out->sampling);
+        CLVR_TRY(launch(&pp, k, nc, 64, &st[CLVR_PP_STAGE_SAMPLING], err));
+    }
+
+    /* --- greedy instance split with local re-indexing; idx_in becomes the scratch vertex map */
+    out->num_idx16 = bits32 ? 0 : S;
+    out->num_idx32 = bits32 ? S : 0;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx16 * 2, NULL, "16-bit indices", &out->idx16, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx32 * 4, NULL, "32-bit indices", &out->idx32, err));
+    {
+        const uint64_t cap = 1ull << plan.log2cap, tables = plan.max_segments;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, tables * cap * 8, NULL, "split hash keys", &tk, err));
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, tables * cap * 4, NULL, "split hash values", &tv, err));
+        cl_ulong zero = 0;
+        cl_event ev = NULL;
+        CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, tk, &zero, sizeof zero, 0, tables * cap * 8, 0, NULL, &ev));
+        st[CLVR_PP_STAGE_SPLIT] += clvr_cl_event_seconds(ev);
+        clReleaseEvent(ev);
+        /* Record slots: rec_max per segment, segment-major, types in order. */
+        cl_uint rec_max = plan.rec_max;
+        uint64_t nslots = (uint64_t)plan.total_segments * rec_max;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nslots * sizeof(clvr_pp_instance_rec), NULL, "instance records",
+                                &recs, err));
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, plan.total_segments * 4, NULL, "instance record counts",
+                                &rec_counts, err));
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            if (!plan.nseg[t]) continue;
+            cl_kernel k = pp.split;
+            cl_int b32 = bits32;
+            cl_uint type = t, tfirst = (cl_uint)L.first[t], cnt = (cl_uint)L.count[t], seg = plan.seg_len[t],
+                    nseg = plan.nseg[t], vl = plan.vlimit, me = plan.max_elems, lc = plan.log2cap,
+                    rb = plan.rec_base[t];
+            cl_ulong slot0 = L.slot[t], ep = plan.epoch0[t];
+            int i = 0;
+            ARG(k, i++, idx_sorted); ARG(k, i++, idx_in); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32);
+            ARG(k, i++, b32); ARG(k, i++, type); ARG(k, i++, tfirst); ARG(k, i++, cnt); ARG(k, i++, slot0);
+            ARG(k, i++, seg); ARG(k, i++, nseg); ARG(k, i++, vl); ARG(k, i++, me); ARG(k, i++, tk); ARG(k, i++, tv);
+            ARG(k, i++, lc); ARG(k, i++, ep); ARG(k, i++, rb); ARG(k, i++, rec_max); ARG(k, i++, recs);
+            ARG(k, i++, rec_counts);
+            CLVR_TRY(launch(&pp, k, nseg, 1, &st[CLVR_PP_STAGE_SPLIT], err));
+        }
+        clvr_cl_release(cl, &tk);
+        clvr_cl_release(cl, &tv);
+        clvr_cl_release(cl, &idx_sorted);
+
+        /* --- instance table: flagged select of the used record slots, scans of the counts */
+        double *si = &st[CLVR_PP_STAGE_INSTANCES];
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nslots * 4, NULL, "record flags", &flags, err));
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nslots * 4, NULL, "selected records", &sel, err));
+        cl_uint ns = (cl_uint)nslots;
+        cl_kernel k = pp.rec_flags;
+        ARG(k, 0, rec_counts); ARG(k, 1, ns); ARG(k, 2, rec_max); ARG(k, 3, flags);
+        CLVR_TRY(launch(&pp, k, nslots, 64, si, err));
+        uint32_t ninst = 0;
+        CLVR_TRY(clvr_pp_select(&pp, flags, NULL, sel, nslots, &ninst, si, err));
+        out->num_instances = ninst;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (uint64_t)ninst * 4, NULL, "instance vertex counts", &nverts, err));
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (uint64_t)ninst * 4, NULL, "instance leaf counts", &nleaves, err));
+        cl_uint ni = ninst, leaf = opt.leaf_size;
+        k = pp.inst_counts;
+        ARG(k, 0, recs); ARG(k, 1, sel); ARG(k, 2, ni); ARG(k, 3, leaf); ARG(k, 4, nverts); ARG(k, 5, nleaves);
+        CLVR_TRY(launch(&pp, k, ninst, 64, si, err));
+        uint32_t total_v = 0, total_l = 0;
+        CLVR_TRY(clvr_pp_scan(&pp, nverts, nverts, ninst, &total_v, si, err));
+        CLVR_TRY(clvr_pp_scan(&pp, nleaves, nleaves, ninst, &total_l, si, err));
+        /* The scans are 32-bit: check that the true sums fit (they count vertices and leaves). */
+        out->num_vertices = total_v;
+        out->num_leaves = total_l;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (uint64_t)ninst * sizeof(clvr_instance), NULL, "instances",
+                                &out->instances, err));
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (uint64_t)ninst * 8, NULL, "instance vertex sources", &vsrc, err));
+        k = pp.inst_write;
+        int i = 0;
+        ARG(k, i++, recs); ARG(k, i++, sel); ARG(k, i++, ni); ARG(k, i++, nverts); ARG(k, i++, nleaves);
+        ARG(k, i++, leaf); cl_int b32 = bits32; ARG(k, i++, b32); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
+        ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
+        CLVR_TRY(launch(&pp, k, ninst, 64, si, err));
+    }
+
+    /* --- clustered vertices */
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_vertices * 16, NULL, "clustered vertices", &out->vertices,
+                            err));
+    {
+        cl_uint ni = (cl_uint)out->num_instances, nv = (cl_uint)out->num_vertices;
+        cl_kernel k = pp.vertices;
+        int i = 0;
+        ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, idx_in); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
+        ARG(k, i++, ni); ARG(k, i++, nv); ARG(k, i++, out->vertices);
+        CLVR_TRY(launch(&pp, k, nv, 64, &st[CLVR_PP_STAGE_VERTICES], err));
+    }
+    clvr_cl_release(cl, &idx_in);
+    clvr_cl_release(cl, &pos);
+    clvr_cl_release(cl, &scal);
+
+    /* --- leaf boxes, then instance bounds from them */
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_leaves * sizeof(clvr_box), NULL, "leaf boxes",
+                            &out->leaf_boxes, err));
+    {
+        cl_uint ni = (cl_uint)out->num_instances, nl = (cl_uint)out->num_leaves, leaf = opt.leaf_size;
+        cl_kernel k = pp.leaf_boxes;
+        int i = 0;
+        ARG(k, i++, out->vertices); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32); ARG(k, i++, out->instances);
+        ARG(k, i++, ni); ARG(k, i++, nl); ARG(k, i++, leaf); ARG(k, i++, out->leaf_boxes);
+        CLVR_TRY(launch(&pp, k, nl, 64, &st[CLVR_PP_STAGE_LEAVES], err));
+        k = pp.instance_bounds;
+        ARG(k, 0, out->instances); ARG(k, 1, ni); ARG(k, 2, out->leaf_boxes);
+        CLVR_TRY(launch(&pp, k, ni, 64, &st[CLVR_PP_STAGE_LEAVES], err));
+    }
+    out->host_instances = malloc(out->num_instances * sizeof(clvr_instance));
+    if (!out->host_instances) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the instance table"); goto cleanup; }
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, out->instances, CL_TRUE, 0, out->num_instances * sizeof(clvr_instance),
+                                      out->host_instances, 0, NULL, NULL));
+    {
+        /* The device scans count in 32 bits: a wrapped total shows up here. */
+        uint64_t sum_v = 0;
+        for (uint64_t i = 0; i < out->num_instances; ++i) sum_v += out->host_instances[i].num_vertices;
+        if (sum_v != out->num_vertices) {
+            s = clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                               "preprocess: the clustered mesh would hold %llu vertices; at most 2^32 - 1 are "
+                               "addressable (clvr_instance.first_vertex)", (unsigned long long)sum_v);
+            goto cleanup;
+        }
+    }
+    fill_stats(out, m);
+
+cleanup:
+    clvr_cl_release(cl, &pos);
+    clvr_cl_release(cl, &scal);
+    clvr_cl_release(cl, &idx_in);
+    clvr_cl_release(cl, &keys);
+    clvr_cl_release(cl, &vals);
+    clvr_cl_release(cl, &keys_tmp);
+    clvr_cl_release(cl, &vals_tmp);
+    clvr_cl_release(cl, &idx_sorted);
+    clvr_cl_release(cl, &tk);
+    clvr_cl_release(cl, &tv);
+    clvr_cl_release(cl, &recs);
+    clvr_cl_release(cl, &rec_counts);
+    clvr_cl_release(cl, &flags);
+    clvr_cl_release(cl, &sel);
+    clvr_cl_release(cl, &nverts);
+    clvr_cl_release(cl, &nleaves);
+    clvr_cl_release(cl, &vsrc);
+    clvr_pp_destroy(&pp);
+    if (s != CLVR_OK) clvr_clustered_release(cl, out);
+    else out->wall_s = wall_now() - t_start;
+    return s;
+}
+
+/* ------------------------------------------------------------ download */
+
+void clvr_clustered_host_free(clvr_clustered_host *h)
+{
+    if (!h) return;
+    free(h->vertices);
+    free(h->idx16);
+    free(h->idx32);
+    free(h->instances);
+    free(h->leaf_boxes);
+    free(h->sampling);
+    free(h->order);
+    memset(h, 0, sizeof *h);
+}
+
+static clvr_status read_array(clvr_cl *cl, cl_mem b, uint64_t bytes, void **out, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    *out = malloc(bytes ? bytes : 1);
+    if (!*out) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory downloading %llu bytes",
+                                     (unsigned long long)bytes);
+    if (bytes && b) CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, b, CL_TRUE, 0, bytes, *out, 0, NULL, NULL));
+cleanup:
+    return s;
+}
+
+clvr_status clvr_clustered_download(clvr_cl *cl, const clvr_clustered *c, clvr_clustered_host *h, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    memset(h, 0, sizeof *h);
+    CLVR_TRY(read_array(cl, c->vertices, c->num_vertices * 16, (void **)&h->vertices, err));
+    CLVR_TRY(read_array(cl, c->idx16, c->num_idx16 * 2, (void **)&h->idx16, err));
+    CLVR_TRY(read_array(cl, c->idx32, c->num_idx32 * 4, (void **)&h->idx32, err));
+    CLVR_TRY(read_array(cl, c->instances, c->num_instances * sizeof(clvr_instance), (void **)&h->instances, err));
+    CLVR_TRY(read_array(cl, c->leaf_boxes, c->num_leaves * sizeof(clvr_box), (void **)&h->leaf_boxes, err));
+    CLVR_TRY(read_array(cl, c->sampling, c->num_sampling * sizeof(clvr_sampling_cluster), (void **)&h->sampling, err));
+    if (c->order) CLVR_TRY(read_array(cl, c->order, c->num_elements * 4, (void **)&h->order, err));
+cleanup:
+    if (s != CLVR_OK) clvr_clustered_host_free(h);
+    return s;
+}

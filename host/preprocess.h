@@ -1,0 +1,200 @@
+/* preprocess.h: Quick Clusters preprocessing on the OpenCL device (paper
+ * sections 3.2-3.4.1): element keys along a Hilbert (or Morton) curve, a
+ * key-value radix sort, the gather of the index lists in curve order, leaf
+ * clusters, instance clusters re-indexed to 16-bit local indices, and
+ * adaptive-sampling clusters. The result is the "clustered mesh" of
+ * kernels/clvr_shared.h; bvh/ builds trees over its instances and leaf
+ * boxes and the renderer reads all of it.
+ *
+ * Module prefix: clvr_pp_ for the stage functions (used by clvr_preprocess
+ * and by the tests), clvr_preprocess / clvr_clustered for the public API.
+ * Every stage has a plain-C reference in host/preprocess_ref.c with the
+ * same contract (clvr_pp_ref_*), so tests can compare bit for bit. */
+#ifndef CLVR_PREPROCESS_H
+#define CLVR_PREPROCESS_H
+
+#include <stdint.h>
+
+#include "cl_context.h"
+#include "mesh.h"
+#include "status.h"
+
+typedef struct clvr_preprocess_options {
+    uint32_t leaf_size;       /* elements per leaf cluster, 1..128 (paper: 16; default 16) */
+    uint32_t sampling_size;   /* elements per adaptive-sampling cluster, >= 1. Default 256: a cluster
+                                 then spans about 6 elements per axis, so its majorant stays local,
+                                 while the sampling tree has N/256 leaves (0.125 B/element) and rays
+                                 cross few clusters (the paper, sec. 5, finds coarse majorant
+                                 structures render fastest because Delta Tracking skips further) */
+    int morton;               /* 0: Hilbert curve (paper); 1: Morton order (for comparison) */
+    uint32_t index_bits;      /* 16 (default): instances grow greedily until they would reference
+                                 more than 65535 vertices, 16-bit local indices (paper 3.3);
+                                 32: no compression, instances of max_instance_elements elements
+                                 with 32-bit local indices (the "before" of Table 1) */
+    uint32_t max_instance_elements; /* cap on elements per instance; 0: 1<<20 for 16-bit (the paper's
+                                       1M of 3.2.2; the vertex limit binds first, giving the
+                                       paper's 30k-60k hexes), 65536 for 32-bit */
+    int keep_order;           /* nonzero: keep `order` (original element id per sorted element) */
+} clvr_preprocess_options;
+
+/* Fills the defaults above. */
+void clvr_preprocess_options_default(clvr_preprocess_options *o);
+
+/* Names of the timed stages, in the order of clvr_clustered.stage_s. */
+enum {
+    CLVR_PP_STAGE_UPLOAD,     /* host -> device copies of the mesh */
+    CLVR_PP_STAGE_BOUNDS,     /* global bounds reduction */
+    CLVR_PP_STAGE_KEYS,       /* element boxes, centroids, curve keys */
+    CLVR_PP_STAGE_SORT,       /* radix sort */
+    CLVR_PP_STAGE_GATHER,     /* index lists in curve order */
+    CLVR_PP_STAGE_SAMPLING,   /* sampling clusters */
+    CLVR_PP_STAGE_SPLIT,      /* instance split + local re-indexing */
+    CLVR_PP_STAGE_INSTANCES,  /* flagged select, scans, instance table */
+    CLVR_PP_STAGE_VERTICES,   /* copy of the per-instance vertices */
+    CLVR_PP_STAGE_LEAVES,     /* leaf boxes and instance bounds */
+    CLVR_PP_STAGE_COUNT
+};
+/* "upload", "bounds", ... */
+const char *clvr_pp_stage_name(int stage);
+
+/* The clustered mesh. Device buffers are made with clvr_cl_buffer and
+ * released by clvr_clustered_release; counts are 64-bit on the host. */
+typedef struct clvr_clustered {
+    cl_mem vertices;          /* float4 (x, y, z, scalar) [num_vertices], per instance, duplicates kept */
+    cl_mem idx16;             /* ushort [num_idx16]: local indices of 16-bit instances, at first_index */
+    cl_mem idx32;             /* uint [num_idx32]: local indices of 32-bit instances, at first_index */
+    cl_mem instances;         /* clvr_instance [num_instances] */
+    cl_mem leaf_boxes;        /* clvr_box [num_leaves] (w lanes zero) */
+    cl_mem sampling;          /* clvr_sampling_cluster [num_sampling] */
+    cl_mem order;             /* uint [num_elements] original global element id per sorted element;
+                                 NULL unless options.keep_order */
+    clvr_instance *host_instances; /* host copy of `instances` (malloc'ed; bounds filled) */
+    uint64_t num_elements, num_vertices, num_idx16, num_idx32, num_instances, num_instances16, num_leaves,
+        num_sampling;
+    uint64_t num_cells[CLVR_CELL_TYPE_COUNT];   /* elements per type (sorted lists in this order) */
+    uint64_t first_cell[CLVR_CELL_TYPE_COUNT];  /* global sorted id of each type's first element */
+    clvr_box bounds;          /* of all mesh vertices; lo[3] / hi[3] = scalar range */
+    float scalar_min, scalar_max;
+    uint32_t leaf_size, sampling_size, index_bits;
+    int morton;
+    /* stats */
+    double stage_s[CLVR_PP_STAGE_COUNT]; /* device seconds per stage (OpenCL event profiling) */
+    double build_s;           /* wall seconds to build the kernels (cached by the driver after the first run) */
+    double wall_s;            /* wall seconds of clvr_preprocess, build included */
+    uint64_t bytes_vertices_before;  /* float3 + float per mesh vertex */
+    uint64_t bytes_vertices_after;   /* float4 per clustered vertex */
+    uint64_t bytes_indices_before;   /* 4 bytes per index */
+    uint64_t bytes_indices_after;    /* 2 or 4 bytes per index */
+    uint64_t bytes_leaf_boxes, bytes_instances, bytes_sampling;
+    double avg_instance_elements, avg_instance_vertices, avg_leaf_elements;
+} clvr_clustered;
+
+/* Preprocesses m (validated, >= 1 element, < 2^32 elements, < 2^32
+ * clustered vertices) into *out (zeroed first). o may be NULL (defaults).
+ * On failure *out holds nothing (everything released). Needs roughly
+ * 40 bytes per index slot + 36 per element + 16 per vertex of device memory
+ * at its peak; each buffer is checked against the device limits. */
+clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o, clvr_clustered *out,
+                            clvr_error *err);
+/* Releases every buffer and the host copy; accepts NULL and half-built results; leaves *c zeroed. */
+void clvr_clustered_release(clvr_cl *cl, clvr_clustered *c);
+
+/* Host copies of every array of a clustered mesh (tests, tools). */
+typedef struct clvr_clustered_host {
+    float *vertices;          /* 4 * num_vertices */
+    uint16_t *idx16;          /* num_idx16 */
+    uint32_t *idx32;          /* num_idx32 */
+    clvr_instance *instances; /* num_instances */
+    clvr_box *leaf_boxes;     /* num_leaves */
+    clvr_sampling_cluster *sampling; /* num_sampling */
+    uint32_t *order;          /* num_elements, or NULL when not kept */
+} clvr_clustered_host;
+clvr_status clvr_clustered_download(clvr_cl *cl, const clvr_clustered *c, clvr_clustered_host *out, clvr_error *err);
+void clvr_clustered_host_free(clvr_clustered_host *h);
+
+/* ------------------------------------------------------------ stages
+ * The kernels of kernels/preprocess.cl, one call per stage. Tiled kernels
+ * split n items into `tiles` contiguous chunks, one work-item each. */
+typedef struct clvr_pp {
+    clvr_cl *cl;
+    cl_program prog;
+    cl_kernel bounds_tiles, element_keys, scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
+        radix_hist, radix_scatter, gather, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
+        inst_write, vertices;
+    uint32_t max_tiles;       /* tiles per tiled launch: a few per compute unit */
+    uint32_t per_item;        /* items per work-item of the per-element kernels (CPU: 1024, GPU: 1) */
+} clvr_pp;
+
+clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err);
+void clvr_pp_destroy(clvr_pp *pp); /* accepts half-built */
+
+/* Tiles for n items: at most max_tiles, chunks of at least 4096 items. */
+uint32_t clvr_pp_tiles(const clvr_pp *pp, uint64_t n);
+
+/* Each stage adds its device seconds to *sec when sec is not NULL. */
+
+/* Bounds of positions (float3 [n]) and scalars [n]: box lo/hi, w = scalar. */
+clvr_status clvr_pp_bounds(clvr_pp *pp, cl_mem pos, cl_mem scal, uint64_t n, clvr_box *out, double *sec,
+                           clvr_error *err);
+/* Per-type element layout used by the element stages: first global element
+ * id and first index slot of each type, and the total element count. */
+typedef struct clvr_pp_layout {
+    uint64_t count[CLVR_CELL_TYPE_COUNT];
+    uint64_t first[CLVR_CELL_TYPE_COUNT];
+    uint64_t slot[CLVR_CELL_TYPE_COUNT];
+    uint64_t num_elements, num_slots;
+} clvr_pp_layout;
+void clvr_pp_layout_make(clvr_pp_layout *l, const uint64_t count[CLVR_CELL_TYPE_COUNT]);
+/* The quantization scale of clvr_pp_quantize for a box. */
+float clvr_pp_scale(const clvr_box *b);
+/* keys[g], vals[g] = sort key and g for every element g. */
+clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layout *l, const clvr_box *b,
+                         int morton, cl_mem keys, cl_mem vals, double *sec, clvr_error *err);
+/* Exclusive scan of n uints (in may equal out); *total = sum (may be NULL). */
+clvr_status clvr_pp_scan(clvr_pp *pp, cl_mem in, cl_mem out, uint64_t n, uint32_t *total, double *sec,
+                         clvr_error *err);
+/* Flagged select: out[k] = values[i] (ids i when values is NULL) for the
+ * k-th nonzero flags[i]; *count = how many. out holds n entries. */
+clvr_status clvr_pp_select(clvr_pp *pp, cl_mem flags, cl_mem values, cl_mem out, uint64_t n, uint32_t *count,
+                           double *sec, clvr_error *err);
+/* Stable sort of n (ulong key, uint value) pairs, n < 2^32. *keys and *vals
+ * hold the input; tmp buffers are the same sizes; on return the handles
+ * may have been swapped so that *keys / *vals hold the result. */
+clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
+                         double *sec, clvr_error *err);
+
+/* ------------------------------------------------------------ references
+ * Plain C, same contracts on host arrays (host/preprocess_ref.c). */
+void clvr_pp_ref_bounds(const float *pos, const float *scal, uint64_t n, clvr_box *out);
+void clvr_pp_ref_keys(const float *pos, const uint32_t *idx, const clvr_pp_layout *l, const clvr_box *b,
+                      int morton, uint64_t *keys, uint32_t *vals);
+uint32_t clvr_pp_ref_scan(const uint32_t *in, uint32_t *out, uint64_t n);
+uint32_t clvr_pp_ref_select(const uint32_t *flags, const uint32_t *values, uint32_t *out, uint64_t n);
+/* Stable LSD radix sort, single thread; returns nonzero when out of memory. */
+int clvr_pp_ref_sort(uint64_t *keys, uint32_t *vals, uint64_t n);
+
+/* The whole pipeline on the host, bit-identical to clvr_preprocess with the
+ * same options and tiles (the split's segment length depends on the device's
+ * compute units, given here). Fills a clustered description (counts, bounds,
+ * host_instances; no device buffers) and host arrays. */
+clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t compute_units,
+                                   clvr_clustered *out, clvr_clustered_host *arrays, clvr_error *err);
+
+/* Split plan shared by device and reference: segment length per type and
+ * the hash table size. */
+typedef struct clvr_pp_split_plan {
+    uint32_t vlimit, max_elems, log2cap;
+    uint32_t seg_len[CLVR_CELL_TYPE_COUNT], nseg[CLVR_CELL_TYPE_COUNT];
+    uint32_t rec_max;         /* records per segment at most (the stride of the record table) */
+    uint32_t rec_base[CLVR_CELL_TYPE_COUNT], total_segments, max_segments;
+    uint64_t epoch0[CLVR_CELL_TYPE_COUNT]; /* epochs of type t's workers start after this */
+} clvr_pp_split_plan;
+/* o must be resolved. Segments are long (>= 2^20 elements) so that the
+ * greedy split, which closes an instance at every segment end, loses little. */
+void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, const clvr_preprocess_options *o,
+                             uint32_t compute_units, uint64_t num_vertices);
+/* Resolved options (defaults applied, checked): CLVR_ERR_USAGE when invalid. */
+clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_preprocess_options *out,
+                                    clvr_error *err);
+
+#endif /* CLVR_PREPROCESS_H */

@@ -1,0 +1,75 @@
+/* bounds.h: per-element boxes, centroids and curve keys, compiled twice
+ * (host reference and kernels), so the host's keys equal the device's bit
+ * for bit. Only exact float operations are used (min, max, subtract,
+ * multiply, compare; no a*b+c that a compiler could contract into an fma).
+ *
+ * Sort key layout (64 bits): type << 48 | curve key (48 bits). Sorting all
+ * elements at once by this key sorts each type along its own curve and puts
+ * the types in CLVR_CELL_* order, which is the contract's concatenation of
+ * the four sorted lists. */
+#ifndef CLVR_BOUNDS_H
+#define CLVR_BOUNDS_H
+
+#include "clvr_shared.h"
+#include "sfc.h"
+
+/* Quantizes one coordinate to the 16-bit grid: (c - lo) * scale, clamped
+ * to [0, 65535]. scale = 65536 / largest extent of the global box (one
+ * scale for the three axes keeps the cells cubic, so curve neighbours are
+ * spatial neighbours), 0 when the box is a point. NaN maps to 0. */
+CLVR_INLINE clvr_u32 clvr_pp_quantize(float c, float lo, float scale)
+{
+    float q = (c - lo) * scale;
+    if (!(q > 0.0f)) return 0u;
+    if (q >= 65535.0f) return 65535u;
+    return (clvr_u32)q;
+}
+
+/* Sort key of an element whose box is (lo, hi): the curve key of the box
+ * centre, with the type in bits 48..49. morton != 0 selects Morton order. */
+CLVR_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const float *hi, const float *glo,
+                                         float scale, int morton)
+{
+    clvr_u32 q[3];
+    for (int k = 0; k < 3; ++k) {
+        float c = (lo[k] + hi[k]) * 0.5f;
+        q[k] = clvr_pp_quantize(c, glo[k], scale);
+    }
+    clvr_u64 code = morton ? clvr_morton3(q[0], q[1], q[2]) : clvr_hilbert3(q[0], q[1], q[2]);
+    return ((clvr_u64)type << 48) | code;
+}
+
+/* Type of the element with global id g, given the first ids of pyramids,
+ * wedges and hexes (empty types have equal bounds). */
+CLVR_INLINE clvr_u32 clvr_pp_type_of(clvr_u64 g, clvr_u64 b1, clvr_u64 b2, clvr_u64 b3)
+{
+    return (clvr_u32)(g >= b1) + (clvr_u32)(g >= b2) + (clvr_u32)(g >= b3);
+}
+
+/* Grows a box (lo, hi) by a point. */
+CLVR_INLINE void clvr_pp_box_grow(float *lo, float *hi, float x, float y, float z)
+{
+    lo[0] = x < lo[0] ? x : lo[0];
+    lo[1] = y < lo[1] ? y : lo[1];
+    lo[2] = z < lo[2] ? z : lo[2];
+    hi[0] = x > hi[0] ? x : hi[0];
+    hi[1] = y > hi[1] ? y : hi[1];
+    hi[2] = z > hi[2] ? z : hi[2];
+}
+
+/* Box of the vpe vertices idx[0..vpe-1] of an element; positions are
+ * x y z interleaved (the mesh's float3 array). */
+CLVR_INLINE void clvr_pp_element_box(const CLVR_GLOBAL float *pos, const CLVR_GLOBAL clvr_u32 *idx, clvr_u32 vpe,
+                                     float *lo, float *hi)
+{
+    clvr_u64 v = idx[0];
+    lo[0] = hi[0] = pos[3 * v];
+    lo[1] = hi[1] = pos[3 * v + 1];
+    lo[2] = hi[2] = pos[3 * v + 2];
+    for (clvr_u32 k = 1; k < vpe; ++k) {
+        v = idx[k];
+        clvr_pp_box_grow(lo, hi, pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]);
+    }
+}
+
+#endif /* CLVR_BOUNDS_H */

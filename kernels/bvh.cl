@@ -1,0 +1,85 @@
+/* bvh.cl: building the packed 4-wide BVHs on the device (one launch per
+ * level, one work item per node, bottom-up) and batch queries used by tests
+ * and benchmarks: point location over the two-level tree and ray queries
+ * over a single-level tree. */
+#include "clvr_shared.h"
+#include "bvh_build.h"
+#include "bvh_traverse.h"
+#include "locate.h"
+
+/* Builds every node of level `level` of all trees. level_prefix[t] is the
+ * number of level-`level` nodes in trees 0 .. t-1 (num_trees + 1 entries),
+ * so work item i finds its tree by binary search. */
+__kernel void clvr_bvh_build_level(__global clvr_bvh_node *nodes, __global const float *prim_boxes,
+                                   __global const clvr_bvh_tree *trees, __global const uint *level_prefix,
+                                   uint num_trees, uint level)
+{
+    const uint i = get_global_id(0);
+    if (i >= level_prefix[num_trees]) return;
+    uint lo = 0, hi = num_trees; /* last t with level_prefix[t] <= i */
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (level_prefix[mid] <= i) lo = mid;
+        else hi = mid;
+    }
+    clvr_bvh_build_node(nodes, prim_boxes, trees[lo], level, i - level_prefix[lo]);
+}
+
+/* Point location for n points (xyz, w ignored): scalar and element id
+ * (CLVR_BVH_NOT_FOUND when outside). */
+__kernel void clvr_locate_points(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
+                                 uint tlas_root, __global const clvr_bvh_node *blas,
+                                 __global const clvr_instance *instances, __global const float4 *vertices,
+                                 __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
+                                 __global float *scalars, __global uint *element_ids)
+{
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const float4 p = points[i];
+    float s = 0.0f;
+    uint e;
+    clvr_locate(p.x, p.y, p.z, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, &s, &e);
+    scalars[i] = s;
+    element_ids[i] = e;
+}
+
+/* Ray queries over a single-level tree (root 0): rays as origin (w = tmin)
+ * and direction (w = tmax). Per ray: number of boxes hit, sum of
+ * (primitive + 1) and sum of t1 - t0 (tests compare with brute force). */
+__kernel void clvr_bvh_ray_hits(__global const float4 *org, __global const float4 *dir, uint n,
+                                __global const clvr_bvh_node *nodes, __global uint *count, __global ulong *prim_sum,
+                                __global float *len_sum)
+{
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const float4 o = org[i], d = dir[i];
+    clvr_bvh_ray_iter it;
+    clvr_bvh_ray_begin(&it, nodes, o.x, o.y, o.z, d.x, d.y, d.z, o.w, d.w);
+    uint prim, c = 0;
+    ulong ps = 0;
+    float t0, t1, len = 0.0f;
+    while (clvr_bvh_ray_next(&it, nodes, &prim, &t0, &t1)) {
+        ++c;
+        ps += (ulong)prim + 1u;
+        len += t1 - t0;
+    }
+    count[i] = c;
+    prim_sum[i] = ps;
+    len_sum[i] = len;
+}
+
+/* Layout of the shared bvh structs as the device sees them (the host
+ * compares with its own sizeof/offsetof). */
+__kernel void clvr_bvh_sizes(__global uint *out)
+{
+    out[0] = (uint)sizeof(clvr_bvh_node);
+    out[1] = (uint)sizeof(clvr_bvh_tree);
+    out[2] = (uint)sizeof(clvr_instance);
+    out[3] = (uint)sizeof(clvr_vec4);
+    /* OpenCL C 1.2 has no offsetof: measure on private objects */
+    clvr_bvh_node nd;
+    clvr_instance in;
+    out[4] = (uint)((char *)&nd.child[0] - (char *)&nd);
+    out[5] = (uint)((char *)&in.first_index - (char *)&in);
+    out[6] = (uint)((char *)&in.bvh_root - (char *)&in);
+}

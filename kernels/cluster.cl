@@ -1,0 +1,116 @@
+/* cluster.cl: elements reordered along the curve, and the three cluster
+ * kinds of the paper built from that order (section 3.2, 3.4.1):
+ * leaf clusters (leaf_size consecutive elements inside an instance, a box
+ * each), instance bounds (union of their leaves) and adaptive-sampling
+ * clusters (sampling_size consecutive elements of one type, a box and the
+ * scalar range of their vertices). Element ids are global over the four
+ * concatenated type lists; eb1..eb3 are the first ids of pyramids, wedges
+ * and hexes, sb1..sb3 their first index slots. */
+#include "clvr_shared.h"
+#include "bounds.h"
+
+/* idx_sorted[slot of sorted element i] = idx_in[slot of element order[i]]. */
+__kernel void clvr_pp_gather(__global const uint *order, __global const uint *idx_in, __global uint *idx_sorted,
+                             uint n, uint eb1, uint eb2, uint eb3, ulong sb1, ulong sb2, ulong sb3)
+{
+    uint i = (uint)get_global_id(0);
+    if (i >= n) return;
+    uint g = order[i];
+    /* Types are the sort key's top bits: i and g have the same type. */
+    uint t = clvr_pp_type_of(i, eb1, eb2, eb3);
+    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
+    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    uint vpe = clvr_cell_vertex_count(t);
+    __global const uint *src = idx_in + slot0 + (ulong)(g - first) * vpe;
+    __global uint *dst = idx_sorted + slot0 + (ulong)(i - first) * vpe;
+    for (uint k = 0; k < vpe; ++k) dst[k] = src[k];
+}
+
+/* Sampling cluster c: cb1..cb3 are the first cluster ids of pyramids,
+ * wedges, hexes; en = element count (end of hexes). */
+__kernel void clvr_pp_sampling(__global const float *pos, __global const float *scal, __global const uint *idx_sorted,
+                               uint nclusters, uint size, uint cb1, uint cb2, uint cb3, uint eb1, uint eb2, uint eb3,
+                               uint en, ulong sb1, ulong sb2, ulong sb3, __global clvr_sampling_cluster *out)
+{
+    uint c = (uint)get_global_id(0);
+    if (c >= nclusters) return;
+    uint t = clvr_pp_type_of(c, cb1, cb2, cb3);
+    uint cfirst = t == 0u ? 0u : t == 1u ? cb1 : t == 2u ? cb2 : cb3;
+    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
+    uint end = t == 0u ? eb1 : t == 1u ? eb2 : t == 2u ? eb3 : en;
+    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    uint vpe = clvr_cell_vertex_count(t);
+    uint e0 = first + (c - cfirst) * size, e1 = min(end, e0 + size);
+    float lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
+    float hi[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    for (uint e = e0; e < e1; ++e) {
+        __global const uint *ix = idx_sorted + slot0 + (ulong)(e - first) * vpe;
+        for (uint k = 0; k < vpe; ++k) {
+            ulong v = ix[k];
+            clvr_pp_box_grow(lo, hi, pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]);
+            float s = scal[v];
+            lo[3] = s < lo[3] ? s : lo[3];
+            hi[3] = s > hi[3] ? s : hi[3];
+        }
+    }
+    for (int k = 0; k < 4; ++k) {
+        out[c].lo[k] = lo[k];
+        out[c].hi[k] = hi[k];
+    }
+}
+
+/* Index of the instance that holds leaf l (largest c with first_leaf <= l). */
+inline uint clvr_pp_find_leaf(__global const clvr_instance *inst, uint ninst, uint l)
+{
+    uint a = 0, b = ninst;
+    while (b - a > 1u) {
+        uint m = (a + b) / 2u;
+        if (inst[m].first_leaf <= l) a = m;
+        else b = m;
+    }
+    return a;
+}
+
+/* Box of leaf cluster l from the clustered arrays (local indices into the
+ * instance's own vertices), so the boxes describe exactly what is rendered. */
+__kernel void clvr_pp_leaf_boxes(__global const float4 *verts, __global const ushort *idx16,
+                                 __global const uint *idx32, __global const clvr_instance *inst, uint ninst,
+                                 uint nleaves, uint leaf_size, __global clvr_box *out)
+{
+    uint l = (uint)get_global_id(0);
+    if (l >= nleaves) return;
+    clvr_instance c = inst[clvr_pp_find_leaf(inst, ninst, l)];
+    uint vpe = clvr_cell_vertex_count(c.type);
+    uint e0 = c.first_element + (l - c.first_leaf) * leaf_size;
+    uint e1 = min(c.first_element + c.num_elements, e0 + leaf_size);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint e = e0; e < e1; ++e) {
+        ulong s = c.first_index + (ulong)(e - c.first_element) * vpe;
+        for (uint k = 0; k < vpe; ++k) {
+            uint li = c.index_bits == 16u ? (uint)idx16[s + k] : idx32[s + k];
+            float4 v = verts[c.first_vertex + li];
+            clvr_pp_box_grow(lo, hi, v.x, v.y, v.z);
+        }
+    }
+    out[l].lo[0] = lo[0]; out[l].lo[1] = lo[1]; out[l].lo[2] = lo[2]; out[l].lo[3] = 0.0f;
+    out[l].hi[0] = hi[0]; out[l].hi[1] = hi[1]; out[l].hi[2] = hi[2]; out[l].hi[3] = 0.0f;
+}
+
+/* Instance bounds: the union of its leaf boxes. */
+__kernel void clvr_pp_instance_bounds(__global clvr_instance *inst, uint ninst, __global const clvr_box *leaves)
+{
+    uint i = (uint)get_global_id(0);
+    if (i >= ninst) return;
+    uint l0 = inst[i].first_leaf, l1 = l0 + inst[i].num_leaves;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint l = l0; l < l1; ++l) {
+        clvr_pp_box_grow(lo, hi, leaves[l].lo[0], leaves[l].lo[1], leaves[l].lo[2]);
+        clvr_pp_box_grow(lo, hi, leaves[l].hi[0], leaves[l].hi[1], leaves[l].hi[2]);
+    }
+    for (int k = 0; k < 3; ++k) {
+        inst[i].bounds.lo[k] = lo[k];
+        inst[i].bounds.hi[k] = hi[k];
+    }
+    inst[i].bounds.lo[3] = 0.0f;
+    inst[i].bounds.hi[3] = 0.0f;
+}

@@ -1,0 +1,219 @@
+/* elements.h: point containment and scalar interpolation for the four
+ * element types (VTK vertex order), compiled for the host (tests, reference)
+ * and for OpenCL kernels: the same code on both sides.
+ *
+ * Tetrahedra use barycentric coordinates (one 3x3 solve). Pyramids, wedges
+ * and hexahedra invert their isoparametric map (bilinear-in-the-base times
+ * linear in height for pyramids and wedges, trilinear for hexahedra) with
+ * Newton's method, as VTK's EvaluatePosition and Open VKL's non-planar
+ * element path do: start at the parametric centre, at most
+ * CLVR_NEWTON_MAX_ITER steps, stop when the step or the residual is tiny,
+ * give up on divergence or a singular Jacobian. Faces that are not planar
+ * are handled exactly: two elements sharing a quad face both see it as the
+ * same bilinear patch, so the parametric test agrees between neighbours.
+ *
+ * Everything runs in coordinates relative to vertex 0 so that meshes far
+ * from the origin keep their float precision. NaN anywhere (degenerate or
+ * inverted elements, NaN points) makes the point "outside": every
+ * comparison is written so that NaN fails it. */
+#ifndef CLVR_ELEMENTS_H
+#define CLVR_ELEMENTS_H
+
+#include "clvr_shared.h"
+
+#ifndef __OPENCL_VERSION__
+#include <math.h>
+#endif
+
+/* Newton: iteration bound and convergence threshold on the parametric step
+ * (VTK uses 10 and 1e-5); residual threshold relative to the element size. */
+#define CLVR_NEWTON_MAX_ITER 16
+#define CLVR_NEWTON_STEP_TOL 1e-6f
+#define CLVR_NEWTON_RESIDUAL_REL 1e-7f
+/* Parametric coordinates beyond this mean Newton diverged. */
+#define CLVR_NEWTON_DIVERGED 1e6f
+
+/* Shape functions N[i] of the element type at parametric (u, v, w) and their
+ * derivatives. Parametric domains: tet u, v, w >= 0, u + v + w <= 1;
+ * pyramid u, v, w in [0, 1] (apex at w = 1); wedge u, v >= 0, u + v <= 1,
+ * w in [0, 1]; hex [0, 1]^3. Slots past the vertex count are zero. */
+CLVR_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
+                                    float *Nw)
+{
+    for (int i = 0; i < 8; ++i) { N[i] = 0.0f; Nu[i] = 0.0f; Nv[i] = 0.0f; Nw[i] = 0.0f; }
+    const float iu = 1.0f - u, iv = 1.0f - v, iw = 1.0f - w;
+    if (type == CLVR_CELL_TET) {
+        N[0] = 1.0f - u - v - w; N[1] = u; N[2] = v; N[3] = w;
+        Nu[0] = -1.0f; Nu[1] = 1.0f;
+        Nv[0] = -1.0f; Nv[2] = 1.0f;
+        Nw[0] = -1.0f; Nw[3] = 1.0f;
+    } else if (type == CLVR_CELL_PYRAMID) {
+        /* base 0 (0,0) 1 (1,0) 2 (1,1) 3 (0,1) scaled by (1 - w), apex 4 */
+        N[0] = iu * iv * iw; N[1] = u * iv * iw; N[2] = u * v * iw; N[3] = iu * v * iw; N[4] = w;
+        Nu[0] = -iv * iw; Nu[1] = iv * iw; Nu[2] = v * iw; Nu[3] = -v * iw;
+        Nv[0] = -iu * iw; Nv[1] = -u * iw; Nv[2] = u * iw; Nv[3] = iu * iw;
+        Nw[0] = -iu * iv; Nw[1] = -u * iv; Nw[2] = -u * v; Nw[3] = -iu * v; Nw[4] = 1.0f;
+    } else if (type == CLVR_CELL_WEDGE) {
+        /* triangle 0 1 2 at w = 0, triangle 3 4 5 above it at w = 1 */
+        const float t = 1.0f - u - v;
+        N[0] = t * iw; N[1] = u * iw; N[2] = v * iw; N[3] = t * w; N[4] = u * w; N[5] = v * w;
+        Nu[0] = -iw; Nu[1] = iw; Nu[3] = -w; Nu[4] = w;
+        Nv[0] = -iw; Nv[2] = iw; Nv[3] = -w; Nv[5] = w;
+        Nw[0] = -t; Nw[1] = -u; Nw[2] = -v; Nw[3] = t; Nw[4] = u; Nw[5] = v;
+    } else {
+        /* hex: 0 (0,0,0) 1 (1,0,0) 2 (1,1,0) 3 (0,1,0), 4..7 the same at w = 1 */
+        N[0] = iu * iv * iw; N[1] = u * iv * iw; N[2] = u * v * iw; N[3] = iu * v * iw;
+        N[4] = iu * iv * w;  N[5] = u * iv * w;  N[6] = u * v * w;  N[7] = iu * v * w;
+        Nu[0] = -iv * iw; Nu[1] = iv * iw; Nu[2] = v * iw; Nu[3] = -v * iw;
+        Nu[4] = -iv * w;  Nu[5] = iv * w;  Nu[6] = v * w;  Nu[7] = -v * w;
+        Nv[0] = -iu * iw; Nv[1] = -u * iw; Nv[2] = u * iw; Nv[3] = iu * iw;
+        Nv[4] = -iu * w;  Nv[5] = -u * w;  Nv[6] = u * w;  Nv[7] = iu * w;
+        Nw[0] = -iu * iv; Nw[1] = -u * iv; Nw[2] = -u * v; Nw[3] = -iu * v;
+        Nw[4] = iu * iv;  Nw[5] = u * iv;  Nw[6] = u * v;  Nw[7] = iu * v;
+    }
+}
+
+/* 1 when (u, v, w) lies in the type's parametric domain grown by eps. */
+CLVR_INLINE int clvr_element_param_inside(clvr_u32 type, float u, float v, float w, float eps)
+{
+    const float lo = -eps, hi = 1.0f + eps;
+    if (type == CLVR_CELL_TET) return u >= lo && v >= lo && w >= lo && u + v + w <= hi;
+    if (type == CLVR_CELL_WEDGE) return u >= lo && v >= lo && u + v <= hi && w >= lo && w <= hi;
+    if (type == CLVR_CELL_PYRAMID) {
+        /* In the collapsed coordinates a = u (1 - w), b = v (1 - w) the
+         * domain is the pyramid itself; u and v lose their meaning at the
+         * apex (their error grows like 1 / (1 - w)), a and b do not. */
+        const float iw = 1.0f - w, a = u * iw, b = v * iw;
+        return w >= lo && w <= hi && a >= lo && a <= iw + eps && b >= lo && b <= iw + eps;
+    }
+    return u >= lo && u <= hi && v >= lo && v <= hi && w >= lo && w <= hi;
+}
+
+/* Forward map: world position of parametric (u, v, w) (tests build points on
+ * faces, edges and inside elements with it). */
+CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float u, float v, float w, float *x,
+                                      float *y, float *z)
+{
+    float N[8], Nu[8], Nv[8], Nw[8];
+    clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
+    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+    for (clvr_u32 i = 0; i < nv; ++i) {
+        sx += N[i] * vtx[i].x;
+        sy += N[i] * vtx[i].y;
+        sz += N[i] * vtx[i].z;
+    }
+    *x = sx; *y = sy; *z = sz;
+}
+
+/* Solves [a b c] x = r by Cramer's rule; returns 0 when the determinant is
+ * zero, tiny relative to the columns, or not finite. */
+CLVR_INLINE int clvr_solve3(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy, float cz,
+                            float rx, float ry, float rz, float *x0, float *x1, float *x2)
+{
+    /* cofactors of the columns: b x c, c x a, a x b */
+    const float bcx = by * cz - bz * cy, bcy = bz * cx - bx * cz, bcz = bx * cy - by * cx;
+    const float cax = cy * az - cz * ay, cay = cz * ax - cx * az, caz = cx * ay - cy * ax;
+    const float abx = ay * bz - az * by, aby = az * bx - ax * bz, abz = ax * by - ay * bx;
+    const float det = ax * bcx + ay * bcy + az * bcz;
+    const float la = fabs(ax) + fabs(ay) + fabs(az), lb = fabs(bx) + fabs(by) + fabs(bz);
+    const float lc = fabs(cx) + fabs(cy) + fabs(cz);
+    /* NaN-safe: !(x > y) is true for NaN. */
+    if (!(fabs(det) > 1e-12f * la * lb * lc) || !(fabs(det) < INFINITY)) return 0;
+    const float inv = 1.0f / det;
+    *x0 = (rx * bcx + ry * bcy + rz * bcz) * inv;
+    *x1 = (rx * cax + ry * cay + rz * caz) * inv;
+    *x2 = (rx * abx + ry * aby + rz * abz) * inv;
+    return 1;
+}
+
+/* Parametric coordinates of world point p in the element (vertices vtx[0..n-1],
+ * VTK order). Returns 1 when they were found (Newton converged, or the tet's
+ * solve succeeded), 0 on divergence, singular maps or NaN; a 1 says nothing
+ * about inside: use clvr_element_param_inside. */
+CLVR_INLINE int clvr_element_invert(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *pu,
+                                    float *pv, float *pw)
+{
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
+    /* Relative to vertex 0, for precision far from the origin. */
+    const float ox = vtx[0].x, oy = vtx[0].y, oz = vtx[0].z;
+    px -= ox; py -= oy; pz -= oz;
+    if (type == CLVR_CELL_TET) {
+        return clvr_solve3(vtx[1].x - ox, vtx[1].y - oy, vtx[1].z - oz, vtx[2].x - ox, vtx[2].y - oy, vtx[2].z - oz,
+                           vtx[3].x - ox, vtx[3].y - oy, vtx[3].z - oz, px, py, pz, pu, pv, pw);
+    }
+    float size = 0.0f;
+    for (clvr_u32 i = 1; i < nv; ++i)
+        size = fmax(size, fabs(vtx[i].x - ox) + fabs(vtx[i].y - oy) + fabs(vtx[i].z - oz));
+    const float res_tol = CLVR_NEWTON_RESIDUAL_REL * size;
+    /* Start at the parametric centre (below the pyramid's singular apex). */
+    float u = type == CLVR_CELL_WEDGE ? 1.0f / 3.0f : 0.5f;
+    float v = u, w = type == CLVR_CELL_PYRAMID ? 0.25f : 0.5f;
+    float N[8], Nu[8], Nv[8], Nw[8];
+    for (int it = 0; it < CLVR_NEWTON_MAX_ITER; ++it) {
+        clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
+        float fx = -px, fy = -py, fz = -pz;
+        float jux = 0.0f, juy = 0.0f, juz = 0.0f, jvx = 0.0f, jvy = 0.0f, jvz = 0.0f;
+        float jwx = 0.0f, jwy = 0.0f, jwz = 0.0f;
+        for (clvr_u32 i = 1; i < nv; ++i) { /* vertex 0 is the origin: contributes nothing */
+            const float x = vtx[i].x - ox, y = vtx[i].y - oy, z = vtx[i].z - oz;
+            fx += N[i] * x; fy += N[i] * y; fz += N[i] * z;
+            jux += Nu[i] * x; juy += Nu[i] * y; juz += Nu[i] * z;
+            jvx += Nv[i] * x; jvy += Nv[i] * y; jvz += Nv[i] * z;
+            jwx += Nw[i] * x; jwy += Nw[i] * y; jwz += Nw[i] * z;
+        }
+        /* Residual already at float noise (also what ends the pyramid apex,
+         * where the Jacobian is singular). */
+        if (fabs(fx) <= res_tol && fabs(fy) <= res_tol && fabs(fz) <= res_tol) {
+            *pu = u; *pv = v; *pw = w;
+            return 1;
+        }
+        float du, dv, dw;
+        if (!clvr_solve3(jux, juy, juz, jvx, jvy, jvz, jwx, jwy, jwz, fx, fy, fz, &du, &dv, &dw)) return 0;
+        u -= du; v -= dv; w -= dw;
+        if (!(fabs(u) < CLVR_NEWTON_DIVERGED && fabs(v) < CLVR_NEWTON_DIVERGED && fabs(w) < CLVR_NEWTON_DIVERGED))
+            return 0;
+        if (fabs(du) < CLVR_NEWTON_STEP_TOL && fabs(dv) < CLVR_NEWTON_STEP_TOL && fabs(dw) < CLVR_NEWTON_STEP_TOL) {
+            *pu = u; *pv = v; *pw = w;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Point containment and interpolation: returns 1 when (px, py, pz) lies in
+ * the element (within CLVR_ELEMENT_EPS in parametric coordinates) and writes
+ * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
+ * for degenerate elements and NaN input). vtx holds the element's
+ * clvr_cell_vertex_count(type) vertices in VTK order. */
+CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
+{
+    float u, v, w;
+    if (!clvr_element_invert(type, vtx, px, py, pz, &u, &v, &w)) return 0;
+    if (!clvr_element_param_inside(type, u, v, w, CLVR_ELEMENT_EPS)) return 0;
+    float N[8], Nu[8], Nv[8], Nw[8];
+    clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
+    float s = 0.0f;
+    for (clvr_u32 i = 0; i < nv; ++i) s += N[i] * vtx[i].w;
+    *scalar = s;
+    return 1;
+}
+
+/* Quick reject: 1 when p is inside the element's vertex box padded like the
+ * BVH's boxes (CLVR_BVH_BOX_PAD_REL of its largest extent). */
+CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz)
+{
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
+    float lx = vtx[0].x, ly = vtx[0].y, lz = vtx[0].z, hx = lx, hy = ly, hz = lz;
+    for (clvr_u32 i = 1; i < nv; ++i) {
+        lx = fmin(lx, vtx[i].x); ly = fmin(ly, vtx[i].y); lz = fmin(lz, vtx[i].z);
+        hx = fmax(hx, vtx[i].x); hy = fmax(hy, vtx[i].y); hz = fmax(hz, vtx[i].z);
+    }
+    const float ext = fmax(fmax(hx - lx, hy - ly), hz - lz);
+    const float mag = fmax(fmax(fmax(fabs(lx), fabs(hx)), fmax(fabs(ly), fabs(hy))), fmax(fabs(lz), fabs(hz)));
+    const float pad = CLVR_BVH_BOX_PAD_REL * ext + 4.0f * 1.1920929e-7f * mag;
+    return px >= lx - pad && px <= hx + pad && py >= ly - pad && py <= hy + pad && pz >= lz - pad && pz <= hz + pad;
+}
+
+#endif /* CLVR_ELEMENTS_H */

@@ -1,0 +1,92 @@
+/* locate.h: two-level point location in the clustered mesh, the software
+ * stand-in for the paper's RT-core query (section 3.1, a ray with
+ * tmin = tmax = 0 at the sample point): top-level tree over instance
+ * clusters -> the instance's bottom-level tree over its leaf clusters ->
+ * the leaf's elements, tested one by one with clvr_element_sample.
+ * Compiled for the host (reference, tests) and for kernels. The first
+ * element that contains the point wins; on a shared face that may be either
+ * neighbour, and both interpolate the same value. */
+#ifndef CLVR_LOCATE_H
+#define CLVR_LOCATE_H
+
+#include "clvr_shared.h"
+#include "elements.h"
+#include "bvh_traverse.h"
+
+/* Loads the vertices of element e (global sorted id, inside instance
+ * `inst`) into v[0 .. vertex_count(inst->type) - 1]. */
+CLVR_INLINE void clvr_load_element(const clvr_instance *inst, clvr_u32 e, CLVR_GLOBAL const clvr_vec4 *vertices,
+                                   CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
+                                   clvr_vec4 *v)
+{
+    const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
+    const clvr_u64 base = inst->first_index + (clvr_u64)(e - inst->first_element) * nv;
+    if (inst->index_bits == 16u) {
+        for (clvr_u32 k = 0; k < nv; ++k) v[k] = vertices[inst->first_vertex + (clvr_u32)idx16[base + k]];
+    } else {
+        for (clvr_u32 k = 0; k < nv; ++k) v[k] = vertices[inst->first_vertex + idx32[base + k]];
+    }
+}
+
+/* Tests the elements of leaf cluster `leaf` of instance inst; returns 1 and
+ * the scalar and element id of the first one that contains p. */
+CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, float px, float py, float pz,
+                                    CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
+                                    CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, float *scalar,
+                                    clvr_u32 *element_id)
+{
+    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
+    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
+    const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
+    clvr_vec4 v[8];
+    for (clvr_u32 e = first; e < end; ++e) {
+        clvr_load_element(inst, e, vertices, idx16, idx32, v);
+        if (!clvr_element_box_test(inst->type, v, px, py, pz)) continue;
+        if (clvr_element_sample(inst->type, v, px, py, pz, scalar)) {
+            *element_id = e;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Point location: returns 1 when an element contains (px, py, pz) and writes
+ * its interpolated scalar and global sorted element id; 0 (and element id
+ * CLVR_BVH_NOT_FOUND) otherwise. tlas_root is the top-level root (0 for
+ * clvr_bvh builds); each instance's bvh_root is its bottom-level root in
+ * blas. leaf_size: elements per leaf cluster, as the clustering used. */
+CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr_bvh_node *tlas, clvr_u32 tlas_root,
+                            CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_instance *instances,
+                            CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
+                            CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, float *scalar,
+                            clvr_u32 *element_id)
+{
+    *element_id = CLVR_BVH_NOT_FOUND;
+    clvr_bvh_point_iter top;
+    clvr_bvh_point_begin(&top, tlas_root, px, py, pz);
+    clvr_u32 ci;
+    while (clvr_bvh_point_next(&top, tlas, &ci)) {
+        const clvr_instance inst = instances[ci];
+        clvr_bvh_point_iter bot;
+        clvr_bvh_point_begin(&bot, inst.bvh_root, px, py, pz);
+        clvr_u32 leaf;
+        while (clvr_bvh_point_next(&bot, blas, &leaf)) {
+            if (clvr_locate_in_leaf(&inst, leaf, px, py, pz, vertices, idx16, idx32, leaf_size, scalar, element_id))
+                return 1;
+        }
+    }
+    return 0;
+}
+
+/* The renderer's entry point: clvr_locate without the element id. */
+CLVR_INLINE int clvr_locate_point(float px, float py, float pz, CLVR_GLOBAL const clvr_bvh_node *tlas,
+                                  CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_instance *instances,
+                                  CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
+                                  CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, clvr_u32 tlas_root,
+                                  float *scalar)
+{
+    clvr_u32 e;
+    return clvr_locate(px, py, pz, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, scalar, &e);
+}
+
+#endif /* CLVR_LOCATE_H */

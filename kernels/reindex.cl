@@ -1,0 +1,95 @@
+/* reindex.cl: instance clusters and mesh compression (paper 3.2.2, 3.3):
+ * the greedy split + local re-indexing per segment (reindex.h), the flags
+ * that the flagged select (scan.cl) compacts into the instance table, the
+ * instance table itself, and the copy of every instance's vertices into the
+ * clustered float4 (x, y, z, scalar) array. */
+#include "clvr_shared.h"
+#include "bounds.h"
+#include "reindex.h"
+
+/* One work-item per segment of one type: segment s covers the type's
+ * elements [s * seg_len, min(count, (s + 1) * seg_len)). Worker s uses hash
+ * table s (1 << log2cap slots) and writes its records at
+ * recs[(rec_base + s) * rec_max ...] and their number at counts[rec_base + s]. */
+__kernel void clvr_pp_split(__global const uint *idx_sorted, __global uint *vmap, __global ushort *idx16,
+                            __global uint *idx32, int bits32, uint type, uint type_first, uint count, ulong slot0,
+                            uint seg_len, uint nseg, uint vlimit, uint max_elems, __global ulong *tk,
+                            __global uint *tv, uint log2cap, ulong epoch0, uint rec_base, uint rec_max,
+                            __global clvr_pp_instance_rec *recs, __global uint *counts)
+{
+    uint s = (uint)get_global_id(0);
+    if (s >= nseg) return;
+    uint b = s * seg_len, e = min(count, b + seg_len);
+    ulong table = (ulong)s << log2cap;
+    counts[rec_base + s] = clvr_pp_split_segment(idx_sorted, vmap, idx16, idx32, bits32, type, type_first, slot0, b,
+                                                 e, vlimit, max_elems, tk + table, tv + table, log2cap, epoch0,
+                                                 recs + (ulong)(rec_base + s) * rec_max, rec_max);
+}
+
+/* flags[i] = 1 when record slot i holds a record (i % rec_max < its count). */
+__kernel void clvr_pp_rec_flags(__global const uint *counts, uint nslots, uint rec_max, __global uint *flags)
+{
+    uint i = (uint)get_global_id(0);
+    if (i >= nslots) return;
+    flags[i] = (i % rec_max) < counts[i / rec_max] ? 1u : 0u;
+}
+
+/* Per instance i (record recs[sel[i]]): vertex and leaf counts, to scan. */
+__kernel void clvr_pp_inst_counts(__global const clvr_pp_instance_rec *recs, __global const uint *sel, uint ninst,
+                                  uint leaf_size, __global uint *nverts, __global uint *nleaves)
+{
+    uint i = (uint)get_global_id(0);
+    if (i >= ninst) return;
+    clvr_pp_instance_rec r = recs[sel[i]];
+    nverts[i] = r.num_vertices;
+    nleaves[i] = (r.num_elements + leaf_size - 1u) / leaf_size;
+}
+
+/* The instance table (bounds come later from the leaves); vsrc[i] keeps
+ * where instance i's vertex ids are in the scratch map. nverts and nleaves
+ * hold the exclusive scans of the counts. */
+__kernel void clvr_pp_inst_write(__global const clvr_pp_instance_rec *recs, __global const uint *sel, uint ninst,
+                                 __global const uint *first_vertex, __global const uint *first_leaf, uint leaf_size,
+                                 int bits32, uint eb1, uint eb2, uint eb3, ulong sb1, ulong sb2, ulong sb3,
+                                 __global clvr_instance *inst, __global ulong *vsrc)
+{
+    uint i = (uint)get_global_id(0);
+    if (i >= ninst) return;
+    clvr_pp_instance_rec r = recs[sel[i]];
+    uint t = r.type;
+    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
+    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    clvr_instance c;
+    for (int k = 0; k < 4; ++k) { c.bounds.lo[k] = 0.0f; c.bounds.hi[k] = 0.0f; }
+    c.type = t;
+    c.index_bits = bits32 ? 32u : 16u;
+    c.first_element = r.first_element;
+    c.num_elements = r.num_elements;
+    c.first_vertex = first_vertex[i];
+    c.num_vertices = r.num_vertices;
+    c.first_index = slot0 + (ulong)(r.first_element - first) * clvr_cell_vertex_count(t);
+    c.first_leaf = first_leaf[i];
+    c.num_leaves = (r.num_elements + leaf_size - 1u) / leaf_size;
+    c.bvh_root = CLVR_PP_NO_ROOT;
+    c.pad0 = 0u;
+    inst[i] = c;
+    vsrc[i] = r.vsrc;
+}
+
+/* Clustered vertex j = (position, scalar) of the mesh vertex that instance
+ * c's j - first_vertex'th local id stands for. */
+__kernel void clvr_pp_vertices(__global const float *pos, __global const float *scal, __global const uint *vmap,
+                               __global const clvr_instance *inst, __global const ulong *vsrc, uint ninst, uint nv,
+                               __global float4 *out)
+{
+    uint j = (uint)get_global_id(0);
+    if (j >= nv) return;
+    uint a = 0, b = ninst;
+    while (b - a > 1u) {
+        uint m = (a + b) / 2u;
+        if (inst[m].first_vertex <= j) a = m;
+        else b = m;
+    }
+    ulong v = vmap[vsrc[a] + (j - inst[a].first_vertex)];
+    out[j] = (float4)(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2], scal[v]);
+}

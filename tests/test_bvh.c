@@ -1,0 +1,535 @@
+/* test_bvh.c: the packed BVH and two-level point location against brute
+ * force, on the host (reference) and on the OpenCL device:
+ * - tree arithmetic and the device's view of the shared structs,
+ * - single-level trees over random boxes (sizes 0, 1, primes, non-multiples
+ *   of 4 and of the work-group size): point and ray iterators report exactly
+ *   the boxes brute force finds; device build equals host build,
+ * - two-level trees over generated meshes of each element type and a mix,
+ *   leaf sizes 1..32, 16- and 32-bit instances, far from the origin:
+ *   random points, points on faces, edges and vertices, points just outside;
+ *   host and device point location agree with brute force (same element, or
+ *   a neighbour brute force also accepts, with the same scalar),
+ * - the same on the meshes in tests/data (vtk, umesh) when they load. */
+#include "test_util.h"
+
+#include <dirent.h>
+
+#include "bvh.h"
+#include "bvh_fixture.h"
+#include "mesh_io.h"
+#include "../kernels/bvh_build.h"
+#include "../kernels/bvh_traverse.h"
+
+/* ------------------------------------------------------------ tree arithmetic */
+
+static void test_arithmetic(void)
+{
+    /* independent count: sum of ceil(n / 4^k) until 1 */
+    const uint32_t ns[] = {0, 1, 2, 3, 4, 5, 15, 16, 17, 63, 64, 65, 1000, 4096, 4097, 123457};
+    for (size_t i = 0; i < sizeof ns / sizeof ns[0]; ++i) {
+        const uint32_t n = ns[i];
+        uint64_t total = 0, s = n, h = 0;
+        do {
+            s = (s + 3) / 4;
+            if (s == 0) s = 1;
+            total += s;
+            ++h;
+        } while (s > 1);
+        TU_CHECK_EQ_U64(clvr_bvh_tree_size(n), total);
+        TU_CHECK_EQ_U64(clvr_bvh_height(n), h);
+        TU_CHECK_EQ_U64(clvr_bvh_level_first(n, clvr_bvh_height(n) - 1), 0); /* root first */
+        TU_CHECK_EQ_U64(clvr_bvh_level_first(n, 0) + clvr_bvh_level_size(n, 0), total);
+    }
+}
+
+static void test_device_sizes(clvr_cl *cl, const clvr_bvh_kernels *k)
+{
+    clvr_error err = {0};
+    clvr_status s = CLVR_OK;
+    cl_mem out = NULL;
+    cl_kernel kk = NULL;
+    cl_uint v[7] = {0};
+    TU_CHECK_STATUS(s = clvr_cl_kernel(k->program, "clvr_bvh_sizes", &kk, &err), CLVR_OK, &err);
+    if (s != CLVR_OK) return;
+    if (clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, sizeof v, NULL, "sizes", &out, &err) == CLVR_OK &&
+        clSetKernelArg(kk, 0, sizeof out, &out) == CL_SUCCESS &&
+        clvr_cl_run1d(cl, kk, 1, 1, NULL, &err) == CLVR_OK &&
+        clEnqueueReadBuffer(cl->queue, out, CL_TRUE, 0, sizeof v, v, 0, NULL, NULL) == CL_SUCCESS) {
+        TU_CHECK_EQ_U64(v[0], sizeof(clvr_bvh_node));
+        TU_CHECK_EQ_U64(v[1], sizeof(clvr_bvh_tree));
+        TU_CHECK_EQ_U64(v[2], sizeof(clvr_instance));
+        TU_CHECK_EQ_U64(v[3], sizeof(clvr_vec4));
+        TU_CHECK_EQ_U64(v[4], offsetof(clvr_bvh_node, child));
+        TU_CHECK_EQ_U64(v[5], offsetof(clvr_instance, first_index));
+        TU_CHECK_EQ_U64(v[6], offsetof(clvr_instance, bvh_root));
+    } else {
+        TU_CHECK(!"clvr_bvh_sizes kernel ran");
+    }
+    clvr_cl_release(cl, &out);
+    clReleaseKernel(kk);
+}
+
+/* ------------------------------------------------------------ single level over boxes */
+
+static void random_boxes(uint32_t n, uint64_t *rs, clvr_box *b)
+{
+    for (uint32_t i = 0; i < n; ++i) {
+        memset(&b[i], 0, sizeof b[i]);
+        for (int a = 0; a < 3; ++a) {
+            const float c = 10.0f * tu_randf(rs), e = 0.05f + 1.5f * tu_randf(rs) * tu_randf(rs);
+            b[i].lo[a] = c - e;
+            b[i].hi[a] = c + e;
+        }
+        b[i].lo[3] = (float)i; /* sampling clusters keep scalar ranges here: must be ignored */
+        b[i].hi[3] = -(float)i;
+    }
+}
+
+static int nodes_equal(const clvr_bvh_node *a, const clvr_bvh_node *b, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; ++i) {
+        if (memcmp(a[i].child, b[i].child, sizeof a[i].child) != 0) return 0;
+        const float *fa = a[i].lo_x, *fb = b[i].lo_x;
+        for (int j = 0; j < 24; ++j)
+            if (!(fa[j] == fb[j] || fabsf(fa[j] - fb[j]) <= 1e-6f * fabsf(fb[j]))) return 0;
+    }
+    return 1;
+}
+
+static void test_boxes(clvr_cl *cl, const clvr_bvh_kernels *k, uint32_t n)
+{
+    uint64_t rs = 1000 + n;
+    clvr_error err = {0};
+    clvr_box *boxes = calloc(n + 1, sizeof *boxes), *padded = calloc(n + 1, sizeof *padded);
+    const uint32_t nn = clvr_bvh_nodes_bound(n);
+    clvr_bvh_node *nodes = calloc(nn, sizeof *nodes), *dnodes = calloc(nn, sizeof *dnodes);
+    uint32_t *seen = calloc(n + 1, sizeof *seen);
+    random_boxes(n, &rs, boxes);
+    for (uint32_t i = 0; i < n; ++i) {
+        padded[i] = boxes[i];
+        clvr_bvh_pad_box(&padded[i].lo[0], &padded[i].lo[1], &padded[i].lo[2], &padded[i].hi[0], &padded[i].hi[1],
+                         &padded[i].hi[2]);
+    }
+    TU_CHECK_STATUS(clvr_bvh_build_boxes(boxes, n, nodes, &err), CLVR_OK, &err);
+
+    /* point queries: exactly the padded boxes that contain the point, once each */
+    int wrong_points = 0;
+    for (int q = 0; q < 300; ++q) {
+        const float p[3] = {12.0f * tu_randf(&rs) - 1.0f, 12.0f * tu_randf(&rs) - 1.0f, 12.0f * tu_randf(&rs) - 1.0f};
+        clvr_bvh_point_iter it;
+        clvr_bvh_point_begin(&it, 0, p[0], p[1], p[2]);
+        uint32_t prim, got = 0, want = 0;
+        int bad = 0;
+        while (clvr_bvh_point_next(&it, nodes, &prim)) {
+            if (prim >= n || seen[prim] == (uint32_t)q + 1) bad = 1;
+            else seen[prim] = (uint32_t)q + 1;
+            ++got;
+        }
+        for (uint32_t i = 0; i < n; ++i) {
+            const int in = p[0] >= padded[i].lo[0] && p[0] <= padded[i].hi[0] && p[1] >= padded[i].lo[1] &&
+                           p[1] <= padded[i].hi[1] && p[2] >= padded[i].lo[2] && p[2] <= padded[i].hi[2];
+            want += in;
+            if (in && seen[i] != (uint32_t)q + 1) bad = 1;
+        }
+        if (bad || got != want) ++wrong_points;
+    }
+    TU_CHECK_EQ_U64(wrong_points, 0);
+
+    /* ray queries: same set and intervals as the slab test per box */
+    enum { NR = 211 };
+    float org[NR][4], dir[NR][4];
+    uint32_t hcount[NR];
+    uint64_t hsum[NR];
+    float hlen[NR];
+    int wrong_rays = 0;
+    for (int r = 0; r < NR; ++r) {
+        for (int a = 0; a < 3; ++a) {
+            org[r][a] = 14.0f * tu_randf(&rs) - 2.0f;
+            dir[r][a] = 2.0f * tu_randf(&rs) - 1.0f;
+        }
+        if (r % 7 == 0) dir[r][r % 3] = 0.0f; /* axis-parallel components */
+        org[r][3] = r % 5 == 0 ? 0.0f : 0.5f * tu_randf(&rs); /* tmin */
+        dir[r][3] = r % 3 == 0 ? INFINITY : 3.0f + 10.0f * tu_randf(&rs); /* tmax */
+        clvr_bvh_ray_iter it;
+        clvr_bvh_ray_begin(&it, nodes, org[r][0], org[r][1], org[r][2], dir[r][0], dir[r][1], dir[r][2], org[r][3],
+                           dir[r][3]);
+        uint32_t prim, got = 0, want = 0;
+        float t0, t1;
+        int bad = 0;
+        hsum[r] = 0;
+        hlen[r] = 0.0f;
+        while (clvr_bvh_ray_next(&it, nodes, &prim, &t0, &t1)) {
+            if (prim >= n || seen[prim] == 100000u + (uint32_t)r) { bad = 1; continue; }
+            seen[prim] = 100000u + (uint32_t)r;
+            ++got;
+            hsum[r] += prim + 1u;
+            hlen[r] += t1 - t0;
+            /* the interval must be the slab interval of the padded box */
+            float a = org[r][3], b = dir[r][3];
+            for (int ax = 0; ax < 3; ++ax) {
+                const float inv = clvr_bvh_safe_inv(dir[r][ax]);
+                const float ta = (padded[prim].lo[ax] - org[r][ax]) * inv, tb = (padded[prim].hi[ax] - org[r][ax]) * inv;
+                a = fmaxf(a, fminf(ta, tb));
+                b = fminf(b, fmaxf(ta, tb));
+            }
+            if (fabsf(a - t0) > 1e-5f * (1.0f + fabsf(a)) || fabsf(b - t1) > 1e-5f * (1.0f + fabsf(b))) bad = 1;
+        }
+        for (uint32_t i = 0; i < n; ++i) {
+            float a = org[r][3], b = dir[r][3];
+            for (int ax = 0; ax < 3; ++ax) {
+                const float inv = clvr_bvh_safe_inv(dir[r][ax]);
+                const float ta = (padded[i].lo[ax] - org[r][ax]) * inv, tb = (padded[i].hi[ax] - org[r][ax]) * inv;
+                a = fmaxf(a, fminf(ta, tb));
+                b = fminf(b, fmaxf(ta, tb));
+            }
+            if (a <= b) {
+                ++want;
+                if (seen[i] != 100000u + (uint32_t)r) bad = 1;
+            }
+        }
+        hcount[r] = got;
+        if (bad || got != want) ++wrong_rays;
+    }
+    TU_CHECK_EQ_U64(wrong_rays, 0);
+
+    /* device: build equals host build, ray kernel equals host iterator */
+    clvr_status s = CLVR_OK;
+    cl_mem dboxes = NULL, dn = NULL, dorg = NULL, ddir = NULL, dcount = NULL, dsum = NULL, dlen = NULL;
+    uint32_t dcnt[NR];
+    uint64_t dsm[NR];
+    float dln[NR];
+    cl_uint nr = NR;
+    TU_CHECK_STATUS(s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (n + 1) * sizeof *boxes, boxes,
+                                       "boxes", &dboxes, &err), CLVR_OK, &err);
+    if (s == CLVR_OK) TU_CHECK_STATUS(s = clvr_bvh_build_boxes_device(cl, k, dboxes, n, &dn, &err), CLVR_OK, &err);
+    if (s == CLVR_OK && clEnqueueReadBuffer(cl->queue, dn, CL_TRUE, 0, nn * sizeof *dnodes, dnodes, 0, NULL, NULL) == CL_SUCCESS) {
+        TU_CHECK(nodes_equal(dnodes, nodes, nn));
+    }
+    if (s == CLVR_OK &&
+        clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof org, org, "org", &dorg, &err) == CLVR_OK &&
+        clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof dir, dir, "dir", &ddir, &err) == CLVR_OK &&
+        clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, sizeof dcnt, NULL, "count", &dcount, &err) == CLVR_OK &&
+        clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, sizeof dsm, NULL, "sum", &dsum, &err) == CLVR_OK &&
+        clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, sizeof dln, NULL, "len", &dlen, &err) == CLVR_OK) {
+        clSetKernelArg(k->ray_hits, 0, sizeof(cl_mem), &dorg);
+        clSetKernelArg(k->ray_hits, 1, sizeof(cl_mem), &ddir);
+        clSetKernelArg(k->ray_hits, 2, sizeof(cl_uint), &nr);
+        clSetKernelArg(k->ray_hits, 3, sizeof(cl_mem), &dn);
+        clSetKernelArg(k->ray_hits, 4, sizeof(cl_mem), &dcount);
+        clSetKernelArg(k->ray_hits, 5, sizeof(cl_mem), &dsum);
+        clSetKernelArg(k->ray_hits, 6, sizeof(cl_mem), &dlen);
+        TU_CHECK_STATUS(clvr_cl_run1d(cl, k->ray_hits, NR, 64, NULL, &err), CLVR_OK, &err);
+        clEnqueueReadBuffer(cl->queue, dcount, CL_TRUE, 0, sizeof dcnt, dcnt, 0, NULL, NULL);
+        clEnqueueReadBuffer(cl->queue, dsum, CL_TRUE, 0, sizeof dsm, dsm, 0, NULL, NULL);
+        clEnqueueReadBuffer(cl->queue, dlen, CL_TRUE, 0, sizeof dln, dln, 0, NULL, NULL);
+        int diff = 0;
+        for (int r = 0; r < NR; ++r)
+            if (dcnt[r] != hcount[r] || dsm[r] != hsum[r] ||
+                (isfinite(hlen[r]) && fabsf(dln[r] - hlen[r]) > 1e-4f * (1.0f + fabsf(hlen[r]))))
+                ++diff;
+        TU_CHECK_EQ_U64(diff, 0);
+    } else {
+        TU_CHECK(!"ray kernel buffers");
+    }
+    clvr_cl_release(cl, &dboxes);
+    clvr_cl_release(cl, &dn);
+    clvr_cl_release(cl, &dorg);
+    clvr_cl_release(cl, &ddir);
+    clvr_cl_release(cl, &dcount);
+    clvr_cl_release(cl, &dsum);
+    clvr_cl_release(cl, &dlen);
+    free(boxes);
+    free(padded);
+    free(nodes);
+    free(dnodes);
+    free(seen);
+}
+
+/* ------------------------------------------------------------ two-level point location */
+
+typedef struct query_set {
+    float (*p)[4];
+    uint32_t n;
+} query_set;
+
+/* Random points in the bounds (grown 5%), points on element faces, edges
+ * and vertices (forward map at boundary parameters) and points nudged just
+ * outside the mesh bounds. */
+static void make_queries(const fx_clustered *c, const clvr_mesh *m, uint32_t n, uint64_t *rs, query_set *q)
+{
+    q->p = calloc(n + 1, sizeof *q->p);
+    q->n = n;
+    float lo[3], hi[3], ext = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = m->bounds_lo[a];
+        hi[a] = m->bounds_hi[a];
+        ext = fmaxf(ext, hi[a] - lo[a]);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t kind = i % 4;
+        float *p = q->p[i];
+        if (kind == 0 || c->num_elements == 0) {
+            for (int a = 0; a < 3; ++a) p[a] = lo[a] - 0.05f * ext + (hi[a] - lo[a] + 0.1f * ext) * tu_randf(rs);
+        } else {
+            const uint32_t e = (uint32_t)(tu_rand(rs) % c->num_elements);
+            clvr_vec4 v[8];
+            const uint32_t t = fx_element(c, e, v);
+            if (kind == 1) { /* a vertex */
+                const clvr_vec4 vv = v[tu_rand(rs) % clvr_cell_vertex_count(t)];
+                p[0] = vv.x; p[1] = vv.y; p[2] = vv.z;
+            } else { /* a face (kind 2) or an edge (kind 3) */
+                float u = tu_randf(rs), w1 = tu_randf(rs), w2 = tu_randf(rs);
+                if (t == CLVR_CELL_TET || t == CLVR_CELL_WEDGE) {
+                    if (u + w1 > 1.0f) { u = 1.0f - u; w1 = 1.0f - w1; }
+                    if (t == CLVR_CELL_TET && u + w1 + w2 > 1.0f) w2 = 1.0f - u - w1;
+                }
+                float *pc[3] = {&u, &w1, &w2};
+                *pc[tu_rand(rs) % 3] = (t == CLVR_CELL_TET) ? 0.0f : (float)(tu_rand(rs) & 1) * ((t == CLVR_CELL_WEDGE) ? 0.0f : 1.0f);
+                if (kind == 3) *pc[tu_rand(rs) % 3] = 0.0f;
+                clvr_element_forward(t, v, u, w1, w2, &p[0], &p[1], &p[2]);
+            }
+            /* a quarter of these go just outside along a random axis: outside
+             * the mesh when they were on its boundary */
+            if (tu_rand(rs) % 4 == 0) {
+                const int a = (int)(tu_rand(rs) % 3);
+                if (p[a] <= lo[a] + 1e-6f * ext) p[a] = lo[a] - 1e-3f * ext;
+                else if (p[a] >= hi[a] - 1e-6f * ext) p[a] = hi[a] + 1e-3f * ext;
+            }
+        }
+        p[3] = 0.0f;
+    }
+}
+
+/* Judges one answer against brute force: same found/not found; the same
+ * element, or one that brute force also accepts, with the same scalar. */
+static int judge(const fx_clustered *c, const float *p, uint32_t got_e, float got_s, uint32_t want_e, float want_s)
+{
+    if ((got_e == CLVR_BVH_NOT_FOUND) != (want_e == CLVR_BVH_NOT_FOUND)) return 0;
+    if (got_e == CLVR_BVH_NOT_FOUND) return 1;
+    if (got_e >= c->num_elements) return 0;
+    float ref = want_s;
+    if (got_e != want_e && !fx_element_sample(c, got_e, p[0], p[1], p[2], &ref)) return 0;
+    return fabsf(got_s - ref) <= 1e-5f * fmaxf(1.0f, fabsf(ref));
+}
+
+static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh *m, const char *name,
+                         uint32_t leaf_size, uint32_t inst_elems, int force32, uint32_t nq)
+{
+    clvr_error errv = {0}, *err = &errv;
+    fx_clustered c;
+    if (fx_cluster(m, leaf_size, inst_elems, force32, &c) != 0) {
+        TU_CHECK(!"fx_cluster out of memory");
+        return;
+    }
+    clvr_bvh_host hb;
+    TU_CHECK_STATUS(clvr_bvh_build_host(c.instances, c.num_instances, c.leaf_boxes, c.num_leaves, &hb, err), CLVR_OK,
+                    err);
+    uint64_t rs = 77 + leaf_size * 13 + inst_elems;
+    query_set q;
+    make_queries(&c, m, nq, &rs, &q);
+    uint32_t *want_e = malloc(nq * sizeof *want_e);
+    float *want_s = malloc(nq * sizeof *want_s);
+    int host_bad = 0, found = 0;
+    for (uint32_t i = 0; i < nq; ++i) {
+        const float *p = q.p[i];
+        want_s[i] = 0.0f;
+        want_e[i] = fx_brute_locate(&c, p[0], p[1], p[2], &want_s[i]);
+        float s = 0.0f;
+        uint32_t e = 0;
+        const int ok = clvr_locate(p[0], p[1], p[2], hb.tlas, hb.tlas_root, hb.blas, c.instances, c.vertices, c.idx16,
+                                   c.idx32, leaf_size, &s, &e);
+        found += ok;
+        if (ok != (e != CLVR_BVH_NOT_FOUND) || !judge(&c, p, e, s, want_e[i], want_s[i])) {
+            if (host_bad < 5)
+                fprintf(stderr, "%s N=%u: host point (%.9g %.9g %.9g): got %u (%g), brute force %u (%g)\n", name,
+                        leaf_size, p[0], p[1], p[2], e, s, want_e[i], want_s[i]);
+            ++host_bad;
+        }
+    }
+    TU_CHECK_EQ_U64(host_bad, 0);
+    TU_CHECK(found > (int)nq / 3); /* the queries do hit the mesh */
+
+    /* device build and device point location */
+    clvr_status s = CLVR_OK;
+    cl_mem dv = NULL, d16 = NULL, d32 = NULL, dinst = NULL, dleaf = NULL, dpts = NULL, dsc = NULL, deid = NULL;
+    clvr_bvh_device db = {0};
+    clvr_instance *dev_inst = malloc((c.num_instances + 1) * sizeof *dev_inst);
+    memcpy(dev_inst, c.instances, c.num_instances * sizeof *dev_inst);
+    for (uint32_t i = 0; i < c.num_instances; ++i) dev_inst[i].bvh_root = 12345; /* must be overwritten */
+    float *dscal = malloc(nq * sizeof *dscal);
+    uint32_t *delem = malloc(nq * sizeof *delem);
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (c.num_vertices + 1) * sizeof(clvr_vec4),
+                            c.vertices, "vertices", &dv, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (c.num_idx16 + 1) * 2, c.idx16, "idx16", &d16, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (c.num_idx32 + 1) * 4, c.idx32, "idx32", &d32, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (c.num_instances + 1) * sizeof(clvr_instance),
+                            dev_inst, "instances", &dinst, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (c.num_leaves + 1) * sizeof(clvr_box),
+                            c.leaf_boxes, "leaf boxes", &dleaf, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (nq + 1) * sizeof *q.p, q.p, "points", &dpts, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (nq + 1) * sizeof(float), NULL, "scalars", &dsc, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (nq + 1) * sizeof(uint32_t), NULL, "ids", &deid, err));
+    CLVR_TRY(clvr_bvh_build_device(cl, k, dev_inst, c.num_instances, dinst, dleaf, c.num_leaves, &db, err));
+    {
+        /* same trees as the host build */
+        int roots = 1;
+        for (uint32_t i = 0; i < c.num_instances; ++i) roots &= dev_inst[i].bvh_root == c.instances[i].bvh_root;
+        TU_CHECK(roots);
+        TU_CHECK_EQ_U64(db.blas_nodes, hb.blas_nodes);
+        TU_CHECK_EQ_U64(db.tlas_nodes, hb.tlas_nodes);
+        clvr_bvh_node *tmp = malloc((size_t)db.blas_nodes * sizeof *tmp);
+        CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, db.blas, CL_TRUE, 0, (size_t)db.blas_nodes * sizeof *tmp, tmp, 0,
+                                          NULL, NULL));
+        TU_CHECK(nodes_equal(tmp, hb.blas, hb.blas_nodes));
+        free(tmp);
+    }
+    cl_uint n = nq, ls = leaf_size, root = db.tlas_root;
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 0, sizeof(cl_mem), &dpts));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 1, sizeof(cl_uint), &n));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 2, sizeof(cl_mem), &db.tlas));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 3, sizeof(cl_uint), &root));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 4, sizeof(cl_mem), &db.blas));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 5, sizeof(cl_mem), &dinst));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 6, sizeof(cl_mem), &dv));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 7, sizeof(cl_mem), &d16));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 8, sizeof(cl_mem), &d32));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 9, sizeof(cl_uint), &ls));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 10, sizeof(cl_mem), &dsc));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 11, sizeof(cl_mem), &deid));
+    CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, 64, NULL, err));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dsc, CL_TRUE, 0, nq * sizeof(float), dscal, 0, NULL, NULL));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, nq * sizeof(uint32_t), delem, 0, NULL, NULL));
+    {
+        int dev_bad = 0;
+        for (uint32_t i = 0; i < nq; ++i)
+            if (!judge(&c, q.p[i], delem[i], dscal[i], want_e[i], want_s[i])) {
+                if (dev_bad < 5)
+                    fprintf(stderr, "%s N=%u: device point (%.9g %.9g %.9g): got %u (%g), brute force %u (%g)\n",
+                            name, leaf_size, q.p[i][0], q.p[i][1], q.p[i][2], delem[i], dscal[i], want_e[i],
+                            want_s[i]);
+                ++dev_bad;
+            }
+        TU_CHECK_EQ_U64(dev_bad, 0);
+    }
+cleanup:
+    if (s != CLVR_OK) {
+        fprintf(stderr, "%s: device part failed: %s\n", name, err->msg);
+        TU_CHECK(s == CLVR_OK);
+    }
+    clvr_bvh_device_release(cl, &db);
+    clvr_cl_release(cl, &dv);
+    clvr_cl_release(cl, &d16);
+    clvr_cl_release(cl, &d32);
+    clvr_cl_release(cl, &dinst);
+    clvr_cl_release(cl, &dleaf);
+    clvr_cl_release(cl, &dpts);
+    clvr_cl_release(cl, &dsc);
+    clvr_cl_release(cl, &deid);
+    free(dev_inst);
+    free(dscal);
+    free(delem);
+    free(want_e);
+    free(want_s);
+    free(q.p);
+    clvr_bvh_host_free(&hb);
+    fx_clustered_free(&c);
+}
+
+static void test_generated(clvr_cl *cl, const clvr_bvh_kernels *k)
+{
+    static const char *names[5] = {"tets", "pyramids", "wedges", "hexes", "mixed"};
+    for (uint32_t kind = 0; kind <= FX_MIXED; ++kind) {
+        clvr_mesh m;
+        clvr_error err = {0};
+        memset(&m, 0, sizeof m);
+        const uint32_t n = kind == FX_HEXES ? 11 : 7;
+        TU_CHECK_STATUS(fx_grid_mesh(n, kind, 0.2f, 1.0f, 0.0f, 11 + kind, &m, &err), CLVR_OK, &err);
+        check_locate(cl, k, &m, names[kind], 1, 97, 0, 1500);
+        check_locate(cl, k, &m, names[kind], 8, 500, 0, 1500);
+        check_locate(cl, k, &m, names[kind], 32, 1000000, 1, 1500);
+        clvr_mesh_free(&m);
+    }
+    /* far from the origin, small elements */
+    clvr_mesh m;
+    clvr_error err = {0};
+    memset(&m, 0, sizeof m);
+    TU_CHECK_STATUS(fx_grid_mesh(6, FX_MIXED, 0.2f, 0.01f, 500.0f, 5, &m, &err), CLVR_OK, &err);
+    check_locate(cl, k, &m, "mixed-offset", 4, 300, 0, 1500);
+    clvr_mesh_free(&m);
+}
+
+/* Inconsistent input is reported, not trusted. */
+static void test_bad_input(void)
+{
+    clvr_error err = {0};
+    clvr_instance in;
+    memset(&in, 0, sizeof in);
+    in.first_leaf = 3;
+    in.num_leaves = 5;
+    clvr_box boxes[4];
+    memset(boxes, 0, sizeof boxes);
+    clvr_bvh_host hb;
+    TU_CHECK_STATUS(clvr_bvh_build_host(&in, 1, boxes, 4, &hb, &err), CLVR_ERR_BAD_FIELD, &err);
+    TU_CHECK(strstr(err.msg, "leaf") != NULL);
+}
+
+static void test_files(clvr_cl *cl, const clvr_bvh_kernels *k)
+{
+    char path[1024];
+    const char *files[16];
+    char names[16][256];
+    int nf = 0;
+    snprintf(path, sizeof path, "%s/vtk", tu_data_dir());
+    DIR *d = opendir(path);
+    if (d) {
+        struct dirent *de;
+        while ((de = readdir(d)) && nf < 15) {
+            const size_t l = strlen(de->d_name);
+            if (l > 4 && strcmp(de->d_name + l - 4, ".vtk") == 0) {
+                snprintf(names[nf], sizeof names[nf], "vtk/%s", de->d_name);
+                files[nf] = names[nf];
+                ++nf;
+            }
+        }
+        closedir(d);
+    }
+    files[nf++] = "umesh/all_elements.umesh";
+    for (int i = 0; i < nf; ++i) {
+        snprintf(path, sizeof path, "%s/%s", tu_data_dir(), files[i]);
+        clvr_mesh m;
+        clvr_error err = {0};
+        memset(&m, 0, sizeof m);
+        if (clvr_mesh_load(path, NULL, &m, &err) != CLVR_OK) {
+            printf("note: %s not loaded (%s): skipped\n", files[i], err.msg);
+            continue;
+        }
+        printf("%s: %llu elements\n", files[i], (unsigned long long)clvr_mesh_num_elements(&m));
+        const uint32_t nq = clvr_mesh_num_elements(&m) > 20000 ? 400 : 1500;
+        check_locate(cl, k, &m, files[i], 8, 2000, 0, nq);
+        clvr_mesh_free(&m);
+    }
+}
+
+int main(void)
+{
+    test_arithmetic();
+    test_bad_input();
+    clvr_cl cl;
+    tu_open_device(&cl);
+    clvr_bvh_kernels k;
+    clvr_error err = {0};
+    if (clvr_bvh_kernels_create(&cl, &k, &err) != CLVR_OK) {
+        fprintf(stderr, "bvh.cl: %s\n", err.msg);
+        TU_CHECK(!"bvh.cl builds");
+        clvr_cl_destroy(&cl);
+        return tu_finish("test_bvh");
+    }
+    test_device_sizes(&cl, &k);
+    const uint32_t sizes[] = {0, 1, 2, 4, 5, 17, 63, 64, 65, 257, 1031};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) test_boxes(&cl, &k, sizes[i]);
+    test_generated(&cl, &k);
+    test_files(&cl, &k);
+    clvr_bvh_kernels_destroy(&k);
+    clvr_cl_destroy(&cl);
+    return tu_finish("test_bvh");
+}

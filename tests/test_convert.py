@@ -1,0 +1,567 @@
+#!/usr/bin/python3
+"""test_convert: tools/clvr-convert turns every VTK-readable file in tests/data into a
+.bin that an independent reader (below, written from docs/bin-format.md, sharing no code
+with the converter) accepts, with the element counts tests/data/README.md states; broken
+inputs fail with one line and leave no file behind.
+
+Environment: CLVR_SHARED_DATA (tests/data), CLVR_BUILD_DIR (for build/clvr --info),
+CLVR_CONVERT (the converter; default tools/clvr-convert beside this file).
+Exit: 0 all passed, 1 a check failed, 77 when /usr/bin/python3 has no VTK (skipped).
+"""
+
+import glob
+import math
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+try:
+    import numpy as np
+    import vtk
+    from vtk.util import numpy_support as ns
+except ImportError as e:
+    print(f"skipped: {sys.executable} cannot import {e.name} (run tools/setup-debian.sh)")
+    sys.exit(77)
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
+CONVERT = os.environ.get("CLVR_CONVERT", os.path.join(HERE, "..", "tools", "clvr-convert"))
+BUILD = os.environ.get("CLVR_BUILD_DIR", "")
+CLVR = os.path.join(BUILD, "clvr") if BUILD else ""
+
+passed = 0
+failed = 0
+
+
+def check(ok, what, got=None, want=None):
+    global passed, failed
+    if ok:
+        passed += 1
+    else:
+        failed += 1
+        extra = f": got {got!r}, want {want!r}" if got is not None or want is not None else ""
+        print(f"FAIL {what}{extra}")
+    return ok
+
+
+# Independent .bin reader -------------------------------------------------------------
+
+class BinMesh:
+    pass
+
+
+def read_bin(path):
+    """Reads and validates a .bin per docs/bin-format.md. Returns (mesh, problems)."""
+    problems = []
+    with open(path, "rb") as f:
+        data = f.read()
+    if len(data) < 256:
+        return None, [f"{len(data)} bytes, shorter than the 256-byte header"]
+    m = BinMesh()
+    if data[0:8] != b"CLVRMESH":
+        problems.append(f"magic {data[0:8]!r}")
+    version, header_size = struct.unpack_from("<II", data, 8)
+    if version != 1:
+        problems.append(f"version {version}")
+    if header_size != 256:
+        problems.append(f"header_size {header_size}")
+    m.V, m.T, m.P, m.W, m.H = struct.unpack_from("<5Q", data, 16)
+    m.lo = struct.unpack_from("<3f", data, 56)
+    m.hi = struct.unpack_from("<3f", data, 68)
+    m.smin, m.smax = struct.unpack_from("<2f", data, 80)
+    m.name = data[88:152].rstrip(b"\0").decode("utf-8", "replace")
+    if b"\0" in data[88:152].rstrip(b"\0"):
+        problems.append("scalar_name has bytes after its NUL")
+    flags = struct.unpack_from("<I", data, 152)[0]
+    if flags != 0:
+        problems.append(f"flags {flags}")
+    if any(data[156:256]):
+        problems.append("reserved bytes not zero")
+    want = 256 + 4 * (4 * m.V + 4 * m.T + 5 * m.P + 6 * m.W + 8 * m.H)
+    if len(data) != want:
+        problems.append(f"file size {len(data)}, header says {want}")
+        return m, problems
+    off = 256
+    m.pos = np.frombuffer(data, "<f4", 3 * m.V, off).reshape(-1, 3)
+    off += 12 * m.V
+    m.scalars = np.frombuffer(data, "<f4", m.V, off)
+    off += 4 * m.V
+    m.cells = []
+    for n, k in ((m.T, 4), (m.P, 5), (m.W, 6), (m.H, 8)):
+        m.cells.append(np.frombuffer(data, "<u4", n * k, off).reshape(-1, k).astype(np.int64))
+        off += 4 * n * k
+    for lst in m.cells:
+        if lst.size and lst.max() >= m.V:
+            problems.append(f"index {lst.max()} >= V {m.V}")
+    if not np.isfinite(m.pos).all() or not np.isfinite(m.scalars).all():
+        problems.append("non-finite coordinate or scalar")
+    if m.V:
+        if tuple(m.pos.min(axis=0)) != m.lo or tuple(m.pos.max(axis=0)) != m.hi:
+            problems.append(f"bounds {m.lo}..{m.hi} differ from the vertices' "
+                            f"{tuple(m.pos.min(axis=0))}..{tuple(m.pos.max(axis=0))}")
+        if (float(m.scalars.min()), float(m.scalars.max())) != (m.smin, m.smax):
+            problems.append(f"scalar range {m.smin}..{m.smax} differs from the values' "
+                            f"{m.scalars.min()}..{m.scalars.max()}")
+    return m, problems
+
+
+def tet_volumes(pos, tets):
+    p = pos.astype(np.float64)
+    a, b, c, d = (p[tets[:, i]] for i in range(4))
+    return np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) / 6.0
+
+
+def hex_volumes(pos, hexes):
+    """Hex volumes as the sum of 6 tets around the 0-6 diagonal (exact for planar faces
+    and independent of the converter's split)."""
+    v = np.zeros(hexes.shape[0])
+    for t in ((0, 1, 2, 6), (0, 2, 3, 6), (0, 3, 7, 6), (0, 7, 4, 6), (0, 4, 5, 6),
+              (0, 5, 1, 6)):
+        v += tet_volumes(pos, hexes[:, t])
+    return v
+
+
+# Running the converter -----------------------------------------------------------------
+
+def convert(args, tmp):
+    r = subprocess.run([CONVERT] + args, capture_output=True, text=True, timeout=300)
+    leftovers = [f for f in os.listdir(tmp) if f.endswith(".tmp")]
+    check(not leftovers, f"no temporary files left after clvr-convert {args}", leftovers, [])
+    return r
+
+
+def clvr_info_check(out, biggest, label):
+    """clvr --info OUT.bin exits 0 and reports the largest element count."""
+    r = subprocess.run([CLVR, "--info", out], capture_output=True, text=True, timeout=120)
+    ok = check(r.returncode == 0, f"{label}: clvr --info exit status (stderr: "
+               f"{r.stderr.strip()[:200]})", r.returncode, 0)
+    if ok:
+        tokens = r.stdout.replace(",", " ").split()
+        check(str(biggest) in tokens, f"{label}: clvr --info prints the count {biggest}",
+              r.stdout[:300], str(biggest))
+
+
+def clvr_has_info():
+    if not CLVR or not os.access(CLVR, os.X_OK):
+        return False, f"not checked: no clvr binary in {BUILD or '(CLVR_BUILD_DIR unset)'}"
+    r = subprocess.run([CLVR, "--help"], capture_output=True, text=True, timeout=60)
+    if "--info" not in r.stdout + r.stderr:
+        return False, f"not checked: {CLVR} --help lists no --info yet"
+    return True, f"checked with {CLVR}"
+
+
+# (input relative to DATA, extra args, (T, P, W, H), scalar name or None to skip)
+CASES = [
+    ("plot3d/bluntfinxyz.bin", [], (0, 0, 0, 37479), "Density"),
+    ("plot3d/combxyz.bin", [], (0, 0, 0, 43008), "Density"),
+    # post's iblank is 1 or -1, never 0: the -1 points are the fringe of the periodic
+    # seam (j = 0, 74, 75 of 76; j = 75 repeats j = 0), not holes. VTK hides only
+    # iblank 0, so nothing is blanked; dropping the -1 cells would cut a 14.4 degree
+    # wedge out of the ring.
+    ("plot3d/postxyz.bin", [], (0, 0, 0, 102675), "VelocityMagnitude"),
+    ("vtk/kiefer_tet10.vtu", [], (56786, 0, 0, 0), "Equivalent (von-Mises) Stress (psi)"),
+    ("vtk/fire_ug.vtu", [], (0, 0, 0, 10462), "t"),
+    ("vtk/notch_stress.vtk", [], (0, 0, 4, 2188), "Nodal Stress-0"),
+    ("vtk/post.vtk", [], (8750, 0, 0, 0), "Pressure"),
+    # uGridEx: 12 cells, of which 2 tets and 2 hexes are 3D (the rest vertices, lines,
+    # triangles, quads, a polygon... dropped).
+    ("vtk/uGridEx.vtk", [], (2, 0, 0, 2), "scalars"),
+    ("vtk/pyramid_ug.vtu", [], (0, 1, 0, 0), "temperature"),
+    ("vtk/pyramid_ug.vtu", ["--scalar", "velocity"], (0, 1, 0, 0), "velocity"),
+    ("vtk/notch_stress.vtk", ["--scalar", "Nodal Stress"], (0, 0, 4, 2188), "Nodal Stress"),
+    ("plot3d/combxyz.bin", ["--scalar", "StagnationEnergy"], (0, 0, 0, 43008),
+     "StagnationEnergy"),
+]
+
+
+def vtk_read(path):
+    r = vtk.vtkXMLUnstructuredGridReader() if path.endswith(".vtu") else vtk.vtkDataSetReader()
+    r.SetFileName(path)
+    r.Update()
+    return r.GetOutput()
+
+
+def test_files(tmp, info_ok):
+    covered = {rel for rel, _, _, _ in CASES}
+    for path in sorted(glob.glob(os.path.join(DATA, "*", "*"))):
+        rel = os.path.relpath(path, DATA)
+        if rel.endswith(".umesh") or rel.endswith(".md") or rel.endswith("q.bin"):
+            continue  # umesh: not VTK's; q files: read with their xyz grid
+        check(rel in covered, f"{rel}: has a case in test_convert.py", rel, "a case")
+    for rel, extra, want, scalar in CASES:
+        src = os.path.join(DATA, rel)
+        label = rel + ("" if not extra else " " + " ".join(extra))
+        out = os.path.join(tmp, os.path.basename(rel) + "-" + str(len(extra)) + ".bin")
+        r = convert([src, out] + extra, tmp)
+        if not check(r.returncode == 0, f"{label}: exit status (stderr: {r.stderr.strip()})",
+                     r.returncode, 0):
+            continue
+        check(r.stdout.count("\n") == 1 and str(want[3] or want[0] or want[1] or want[2])
+              in r.stdout, f"{label}: one summary line with the counts", r.stdout, None)
+        m, problems = read_bin(out)
+        if not check(m is not None and not problems, f"{label}: valid .bin", problems, []):
+            continue
+        check((m.T, m.P, m.W, m.H) == want, f"{label}: element counts (T, P, W, H)",
+              (m.T, m.P, m.W, m.H), want)
+        check(m.name == scalar, f"{label}: scalar name", m.name, scalar)
+        used = np.zeros(m.V, bool)
+        for lst in m.cells:
+            used[lst.reshape(-1)] = True
+        check(used.all(), f"{label}: every vertex used", int((~used).sum()), 0)
+        if m.T:
+            v = tet_volumes(m.pos, m.cells[0])
+            check((v > 0).all(), f"{label}: tets have VTK's (positive) orientation",
+                  int((v <= 0).sum()), 0)
+        if info_ok:
+            clvr_info_check(out, max(want), label)
+
+
+def test_values_match_vtk(tmp):
+    """Coordinates and scalars equal what VTK itself reads, vertex by vertex."""
+    for rel, name in (("vtk/pyramid_ug.vtu", "temperature"), ("vtk/fire_ug.vtu", "t")):
+        src = os.path.join(DATA, rel)
+        out = os.path.join(tmp, "values.bin")
+        r = convert([src, out, "--quiet"], tmp)
+        check(r.returncode == 0 and r.stdout == "", f"{rel} --quiet: exit 0, no output",
+              (r.returncode, r.stdout), (0, ""))
+        m, problems = read_bin(out)
+        if not check(not problems, f"{rel}: valid .bin", problems, []):
+            continue
+        d = vtk_read(src)
+        pts = ns.vtk_to_numpy(d.GetPoints().GetData()).astype(np.float32)
+        sc = ns.vtk_to_numpy(d.GetPointData().GetArray(name)).astype(np.float32)
+        check(m.V == pts.shape[0] and np.array_equal(m.pos, pts),
+              f"{rel}: positions equal VTK's", m.V, pts.shape[0])
+        check(m.V == sc.shape[0] and np.array_equal(m.scalars, sc),
+              f"{rel}: scalars equal VTK's", m.scalars[:4].tolist(), sc[:4].tolist())
+
+
+def test_reorientation_and_tets(tmp):
+    """fire_ug.vtu stores its hexes inside out; the converter mirrors them. --tets keeps
+    the volume exactly (sum of tets = sum of hexes) with 5 or 6 tets per hex."""
+    src = os.path.join(DATA, "vtk/fire_ug.vtu")
+    d = vtk_read(src)
+    conn = ns.vtk_to_numpy(d.GetCells().GetConnectivityArray()).reshape(-1, 8)
+    raw = hex_volumes(ns.vtk_to_numpy(d.GetPoints().GetData()), conn)
+    check((raw < 0).all(), "fire_ug.vtu hexes are inside out in the file (premise)",
+          int((raw < 0).sum()), conn.shape[0])
+    hexes = os.path.join(tmp, "fire-hex.bin")
+    tets = os.path.join(tmp, "fire-tet.bin")
+    r1 = convert([src, hexes, "--quiet"], tmp)
+    r2 = convert([src, tets, "--tets", "--quiet"], tmp)
+    if not check(r1.returncode == 0 and r2.returncode == 0, "fire_ug: converts with --tets",
+                 (r1.stderr, r2.stderr), ("", "")):
+        return
+    mh, p1 = read_bin(hexes)
+    mt, p2 = read_bin(tets)
+    if not check(not p1 and not p2, "fire_ug --tets: valid .bin", p1 + p2, []):
+        return
+    vh = hex_volumes(mh.pos, mh.cells[3])
+    check((vh > 0).all(), "fire_ug: hexes reoriented to positive volume",
+          int((vh <= 0).sum()), 0)
+    check(np.isclose(vh.sum(), -raw.sum(), rtol=1e-6), "fire_ug: reorienting keeps volume",
+          vh.sum(), -raw.sum())
+    check((mt.P, mt.W, mt.H) == (0, 0, 0) and 5 * mh.H <= mt.T <= 6 * mh.H,
+          "fire_ug --tets: only tets, 5 or 6 per hex", (mt.T, mt.P, mt.W, mt.H), 6 * mh.H)
+    vt = tet_volumes(mt.pos, mt.cells[0])
+    check((vt > 0).all(), "fire_ug --tets: every tet positive", int((vt <= 0).sum()), 0)
+    check(math.isclose(vt.sum(), vh.sum(), rel_tol=1e-6), "fire_ug --tets: volume kept",
+          vt.sum(), vh.sum())
+    r = convert([os.path.join(DATA, "vtk/uGridEx.vtk"), tets, "--tets", "--quiet"], tmp)
+    m, p = read_bin(tets)
+    check(r.returncode == 0 and not p and (m.T, m.P, m.W, m.H) == (14, 0, 0, 0),
+          "uGridEx --tets: 2 tets + 2 hexes x 6", (m.T, m.P, m.W, m.H), (14, 0, 0, 0))
+
+
+def write_plot3d(path, dims, xyz, iblank=None, order="<", byte_count=False, grids=1,
+                 double=False):
+    """A binary PLOT3D grid file holding `grids` copies of one grid."""
+    real = "d" if double else "f"
+    n = dims[0] * dims[1] * dims[2]
+
+    def record(payload):
+        if byte_count:
+            return struct.pack(f"{order}i", len(payload)) + payload + \
+                struct.pack(f"{order}i", len(payload))
+        return payload
+    out = b""
+    if grids > 1:
+        out += record(struct.pack(f"{order}i", grids))
+    out += record(struct.pack(f"{order}{3 * grids}i", *(list(dims) * grids)))
+    for _ in range(grids):
+        body = struct.pack(f"{order}{3 * n}{real}", *xyz)
+        if iblank is not None:
+            body += struct.pack(f"{order}{n}i", *iblank)
+        out += record(body)
+    with open(path, "wb") as f:
+        f.write(out)
+
+
+def test_plot3d_layouts_and_blanking(tmp):
+    """Layouts detected from the sizes; iblank 0 hides every cell around the point."""
+    dims = (3, 3, 3)
+    xs, ys, zs = [], [], []
+    for k in range(3):
+        for j in range(3):
+            for i in range(3):
+                xs.append(float(i))
+                ys.append(float(j) * 2.0)
+                zs.append(float(k) * 3.0)
+    xyz = xs + ys + zs
+    blank_corner = [1] * 27
+    blank_corner[0] = 0          # in 1 of the 8 cells
+    blank_centre = [1] * 27
+    blank_centre[13] = 0         # in all 8 cells
+    fringe = [-1] * 27           # fringe points are not holes: all 8 cells stay
+    cases = [
+        ("le-plain", dict(), 8),
+        ("be-iblank-corner", dict(order=">", iblank=blank_corner), 7),
+        ("le-iblank-fringe", dict(iblank=fringe), 8),
+        ("be-records-double", dict(order=">", byte_count=True, double=True), 8),
+        ("le-multi-records", dict(byte_count=True, grids=2, iblank=blank_corner), 14),
+        ("le-centre", dict(iblank=blank_centre), None),
+    ]
+    for name, kw, hexes in cases:
+        src = os.path.join(tmp, f"{name}xyz.bin")
+        out = os.path.join(tmp, f"{name}.bin")
+        write_plot3d(src, dims, xyz, **kw)
+        r = convert([src, out, "--quiet"], tmp)
+        if hexes is None:
+            check(r.returncode == 1 and not os.path.exists(out) and "no 3D cells" in r.stderr,
+                  f"plot3d {name}: every cell blanked is an error", r.stderr.strip(),
+                  "no 3D cells")
+            continue
+        if not check(r.returncode == 0, f"plot3d {name}: exit status ({r.stderr.strip()})",
+                     r.returncode, 0):
+            continue
+        m, problems = read_bin(out)
+        check(not problems and m.H == hexes, f"plot3d {name}: hexes", (problems, m.H), hexes)
+        if not problems:
+            vol = hex_volumes(m.pos, m.cells[3]).sum()
+            check(math.isclose(vol, hexes * 6.0), f"plot3d {name}: volume", vol, hexes * 6.0)
+
+
+def legacy_ugrid(path, points, cells):
+    """An ASCII legacy .vtk unstructured grid; cells are (vtk type, [point ids])."""
+    with open(path, "w") as f:
+        f.write("# vtk DataFile Version 3.0\ntest\nASCII\nDATASET UNSTRUCTURED_GRID\n")
+        f.write(f"POINTS {len(points)} double\n")
+        for p in points:
+            f.write(" ".join(repr(float(c)) for c in p) + "\n")
+        f.write(f"CELLS {len(cells)} {sum(len(ids) + 1 for _, ids in cells)}\n")
+        for _, ids in cells:
+            f.write(f"{len(ids)} " + " ".join(map(str, ids)) + "\n")
+        f.write(f"CELL_TYPES {len(cells)}\n" + "".join(f"{t}\n" for t, _ in cells))
+        f.write(f"POINT_DATA {len(points)}\nSCALARS s float 1\nLOOKUP_TABLE default\n")
+        f.write("".join(f"{i}\n" for i in range(len(points))))
+
+
+def test_quadratic_and_voxel_cells(tmp):
+    """Quadratic cells keep their corners, in VTK's linear order; voxels become hexes."""
+    hexc = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1),
+            (0, 1, 1)]
+    wedgec = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (0, 0, 1), (0, 1, 1), (1, 0, 1)]
+    pyrc = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0.5, 0.5, 1)]
+    # (VTK type, corners, number of further nodes, x shift, clvr slot)
+    kinds = [(25, hexc, 12, 0, 3), (29, hexc, 19, 2, 3), (26, wedgec, 9, 4, 2),
+             (27, pyrc, 8, 6, 1), (24, [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)], 6, 8, 0)]
+    points, cells, want = [], [], {0: [], 1: [], 2: [], 3: []}
+    for vtk_type, corners, extra, dx, slot in kinds:
+        base = len(points)
+        shifted = [(x + dx, y, z) for x, y, z in corners]
+        points += shifted
+        # Further nodes off the corners, so that taking one of them shows in the check.
+        points += [(dx + 0.3 + 0.01 * i, 0.4, 0.45) for i in range(extra)]
+        cells.append((vtk_type, list(range(base, base + len(corners) + extra))))
+        want[slot].append(shifted)
+    cells.append((5, [0, 1, 2]))  # a triangle: dropped
+    src = os.path.join(tmp, "quadratic.vtk")
+    legacy_ugrid(src, points, cells)
+    out = os.path.join(tmp, "quadratic.bin")
+    r = convert([src, out], tmp)
+    if not check(r.returncode == 0, f"quadratic cells: exit status ({r.stderr.strip()})",
+                 r.returncode, 0):
+        return
+    check("1 2D/1D/0D cells dropped" in r.stdout, "quadratic cells: the triangle is counted "
+          "as dropped", r.stdout.strip(), "1 2D/1D/0D cells dropped")
+    m, problems = read_bin(out)
+    if not check(not problems, "quadratic cells: valid .bin", problems, []):
+        return
+    check((m.T, m.P, m.W, m.H) == (1, 1, 1, 2), "quadratic cells: counts",
+          (m.T, m.P, m.W, m.H), (1, 1, 1, 2))
+    for slot in range(4):
+        got = [[tuple(float(c) for c in m.pos[i]) for i in cell] for cell in m.cells[slot]]
+        check(got == [[tuple(float(c) for c in p) for p in cell] for cell in want[slot]],
+              f"quadratic cells: corners of type slot {slot} in VTK order", got, want[slot])
+
+    # Image data: voxels, whose corners VTK lists x-fastest.
+    src = os.path.join(tmp, "image.vtk")
+    with open(src, "w") as f:
+        f.write("# vtk DataFile Version 3.0\nimage\nASCII\nDATASET STRUCTURED_POINTS\n"
+                "DIMENSIONS 3 3 3\nSPACING 1 2 3\nORIGIN 0 0 0\nPOINT_DATA 27\n"
+                "SCALARS s float 1\nLOOKUP_TABLE default\n" +
+                " ".join(str(i) for i in range(27)) + "\n")
+    r = convert([src, out, "--quiet"], tmp)
+    m, problems = read_bin(out)
+    if check(r.returncode == 0 and not problems and m.H == 8, "image data: 8 hexes",
+             (r.stderr, problems), []):
+        v = hex_volumes(m.pos, m.cells[3])
+        check(np.allclose(v, 6.0), "image data: every voxel a proper 1x2x3 hex", v.tolist(),
+              [6.0] * 8)
+
+
+def test_ghosts_in_unstructured_grid(tmp):
+    """A hidden point removes every cell using it; duplicate and hidden cells go too."""
+    d = vtk_read(os.path.join(DATA, "vtk/fire_ug.vtu"))
+    conn = ns.vtk_to_numpy(d.GetCells().GetConnectivityArray()).reshape(-1, 8)
+    pg = np.zeros(d.GetNumberOfPoints(), np.uint8)
+    pg[[5, 100]] |= 2                       # HIDDENPOINT
+    cg = np.zeros(d.GetNumberOfCells(), np.uint8)
+    cg[[7, 8, 9]] = 1                       # DUPLICATECELL
+    cg[[20]] = 32                           # HIDDENCELL
+    gone = np.isin(conn, [5, 100]).any(axis=1)
+    gone[[7, 8, 9, 20]] = True
+    for name, arr, attrs in (("p", pg, d.GetPointData()), ("c", cg, d.GetCellData())):
+        a = ns.numpy_to_vtk(arr, deep=1, array_type=vtk.VTK_UNSIGNED_CHAR)
+        a.SetName("vtkGhostType")
+        attrs.AddArray(a)
+    src = os.path.join(tmp, "ghosts.vtu")
+    w = vtk.vtkXMLUnstructuredGridWriter()
+    w.SetFileName(src)
+    w.SetInputData(d)
+    w.Write()
+    out = os.path.join(tmp, "ghosts.bin")
+    r = convert([src, out], tmp)
+    m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+    want = int((~gone).sum())
+    check(not problems and m.H == want, "ghost types: hidden and duplicate cells removed",
+          (problems, m and m.H), want)
+    check(f"{int(gone.sum())} blanked cells removed" in r.stdout,
+          "ghost types: removed cells counted", r.stdout.strip(), int(gone.sum()))
+
+
+def test_exodus(tmp):
+    """Exodus II via vtkExodusIIWriter: point and cell results both reachable."""
+    d = vtk_read(os.path.join(DATA, "vtk/fire_ug.vtu"))
+    n = d.GetNumberOfCells()
+    blocks = np.ones(n, np.int32)
+    blocks[n // 3:] = 2  # two element blocks; both must be read
+    for name, arr in (("ElementBlockIds", blocks),
+                      ("cellval", np.arange(n, dtype=np.float64))):
+        a = ns.numpy_to_vtk(arr, deep=1)
+        a.SetName(name)
+        d.GetCellData().AddArray(a)
+    src = os.path.join(tmp, "fire.exo")
+    w = vtk.vtkExodusIIWriter()
+    w.SetFileName(src)
+    w.SetInputData(d)
+    w.WriteAllTimeStepsOff()
+    w.Write()
+    for extra, name in (([], "t"), (["--scalar", "cellval"], "cellval")):
+        out = os.path.join(tmp, "exo.bin")
+        r = convert([src, out, "--quiet"] + extra, tmp)
+        m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+        check(not problems and (m.H, m.name) == (10462, name), f"exodus {extra}: hexes, name",
+              (problems, m and (m.H, m.name)), (10462, name))
+        if name == "cellval" and not problems:
+            check(0.0 <= m.smin and m.smax <= n - 1 and m.smax > m.smin,
+                  "exodus: cell data averaged into the cells' range", (m.smin, m.smax),
+                  (0, n - 1))
+
+
+def test_errors(tmp):
+    """Broken inputs: exit 1, one line on stderr naming the file, no output file."""
+    trunc = os.path.join(tmp, "truncated.vtu")
+    with open(os.path.join(DATA, "vtk/fire_ug.vtu"), "rb") as f:
+        data = f.read()
+    with open(trunc, "wb") as f:
+        f.write(data[:len(data) // 2])
+    garbage = os.path.join(tmp, "garbage.vtk")
+    with open(garbage, "wb") as f:
+        f.write(b"# vtk DataFile Version 3.0\nnonsense\nBINARY\nDATASET BOGUS\n")
+    badsize = os.path.join(tmp, "oddxyz.bin")
+    with open(badsize, "wb") as f:
+        f.write(struct.pack("<3i", 2, 2, 2) + b"\0" * 37)
+    existing_bin = os.path.join(tmp, "already.bin")
+    shutil.copy(os.path.join(tmp, "fire-hex.bin"), existing_bin) \
+        if os.path.exists(os.path.join(tmp, "fire-hex.bin")) else None
+    cases = [
+        ("missing file", os.path.join(tmp, "no-such.vtu"), [], "no such file"),
+        ("truncated .vtu", trunc, [], "VTK cannot read"),
+        ("unknown scalar", os.path.join(DATA, "vtk/post.vtk"), ["--scalar", "NoSuchArray"],
+         "NoSuchArray"),
+        ("broken legacy .vtk", garbage, [], ""),
+        ("PLOT3D size fits no layout", badsize, [], "PLOT3D"),
+        ("only 2D/1D cells", None, [], "no 3D cells"),
+    ]
+    if os.path.exists(existing_bin):
+        cases.append(("a clvr .bin as input", existing_bin, [], "already a clvr .bin"))
+    for label, src, extra, needle in cases:
+        if src is None:
+            src = os.path.join(tmp, "flat.vtk")
+            with open(src, "w") as f:
+                f.write("# vtk DataFile Version 3.0\nflat\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                        "POINTS 3 float\n0 0 0 1 0 0 0 1 0\nCELLS 1 4\n3 0 1 2\n"
+                        "CELL_TYPES 1\n5\n")
+        out = os.path.join(tmp, "error-out.bin")
+        r = convert([src, out] + extra, tmp)
+        lines = r.stderr.splitlines()
+        check(r.returncode == 1, f"error {label}: exit 1", r.returncode, 1)
+        check(len(lines) == 1 and src in lines[0] and needle in lines[0],
+              f"error {label}: one stderr line naming the file and '{needle}'",
+              r.stderr, f"clvr-convert: {src}: ...{needle}...")
+        check(r.stdout == "", f"error {label}: nothing on stdout", r.stdout, "")
+        check(not os.path.exists(out), f"error {label}: no output file", True, False)
+    # A failed conversion leaves an existing output untouched.
+    out = os.path.join(tmp, "keep.bin")
+    with open(out, "wb") as f:
+        f.write(b"old")
+    r = convert([trunc, out], tmp)
+    with open(out, "rb") as f:
+        check(r.returncode == 1 and f.read() == b"old", "error: existing output untouched",
+              r.returncode, 1)
+
+
+def test_list(tmp):
+    r = convert([os.path.join(DATA, "vtk/fire_ug.vtu"), "--list"], tmp)
+    names = [ln.split("'")[1] for ln in r.stdout.splitlines() if "'" in ln]
+    check(r.returncode == 0 and names == ["t", "uvw", "u", "v", "w", "mfrac"],
+          "fire_ug --list: every point array in file order", names,
+          ["t", "uvw", "u", "v", "w", "mfrac"])
+    r = convert([os.path.join(DATA, "plot3d/postxyz.bin"), "--list"], tmp)
+    check(r.returncode == 0 and "'Density'" in r.stdout and "'VelocityMagnitude'" in r.stdout,
+          "postxyz --list: q file found by name", r.stdout[:200], "Density, VelocityMagnitude")
+
+
+def main():
+    if not os.path.isfile(CONVERT):
+        print(f"FAIL no converter at {CONVERT}")
+        print("0 passed, 1 failed")
+        return 1
+    info_ok, info_note = clvr_has_info()
+    tmp = tempfile.mkdtemp(prefix="clvr-test-convert-")
+    try:
+        test_files(tmp, info_ok)
+        test_values_match_vtk(tmp)
+        test_reorientation_and_tets(tmp)
+        test_plot3d_layouts_and_blanking(tmp)
+        test_quadratic_and_voxel_cells(tmp)
+        test_ghosts_in_unstructured_grid(tmp)
+        test_exodus(tmp)
+        test_errors(tmp)
+        test_list(tmp)
+        skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
+                         if p.endswith(".umesh"))
+        print(f"not VTK-readable, skipped: {', '.join(skipped)}")
+        print(f"clvr --info: {info_note}")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print(f"{passed} passed, {failed} failed")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,313 @@
+/* test_elements.c: containment and interpolation of kernels/elements.h on
+ * the host (the very code the kernels run): round trips through the forward
+ * map, exact reproduction of linear fields, points on faces, edges and
+ * vertices, points outside, Newton hexes against their tet decomposition,
+ * non-planar shared faces seen by both neighbours, degenerate, inverted and
+ * NaN input. */
+#include "test_util.h"
+
+#include "../kernels/elements.h"
+
+static const char *type_name(uint32_t t)
+{
+    static const char *n[4] = {"tet", "pyramid", "wedge", "hex"};
+    return n[t & 3];
+}
+
+/* Reference element in VTK order, optionally distorted by `jit` (fraction
+ * of the edge length) and scaled/offset. */
+static void make_element(uint32_t type, float jit, float scale, float offset, uint64_t *rs, clvr_vec4 *v)
+{
+    static const float hex[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    static const float tet[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    static const float pyr[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 0.5f, 1}};
+    static const float wdg[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+    const uint32_t nv = clvr_cell_vertex_count(type);
+    for (uint32_t i = 0; i < nv; ++i) {
+        const float *p = type == CLVR_CELL_TET ? tet[i] : type == CLVR_CELL_PYRAMID ? pyr[i]
+                         : type == CLVR_CELL_WEDGE ? wdg[i] : hex[i];
+        float q[3];
+        for (int a = 0; a < 3; ++a) q[a] = (p[a] + jit * (2.0f * tu_randf(rs) - 1.0f)) * scale + offset;
+        v[i].x = q[0]; v[i].y = q[1]; v[i].z = q[2];
+        v[i].w = 0.0f;
+    }
+}
+
+/* Linear field used to check interpolation exactly. */
+static float lin(float x, float y, float z, float offset) { return 1.5f + 0.3f * (x - offset) - 0.7f * (y - offset) + 0.2f * (z - offset); }
+
+static void random_param(uint32_t type, float margin, uint64_t *rs, float *u, float *v, float *w)
+{
+    for (;;) {
+        *u = margin + (1.0f - 2.0f * margin) * tu_randf(rs);
+        *v = margin + (1.0f - 2.0f * margin) * tu_randf(rs);
+        *w = margin + (1.0f - 2.0f * margin) * tu_randf(rs);
+        if (type == CLVR_CELL_TET && *u + *v + *w > 1.0f - margin) continue;
+        if (type == CLVR_CELL_WEDGE && *u + *v > 1.0f - margin) continue;
+        return;
+    }
+}
+
+/* Inside points round-trip, interpolate a linear field exactly and come
+ * back with their parametric coordinates. */
+static void test_inside_linear(uint32_t type, float jit, float scale, float offset)
+{
+    uint64_t rs = 1234 + type;
+    int bad_inside = 0, bad_value = 0, bad_param = 0;
+    double worst = 0.0;
+    for (int trial = 0; trial < 50; ++trial) {
+        clvr_vec4 v[8];
+        make_element(type, jit, scale, offset, &rs, v);
+        for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) v[i].w = lin(v[i].x, v[i].y, v[i].z, offset);
+        for (int k = 0; k < 40; ++k) {
+            float u, vv, w, x, y, z, s = -1.0f;
+            random_param(type, 0.01f, &rs, &u, &vv, &w);
+            clvr_element_forward(type, v, u, vv, w, &x, &y, &z);
+            if (!clvr_element_sample(type, v, x, y, z, &s)) { ++bad_inside; continue; }
+            const double want = lin(x, y, z, offset);
+            const double e = fabs(s - want) / fabs(want);
+            if (e > worst) worst = e;
+            if (e > 1e-4) ++bad_value;
+            float pu, pv, pw;
+            /* pyramid u, v are ill-conditioned near the apex: compare u (1 - w) */
+            const float sc = type == CLVR_CELL_PYRAMID ? 1.0f - w : 1.0f;
+            if (!clvr_element_invert(type, v, x, y, z, &pu, &pv, &pw) || fabsf(pu - u) * sc > 1e-3f ||
+                fabsf(pv - vv) * sc > 1e-3f || fabsf(pw - w) > 1e-3f)
+                ++bad_param;
+        }
+    }
+    if (bad_inside || bad_value || bad_param)
+        fprintf(stderr, "%s jit %g scale %g offset %g: %d not inside, %d wrong value (worst rel %g), %d wrong params\n",
+                type_name(type), jit, scale, offset, bad_inside, bad_value, worst, bad_param);
+    TU_CHECK_EQ_U64(bad_inside, 0);
+    TU_CHECK_EQ_U64(bad_value, 0);
+    TU_CHECK_EQ_U64(bad_param, 0);
+}
+
+/* Points on the boundary (faces, edges, vertices) are inside; points pushed
+ * out of the parametric domain by 0.02 are outside. */
+static void test_boundary_and_outside(uint32_t type)
+{
+    uint64_t rs = 99 + type;
+    int lost = 0, false_in = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+        clvr_vec4 v[8];
+        make_element(type, 0.08f, 2.0f, -1.0f, &rs, v);
+        for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) v[i].w = (float)i;
+        /* vertices */
+        for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) {
+            float s = 0.0f;
+            if (!clvr_element_sample(type, v, v[i].x, v[i].y, v[i].z, &s) || fabsf(s - (float)i) > 1e-4f) {
+                ++lost;
+                fprintf(stderr, "%s vertex %u lost or wrong (%g)\n", type_name(type), i, s);
+            }
+        }
+        for (int k = 0; k < 60; ++k) {
+            float u, vv, w, x, y, z, s = 0.0f;
+            random_param(type, 0.0f, &rs, &u, &vv, &w);
+            /* snap one or two coordinates to the domain boundary */
+            const int which = k % 6;
+            float *c[3] = {&u, &vv, &w};
+            const int a = which % 3, b = (which + 1) % 3;
+            if (type == CLVR_CELL_TET && which == 5) {
+                /* slanted face u + v + w = 1 */
+                const float sum = u + vv + w;
+                u /= sum; vv /= sum; w /= sum;
+            } else if (type == CLVR_CELL_WEDGE && which == 5) {
+                const float sum = u + vv;
+                u /= sum; vv /= sum;
+            } else {
+                *c[a] = (k & 1) && type != CLVR_CELL_TET ? 1.0f : 0.0f;
+                if (which >= 3) *c[b] = 0.0f; /* an edge */
+                if (type == CLVR_CELL_WEDGE && a < 2 && (k & 1)) { *c[a] = 1.0f; *c[1 - a] = 0.0f; }
+            }
+            clvr_element_forward(type, v, u, vv, w, &x, &y, &z);
+            if (!clvr_element_sample(type, v, x, y, z, &s)) {
+                ++lost;
+                fprintf(stderr, "%s boundary point (%g %g %g) lost\n", type_name(type), u, vv, w);
+            }
+            /* outside: push a face coordinate 0.02 beyond the boundary */
+            float ou = u, ov = vv, ow = w;
+            if (type == CLVR_CELL_TET) {
+                if (which == 5) { ou *= 1.03f; ov *= 1.03f; ow *= 1.03f; } else ou = -0.02f;
+            } else if (type == CLVR_CELL_WEDGE && which == 5) {
+                ou *= 1.03f; ov *= 1.03f;
+            } else {
+                float *oc[3] = {&ou, &ov, &ow};
+                *oc[a] = *oc[a] > 0.5f ? 1.02f : -0.02f;
+                if (type == CLVR_CELL_PYRAMID && a == 2 && ow > 0.5f) continue; /* beyond the apex: still a cone */
+                /* near the apex a parametric push of 0.02 moves the point by
+                 * 0.02 (1 - w): below the tolerance */
+                if (type == CLVR_CELL_PYRAMID && ow > 0.9f) continue;
+                if (type == CLVR_CELL_WEDGE && a < 2 && ou + ov > 1.0f) { ou = -0.02f; }
+            }
+            clvr_element_forward(type, v, ou, ov, ow, &x, &y, &z);
+            if (clvr_element_sample(type, v, x, y, z, &s)) {
+                ++false_in;
+                fprintf(stderr, "%s outside point (%g %g %g) reported inside\n", type_name(type), ou, ov, ow);
+            }
+        }
+    }
+    TU_CHECK_EQ_U64(lost, 0);
+    TU_CHECK_EQ_U64(false_in, 0);
+}
+
+/* An undistorted parallelepiped hex contains a point exactly when one of
+ * its 6 Kuhn tets does: Newton against barycentrics, two independent paths. */
+static void test_hex_vs_tets(void)
+{
+    clvr_vec4 h[8];
+    const float e0[3] = {1.0f, 0.1f, 0.0f}, e1[3] = {0.2f, 0.9f, 0.1f}, e2[3] = {-0.1f, 0.2f, 1.1f};
+    static const int off[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    for (int i = 0; i < 8; ++i) {
+        h[i].x = 3.0f + off[i][0] * e0[0] + off[i][1] * e1[0] + off[i][2] * e2[0];
+        h[i].y = -2.0f + off[i][0] * e0[1] + off[i][1] * e1[1] + off[i][2] * e2[1];
+        h[i].z = 0.5f + off[i][0] * e0[2] + off[i][1] * e1[2] + off[i][2] * e2[2];
+        h[i].w = h[i].x - 2.0f * h[i].y + 0.5f * h[i].z;
+    }
+    static const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    uint64_t rs = 7;
+    int disagree = 0, inside = 0, value = 0;
+    for (int k = 0; k < 20000; ++k) {
+        const float x = 2.7f + 2.0f * tu_randf(&rs), y = -2.3f + 1.8f * tu_randf(&rs), z = 0.3f + 1.6f * tu_randf(&rs);
+        float sh = 0, st = 0;
+        clvr_vec4 tv[4] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}};
+        const int in_h = clvr_element_sample(CLVR_CELL_HEX, h, x, y, z, &sh);
+        int in_t = 0;
+        for (int t = 0; t < 6 && !in_t; ++t) {
+            int b[3] = {0, 0, 0};
+            tv[0] = h[0];
+            for (int s2 = 0; s2 < 3; ++s2) {
+                b[perm[t][s2]] = 1;
+                for (int q = 0; q < 8; ++q)
+                    if (off[q][0] == b[0] && off[q][1] == b[1] && off[q][2] == b[2]) tv[1 + s2] = h[q];
+            }
+            in_t = clvr_element_sample(CLVR_CELL_TET, tv, x, y, z, &st);
+        }
+        inside += in_h;
+        if (in_h != in_t) ++disagree;
+        else if (in_h && fabsf(sh - st) > 1e-4f * (1.0f + fabsf(st))) ++value;
+    }
+    TU_CHECK(inside > 2000);
+    TU_CHECK_EQ_U64(disagree, 0);
+    TU_CHECK_EQ_U64(value, 0);
+}
+
+/* Two hexes sharing a strongly non-planar quad face: points on the shared
+ * bilinear patch are inside both; points just off it are inside exactly one. */
+static void test_nonplanar_shared_face(void)
+{
+    clvr_vec4 a[8], b[8];
+    static const int off[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    /* shared face x = 1 of a (vertices 1 2 6 5) = face x = 0 of b (0 3 7 4), twisted */
+    const float twist[2][2] = {{0.0f, 0.3f}, {-0.25f, 0.0f}}; /* x offset at (y, z) corners */
+    for (int i = 0; i < 8; ++i) {
+        a[i].x = (float)off[i][0] + (off[i][0] ? twist[off[i][1]][off[i][2]] : 0.0f);
+        a[i].y = (float)off[i][1];
+        a[i].z = (float)off[i][2];
+        b[i].x = 1.0f + (float)off[i][0] + (off[i][0] ? 0.0f : twist[off[i][1]][off[i][2]]);
+        b[i].y = (float)off[i][1];
+        b[i].z = (float)off[i][2];
+        a[i].w = a[i].x * a[i].x + a[i].y;
+        b[i].w = b[i].x * b[i].x + b[i].y;
+    }
+    uint64_t rs = 3;
+    int both = 0, none_or_two = 0, value = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const float y = tu_randf(&rs), z = tu_randf(&rs);
+        float x, yy, zz, sa = 0.0f, sb = 0.0f;
+        clvr_element_forward(CLVR_CELL_HEX, a, 1.0f, y, z, &x, &yy, &zz);
+        const int ia = clvr_element_sample(CLVR_CELL_HEX, a, x, yy, zz, &sa);
+        const int ib = clvr_element_sample(CLVR_CELL_HEX, b, x, yy, zz, &sb);
+        both += ia && ib;
+        if (ia && ib && fabsf(sa - sb) > 1e-4f) ++value;
+        /* off the patch along x by 1e-3: exactly one contains it */
+        const float d = (k & 1) ? 1e-3f : -1e-3f;
+        const int ja = clvr_element_sample(CLVR_CELL_HEX, a, x + d, yy, zz, &sa);
+        const int jb = clvr_element_sample(CLVR_CELL_HEX, b, x + d, yy, zz, &sb);
+        if (ja + jb != 1) ++none_or_two;
+    }
+    TU_CHECK_EQ_U64(both, 2000);
+    TU_CHECK_EQ_U64(value, 0);
+    TU_CHECK_EQ_U64(none_or_two, 0);
+}
+
+/* Degenerate, inverted and NaN input neither crash, loop nor claim points. */
+static void test_degenerate(void)
+{
+    uint64_t rs = 5;
+    for (uint32_t t = 0; t < 4; ++t) {
+        clvr_vec4 v[8];
+        float s = 0;
+        /* all vertices equal */
+        for (int i = 0; i < 8; ++i) { v[i].x = 1.0f; v[i].y = 2.0f; v[i].z = 3.0f; v[i].w = 1.0f; }
+        TU_CHECK(!clvr_element_sample(t, v, 1.5f, 2.0f, 3.0f, &s));
+        /* flat: every vertex in the plane z = 0 */
+        make_element(t, 0.0f, 1.0f, 0.0f, &rs, v);
+        for (int i = 0; i < 8; ++i) v[i].z = 0.0f;
+        TU_CHECK(!clvr_element_sample(t, v, 0.2f, 0.2f, 0.1f, &s));
+        (void)clvr_element_sample(t, v, 0.2f, 0.2f, 0.0f, &s); /* must return, either answer */
+        /* NaN vertex and NaN point */
+        make_element(t, 0.0f, 1.0f, 0.0f, &rs, v);
+        v[1].x = NAN;
+        TU_CHECK(!clvr_element_sample(t, v, 0.2f, 0.2f, 0.2f, &s));
+        make_element(t, 0.0f, 1.0f, 0.0f, &rs, v);
+        TU_CHECK(!clvr_element_sample(t, v, NAN, 0.2f, 0.2f, &s));
+        TU_CHECK(!clvr_element_sample(t, v, INFINITY, 0.2f, 0.2f, &s));
+        /* a valid point still works in the same element */
+        TU_CHECK(clvr_element_sample(t, v, 0.2f, 0.2f, 0.2f, &s));
+    }
+    /* inverted tet (two vertices swapped) still contains its interior */
+    clvr_vec4 tv[4] = {{0, 0, 0, 0}, {0, 1, 0, 2}, {1, 0, 0, 1}, {0, 0, 1, 3}};
+    float s = 0;
+    TU_CHECK(clvr_element_sample(CLVR_CELL_TET, tv, 0.2f, 0.1f, 0.3f, &s));
+    TU_CHECK_NEAR(s, 0.2f * 1 + 0.1f * 2 + 0.3f * 3, 1e-5);
+    /* inside-out hex (top and bottom swapped): Newton still inverts it */
+    clvr_vec4 h[8];
+    make_element(CLVR_CELL_HEX, 0.0f, 1.0f, 0.0f, &rs, h);
+    for (int i = 0; i < 4; ++i) { clvr_vec4 tmp = h[i]; h[i] = h[i + 4]; h[i + 4] = tmp; }
+    for (int i = 0; i < 8; ++i) h[i].w = h[i].z;
+    TU_CHECK(clvr_element_sample(CLVR_CELL_HEX, h, 0.3f, 0.6f, 0.25f, &s));
+    TU_CHECK_NEAR(s, 0.25f, 1e-5);
+    /* a hex bent so far it folds over itself: bounded work, no hang */
+    make_element(CLVR_CELL_HEX, 0.0f, 1.0f, 0.0f, &rs, h);
+    h[6].x = -2.0f; h[6].y = -2.0f; h[6].z = -1.0f;
+    int n_in = 0;
+    for (int k = 0; k < 1000; ++k)
+        n_in += clvr_element_sample(CLVR_CELL_HEX, h, 2 * tu_randf(&rs) - 1, 2 * tu_randf(&rs) - 1, 2 * tu_randf(&rs) - 1, &s);
+    TU_CHECK(n_in < 1000);
+}
+
+/* Pyramid apex (singular Jacobian) and wedge/pyramid interpolation at a
+ * few hand-computed points. */
+static void test_known_values(void)
+{
+    clvr_vec4 p[5] = {{0, 0, 0, 1}, {2, 0, 0, 2}, {2, 2, 0, 3}, {0, 2, 0, 4}, {1, 1, 2, 10}};
+    float s = 0;
+    TU_CHECK(clvr_element_sample(CLVR_CELL_PYRAMID, p, 1, 1, 2, &s));
+    TU_CHECK_NEAR(s, 10.0, 1e-4);
+    TU_CHECK(clvr_element_sample(CLVR_CELL_PYRAMID, p, 1, 1, 0, &s));
+    TU_CHECK_NEAR(s, 2.5, 1e-5);
+    TU_CHECK(clvr_element_sample(CLVR_CELL_PYRAMID, p, 1, 1, 1, &s)); /* half-way up the axis */
+    TU_CHECK_NEAR(s, 0.5 * 2.5 + 0.5 * 10.0, 1e-5);
+    TU_CHECK(!clvr_element_sample(CLVR_CELL_PYRAMID, p, 0.2f, 0.2f, 1.5f, &s));
+    clvr_vec4 w[6] = {{0, 0, 0, 1}, {1, 0, 0, 2}, {0, 1, 0, 3}, {0, 0, 1, 4}, {1, 0, 1, 5}, {0, 1, 1, 6}};
+    TU_CHECK(clvr_element_sample(CLVR_CELL_WEDGE, w, 0.25f, 0.25f, 0.5f, &s));
+    TU_CHECK_NEAR(s, 0.5 * (0.5 * 1 + 0.25 * 2 + 0.25 * 3) + 0.5 * (0.5 * 4 + 0.25 * 5 + 0.25 * 6), 1e-5);
+    TU_CHECK(!clvr_element_sample(CLVR_CELL_WEDGE, w, 0.6f, 0.6f, 0.5f, &s));
+}
+
+int main(void)
+{
+    for (uint32_t t = 0; t < 4; ++t) {
+        test_inside_linear(t, 0.0f, 1.0f, 0.0f);
+        test_inside_linear(t, 0.12f, 0.01f, 0.0f);
+        test_inside_linear(t, 0.12f, 0.5f, 1000.0f); /* far from the origin */
+        test_boundary_and_outside(t);
+    }
+    test_hex_vs_tets();
+    test_nonplanar_shared_face();
+    test_degenerate();
+    test_known_values();
+    return tu_finish("test_elements");
+}

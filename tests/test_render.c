@@ -1,0 +1,409 @@
+/* Proves the renderer statistically, never against stored images:
+ * 1. homogeneous box of all four element types with constant extinction:
+ *    per-pixel opacity matches 1 - exp(-sigma * d) within a confidence
+ *    interval, for track, dda and bins;
+ * 2. track, bins and dda converge to the same image (per-pixel difference of
+ *    means within k standard errors) on a mixed mesh and on a real file;
+ * 3. march with a small step agrees with delta tracking without shadows;
+ * 4. majorants (sampling clusters, macrocells, global) are true upper bounds
+ *    of the extinction for random transfer functions;
+ * 5. the same seed gives the same image, another seed another one. */
+#include "accel.h"
+#include "cli.h"
+#include "camera.h"
+#include "mesh_io.h"
+#include "preprocess.h"
+#include "render.h"
+#include "scene.h"
+#include "test_util.h"
+#include "tf.h"
+
+/* Five standard errors: with a few thousand pixel channels per comparison a
+ * false alarm stays below 1% while a real bias of a few percent is caught. */
+#define K_SIGMA 5.0
+
+typedef struct fixture {
+    clvr_cl *cl;
+    clvr_mesh mesh;
+    clvr_clustered c;
+    clvr_accel a;
+    clvr_renderer *r;
+    clvr_render_settings set;
+} fixture;
+
+static int fixture_open(fixture *fx, clvr_cl *cl, clvr_mesh *mesh_moved, uint32_t w, uint32_t h)
+{
+    clvr_error err = {0};
+    memset(fx, 0, sizeof *fx);
+    fx->cl = cl;
+    fx->mesh = *mesh_moved;
+    memset(mesh_moved, 0, sizeof *mesh_moved);
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    po.keep_order = 1;
+    po.sampling_size = 16; /* small clusters: tighter majorants on small meshes */
+    clvr_render_settings_default(&fx->set);
+    fx->set.width = w;
+    fx->set.height = h;
+    clvr_status s = clvr_preprocess(cl, &fx->mesh, &po, &fx->c, &err);
+    if (s == CLVR_OK) s = clvr_accel_build(cl, &fx->c, &fx->a, &err);
+    if (s == CLVR_OK) s = clvr_renderer_create(cl, &fx->c, &fx->a, &fx->set, &fx->r, &err);
+    if (s != CLVR_OK) {
+        fprintf(stderr, "fixture: %s\n", err.msg);
+        ++tu_fail_;
+        return 1;
+    }
+    return 0;
+}
+
+static void fixture_close(fixture *fx)
+{
+    clvr_renderer_destroy(fx->r);
+    clvr_accel_release(fx->cl, &fx->a);
+    clvr_clustered_release(fx->cl, &fx->c);
+    clvr_mesh_free(&fx->mesh);
+}
+
+/* Renders n frames and returns per-pixel means and variances of one sample
+ * (4 floats per pixel each; caller frees). */
+static int render_stats(fixture *fx, uint32_t n, float **mean, float **var)
+{
+    clvr_error err = {0};
+    size_t np = (size_t)fx->set.width * fx->set.height * 4;
+    float *sum = malloc(np * sizeof(float)), *sq = malloc(np * sizeof(float));
+    *mean = sum;
+    *var = sq;
+    if (!sum || !sq) return 1;
+    clvr_status s = clvr_renderer_set_settings(fx->r, &fx->set, &err);
+    for (uint32_t i = 0; i < n && s == CLVR_OK; ++i) s = clvr_renderer_frame(fx->r, &err);
+    if (s == CLVR_OK) s = clvr_renderer_read_moments(fx->r, sum, sq, &err);
+    if (s != CLVR_OK) {
+        fprintf(stderr, "render: %s\n", err.msg);
+        ++tu_fail_;
+        return 1;
+    }
+    for (size_t i = 0; i < np; ++i) {
+        double m = sum[i] / n, v = sq[i] / n - m * m;
+        sum[i] = (float)m;
+        sq[i] = (float)(v > 0 ? v : 0);
+    }
+    return 0;
+}
+
+/* Compares two renders channel by channel: |ma - mb| <= K * se + tol.
+ * Returns the number of violations and prints the worst. */
+static int compare(const char *what, const float *ma, const float *va, uint32_t na, const float *mb,
+                   const float *vb, uint32_t nb, size_t n, double tol)
+{
+    int bad = 0;
+    double worst = 0;
+    size_t wi = 0;
+    for (size_t i = 0; i < n; ++i) {
+        double se = sqrt(va[i] / na + vb[i] / nb);
+        double d = fabs((double)ma[i] - mb[i]);
+        double z = (d - tol) / (se > 0 ? se : 1e-30);
+        if (z > worst) { worst = z; wi = i; }
+        if (d > K_SIGMA * se + tol) ++bad;
+    }
+    if (bad)
+        fprintf(stderr, "%s: %d of %zu channels differ by more than %g SE (worst pixel %zu ch %zu: %g vs %g, %.1f SE)\n",
+                what, bad, n, K_SIGMA, wi / 4, wi % 4, ma[wi], mb[wi], worst);
+    return bad;
+}
+
+static void set_table(fixture *fx, const float *table, uint32_t n, float lo, float hi)
+{
+    clvr_error err = {0};
+    TU_CHECK_STATUS(clvr_renderer_set_tf(fx->r, table, n, lo, hi, 1.0f, &err), CLVR_OK, &err);
+}
+
+/* ---- 1. homogeneous box against 1 - exp(-sigma d) */
+static void test_homogeneous(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 4;
+    p.mix = CLVR_SCENE_MIX_CYCLE; /* hexes, tets, wedges and pyramids side by side */
+    p.field = CLVR_SCENE_FIELD_CONSTANT;
+    p.value = 1.0f;
+    clvr_mesh m;
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    const uint32_t W = 24, H = 24, N = 400;
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, W, H)) return;
+    const float sigma = 1.5f;
+    float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
+    set_table(&fx, table, 2, 0.0f, 2.0f);
+    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
+    clvr_camera cam;
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    fx.set.shadows = 0;
+    const uint32_t methods[3] = {CLVR_RENDER_TRACK, CLVR_RENDER_DDA, CLVR_RENDER_BINS};
+    for (int mi = 0; mi < 3; ++mi) {
+        fx.set.method = methods[mi];
+        fx.set.macrocells = 7;
+        fx.set.bins = 8;
+        fx.set.segments = 2;
+        float *mean, *var;
+        if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
+        int bad = 0, tested = 0, covered = 0;
+        for (uint32_t y = 0; y < H; ++y)
+            for (uint32_t x = 0; x < W; ++x) {
+                /* Expected opacity: the mean over a 16x16 sub-pixel grid of
+                 * 1 - exp(-sigma * chord length); silhouette pixels (some
+                 * sub-rays miss) are skipped, their quadrature is inexact. */
+                double acc = 0;
+                int hits = 0;
+                for (int sy = 0; sy < 16; ++sy)
+                    for (int sx = 0; sx < 16; ++sx) {
+                        float o[3], d[3];
+                        clvr_camera_ray(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16, o, d);
+                        double t0 = 0, t1 = 1e30;
+                        for (int k = 0; k < 3; ++k) {
+                            double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
+                            if (a > b) { double t = a; a = b; b = t; }
+                            t0 = a > t0 ? a : t0;
+                            t1 = b < t1 ? b : t1;
+                        }
+                        double len = t1 > t0 ? t1 - t0 : 0;
+                        hits += len > 0;
+                        acc += 1 - exp(-sigma * len);
+                    }
+                if (hits != 0 && hits != 256) continue;
+                double expect = acc / 256, got = mean[4 * (y * W + x) + 3];
+                double se = sqrt(expect * (1 - expect) / N);
+                ++tested;
+                covered += hits == 256;
+                if (fabs(got - expect) > K_SIGMA * se + 1e-6) {
+                    if (bad < 5)
+                        fprintf(stderr, "homogeneous %s: pixel (%u,%u) opacity %.4f, expected %.4f +- %.4f\n",
+                                clvr_method_name((clvr_method)methods[mi]), x, y, got, expect, K_SIGMA * se);
+                    ++bad;
+                }
+            }
+        TU_CHECK_EQ_U64(bad, 0);
+        TU_CHECK(tested > (int)(W * H) / 2 && covered > 50);
+        free(mean);
+        free(var);
+    }
+    fixture_close(&fx);
+}
+
+/* ---- 2 and 3: methods agree with each other */
+static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t N)
+{
+    clvr_error err = {0};
+    const uint32_t W = 28, H = 28;
+    fixture fx;
+    if (fixture_open(&fx, cl, m, W, H)) return;
+    clvr_tf tf = {0};
+    TU_CHECK_STATUS(clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, 4.0f, fx.mesh.scalar_min,
+                                         fx.mesh.scalar_max, &err), CLVR_OK, &err);
+    clvr_tf_set_extent(&tf, fx.mesh.bounds_lo, fx.mesh.bounds_hi);
+    uint32_t n = clvr_tf_table_size(&tf);
+    float *table = malloc(n * 4 * sizeof(float));
+    clvr_tf_bake(&tf, table, n);
+    TU_CHECK_STATUS(clvr_renderer_set_tf(fx.r, table, n, tf.range_lo, tf.range_hi, tf.density, &err), CLVR_OK, &err);
+    clvr_camera cam;
+    TU_CHECK_STATUS(clvr_camera_frame_box(&cam, fx.mesh.bounds_lo, fx.mesh.bounds_hi, 40.0f, W, H, &err), CLVR_OK,
+                    &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    size_t np = (size_t)W * H * 4;
+    char what[160];
+    for (int shadows = 1; shadows >= 0; --shadows) {
+        float *mt, *vt, *mb, *vb, *md, *vd;
+        fx.set.shadows = shadows;
+        fx.set.method = CLVR_RENDER_TRACK;
+        fx.set.seed = 11;
+        render_stats(&fx, N, &mt, &vt);
+        fx.set.method = CLVR_RENDER_BINS;
+        fx.set.bins = 16;
+        fx.set.segments = 3;
+        fx.set.seed = 12;
+        render_stats(&fx, N, &mb, &vb);
+        fx.set.method = CLVR_RENDER_DDA;
+        fx.set.macrocells = 24;
+        fx.set.seed = 13;
+        render_stats(&fx, N, &md, &vd);
+        snprintf(what, sizeof what, "%s shadows %s: track vs bins", name, shadows ? "on" : "off");
+        TU_CHECK_EQ_U64(compare(what, mt, vt, N, mb, vb, N, np, 1e-5), 0);
+        snprintf(what, sizeof what, "%s shadows %s: track vs dda", name, shadows ? "on" : "off");
+        TU_CHECK_EQ_U64(compare(what, mt, vt, N, md, vd, N, np, 1e-5), 0);
+        snprintf(what, sizeof what, "%s shadows %s: bins vs dda", name, shadows ? "on" : "off");
+        TU_CHECK_EQ_U64(compare(what, mb, vb, N, md, vd, N, np, 1e-5), 0);
+        /* The image is not trivially empty: some pixels are mostly opaque. */
+        int opaque = 0;
+        for (size_t i = 3; i < np; i += 4) opaque += mt[i] > 0.3f;
+        TU_CHECK(opaque > 20);
+        if (!shadows) {
+            /* march: same expectation as delta tracking without shadows, up
+             * to the step's discretisation (a small absolute tolerance). */
+            float *mm, *vm;
+            fx.set.method = CLVR_RENDER_MARCH;
+            fx.set.step = 0.0f; /* default: diagonal / 512 */
+            fx.set.seed = 14;
+            render_stats(&fx, 16, &mm, &vm);
+            snprintf(what, sizeof what, "%s: march vs track (no shadows)", name);
+            TU_CHECK_EQ_U64(compare(what, mm, vm, 16, mt, vt, N, np, 0.01), 0);
+            free(mm);
+            free(vm);
+        }
+        free(mt); free(vt); free(mb); free(vb); free(md); free(vd);
+    }
+    free(table);
+    clvr_tf_free(&tf);
+    fixture_close(&fx);
+}
+
+/* ---- 4. majorants bound the extinction */
+static void test_majorants(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 9;
+    p.mix = CLVR_SCENE_MIX_MIXED;
+    p.field = CLVR_SCENE_FIELD_BLOBS;
+    clvr_mesh m;
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, 8, 8)) return;
+    clvr_clustered_host h = {0};
+    TU_CHECK_STATUS(clvr_clustered_download(cl, &fx.c, &h, &err), CLVR_OK, &err);
+    if (!h.order) { ++tu_fail_; fixture_close(&fx); return; }
+    /* sorted position of every original element (global ids over the four
+     * lists concatenated, like the sorted ids) */
+    uint64_t ne = fx.c.num_elements;
+    uint32_t *pos = malloc(ne * sizeof(uint32_t));
+    for (uint64_t g = 0; g < ne; ++g) pos[h.order[g]] = (uint32_t)g;
+    const uint32_t R = 13;
+    fx.set.macrocells = R;
+    TU_CHECK_STATUS(clvr_renderer_set_settings(fx.r, &fx.set, &err), CLVR_OK, &err);
+    float *cmaj = malloc(fx.c.num_sampling * sizeof(float)), *gmaj = malloc((size_t)R * R * R * sizeof(float));
+    uint64_t rng = 7;
+    int violations = 0, checks = 0;
+    for (int trial = 0; trial < 20; ++trial) {
+        enum { N = 24 };
+        float table[4 * N];
+        for (int i = 0; i < N; ++i) {
+            for (int k = 0; k < 3; ++k) table[4 * i + k] = tu_randf(&rng);
+            table[4 * i + 3] = tu_randf(&rng) < 0.3f ? 0.0f : 5.0f * tu_randf(&rng);
+        }
+        float lo = -0.2f + 0.4f * tu_randf(&rng), hi = lo + 0.3f + tu_randf(&rng);
+        set_table(&fx, table, N, lo, hi);
+        float gm;
+        TU_CHECK_STATUS(clvr_renderer_read_majorants(fx.r, cmaj, gmaj, &gm, &err), CLVR_OK, &err);
+        for (int q = 0; q < 400; ++q) {
+            /* a random element, a random point inside it (convex combination
+             * of its vertices: elements of this mesh are convex), and any
+             * scalar its interpolation can produce (within its vertex range) */
+            uint64_t e = tu_rand(&rng) % ne, local = e;
+            uint32_t t = 0;
+            while (local >= fx.mesh.num_cells[t]) local -= fx.mesh.num_cells[t++];
+            uint32_t nv = clvr_cell_vertex_count(t);
+            const uint32_t *idx = fx.mesh.indices[t] + local * nv;
+            float w[8], wsum = 0, pt[3] = {0, 0, 0}, smin = 1e30f, smax = -1e30f;
+            for (uint32_t k = 0; k < nv; ++k) { w[k] = tu_randf(&rng) + 1e-3f; wsum += w[k]; }
+            for (uint32_t k = 0; k < nv; ++k) {
+                const float *v = fx.mesh.positions + 3 * idx[k];
+                for (int a = 0; a < 3; ++a) pt[a] += w[k] / wsum * v[a];
+                float sv = fx.mesh.scalars[idx[k]];
+                smin = sv < smin ? sv : smin;
+                smax = sv > smax ? sv : smax;
+            }
+            float s = smin + (smax - smin) * tu_randf(&rng), ext[4];
+            clvr_tf_lookup(table, N, lo, hi, 1.0f, s, ext);
+            /* sampling cluster of the element: runs of sampling_size within its type */
+            uint64_t g = pos[e], c = 0;
+            for (uint32_t tt = 0; tt < t; ++tt) c += (fx.c.num_cells[tt] + fx.c.sampling_size - 1) / fx.c.sampling_size;
+            c += (g - fx.c.first_cell[t]) / fx.c.sampling_size;
+            int cell[3];
+            for (int a = 0; a < 3; ++a) {
+                float u = (pt[a] - fx.c.bounds.lo[a]) / (fx.c.bounds.hi[a] - fx.c.bounds.lo[a]) * R;
+                cell[a] = (int)floorf(u);
+                cell[a] = cell[a] < 0 ? 0 : cell[a] >= (int)R ? (int)R - 1 : cell[a];
+            }
+            float cm = gmaj[((size_t)cell[2] * R + cell[1]) * R + cell[0]];
+            checks += 3;
+            if (c >= fx.c.num_sampling || ext[3] > cmaj[c]) {
+                if (violations < 5) fprintf(stderr, "cluster %llu majorant %g < extinction %g\n", (unsigned long long)c, c < fx.c.num_sampling ? cmaj[c] : -1.0f, ext[3]);
+                ++violations;
+            }
+            if (ext[3] > cm) {
+                if (violations < 5) fprintf(stderr, "cell (%d,%d,%d) majorant %g < extinction %g\n", cell[0], cell[1], cell[2], cm, ext[3]);
+                ++violations;
+            }
+            if (ext[3] > gm) ++violations;
+        }
+    }
+    TU_CHECK_EQ_U64(violations, 0);
+    TU_CHECK(checks > 1000);
+    free(cmaj);
+    free(gmaj);
+    free(pos);
+    clvr_clustered_host_free(&h);
+    fixture_close(&fx);
+}
+
+/* ---- 5. reproducibility */
+static void test_seeds(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 6;
+    p.mix = CLVR_SCENE_MIX_MIXED;
+    p.field = CLVR_SCENE_FIELD_BLOBS;
+    clvr_mesh m;
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { ++tu_fail_; return; }
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, 16, 16)) return;
+    float table[8] = {1, 0, 0, 0, 0, 0, 1, 20};
+    set_table(&fx, table, 2, 0.0f, 1.0f);
+    clvr_camera cam;
+    clvr_camera_frame_box(&cam, fx.mesh.bounds_lo, fx.mesh.bounds_hi, 40.0f, 16, 16, &err);
+    clvr_renderer_set_camera(fx.r, &cam, &err);
+    float *a, *va, *b, *vb, *c, *vc;
+    fx.set.seed = 5;
+    render_stats(&fx, 3, &a, &va);
+    render_stats(&fx, 3, &b, &vb);
+    fx.set.seed = 6;
+    render_stats(&fx, 3, &c, &vc);
+    TU_CHECK(memcmp(a, b, 16 * 16 * 4 * sizeof(float)) == 0);
+    TU_CHECK(memcmp(a, c, 16 * 16 * 4 * sizeof(float)) != 0);
+    free(a); free(va); free(b); free(vb); free(c); free(vc);
+    fixture_close(&fx);
+}
+
+int main(void)
+{
+    clvr_cl cl;
+    clvr_error err = {0};
+    tu_open_device(&cl);
+    test_homogeneous(&cl);
+    test_majorants(&cl);
+    test_seeds(&cl);
+    {
+        clvr_scene_box_params p;
+        clvr_scene_box_params_init(&p);
+        p.nx = p.ny = p.nz = 10;
+        p.lo[0] = -1; p.lo[1] = -1; p.lo[2] = -1;
+        p.hi[0] = 1; p.hi[1] = 1; p.hi[2] = 1;
+        p.mix = CLVR_SCENE_MIX_MIXED;
+        p.field = CLVR_SCENE_FIELD_BLOBS;
+        clvr_mesh m;
+        TU_CHECK_STATUS(clvr_scene_box(&p, &m, &err), CLVR_OK, &err);
+        methods_agree(&cl, &m, "mixed box", 256);
+    }
+    {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/vtk/post.vtk", tu_data_dir());
+        clvr_mesh m;
+        TU_CHECK_STATUS(clvr_mesh_load(path, NULL, &m, &err), CLVR_OK, &err);
+        if (err.status == CLVR_OK || m.num_vertices) methods_agree(&cl, &m, "post.vtk", 256);
+    }
+    clvr_cl_destroy(&cl);
+    return tu_finish("test_render");
+}
