@@ -440,6 +440,9 @@ clvr_status clvr_cl_buffer(clvr_cl *cl, cl_mem_flags flags, size_t bytes, void *
                               "use a smaller mesh or image, or another --device",
                               what, (double)n / 1e9, cl->device_name, (double)cl->global_mem_bytes / 1e9,
                               (double)cl->allocated_bytes / 1e9);
+    /* An empty input has nothing to copy: a 16-byte placeholder without the
+     * host-pointer flags (which require a non-NULL pointer). */
+    if (bytes == 0) flags &= ~(cl_mem_flags)(CL_MEM_COPY_HOST_PTR | CL_MEM_USE_HOST_PTR);
     rc = CLVR_FAULT_CODE("clCreateBuffer", CL_MEM_OBJECT_ALLOCATION_FAILURE);
     if (rc == CL_SUCCESS) *out = clCreateBuffer(cl->context, flags, n, bytes ? host_ptr : NULL, &rc);
     if (rc != CL_SUCCESS) {

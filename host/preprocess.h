@@ -122,7 +122,7 @@ typedef struct clvr_pp {
         radix_hist, radix_scatter, gather, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
         inst_write, vertices;
     uint32_t max_tiles;       /* tiles per tiled launch: a few per compute unit */
-    uint32_t per_item;        /* items per work-item of the per-element kernels (CPU: 1024, GPU: 1) */
+    uint32_t per_item;        /* elements per work-item of the key kernel (1: groups of 64) */
 } clvr_pp;
 
 clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err);

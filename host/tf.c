@@ -609,6 +609,12 @@ static int parse_space(const char *s, size_t len, uint32_t *out)
     return 0;
 }
 
+/* A value that must lie in [0, 1]: exporters write rounding noise such as
+ * 1.0000001, so a millionth beyond is accepted (and clamped). */
+static int unit_value(double v) { return v >= -1e-6 && v <= 1.0 + 1e-6; }
+
+static float clamp_unit(float v) { return v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v; }
+
 /* ---------------------------------------------- text format */
 
 /* Strict float: the whole token, finite, within float range. */
@@ -662,12 +668,14 @@ static clvr_status parse_text(pending *p, const char *text, size_t len, const ch
             if (nt != 5)
                 return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s:%u: expected `color x r g b` (4 numbers), got %d",
                                       name, line, nt - 1);
-            for (int i = 0; i < 4; ++i)
-                if (!parse_float_token(tok[1 + i], &v[i]) || v[i] < 0.0f || v[i] > 1.0f)
+            for (int i = 0; i < 4; ++i) {
+                if (!parse_float_token(tok[1 + i], &v[i]) || !unit_value(v[i]))
                     return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
                                           "%s:%u: color: \"%s\" is not a number in [0, 1] (expected `color x r g b`, "
                                           "x a position in the window, r g b sRGB values)",
                                           name, line, tok[1 + i]);
+                v[i] = clamp_unit(v[i]);
+            }
             if (used_colormap)
                 return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
                                       "%s:%u: color lines after a colormap line; use one or the other", name, line);
@@ -686,10 +694,12 @@ static clvr_status parse_text(pending *p, const char *text, size_t len, const ch
                                       name, line, nt - 1);
             v[2] = 0.5f;
             v[3] = 0.0f;
-            for (int i = 0; i < nt - 1; ++i)
-                if (!parse_float_token(tok[1 + i], &v[i]) || v[i] < 0.0f || v[i] > 1.0f)
+            for (int i = 0; i < nt - 1; ++i) {
+                if (!parse_float_token(tok[1 + i], &v[i]) || !unit_value(v[i]))
                     return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
                                           "%s:%u: opacity: \"%s\" is not a number in [0, 1]", name, line, tok[1 + i]);
+                v[i] = clamp_unit(v[i]);
+            }
             if (p->num_opacity && v[0] < p->opacity[4 * (size_t)(p->num_opacity - 1)])
                 return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
                                       "%s:%u: opacity position %g is before the previous one; positions must not "
@@ -1112,7 +1122,7 @@ static clvr_status jpoints(jparser *p, const jnode *arr, const char *key, int op
         }
         /* Position: any finite float; others (colour, opacity, midpoint,
          * sharpness) in [0, 1]. */
-        int bad = comp == 0 ? !(fabs(v->num) <= FLT_MAX) : !(v->num >= 0.0 && v->num <= 1.0);
+        int bad = comp == 0 ? !(fabs(v->num) <= FLT_MAX) : !unit_value(v->num);
         if (!bad && comp == 0 && i >= 4 && (float)v->num < pts[i - 4]) {
             free(pts);
             return jfail_at(p, v->line, v->col, "\"%s\"[%u] = %g is smaller than the previous position; positions "
@@ -1123,7 +1133,7 @@ static clvr_status jpoints(jparser *p, const jnode *arr, const char *key, int op
             return jfail_at(p, v->line, v->col, "\"%s\"[%u] = %g is out of range (expected %s)", key, i, v->num,
                             comp == 0 ? "a finite position" : "a value in [0, 1]");
         }
-        pts[i] = (float)v->num;
+        pts[i] = comp == 0 ? (float)v->num : (float)fmin(fmax(v->num, 0.0), 1.0);
     }
     float x0 = pts[0], x1 = pts[4 * (n - 1)];
     if (n > 1 && !(x1 > x0)) {

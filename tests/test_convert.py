@@ -344,6 +344,21 @@ def test_plot3d_layouts_and_blanking(tmp):
             check(math.isclose(vol, hexes * 6.0), f"plot3d {name}: volume", vol, hexes * 6.0)
 
 
+def test_plot3d_q_option(tmp):
+    """--q names the solution when the names do not pair; without one, scalars are 0."""
+    grid = os.path.join(tmp, "grid.x")
+    flow = os.path.join(tmp, "flow.sol")
+    shutil.copy(os.path.join(DATA, "plot3d/bluntfinxyz.bin"), grid)
+    shutil.copy(os.path.join(DATA, "plot3d/bluntfinq.bin"), flow)
+    out = os.path.join(tmp, "q.bin")
+    for extra, name, smax_positive in ((["--q", flow], "Density", True), ([], "", False)):
+        r = convert([grid, out, "--quiet"] + extra, tmp)
+        m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+        check(not problems and (m.H, m.name, m.smax > 0) == (37479, name, smax_positive),
+              f"plot3d grid.x {extra}: hexes, scalar", (problems, m and (m.H, m.name, m.smax)),
+              (37479, name))
+
+
 def legacy_ugrid(path, points, cells):
     """An ASCII legacy .vtk unstructured grid; cells are (vtk type, [point ids])."""
     with open(path, "w") as f:
@@ -548,6 +563,7 @@ def main():
         test_values_match_vtk(tmp)
         test_reorientation_and_tets(tmp)
         test_plot3d_layouts_and_blanking(tmp)
+        test_plot3d_q_option(tmp)
         test_quadratic_and_voxel_cells(tmp)
         test_ghosts_in_unstructured_grid(tmp)
         test_exodus(tmp)

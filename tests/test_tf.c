@@ -365,6 +365,9 @@ static void test_json(void)
                     CLVR_OK, &err);
     TU_CHECK_EQ_U64(tf.space, CLVR_TF_SPACE_RGB);
     TU_CHECK_EQ_U64(tf.num_opacity, 3);
+    /* Exporters' rounding noise just outside [0, 1] is accepted and clamped. */
+    TU_CHECK_STATUS(parse_str(&tf, "[{\"RGBPoints\":[0,1.0000001,0,-1e-9, 1,0,0,0]}]", &err), CLVR_OK, &err);
+    CHECK_RGB(&tf, 0.0f, 1.0, 0.0, 0.0, 0.0);
     clvr_tf_free(&tf);
 
     /* Every truncation of a valid document fails cleanly with a position. */
