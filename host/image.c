@@ -53,12 +53,6 @@ uint8_t clvr_image_srgb_to_u8(float c)
     return (uint8_t)lrintf(clvr_image_srgb_encode(c) * 255.0f);
 }
 
-static uint8_t alpha_to_u8(float a)
-{
-    a = a > 0.0f ? (a < 1.0f ? a : 1.0f) : 0.0f;
-    return (uint8_t)lrintf(a * 255.0f);
-}
-
 typedef enum { FMT_NONE, FMT_EXR, FMT_PNG, FMT_PFM } image_format;
 
 static image_format format_of(const char *path)
@@ -239,12 +233,12 @@ cleanup:
 static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const float *rgba, clvr_error *err)
 {
     size_t n = (size_t)w * h;
-    uint8_t *px = malloc(n * 4);
+    /* Opaque RGB: r g b already hold the background seen through the
+     * volume, so an alpha channel would make viewers composite it twice. */
+    uint8_t *px = malloc(n * 3);
     if (!px) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory writing %s", path);
-    for (size_t i = 0; i < n; ++i) {
-        for (int c = 0; c < 3; ++c) px[4 * i + c] = clvr_image_srgb_to_u8(rgba[4 * i + c]);
-        px[4 * i + 3] = alpha_to_u8(rgba[4 * i + 3]);
-    }
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) px[3 * i + c] = clvr_image_srgb_to_u8(rgba[4 * i + c]);
     char *tmp;
     FILE *f;
     clvr_status s = open_temp(path, &tmp, &f, err);
@@ -254,7 +248,7 @@ static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const flo
     img.version = PNG_IMAGE_VERSION;
     img.width = w;
     img.height = h;
-    img.format = PNG_FORMAT_RGBA; /* 8-bit, sRGB-encoded, straight alpha */
+    img.format = PNG_FORMAT_RGB; /* 8-bit, sRGB-encoded, opaque */
     errno = 0;
     int ok = png_image_write_to_stdio(&img, f, 0, px, 0, NULL);
     free(px);

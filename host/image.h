@@ -12,8 +12,9 @@
  *   .exr  OpenEXR, 32-bit float R G B A, ZIP compression, written with the
  *         OpenEXR core C API (openexr.h; ImfCRgbaFile.h only does half);
  *         values stored unchanged (linear, alpha as above).
- *   .png  8-bit RGBA; r g b clamped to [0, 1] and encoded with the sRGB
- *         transfer curve (IEC 61966-2-1), sRGB chunk set; a clamped, linear.
+ *   .png  8-bit RGB, opaque; r g b clamped to [0, 1] and encoded with the
+ *         sRGB transfer curve (IEC 61966-2-1), sRGB chunk set. Alpha is
+ *         dropped: r g b already hold the background (use .exr for alpha).
  *   .pfm  portable float map "PF": linear float r g b, little-endian (scale
  *         -1.0), rows bottom to top as the format requires. PFM has no
  *         alpha: it is dropped (r g b already hold the background).

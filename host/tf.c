@@ -404,6 +404,7 @@ static float clamp01(float x) { return x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f; 
 void clvr_tf_color(const clvr_tf *tf, float x, float srgb[3])
 {
     x = clamp01(x);
+    if (!tf->num_colors) { srgb[0] = srgb[1] = srgb[2] = 0.0f; return; } /* not initialised */
     long k = find_segment(tf->colors, tf->num_colors, x);
     if (k < 0 || k >= (long)tf->num_colors - 1) {
         const float *p = tf->colors + 4 * (size_t)(k < 0 ? 0 : k);
@@ -440,6 +441,7 @@ static double opacity_segment(double s, double y1, double y2, double midpoint, d
 float clvr_tf_opacity(const clvr_tf *tf, float x)
 {
     x = clamp01(x);
+    if (!tf->num_opacity) return 0.0f; /* not initialised */
     long k = find_segment(tf->opacity, tf->num_opacity, x);
     if (k < 0 || k >= (long)tf->num_opacity - 1) return tf->opacity[4 * (size_t)(k < 0 ? 0 : k) + 1];
     const float *p = tf->opacity + 4 * (size_t)k, *q = p + 4;
