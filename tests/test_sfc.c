@@ -85,6 +85,32 @@ static void test_full_curve(void)
     TU_CHECK_EQ_U64(clvr_morton3(65535, 65535, 65535), (1ull << 48) - 1);
 }
 
+/* The table-driven encoder (clvr_hilbert3) equals the Butz-Moore/Skilling
+ * sweep (clvr_hilbert3_bits at 16 bits) on random points, on every corner
+ * and edge value, and on every point of a 32^3 block at the origin and at
+ * the far corner (which walk every state of the table). */
+static void test_table_encoder(void)
+{
+    uint64_t rng = 3, bad = 0, n = 0;
+    for (int r = 0; r < 1000000; ++r, ++n) {
+        uint32_t x = (uint32_t)tu_rand(&rng) & 0xffff, y = (uint32_t)tu_rand(&rng) & 0xffff,
+                 z = (uint32_t)tu_rand(&rng) & 0xffff;
+        bad += clvr_hilbert3(x, y, z) != clvr_hilbert3_bits(x, y, z, 16);
+    }
+    const uint32_t edge[] = {0, 1, 2, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff};
+    for (int a = 0; a < 8; ++a)
+        for (int b = 0; b < 8; ++b)
+            for (int c = 0; c < 8; ++c, ++n)
+                bad += clvr_hilbert3(edge[a], edge[b], edge[c]) != clvr_hilbert3_bits(edge[a], edge[b], edge[c], 16);
+    for (uint32_t base = 0; base <= 0xffe0; base += 0xffe0)
+        for (uint32_t i = 0; i < 32; ++i)
+            for (uint32_t j = 0; j < 32; ++j)
+                for (uint32_t k = 0; k < 32; ++k, ++n)
+                    bad += clvr_hilbert3(base + i, base + j, base + k) != clvr_hilbert3_bits(base + i, base + j, base + k, 16);
+    if (bad) fprintf(stderr, "table encoder differs on %llu of %llu points\n", (unsigned long long)bad, (unsigned long long)n);
+    TU_CHECK_EQ_U64(bad, 0);
+}
+
 /* Random elements (random vertices of a random cloud) of every type. */
 static void test_device_keys(clvr_cl *cl, clvr_pp *pp)
 {
@@ -142,6 +168,7 @@ int main(void)
 {
     test_small_grids();
     test_full_curve();
+    test_table_encoder();
     clvr_cl cl;
     clvr_pp pp;
     clvr_error err = {0};
