@@ -497,6 +497,20 @@ cleanup:
 
 /* ------------------------------------------------------------ dispatch */
 
+clvr_status clvr_image_check_output(const char *path, clvr_error *err)
+{
+    if (format_of(path) == FMT_NONE)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s: unknown image extension; supported: .exr, .png, .pfm", path);
+    char dir[4096];
+    const char *slash = strrchr(path, '/');
+    if (!slash) snprintf(dir, sizeof dir, ".");
+    else if (slash == path) snprintf(dir, sizeof dir, "/");
+    else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    if (access(dir, W_OK) != 0)
+        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: directory %s: %s", path, dir, strerror(errno));
+    return CLVR_OK;
+}
+
 clvr_status clvr_image_write(const char *path, uint32_t width, uint32_t height, const float *rgba, clvr_error *err)
 {
     image_format fmt = format_of(path);

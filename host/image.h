@@ -51,6 +51,11 @@ const char *clvr_image_formats(void);
  * supported ones; bad size), CLVR_ERR_WRITE (path and OS error). */
 clvr_status clvr_image_write(const char *path, uint32_t width, uint32_t height, const float *rgba, clvr_error *err);
 
+/* Checks, before any long work, that path has a supported extension
+ * (CLVR_ERR_USAGE) and that its directory exists and is writable
+ * (CLVR_ERR_WRITE naming the directory and the OS error). */
+clvr_status clvr_image_check_output(const char *path, clvr_error *err);
+
 /* Reads a .exr (single-part scanline file with R G B [A] channels, half or
  * float; missing A reads as 1), .pfm (PF or grey Pf; A = 1) or .png (decoded
  * from sRGB to linear) into a fresh image (caller frees). Errors:

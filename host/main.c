@@ -82,6 +82,11 @@ int main(int argc, char **argv)
         return s == CLVR_OK ? 0 : fail(&err);
     }
     if (o.kernel_dir) setenv("CLVR_KERNEL_DIR", o.kernel_dir, 1);
+    /* Fail on an unwritable output before minutes of work, not after. */
+    if (!o.info && !o.view) {
+        s = clvr_image_check_output(o.output, &err);
+        if (s != CLVR_OK) return fail(&err);
+    }
 
     /* --- mesh */
     double t0 = now_s();

@@ -91,7 +91,6 @@ void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, con
     /* Load factor at most 1/2 keeps the linear probes short. */
     p->log2cap = 4;
     while ((1ull << p->log2cap) < 2ull * ((uint64_t)p->vlimit + CLVR_CELL_MAX_VERTS)) ++p->log2cap;
-    uint64_t epoch = 0;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         uint64_t n = l->count[t];
         uint64_t seg = (n + 4ull * cu - 1) / (4ull * cu);
@@ -106,11 +105,6 @@ void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, con
         if (seg_elems / m + 2 > p->rec_max) p->rec_max = (uint32_t)(seg_elems / m + 2);
         p->rec_base[t] = p->total_segments;
         p->total_segments += p->nseg[t];
-        if (p->nseg[t] > p->max_segments) p->max_segments = p->nseg[t];
-    }
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        p->epoch0[t] = epoch;
-        epoch += p->rec_max;
     }
 }
 
@@ -393,8 +387,9 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
     clvr_pp_layout L;
     clvr_pp_split_plan plan;
     cl_mem pos = NULL, scal = NULL, idx_in = NULL, keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL,
-           idx_sorted = NULL, tk = NULL, tv = NULL, recs = NULL, rec_counts = NULL, flags = NULL, sel = NULL,
+           idx_sorted = NULL, tk = NULL, segbuf = NULL, recs = NULL, rec_counts = NULL, flags = NULL, sel = NULL,
            nverts = NULL, nleaves = NULL, vsrc = NULL;
+    cl_uint4 *segs = NULL;
     double t_start = wall_now();
     double *st;
     memset(out, 0, sizeof *out);
@@ -461,9 +456,12 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
     {
         cl_kernel k = pp.gather;
         int i = 0;
-        ARG(k, i++, vals); ARG(k, i++, idx_in); ARG(k, i++, idx_sorted); ARG(k, i++, n32); ARG(k, i++, e1);
-        ARG(k, i++, e2); ARG(k, i++, e3); ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3);
-        CLVR_TRY(launch(&pp, k, N, 64, &st[CLVR_PP_STAGE_GATHER], err));
+        cl_uint tiles = clvr_pp_tiles(&pp, N);
+        cl_ulong chunk = (N + tiles - 1) / tiles;
+        ARG(k, i++, vals); ARG(k, i++, idx_in); ARG(k, i++, idx_sorted); ARG(k, i++, n32); ARG(k, i++, chunk);
+        ARG(k, i++, tiles); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3); ARG(k, i++, s1); ARG(k, i++, s2);
+        ARG(k, i++, s3);
+        CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_GATHER], err));
     }
     if (opt.keep_order) { out->order = vals; vals = NULL; }
     else clvr_cl_release(cl, &vals);
@@ -494,39 +492,47 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx16 * 2, NULL, "16-bit indices", &out->idx16, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx32 * 4, NULL, "32-bit indices", &out->idx32, err));
     {
-        const uint64_t cap = 1ull << plan.log2cap, tables = plan.max_segments;
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, tables * cap * 8, NULL, "split hash keys", &tk, err));
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, tables * cap * 4, NULL, "split hash values", &tv, err));
+        const uint64_t cap = 1ull << plan.log2cap, tables = plan.total_segments;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, tables * cap * 8, NULL, "split hash maps", &tk, err));
         cl_ulong zero = 0;
         cl_event ev = NULL;
         CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, tk, &zero, sizeof zero, 0, tables * cap * 8, 0, NULL, &ev));
         st[CLVR_PP_STAGE_SPLIT] += clvr_cl_event_seconds(ev);
         clReleaseEvent(ev);
-        /* Record slots: rec_max per segment, segment-major, types in order. */
+        /* Segment table: (type, first, end, 0) per segment, types in order. */
+        segs = malloc(plan.total_segments * sizeof *segs);
+        if (!segs) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the split plan"); goto cleanup; }
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+            for (uint32_t g = 0; g < plan.nseg[t]; ++g) {
+                cl_uint4 *d = &segs[plan.rec_base[t] + g];
+                uint64_t b = (uint64_t)g * plan.seg_len[t], e = b + plan.seg_len[t];
+                d->s[0] = t;
+                d->s[1] = (cl_uint)b;
+                d->s[2] = (cl_uint)(e < L.count[t] ? e : L.count[t]);
+                d->s[3] = 0;
+            }
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, plan.total_segments * sizeof *segs, segs,
+                                "split segments", &segbuf, err));
+        /* Record slots: rec_max per segment. */
         cl_uint rec_max = plan.rec_max;
         uint64_t nslots = (uint64_t)plan.total_segments * rec_max;
         CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nslots * sizeof(clvr_pp_instance_rec), NULL, "instance records",
                                 &recs, err));
         CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, plan.total_segments * 4, NULL, "instance record counts",
                                 &rec_counts, err));
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-            if (!plan.nseg[t]) continue;
+        {
             cl_kernel k = pp.split;
             cl_int b32 = bits32;
-            cl_uint type = t, tfirst = (cl_uint)L.first[t], cnt = (cl_uint)L.count[t], seg = plan.seg_len[t],
-                    nseg = plan.nseg[t], vl = plan.vlimit, me = plan.max_elems, lc = plan.log2cap,
-                    rb = plan.rec_base[t];
-            cl_ulong slot0 = L.slot[t], ep = plan.epoch0[t];
+            cl_uint nseg = plan.total_segments, vl = plan.vlimit, me = plan.max_elems, lc = plan.log2cap;
             int i = 0;
             ARG(k, i++, idx_sorted); ARG(k, i++, idx_in); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32);
-            ARG(k, i++, b32); ARG(k, i++, type); ARG(k, i++, tfirst); ARG(k, i++, cnt); ARG(k, i++, slot0);
-            ARG(k, i++, seg); ARG(k, i++, nseg); ARG(k, i++, vl); ARG(k, i++, me); ARG(k, i++, tk); ARG(k, i++, tv);
-            ARG(k, i++, lc); ARG(k, i++, ep); ARG(k, i++, rb); ARG(k, i++, rec_max); ARG(k, i++, recs);
-            ARG(k, i++, rec_counts);
+            ARG(k, i++, b32); ARG(k, i++, segbuf); ARG(k, i++, nseg); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
+            ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, vl); ARG(k, i++, me); ARG(k, i++, tk);
+            ARG(k, i++, lc); ARG(k, i++, rec_max); ARG(k, i++, recs); ARG(k, i++, rec_counts);
             CLVR_TRY(launch(&pp, k, nseg, 1, &st[CLVR_PP_STAGE_SPLIT], err));
         }
         clvr_cl_release(cl, &tk);
-        clvr_cl_release(cl, &tv);
+        clvr_cl_release(cl, &segbuf);
         clvr_cl_release(cl, &idx_sorted);
 
         /* --- instance table: flagged select of the used record slots, scans of the counts */
@@ -571,8 +577,10 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         cl_kernel k = pp.vertices;
         int i = 0;
         ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, idx_in); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
-        ARG(k, i++, ni); ARG(k, i++, nv); ARG(k, i++, out->vertices);
-        CLVR_TRY(launch(&pp, k, nv, 64, &st[CLVR_PP_STAGE_VERTICES], err));
+        cl_uint tiles = clvr_pp_tiles(&pp, nv);
+        cl_ulong chunk = ((cl_ulong)nv + tiles - 1) / tiles;
+        ARG(k, i++, ni); ARG(k, i++, nv); ARG(k, i++, chunk); ARG(k, i++, tiles); ARG(k, i++, out->vertices);
+        CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_VERTICES], err));
     }
     clvr_cl_release(cl, &idx_in);
     clvr_cl_release(cl, &pos);
@@ -619,7 +627,8 @@ cleanup:
     clvr_cl_release(cl, &vals_tmp);
     clvr_cl_release(cl, &idx_sorted);
     clvr_cl_release(cl, &tk);
-    clvr_cl_release(cl, &tv);
+    clvr_cl_release(cl, &segbuf);
+    free(segs);
     clvr_cl_release(cl, &recs);
     clvr_cl_release(cl, &rec_counts);
     clvr_cl_release(cl, &flags);

@@ -181,13 +181,14 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
                                    clvr_clustered *out, clvr_clustered_host *arrays, clvr_error *err);
 
 /* Split plan shared by device and reference: segment length per type and
- * the hash table size. */
+ * the hash map size. Segments are numbered over the types in order (type
+ * t's are rec_base[t] .. rec_base[t] + nseg[t] - 1); segment s keeps its
+ * records at s * rec_max. */
 typedef struct clvr_pp_split_plan {
     uint32_t vlimit, max_elems, log2cap;
     uint32_t seg_len[CLVR_CELL_TYPE_COUNT], nseg[CLVR_CELL_TYPE_COUNT];
     uint32_t rec_max;         /* records per segment at most (the stride of the record table) */
-    uint32_t rec_base[CLVR_CELL_TYPE_COUNT], total_segments, max_segments;
-    uint64_t epoch0[CLVR_CELL_TYPE_COUNT]; /* epochs of type t's workers start after this */
+    uint32_t rec_base[CLVR_CELL_TYPE_COUNT], total_segments;
 } clvr_pp_split_plan;
 /* o must be resolved. Segments are long (>= 2^20 elements) so that the
  * greedy split, which closes an instance at every segment end, loses little. */

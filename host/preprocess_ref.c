@@ -94,7 +94,7 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     clvr_preprocess_options opt;
     clvr_pp_layout L;
     clvr_pp_split_plan plan;
-    uint32_t *idx_in = NULL, *idx_sorted = NULL, *vmap = NULL, *order = NULL, *tv = NULL;
+    uint32_t *idx_in = NULL, *idx_sorted = NULL, *vmap = NULL, *order = NULL;
     uint64_t *keys = NULL, *tk = NULL, *vsrc = NULL;
     clvr_pp_instance_rec *recs = NULL;
     memset(out, 0, sizeof *out);
@@ -168,19 +168,17 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     out->num_idx32 = bits32 ? S : 0;
     h->idx16 = malloc((out->num_idx16 ? out->num_idx16 : 1) * 2);
     h->idx32 = malloc((out->num_idx32 ? out->num_idx32 : 1) * 4);
-    tk = malloc(sizeof *tk << plan.log2cap);
-    tv = malloc(sizeof *tv << plan.log2cap);
+    tk = calloc((size_t)1 << plan.log2cap, sizeof *tk); /* the split leaves the map empty again */
     uint64_t nslots = (uint64_t)plan.total_segments * plan.rec_max;
     recs = malloc((nslots ? nslots : 1) * sizeof *recs);
-    if (!h->idx16 || !h->idx32 || !tk || !tv || !recs) goto oom;
+    if (!h->idx16 || !h->idx32 || !tk || !recs) goto oom;
     uint64_t ninst = 0;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         for (uint32_t sg = 0; sg < plan.nseg[t]; ++sg) {
-            memset(tk, 0, sizeof *tk << plan.log2cap);
             uint64_t b = (uint64_t)sg * plan.seg_len[t], e = b + plan.seg_len[t] < L.count[t] ? b + plan.seg_len[t] : L.count[t];
             uint32_t nr = clvr_pp_split_segment(idx_sorted, vmap, h->idx16, h->idx32, bits32, t, (uint32_t)L.first[t],
                                                 L.slot[t], (uint32_t)b, (uint32_t)e, plan.vlimit, plan.max_elems, tk,
-                                                tv, plan.log2cap, plan.epoch0[t], recs + ninst, plan.rec_max);
+                                                plan.log2cap, recs + ninst, plan.rec_max);
             if (nr > plan.rec_max) {
                 s = clvr_error_set(err, CLVR_ERR_INTERNAL, "preprocess reference: %u records exceed the bound %u", nr,
                                    plan.rec_max);
@@ -270,7 +268,6 @@ cleanup:
     free(order);
     free(keys);
     free(tk);
-    free(tv);
     free(vsrc);
     free(recs);
     if (s != CLVR_OK) {

@@ -39,10 +39,29 @@ CLVR_INLINE void clvr_bvh_point_begin(clvr_bvh_point_iter *it, clvr_u32 root, fl
     it->sp = 1;
 }
 
+/* Bit c set when child c's box of node n contains the point. Empty slots
+ * (lo = +inf) and NaN points fail every test. On the device the four
+ * children are tested at once on the node's structure-of-arrays float4
+ * lanes (one compare per bound, no per-child branches). */
+CLVR_INLINE clvr_u32 clvr_bvh_node_point_mask(CLVR_GLOBAL const clvr_bvh_node *n, float px, float py, float pz)
+{
+#ifdef __OPENCL_VERSION__
+    CLVR_GLOBAL const float4 *q = (CLVR_GLOBAL const float4 *)n; /* lo x y z, hi x y z, child */
+    const int4 in = (px >= q[0]) & (py >= q[1]) & (pz >= q[2]) & (px <= q[3]) & (py <= q[4]) & (pz <= q[5]);
+    return (clvr_u32)((in.x & 1) | (in.y & 2) | (in.z & 4) | (in.w & 8));
+#else
+    clvr_u32 mask = 0;
+    for (int c = 0; c < 4; ++c)
+        mask |= (clvr_u32)(px >= n->lo_x[c] && py >= n->lo_y[c] && pz >= n->lo_z[c] && px <= n->hi_x[c] &&
+                           py <= n->hi_y[c] && pz <= n->hi_z[c])
+                << c;
+    return mask;
+#endif
+}
+
 /* Next primitive whose box contains the point; 0 when there is none left. */
 CLVR_INLINE int clvr_bvh_point_next(clvr_bvh_point_iter *it, CLVR_GLOBAL const clvr_bvh_node *nodes, clvr_u32 *prim)
 {
-    const float px = it->px, py = it->py, pz = it->pz;
     while (it->sp > 0) {
         const clvr_u32 ref = it->stack[--it->sp];
         if (ref & CLVR_BVH_LEAF_BIT) {
@@ -50,12 +69,9 @@ CLVR_INLINE int clvr_bvh_point_next(clvr_bvh_point_iter *it, CLVR_GLOBAL const c
             return 1;
         }
         CLVR_GLOBAL const clvr_bvh_node *n = nodes + ref;
-        for (int c = 0; c < 4; ++c) {
-            /* Empty slots have lo = +inf > p, and NaN points fail every test. */
-            if (px >= n->lo_x[c] && px <= n->hi_x[c] && py >= n->lo_y[c] && py <= n->hi_y[c] && pz >= n->lo_z[c] &&
-                pz <= n->hi_z[c] && it->sp < CLVR_BVH_STACK_SIZE)
-                it->stack[it->sp++] = n->child[c];
-        }
+        const clvr_u32 mask = clvr_bvh_node_point_mask(n, it->px, it->py, it->pz);
+        for (int c = 0; c < 4; ++c)
+            if (((mask >> c) & 1u) && it->sp < CLVR_BVH_STACK_SIZE) it->stack[it->sp++] = n->child[c];
     }
     return 0;
 }

@@ -9,21 +9,44 @@
 #include "clvr_shared.h"
 #include "bounds.h"
 
-/* idx_sorted[slot of sorted element i] = idx_in[slot of element order[i]]. */
-__kernel void clvr_pp_gather(__global const uint *order, __global const uint *idx_in, __global uint *idx_sorted,
-                             uint n, uint eb1, uint eb2, uint eb3, ulong sb1, ulong sb2, ulong sb3)
+/* Copies the vpe indices of n elements: dst element i = src element order[i]
+ * (order relative to the type). One loop per vertex count keeps the copy a
+ * fixed-size move the compiler unrolls. */
+inline void clvr_pp_gather_run(__global const uint *order, __global const uint *src, __global uint *dst, uint vpe,
+                               uint i0, uint i1, uint first)
 {
-    uint i = (uint)get_global_id(0);
-    if (i >= n) return;
-    uint g = order[i];
-    /* Types are the sort key's top bits: i and g have the same type. */
-    uint t = clvr_pp_type_of(i, eb1, eb2, eb3);
-    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
-    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
-    uint vpe = clvr_cell_vertex_count(t);
-    __global const uint *src = idx_in + slot0 + (ulong)(g - first) * vpe;
-    __global uint *dst = idx_sorted + slot0 + (ulong)(i - first) * vpe;
-    for (uint k = 0; k < vpe; ++k) dst[k] = src[k];
+    if (vpe == 8u)
+        for (uint i = i0; i < i1; ++i) vstore8(vload8(order[i] - first, src), i, dst);
+    else if (vpe == 4u)
+        for (uint i = i0; i < i1; ++i) vstore4(vload4(order[i] - first, src), i, dst);
+    else
+        for (uint i = i0; i < i1; ++i) {
+            __global const uint *a = src + (ulong)(order[i] - first) * vpe;
+            __global uint *b = dst + (ulong)i * vpe;
+            for (uint k = 0; k < vpe; ++k) b[k] = a[k];
+        }
+}
+
+/* idx_sorted[slot of sorted element i] = idx_in[slot of element order[i]].
+ * Tiled: work-item t copies sorted elements [t * chunk, min(n, (t + 1) *
+ * chunk)), one run per type; many independent loads in flight per core is
+ * what a CPU device needs for this random read. */
+__kernel void clvr_pp_gather(__global const uint *order, __global const uint *idx_in, __global uint *idx_sorted,
+                             uint n, ulong chunk, uint ntiles, uint eb1, uint eb2, uint eb3, ulong sb1, ulong sb2,
+                             ulong sb3)
+{
+    uint tile = (uint)get_global_id(0);
+    if (tile >= ntiles) return;
+    ulong b = (ulong)tile * chunk, e = min((ulong)n, b + chunk);
+    uint firsts[5] = {0u, eb1, eb2, eb3, n};
+    ulong slots[4] = {0ul, sb1, sb2, sb3};
+    for (uint t = 0; t < 4u; ++t) {
+        ulong r0 = max(b, (ulong)firsts[t]), r1 = min(e, (ulong)firsts[t + 1]);
+        if (r0 >= r1) continue;
+        /* Types are the sort key's top bits: sorted element i and order[i] have the same type. */
+        clvr_pp_gather_run(order + firsts[t], idx_in + slots[t], idx_sorted + slots[t], clvr_cell_vertex_count(t),
+                           (uint)r0 - firsts[t], (uint)r1 - firsts[t], firsts[t]);
+    }
 }
 
 /* Sampling cluster c: cb1..cb3 are the first cluster ids of pyramids,

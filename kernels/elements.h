@@ -181,6 +181,42 @@ CLVR_INLINE int clvr_element_invert(clvr_u32 type, const clvr_vec4 *vtx, float p
     return 0;
 }
 
+/* Tet containment and interpolation: the same arithmetic as
+ * clvr_element_invert + clvr_element_param_inside + the shape-function sum
+ * (bit for bit: clvr_solve3's formulas, in its order), but each barycentric
+ * is computed only when the previous ones passed, so the many tets a point
+ * is not in (point location tests several per query) cost about a third of
+ * the full solve. */
+CLVR_INLINE int clvr_tet_sample(const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
+{
+    const float ox = vtx[0].x, oy = vtx[0].y, oz = vtx[0].z;
+    const float rx = px - ox, ry = py - oy, rz = pz - oz;
+    const float ax = vtx[1].x - ox, ay = vtx[1].y - oy, az = vtx[1].z - oz;
+    const float bx = vtx[2].x - ox, by = vtx[2].y - oy, bz = vtx[2].z - oz;
+    const float cx = vtx[3].x - ox, cy = vtx[3].y - oy, cz = vtx[3].z - oz;
+    const float bcx = by * cz - bz * cy, bcy = bz * cx - bx * cz, bcz = bx * cy - by * cx;
+    const float det = ax * bcx + ay * bcy + az * bcz;
+    const float la = fabs(ax) + fabs(ay) + fabs(az), lb = fabs(bx) + fabs(by) + fabs(bz);
+    const float lc = fabs(cx) + fabs(cy) + fabs(cz);
+    if (!(fabs(det) > 1e-12f * la * lb * lc) || !(fabs(det) < INFINITY)) return 0;
+    const float inv = 1.0f / det, lo = -CLVR_ELEMENT_EPS;
+    const float u = (rx * bcx + ry * bcy + rz * bcz) * inv;
+    if (!(u >= lo)) return 0;
+    const float cax = cy * az - cz * ay, cay = cz * ax - cx * az, caz = cx * ay - cy * ax;
+    const float v = (rx * cax + ry * cay + rz * caz) * inv;
+    if (!(v >= lo)) return 0;
+    const float abx = ay * bz - az * by, aby = az * bx - ax * bz, abz = ax * by - ay * bx;
+    const float w = (rx * abx + ry * aby + rz * abz) * inv;
+    if (!(w >= lo && u + v + w <= 1.0f + CLVR_ELEMENT_EPS)) return 0;
+    float s = 0.0f;
+    s += (1.0f - u - v - w) * vtx[0].w;
+    s += u * vtx[1].w;
+    s += v * vtx[2].w;
+    s += w * vtx[3].w;
+    *scalar = s;
+    return 1;
+}
+
 /* Point containment and interpolation: returns 1 when (px, py, pz) lies in
  * the element (within CLVR_ELEMENT_EPS in parametric coordinates) and writes
  * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
@@ -188,6 +224,7 @@ CLVR_INLINE int clvr_element_invert(clvr_u32 type, const clvr_vec4 *vtx, float p
  * clvr_cell_vertex_count(type) vertices in VTK order. */
 CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
 {
+    if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
     float u, v, w;
     if (!clvr_element_invert(type, vtx, px, py, pz, &u, &v, &w)) return 0;
     if (!clvr_element_param_inside(type, u, v, w, CLVR_ELEMENT_EPS)) return 0;

@@ -7,23 +7,27 @@
 #include "bounds.h"
 #include "reindex.h"
 
-/* One work-item per segment of one type: segment s covers the type's
- * elements [s * seg_len, min(count, (s + 1) * seg_len)). Worker s uses hash
- * table s (1 << log2cap slots) and writes its records at
- * recs[(rec_base + s) * rec_max ...] and their number at counts[rec_base + s]. */
+/* One work-item per segment, all types in one launch (so that the segments
+ * of small types run beside those of big ones): seg[s] = (type, first
+ * element, end element, 0) with elements counted within the type, eb1..eb3
+ * and sb1..sb3 the first global element ids and index slots of pyramids,
+ * wedges and hexes. Worker s uses map s (1 << log2cap slots, zero) and
+ * writes its records at recs[s * rec_max ...] and their number at counts[s]. */
 __kernel void clvr_pp_split(__global const uint *idx_sorted, __global uint *vmap, __global ushort *idx16,
-                            __global uint *idx32, int bits32, uint type, uint type_first, uint count, ulong slot0,
-                            uint seg_len, uint nseg, uint vlimit, uint max_elems, __global ulong *tk,
-                            __global uint *tv, uint log2cap, ulong epoch0, uint rec_base, uint rec_max,
-                            __global clvr_pp_instance_rec *recs, __global uint *counts)
+                            __global uint *idx32, int bits32, __global const uint4 *seg, uint nseg, uint eb1,
+                            uint eb2, uint eb3, ulong sb1, ulong sb2, ulong sb3, uint vlimit, uint max_elems,
+                            __global ulong *tab, uint log2cap, uint rec_max, __global clvr_pp_instance_rec *recs,
+                            __global uint *counts)
 {
     uint s = (uint)get_global_id(0);
     if (s >= nseg) return;
-    uint b = s * seg_len, e = min(count, b + seg_len);
-    ulong table = (ulong)s << log2cap;
-    counts[rec_base + s] = clvr_pp_split_segment(idx_sorted, vmap, idx16, idx32, bits32, type, type_first, slot0, b,
-                                                 e, vlimit, max_elems, tk + table, tv + table, log2cap, epoch0,
-                                                 recs + (ulong)(rec_base + s) * rec_max, rec_max);
+    uint4 g = seg[s];
+    uint t = g.x;
+    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
+    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    counts[s] = clvr_pp_split_segment(idx_sorted, vmap, idx16, idx32, bits32, t, first, slot0, g.y, g.z, vlimit,
+                                      max_elems, tab + ((ulong)s << log2cap), log2cap, recs + (ulong)s * rec_max,
+                                      rec_max);
 }
 
 /* flags[i] = 1 when record slot i holds a record (i % rec_max < its count). */
@@ -77,19 +81,32 @@ __kernel void clvr_pp_inst_write(__global const clvr_pp_instance_rec *recs, __gl
 }
 
 /* Clustered vertex j = (position, scalar) of the mesh vertex that instance
- * c's j - first_vertex'th local id stands for. */
+ * c's j - first_vertex'th local id stands for. Tiled: work-item t fills
+ * vertices [t * chunk, min(nv, (t + 1) * chunk)), finding its first
+ * instance by binary search once and then walking the instances in order. */
 __kernel void clvr_pp_vertices(__global const float *pos, __global const float *scal, __global const uint *vmap,
                                __global const clvr_instance *inst, __global const ulong *vsrc, uint ninst, uint nv,
-                               __global float4 *out)
+                               ulong chunk, uint ntiles, __global float4 *out)
 {
-    uint j = (uint)get_global_id(0);
-    if (j >= nv) return;
+    uint tile = (uint)get_global_id(0);
+    if (tile >= ntiles) return;
+    ulong jb = (ulong)tile * chunk, je = min((ulong)nv, jb + chunk);
+    if (jb >= je) return;
     uint a = 0, b = ninst;
     while (b - a > 1u) {
         uint m = (a + b) / 2u;
-        if (inst[m].first_vertex <= j) a = m;
+        if (inst[m].first_vertex <= jb) a = m;
         else b = m;
     }
-    ulong v = vmap[vsrc[a] + (j - inst[a].first_vertex)];
-    out[j] = (float4)(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2], scal[v]);
+    for (ulong j = jb; j < je;) {
+        uint f = inst[a].first_vertex;
+        ulong end = a + 1u < ninst ? (ulong)inst[a + 1u].first_vertex : (ulong)nv;
+        end = min(end, je);
+        __global const uint *src = vmap + vsrc[a] + (j - f);
+        for (; j < end; ++j) {
+            ulong v = *src++;
+            out[j] = (float4)(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2], scal[v]);
+        }
+        ++a;
+    }
 }
