@@ -31,6 +31,7 @@ typedef struct row {
 } row;
 
 static size_t g_local = 64; /* work-group size of the query kernel (--local) */
+static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
 
 static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh *m, uint32_t leaf, uint32_t nq,
                            row *out, clvr_error *err)
@@ -135,6 +136,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--queries") && i + 1 < argc) nq = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--kind") && i + 1 < argc) kind_name = argv[++i];
         else if (!strcmp(argv[i], "--local") && i + 1 < argc) g_local = (size_t)atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--leaf") && i + 1 < argc) g_leaf = (uint32_t)atoi(argv[++i]);
         else {
             fprintf(stderr, "usage: %s [--device SPEC] [--json FILE] [--cubes N] [--queries Q] [--kind tets|hexes|mixed]\n",
                     argv[0]);
@@ -172,6 +174,7 @@ int main(int argc, char **argv)
     row rows[5];
     int nrows = 0, rc = 0;
     for (int i = 0; i < 5; ++i) {
+        if (g_leaf && ns[i] != g_leaf) continue;
         if (run_one(&cl, &k, &m, ns[i], nq, &rows[nrows], &err) != CLVR_OK) {
             fprintf(stderr, "bench_locate: N=%u: %s\n", ns[i], err.msg);
             rc = 1;

@@ -21,6 +21,9 @@
 #include "scene.h"
 #include "stats.h"
 #include "tf.h"
+#ifdef CLVR_HAVE_VIEWER
+#include "viewer.h"
+#endif
 
 /* Set by SIGINT/SIGTERM: the render loop stops after the current frame and
  * the image accumulated so far is written. A signal handler can only talk to
@@ -87,9 +90,20 @@ int main(int argc, char **argv)
         s = clvr_image_check_output(o.output, &err);
         if (s != CLVR_OK) return fail(&err);
     }
+    /* --view without a display (or without the viewer) fails now, not after preprocessing. */
+    if (o.view && !o.info) {
+#ifdef CLVR_HAVE_VIEWER
+        s = clvr_viewer_probe(&err);
+        if (s != CLVR_OK) return fail(&err);
+#else
+        fprintf(stderr, "clvr: clvr was built without the viewer (GLFW not found); render to a file with -o\n");
+        return 1;
+#endif
+    }
 
     /* --- mesh */
     double t0 = now_s();
+    if (!o.quiet && !o.info) fprintf(stderr, "clvr: loading %s\n", o.mesh_path ? o.mesh_path : "the built-in scene");
     s = load_mesh(&o, &mesh, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     stats.load_s = now_s() - t0;
@@ -124,6 +138,13 @@ int main(int argc, char **argv)
     s = clvr_accel_build(&cl, &clustered, &bvh, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     stats.preprocess_s = now_s() - t0;
+    if (!o.quiet)
+        fprintf(stderr,
+                "clvr: clustered in %.2f s: %llu instance clusters (%llu with 16-bit indices), %llu leaf clusters, "
+                "%llu sampling clusters\n",
+                stats.preprocess_s, (unsigned long long)clustered.num_instances,
+                (unsigned long long)clustered.num_instances16, (unsigned long long)clustered.num_leaves,
+                (unsigned long long)clustered.num_sampling);
     stats.have_mesh = 1;
     clvr_stats_from_mesh(&stats, &mesh);
     clvr_stats_from_clusters(&stats, &clustered, &bvh);
@@ -170,6 +191,14 @@ int main(int argc, char **argv)
         }
     }
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+
+#ifdef CLVR_HAVE_VIEWER
+    if (o.view) {
+        s = clvr_viewer_run(&o, &cl, &clustered, renderer, &rs, &cam, &tf, &err);
+        if (s != CLVR_OK) rc = fail(&err);
+        goto cleanup;
+    }
+#endif
 
     /* --- progressive rendering */
     signal(SIGINT, on_signal);

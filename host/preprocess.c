@@ -122,8 +122,8 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
     /* Elements per work-item of the key kernel. Runs of 1024 per work-item
      * measured no faster on PoCL than one element per work-item in groups of
      * 64 (PoCL vectorizes the latter across work-items), so 1 everywhere. */
-    pp->per_item = 1u;
-    CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", NULL, &pp->prog, err));
+    pp->per_item = getenv("PPI") ? (uint32_t)atoi(getenv("PPI")) : 1u; /* TEMP */
+    CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", getenv("PPOPT"), &pp->prog, err)); /* TEMP */
     struct { cl_kernel *k; const char *name; } ks[] = {
         {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->element_keys, "clvr_pp_element_keys"},
         {&pp->scan_reduce, "clvr_pp_scan_reduce"},   {&pp->scan_sums, "clvr_pp_scan_sums"},

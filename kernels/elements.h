@@ -242,6 +242,20 @@ CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float p
 CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz)
 {
     const clvr_u32 nv = clvr_cell_vertex_count(type);
+#ifdef __OPENCL_VERSION__
+    /* The same test on float3 lanes: a third of the instructions (point
+     * location runs it on every candidate element). */
+    float3 lo = vtx[0].xyz, hi = lo;
+    for (clvr_u32 i = 1; i < nv; ++i) {
+        lo = fmin(lo, vtx[i].xyz);
+        hi = fmax(hi, vtx[i].xyz);
+    }
+    const float3 d = hi - lo, a = fmax(fabs(lo), fabs(hi));
+    const float pad4 = CLVR_BVH_BOX_PAD_REL * fmax(fmax(d.x, d.y), d.z) + 4.0f * 1.1920929e-7f * fmax(fmax(a.x, a.y), a.z);
+    const float3 p3 = (float3)(px, py, pz);
+    const int3 in = (p3 >= lo - pad4) & (p3 <= hi + pad4);
+    return in.x & in.y & in.z & 1;
+#endif
     float lx = vtx[0].x, ly = vtx[0].y, lz = vtx[0].z, hx = lx, hy = ly, hz = lz;
     for (clvr_u32 i = 1; i < nv; ++i) {
         lx = fmin(lx, vtx[i].x); ly = fmin(ly, vtx[i].y); lz = fmin(lz, vtx[i].z);

@@ -28,8 +28,30 @@ CLVR_INLINE void clvr_load_element(const clvr_instance *inst, clvr_u32 e, CLVR_G
     }
 }
 
+/* Loads tet e's 4 vertices (one 8-byte index load on the device for
+ * 16-bit instances). */
+CLVR_INLINE void clvr_load_tet(const clvr_instance *inst, clvr_u32 e, CLVR_GLOBAL const clvr_vec4 *vertices,
+                               CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32, clvr_vec4 *v)
+{
+    const clvr_u64 base = inst->first_index + (clvr_u64)(e - inst->first_element) * 4u;
+    CLVR_GLOBAL const clvr_vec4 *vb = vertices + inst->first_vertex;
+    if (inst->index_bits == 16u) {
+#ifdef __OPENCL_VERSION__
+        const ushort4 k = vload4(0, idx16 + base);
+        v[0] = vb[k.x]; v[1] = vb[k.y]; v[2] = vb[k.z]; v[3] = vb[k.w];
+#else
+        for (int k = 0; k < 4; ++k) v[k] = vb[idx16[base + k]];
+#endif
+    } else {
+        for (int k = 0; k < 4; ++k) v[k] = vb[idx32[base + k]];
+    }
+}
+
 /* Tests the elements of leaf cluster `leaf` of instance inst; returns 1 and
- * the scalar and element id of the first one that contains p. */
+ * the scalar and element id of the first one that contains p. Each
+ * candidate is first rejected by its vertex box (most of a leaf's elements
+ * are not near p, and the box test is cheaper than a solve); tets then take
+ * the early-out barycentric test, other types Newton. */
 CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, float px, float py, float pz,
                                     CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
                                     CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, float *scalar,
@@ -39,6 +61,17 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
     const clvr_u32 end_inst = inst->first_element + inst->num_elements;
     const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
     clvr_vec4 v[8];
+    if (inst->type == CLVR_CELL_TET) {
+        for (clvr_u32 e = first; e < end; ++e) {
+            clvr_load_tet(inst, e, vertices, idx16, idx32, v);
+            if (!clvr_element_box_test(CLVR_CELL_TET, v, px, py, pz)) continue;
+            if (clvr_tet_sample(v, px, py, pz, scalar)) {
+                *element_id = e;
+                return 1;
+            }
+        }
+        return 0;
+    }
     for (clvr_u32 e = first; e < end; ++e) {
         clvr_load_element(inst, e, vertices, idx16, idx32, v);
         if (!clvr_element_box_test(inst->type, v, px, py, pz)) continue;
@@ -48,6 +81,35 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
         }
     }
     return 0;
+}
+
+/* Walks instance inst's bottom-level tree: every leaf cluster whose box
+ * holds p is searched as soon as its parent's box test finds it (no stack
+ * round trip for primitives); inner children go on a private stack. */
+CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, float py, float pz,
+                                        CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_vec4 *vertices,
+                                        CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
+                                        clvr_u32 leaf_size, float *scalar, clvr_u32 *element_id)
+{
+    clvr_u32 stack[CLVR_BVH_STACK_SIZE];
+    clvr_u32 sp = 0, ref = inst->bvh_root;
+    for (;;) {
+        CLVR_GLOBAL const clvr_bvh_node *n = blas + ref;
+        const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
+        for (clvr_u32 c = 0; c < 4; ++c) {
+            if (!((mask >> c) & 1u)) continue;
+            const clvr_u32 ch = n->child[c];
+            if (ch & CLVR_BVH_LEAF_BIT) {
+                if (clvr_locate_in_leaf(inst, ch & CLVR_BVH_MAX_PRIMS, px, py, pz, vertices, idx16, idx32, leaf_size,
+                                        scalar, element_id))
+                    return 1;
+            } else if (sp < CLVR_BVH_STACK_SIZE) {
+                stack[sp++] = ch;
+            }
+        }
+        if (sp == 0) return 0;
+        ref = stack[--sp];
+    }
 }
 
 /* Point location: returns 1 when an element contains (px, py, pz) and writes
@@ -62,20 +124,26 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
                             clvr_u32 *element_id)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
-    clvr_bvh_point_iter top;
-    clvr_bvh_point_begin(&top, tlas_root, px, py, pz);
-    clvr_u32 ci;
-    while (clvr_bvh_point_next(&top, tlas, &ci)) {
-        const clvr_instance inst = instances[ci];
-        clvr_bvh_point_iter bot;
-        clvr_bvh_point_begin(&bot, inst.bvh_root, px, py, pz);
-        clvr_u32 leaf;
-        while (clvr_bvh_point_next(&bot, blas, &leaf)) {
-            if (clvr_locate_in_leaf(&inst, leaf, px, py, pz, vertices, idx16, idx32, leaf_size, scalar, element_id))
-                return 1;
+    clvr_u32 stack[CLVR_BVH_STACK_SIZE];
+    clvr_u32 sp = 0, ref = tlas_root;
+    for (;;) {
+        CLVR_GLOBAL const clvr_bvh_node *n = tlas + ref;
+        const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
+        for (clvr_u32 c = 0; c < 4; ++c) {
+            if (!((mask >> c) & 1u)) continue;
+            const clvr_u32 ch = n->child[c];
+            if (ch & CLVR_BVH_LEAF_BIT) {
+                const clvr_instance inst = instances[ch & CLVR_BVH_MAX_PRIMS];
+                if (clvr_locate_in_instance(&inst, px, py, pz, blas, vertices, idx16, idx32, leaf_size, scalar,
+                                            element_id))
+                    return 1;
+            } else if (sp < CLVR_BVH_STACK_SIZE) {
+                stack[sp++] = ch;
+            }
         }
+        if (sp == 0) return 0;
+        ref = stack[--sp];
     }
-    return 0;
 }
 
 /* The renderer's entry point: clvr_locate without the element id. */

@@ -1,0 +1,714 @@
+/* bench_render.c: render throughput in the shape of the paper's Table 5
+ * (fps and million rays per second at 1 sample per pixel, primary plus
+ * shadow rays) for every integrator: alpha-composited ray marching (no
+ * shadows, as in the paper), delta tracking with one global majorant, and
+ * the adaptive methods (majorant bins along the ray; macrocell grid with
+ * 3D-DDA at two grid sizes); plus samples (point locations) and null
+ * collisions per ray. The pipeline is clvr's own (load, Quick Clusters
+ * preprocessing, two-level BVH, renderer), with clvr's default transfer
+ * function over the mesh's scalar range and its automatic camera framing.
+ *
+ * Timing: W warm-up frames, then N frames, each timed by the render
+ * kernel's OpenCL event (the renderer's counters: last_frame_s); the table
+ * gives the median. Rays, samples and null collisions are the counters'
+ * totals over the N timed frames divided by N. The 1-minute load average is
+ * recorded with every row because the machine may be shared.
+ *
+ * --converge measures time to equal quality instead (bench/render-vs-vtk.sh):
+ * a reference with many samples per pixel, then a fresh progressive run with
+ * another seed whose RMSE against the reference is checked at growing spp
+ * (see the comment at converge_one for the definitions).
+ *
+ *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
+ *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--quick]
+ *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
+ *                [--max-spp M] [--json FILE]
+ *
+ * Without --mesh: the built-in default scene and tests/data/vtk/notch_stress.vtk. */
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "accel.h"
+#include "camera.h"
+#include "cl_context.h"
+#include "mesh_io.h"
+#include "preprocess.h"
+#include "render.h"
+#include "scene.h"
+#include "tf.h"
+
+#define MAX_MESHES 16
+#define MAX_CONFIGS 8
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* 1-minute load average, -1 when unknown. */
+static double load1(void)
+{
+    double l = -1.0;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f) {
+        if (fscanf(f, "%lf", &l) != 1) l = -1.0;
+        fclose(f);
+    }
+    return l;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, uint32_t n)
+{
+    qsort(v, n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static const char *method_name(uint32_t m)
+{
+    static const char *names[] = {"march", "track", "bins", "dda"};
+    return m < 4 ? names[m] : "?";
+}
+
+static int parse_method(const char *s, uint32_t *m)
+{
+    for (uint32_t i = 0; i < 4; ++i)
+        if (!strcmp(s, method_name(i))) { *m = i; return 1; }
+    return 0;
+}
+
+typedef struct config {
+    uint32_t method, macrocells;
+    int shadows;
+    char label[32];
+} config;
+
+typedef struct row {
+    const char *mesh;
+    uint64_t elements;
+    double preprocess_s;
+    config c;
+    uint32_t frames;
+    double frame_s, frame_min_s, frame_max_s, wall_frame_s; /* median device time, its spread, median wall time */
+    double rays_per_frame, samples_per_ray, nulls_per_ray;
+    double fps, mrays_s, image_mean;
+    double load_before, load_after;
+} row;
+
+/* A mesh on the device, ready to render: owns everything it holds. */
+typedef struct scene_gpu {
+    clvr_clustered clustered;
+    clvr_accel accel;
+    clvr_tf tf;
+    float *table;
+    uint32_t table_n;
+    float lo[3], hi[3];
+    uint64_t elements;
+    double preprocess_s;
+} scene_gpu;
+
+static void scene_release(clvr_cl *cl, scene_gpu *g)
+{
+    clvr_accel_release(cl, &g->accel);
+    clvr_clustered_release(cl, &g->clustered);
+    clvr_tf_free(&g->tf);
+    free(g->table);
+    memset(g, 0, sizeof *g);
+}
+
+/* Loads path ("default": the built-in scene), preprocesses and builds the
+ * trees, and bakes clvr's default transfer function over the data range. */
+static clvr_status scene_load(clvr_cl *cl, const char *path, scene_gpu *g, clvr_error *err)
+{
+    clvr_status s;
+    clvr_mesh m = {0};
+    memset(g, 0, sizeof *g);
+    if (!strcmp(path, "default")) s = clvr_scene_default(&m, err);
+    else {
+        clvr_load_options lo = {0};
+        s = clvr_mesh_load(path, &lo, &m, err);
+    }
+    if (s != CLVR_OK) return s;
+    g->elements = clvr_mesh_num_elements(&m);
+    memcpy(g->lo, m.bounds_lo, sizeof g->lo);
+    memcpy(g->hi, m.bounds_hi, sizeof g->hi);
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    double t0 = now_s();
+    s = clvr_preprocess(cl, &m, &po, &g->clustered, err);
+    if (s == CLVR_OK) s = clvr_accel_build(cl, &g->clustered, &g->accel, err);
+    g->preprocess_s = now_s() - t0;
+    if (s == CLVR_OK)
+        s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, 1.0f, m.scalar_min, m.scalar_max, err);
+    if (s == CLVR_OK) {
+        clvr_tf_set_extent(&g->tf, m.bounds_lo, m.bounds_hi);
+        g->table_n = clvr_tf_table_size(&g->tf);
+        g->table = malloc((size_t)g->table_n * 4 * sizeof(float));
+        if (!g->table) s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory for the tf table");
+        else clvr_tf_bake(&g->tf, g->table, g->table_n);
+    }
+    clvr_mesh_free(&m);
+    if (s != CLVR_OK) scene_release(cl, g);
+    return s;
+}
+
+/* A renderer over g with clvr's defaults, method/shadows/size from c. */
+static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint32_t w, uint32_t h, uint64_t seed,
+                                clvr_renderer **out, clvr_camera *cam_out, clvr_error *err)
+{
+    clvr_render_settings rs;
+    clvr_render_settings_default(&rs);
+    rs.method = c->method;
+    rs.width = w;
+    rs.height = h;
+    rs.seed = seed;
+    rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
+    if (c->macrocells) rs.macrocells = c->macrocells;
+    clvr_camera cam;
+    clvr_status s = clvr_camera_frame_box(&cam, g->lo, g->hi, 40.0f, w, h, err);
+    if (s != CLVR_OK) return s;
+    if (cam_out) *cam_out = cam;
+    s = clvr_renderer_create(cl, &g->clustered, &g->accel, &rs, out, err);
+    if (s == CLVR_OK) s = clvr_renderer_set_camera(*out, &cam, err);
+    if (s == CLVR_OK) s = clvr_renderer_set_tf(*out, g->table, g->table_n, g->tf.range_lo, g->tf.range_hi,
+                                               g->tf.density, err);
+    if (s != CLVR_OK) {
+        clvr_renderer_destroy(*out);
+        *out = NULL;
+    }
+    return s;
+}
+
+/* Mean of the finite rgb values; NaN when any value is not finite. */
+static double image_mean(const float *rgba, size_t npix)
+{
+    double sum = 0.0;
+    for (size_t i = 0; i < npix; ++i)
+        for (int k = 0; k < 3; ++k) {
+            float v = rgba[4 * i + k];
+            if (!isfinite(v)) return NAN;
+            sum += v;
+        }
+    return npix ? sum / (3.0 * (double)npix) : NAN;
+}
+
+static clvr_status bench_one(clvr_cl *cl, scene_gpu *g, const config *c, uint32_t w, uint32_t h, uint32_t warmup,
+                             uint32_t frames, double budget_s, row *r, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_renderer *rd = NULL;
+    double *dev = calloc(frames, sizeof *dev), *wall = calloc(frames, sizeof *wall);
+    float *img = malloc((size_t)w * h * 4 * sizeof(float));
+    clvr_render_counters c0, c1;
+    if (!dev || !wall || !img) {
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
+        goto done;
+    }
+    r->c = *c;
+    r->load_before = load1();
+    s = renderer_for(cl, g, c, w, h, 1, &rd, NULL, err);
+    /* Calibration: the first warm-up frame's time caps the timed frames at
+     * about budget_s (at least one), so that marching a 10M-element mesh at
+     * 1024^2 finishes; the row reports how many frames it took. */
+    for (uint32_t i = 0; s == CLVR_OK && i < (warmup ? warmup : 1); ++i) {
+        s = clvr_renderer_frame(rd, err);
+        if (s != CLVR_OK || i) continue;
+        clvr_render_counters cw;
+        s = clvr_renderer_read(rd, NULL, &cw, err);
+        if (s == CLVR_OK && cw.last_frame_s > 0 && budget_s > 0) {
+            double fit = budget_s / cw.last_frame_s;
+            if (fit < frames) frames = fit < 1 ? 1 : (uint32_t)fit;
+            if (cw.last_frame_s > budget_s / 4) break; /* one warm-up frame is enough for slow configurations */
+        }
+    }
+    if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &c0, err);
+    for (uint32_t i = 0; s == CLVR_OK && i < frames; ++i) {
+        double t0 = now_s();
+        s = clvr_renderer_frame(rd, err);
+        wall[i] = now_s() - t0;
+        clvr_render_counters ci;
+        if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &ci, err);
+        dev[i] = ci.last_frame_s;
+    }
+    if (s == CLVR_OK) s = clvr_renderer_read(rd, img, &c1, err);
+    if (s != CLVR_OK) goto done;
+    r->frames = frames;
+    r->load_after = load1();
+    const double rays = (double)(c1.rays - c0.rays), samples = (double)(c1.samples - c0.samples),
+                 nulls = (double)(c1.null_collisions - c0.null_collisions);
+    r->rays_per_frame = rays / frames;
+    r->samples_per_ray = rays > 0 ? samples / rays : 0.0;
+    r->nulls_per_ray = rays > 0 ? nulls / rays : 0.0;
+    r->wall_frame_s = median(wall, frames);
+    r->frame_s = median(dev, frames);
+    r->frame_min_s = dev[0];
+    r->frame_max_s = dev[frames - 1];
+    r->fps = r->frame_s > 0 ? 1.0 / r->frame_s : 0.0;
+    r->mrays_s = r->frame_s > 0 ? r->rays_per_frame / r->frame_s / 1e6 : 0.0;
+    r->image_mean = image_mean(img, (size_t)w * h);
+done:
+    clvr_renderer_destroy(rd);
+    free(dev);
+    free(wall);
+    free(img);
+    return s;
+}
+
+static const char *base_name(const char *p)
+{
+    const char *b = strrchr(p, '/');
+    return b ? b + 1 : p;
+}
+
+/* ---------------------------------------------------------------- converge
+ * Time to equal quality. The reference is R spp with seed 0x5eed; the
+ * measured run uses seed 1, so the two are independent. Definitions, over
+ * the linear rgb of every pixel (background included), values clamped to
+ * [0, 1] as an 8-bit image would be:
+ *   mse_raw(n)  = mean over pixels and channels of (img_n - ref)^2
+ *   ref_var     = mean of the reference's own variance of the mean,
+ *                 (sumsq/R - mean^2) / (R - 1) per pixel and channel,
+ *                 from its per-frame moments (unclamped)
+ *   rmse(n)     = sqrt(max(0, mse_raw(n) - ref_var)): the error against the
+ *                 converged image, with the reference's own noise removed
+ *   rmse_rel(n) = rmse(n) / mean(ref rgb)
+ * The primary criterion is rmse <= target (RMSE of rgb in [0, 1] units);
+ * rmse_rel is reported beside it. Checkpoints at n = 1, 2, 3, 4, 6, 8, 12,
+ * ...; the time is the summed device time of the n frames (and wall time).
+ * A 1/n fit (mse * n is constant for an unbiased estimator) gives the
+ * interpolated spp and time to the target as well. */
+typedef struct conv_point {
+    uint32_t spp;
+    double dev_s, wall_s, rmse_raw, rmse, rmse_rel;
+} conv_point;
+
+#define MAX_POINTS 64
+
+typedef struct conv_result {
+    int shadows;
+    double ref_s, ref_mean, ref_rmse_of_ref; /* reference device time, mean rgb, its own noise (rmse) */
+    double frame_s;                          /* median device time of one frame */
+    uint32_t npoints;
+    conv_point pts[MAX_POINTS];
+    int reached, reached_rel;
+    conv_point at, at_rel;          /* first checkpoint at or below the target */
+    double fit_spp, fit_s;          /* 1/n fit, absolute criterion */
+    double fit_spp_rel, fit_s_rel;  /* 1/n fit, relative criterion */
+    double load_before, load_after;
+} conv_result;
+
+static float clamp01(float v) { return v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v; }
+
+static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int shadows, uint32_t w, uint32_t h,
+                                uint32_t ref_spp, uint32_t max_spp, double target, conv_result *out,
+                                clvr_camera *cam, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_renderer *rd = NULL;
+    const size_t npix = (size_t)w * h, nf = npix * 4;
+    float *sum = malloc(nf * sizeof(float)), *sq = malloc(nf * sizeof(float)), *ref = malloc(nf * sizeof(float)),
+          *img = malloc(nf * sizeof(float));
+    double *ft = calloc(max_spp, sizeof *ft);
+    config c = {method, 0, shadows, ""};
+    memset(out, 0, sizeof *out);
+    out->shadows = shadows;
+    out->load_before = load1();
+    if (!sum || !sq || !ref || !img || !ft) {
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
+        goto done;
+    }
+    /* Reference. */
+    s = renderer_for(cl, g, &c, w, h, 0x5eed, &rd, cam, err);
+    for (uint32_t i = 0; s == CLVR_OK && i < ref_spp; ++i) s = clvr_renderer_frame(rd, err);
+    clvr_render_counters rc;
+    if (s == CLVR_OK) s = clvr_renderer_read(rd, ref, &rc, err);
+    if (s == CLVR_OK) s = clvr_renderer_read_moments(rd, sum, sq, err);
+    if (s != CLVR_OK) goto done;
+    out->ref_s = rc.kernel_s;
+    double var = 0.0, mean = 0.0;
+    for (size_t p = 0; p < npix; ++p)
+        for (int k = 0; k < 3; ++k) {
+            const size_t i = 4 * p + (size_t)k;
+            double mu = sum[i] / ref_spp, v = (sq[i] / ref_spp - mu * mu) / (ref_spp > 1 ? ref_spp - 1 : 1);
+            var += v > 0 ? v : 0;
+            mean += ref[i];
+        }
+    var /= 3.0 * (double)npix;
+    mean /= 3.0 * (double)npix;
+    out->ref_mean = mean;
+    out->ref_rmse_of_ref = sqrt(var);
+    clvr_renderer_destroy(rd);
+    rd = NULL;
+
+    /* Progressive run with another seed. */
+    s = renderer_for(cl, g, &c, w, h, 1, &rd, NULL, err);
+    double wall = 0.0, fit_acc = 0.0, fit_acc_rel = 0.0;
+    uint32_t fit_n = 0, next = 1;
+    for (uint32_t n = 1; s == CLVR_OK && n <= max_spp; ++n) {
+        double t0 = now_s();
+        s = clvr_renderer_frame(rd, err);
+        wall += now_s() - t0;
+        if (s != CLVR_OK || n != next) continue;
+        /* checkpoints 1, 2, 3, 4, 6, 8, 12, 16, ...: powers of two and 1.5 times them */
+        next = (n & (n - 1)) == 0 ? (n < 2 ? 2 : n + n / 2) : (n / 3) * 4;
+        if (next > max_spp && n < max_spp) next = max_spp;
+        s = clvr_renderer_read(rd, img, &rc, err);
+        if (s != CLVR_OK) break;
+        double mse = 0.0;
+        for (size_t p = 0; p < npix; ++p)
+            for (int k = 0; k < 3; ++k) {
+                const size_t i = 4 * p + (size_t)k;
+                double d = (double)clamp01(img[i]) - (double)clamp01(ref[i]);
+                mse += d * d;
+            }
+        mse /= 3.0 * (double)npix;
+        conv_point pt = {n, rc.kernel_s, wall, sqrt(mse), sqrt(mse > var ? mse - var : 0.0), 0.0};
+        pt.rmse_rel = mean > 0 ? pt.rmse / mean : 0.0;
+        if (out->npoints < MAX_POINTS) out->pts[out->npoints++] = pt;
+        /* Fit mse * n over checkpoints with n >= 4 (fewer frames are dominated by
+         * the first frames' correlation with nothing; all terms are unbiased). */
+        if (n >= 4) {
+            fit_acc += (pt.rmse * pt.rmse) * n;
+            fit_acc_rel += (pt.rmse_rel * pt.rmse_rel) * n;
+            ++fit_n;
+        }
+        if (!out->reached && pt.rmse <= target) { out->reached = 1; out->at = pt; }
+        if (!out->reached_rel && pt.rmse_rel <= target) { out->reached_rel = 1; out->at_rel = pt; }
+        if (out->reached && out->reached_rel && n >= 16) break;
+    }
+    if (s != CLVR_OK) goto done;
+    {
+        clvr_render_counters last;
+        s = clvr_renderer_read(rd, NULL, &last, err);
+        if (s != CLVR_OK) goto done;
+        out->frame_s = last.frames ? last.kernel_s / (double)last.frames : 0.0;
+    }
+    if (fit_n) {
+        out->fit_spp = fit_acc / fit_n / (target * target);
+        out->fit_s = out->fit_spp * out->frame_s;
+        out->fit_spp_rel = fit_acc_rel / fit_n / (target * target);
+        out->fit_s_rel = out->fit_spp_rel * out->frame_s;
+    }
+    out->load_after = load1();
+done:
+    clvr_renderer_destroy(rd);
+    free(sum);
+    free(sq);
+    free(ref);
+    free(img);
+    free(ft);
+    return s;
+}
+
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; ++s) {
+        if (*s == '"' || *s == '\\') fputc('\\', f);
+        if ((unsigned char)*s >= 0x20) fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
+static void json_point(FILE *f, const conv_point *p)
+{
+    fprintf(f, "{\"spp\": %u, \"device_s\": %.6g, \"wall_s\": %.6g, \"rmse_raw\": %.6g, \"rmse\": %.6g, \"rmse_rel\": %.6g}",
+            p->spp, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
+}
+
+static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t w, uint32_t h, uint32_t ref_spp,
+                        uint32_t max_spp, double target, const char *json)
+{
+    clvr_error err = {0};
+    scene_gpu g;
+    conv_result res[2];
+    clvr_camera cam;
+    printf("# bench_render --converge: %s, %s, %ux%u, reference %u spp, target RMSE %.3g\n", base_name(mesh),
+           method_name(method), w, h, ref_spp, target);
+    printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
+           cl->driver_version);
+    fflush(stdout);
+    if (scene_load(cl, mesh, &g, &err) != CLVR_OK) {
+        fprintf(stderr, "bench_render: %s\n", err.msg);
+        return 1;
+    }
+    for (int sh = 0; sh < 2; ++sh) {
+        if (converge_one(cl, &g, method, sh, w, h, ref_spp, max_spp, target, &res[sh], &cam, &err) != CLVR_OK) {
+            fprintf(stderr, "bench_render: %s\n", err.msg);
+            scene_release(cl, &g);
+            return 1;
+        }
+        fprintf(stderr, "bench_render: converge shadows=%d done (reference %.1f s device)\n", sh, res[sh].ref_s);
+    }
+    printf("| shadows | elements | frame ms | ref mean rgb | ref own RMSE | spp to %.0f%% | s to %.0f%% (device) | "
+           "s (wall) | fit spp | fit s | spp to %.0f%% rel | s to %.0f%% rel | load |\n",
+           target * 100, target * 100, target * 100, target * 100);
+    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int sh = 0; sh < 2; ++sh) {
+        const conv_result *r = &res[sh];
+        printf("| %s | %" PRIu64 " | %.1f | %.4f | %.4f | %s%u | %.3f | %.3f | %.1f | %.3f | %s%u | %.3f | %.2f |\n",
+               sh ? "on" : "off", g.elements, r->frame_s * 1e3, r->ref_mean, r->ref_rmse_of_ref,
+               r->reached ? "" : ">", r->reached ? r->at.spp : max_spp, r->reached ? r->at.dev_s : NAN,
+               r->reached ? r->at.wall_s : NAN, r->fit_spp, r->fit_s, r->reached_rel ? "" : ">",
+               r->reached_rel ? r->at_rel.spp : max_spp, r->reached_rel ? r->at_rel.dev_s : NAN, r->load_after);
+    }
+    printf("\nRMSE: linear rgb clamped to [0,1], all pixels, reference noise subtracted; rel = RMSE / mean rgb of the reference.\n");
+    if (json) {
+        FILE *f = fopen(json, "w");
+        if (!f) {
+            fprintf(stderr, "bench_render: cannot write %s\n", json);
+            scene_release(cl, &g);
+            return 1;
+        }
+        fprintf(f, "{\"bench\": \"render_converge\", \"device\": ");
+        json_str(f, cl->device_name);
+        fprintf(f, ", \"driver\": ");
+        json_str(f, cl->driver_version);
+        fprintf(f, ", \"mesh\": ");
+        json_str(f, mesh);
+        fprintf(f, ", \"elements\": %" PRIu64 ", \"method\": \"%s\", \"width\": %u, \"height\": %u, \"ref_spp\": %u, "
+                   "\"target\": %g, \"preprocess_s\": %.6g,\n",
+                g.elements, method_name(method), w, h, ref_spp, target, g.preprocess_s);
+        fprintf(f, " \"camera\": {\"eye\": [%.9g, %.9g, %.9g], \"target\": [%.9g, %.9g, %.9g], \"up\": [%.9g, %.9g, %.9g], "
+                   "\"fovy\": %.9g},\n",
+                cam.origin[0], cam.origin[1], cam.origin[2], cam.target[0], cam.target[1], cam.target[2], cam.up[0],
+                cam.up[1], cam.up[2], cam.fovy);
+        fprintf(f, " \"tf\": {\"range\": [%.9g, %.9g], \"density\": %.9g, \"table\": [", g.tf.range_lo, g.tf.range_hi,
+                g.tf.density);
+        for (uint32_t i = 0; i < g.table_n; ++i)
+            fprintf(f, "%s[%.6g, %.6g, %.6g, %.6g]", i ? ", " : "", g.table[4 * i], g.table[4 * i + 1],
+                    g.table[4 * i + 2], g.table[4 * i + 3] * g.tf.density);
+        fprintf(f, "]},\n \"rows\": [");
+        for (int sh = 0; sh < 2; ++sh) {
+            const conv_result *r = &res[sh];
+            fprintf(f, "%s\n  {\"shadows\": %d, \"frame_s\": %.6g, \"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
+                       "\"ref_own_rmse\": %.6g, \"reached\": %d, \"reached_rel\": %d, \"fit_spp\": %.6g, \"fit_s\": %.6g, "
+                       "\"fit_spp_rel\": %.6g, \"fit_s_rel\": %.6g, \"load_before\": %.2f, \"load_after\": %.2f, \"at\": ",
+                    sh ? "," : "", sh, r->frame_s, r->ref_s, r->ref_mean, r->ref_rmse_of_ref, r->reached,
+                    r->reached_rel, r->fit_spp, r->fit_s, r->fit_spp_rel, r->fit_s_rel, r->load_before, r->load_after);
+            json_point(f, &r->at);
+            fprintf(f, ", \"at_rel\": ");
+            json_point(f, &r->at_rel);
+            fprintf(f, ", \"points\": [");
+            for (uint32_t i = 0; i < r->npoints; ++i) {
+                if (i) fprintf(f, ", ");
+                json_point(f, &r->pts[i]);
+            }
+            fprintf(f, "]}");
+        }
+        fprintf(f, "\n]}\n");
+        fclose(f);
+    }
+    scene_release(cl, &g);
+    return 0;
+}
+
+/* ---------------------------------------------------------------- main */
+
+static int usage(void)
+{
+    fprintf(stderr,
+            "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
+            "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--quick]\n"
+            "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
+            "                    [--max-spp M] [--json FILE]\n");
+    return 2;
+}
+
+int main(int argc, char **argv)
+{
+    const char *device = NULL, *json = NULL, *meshes[MAX_MESHES];
+    const char *methods = "march,track,bins,dda", *macro = "32,128";
+    uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024;
+    uint32_t conv_method = CLVR_RENDER_DDA;
+    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0;
+    double target = 0.02, budget = 30.0;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--device") && v) device = argv[++i];
+        else if (!strcmp(a, "--json") && v) json = argv[++i];
+        else if (!strcmp(a, "--mesh") && v) {
+            if (nmesh == MAX_MESHES) return usage();
+            meshes[nmesh++] = argv[++i];
+        } else if (!strcmp(a, "--size") && v) {
+            if (sscanf(argv[++i], "%ux%u", &w, &h) != 2 || !w || !h || w > 16384 || h > 16384) return usage();
+            size_set = 1;
+        } else if (!strcmp(a, "--frames") && v) {
+            frames = (uint32_t)atoi(argv[++i]);
+            frames_set = 1;
+        } else if (!strcmp(a, "--warmup") && v) warmup = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--methods") && v) methods = argv[++i];
+        else if (!strcmp(a, "--macrocells") && v) macro = argv[++i];
+        else if (!strcmp(a, "--budget") && v) budget = atof(argv[++i]);
+        else if (!strcmp(a, "--no-shadows")) shadows = 0;
+        else if (!strcmp(a, "--quick")) quick = 1;
+        else if (!strcmp(a, "--converge")) converge = 1;
+        else if (!strcmp(a, "--method") && v) {
+            if (!parse_method(argv[++i], &conv_method)) return usage();
+        } else if (!strcmp(a, "--ref-spp") && v) ref_spp = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--max-spp") && v) max_spp = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--target") && v) target = atof(argv[++i]);
+        else return usage();
+    }
+    if (quick) {
+        if (!size_set) w = h = 256;
+        if (!frames_set) frames = 3;
+        warmup = 1;
+    }
+    if (frames < 1 || ref_spp < 2 || max_spp < 1 || !(target > 0)) return usage();
+    static char notch[1024];
+    if (!nmesh) {
+        snprintf(notch, sizeof notch, "%s/tests/data/vtk/notch_stress.vtk", CLVR_SOURCE_DIR);
+        meshes[nmesh++] = "default";
+        meshes[nmesh++] = notch;
+    }
+
+    /* configurations: each method; dda once per grid size */
+    config cfg[MAX_CONFIGS];
+    uint32_t ncfg = 0;
+    {
+        char buf[256];
+        snprintf(buf, sizeof buf, "%s", methods);
+        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+            uint32_t m;
+            if (!parse_method(tok, &m)) return usage();
+            if (m == CLVR_RENDER_DDA) {
+                char mb[128];
+                snprintf(mb, sizeof mb, "%s", macro);
+                for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
+                     t = strtok_r(NULL, ",", &save)) {
+                    config c = {m, (uint32_t)atoi(t), shadows, ""};
+                    if (c.macrocells < 1 || c.macrocells > 1024) return usage();
+                    snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
+                    cfg[ncfg++] = c;
+                }
+            } else if (ncfg < MAX_CONFIGS) {
+                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, ""};
+                snprintf(c.label, sizeof c.label, "%s", method_name(m));
+                cfg[ncfg++] = c;
+            }
+        }
+    }
+
+    clvr_cl cl;
+    clvr_error err = {0};
+    if (clvr_cl_create(device, &cl, &err) != CLVR_OK) {
+        fprintf(stderr, "bench_render: %s\n", err.msg);
+        return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
+    }
+    if (converge) {
+        int rc = run_converge(&cl, meshes[0], conv_method, size_set ? w : 512, size_set ? h : 512, ref_spp, max_spp,
+                              target, json);
+        clvr_cl_destroy(&cl);
+        return rc;
+    }
+
+    printf("# bench_render: %ux%u, 1 spp per frame, %u warm-up + median of %u frames, shadows %s%s\n", w, h, warmup,
+           frames, shadows ? "on (march: off)" : "off", quick ? " (quick)" : "");
+    printf("# device: %s | %s | %s | driver %s | %u compute units\n\n", cl.device_name, cl.platform_name,
+           cl.device_version, cl.driver_version, cl.compute_units);
+    printf("| mesh | elements | method | shadows | fps | Mrays/s | ms/frame (min-max) | frames | rays/frame | samples/ray | "
+           "null collisions/ray | load |\n");
+    printf("|---|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    fflush(stdout);
+
+    row *rows = calloc((size_t)nmesh * ncfg, sizeof *rows);
+    uint32_t nrows = 0;
+    int rc = 0;
+    for (uint32_t mi = 0; mi < nmesh && !rc; ++mi) {
+        scene_gpu g;
+        fprintf(stderr, "bench_render: loading %s\n", meshes[mi]);
+        if (scene_load(&cl, meshes[mi], &g, &err) != CLVR_OK) {
+            fprintf(stderr, "bench_render: %s\n", err.msg);
+            rc = 1;
+            break;
+        }
+        fprintf(stderr, "bench_render: %s: %" PRIu64 " elements, preprocessing %.2f s\n", meshes[mi], g.elements,
+                g.preprocess_s);
+        const uint32_t first = nrows;
+        for (uint32_t ci = 0; ci < ncfg; ++ci) {
+            row *r = &rows[nrows];
+            r->mesh = strcmp(meshes[mi], "default") ? base_name(meshes[mi]) : "default scene";
+            r->elements = g.elements;
+            r->preprocess_s = g.preprocess_s;
+            if (bench_one(&cl, &g, &cfg[ci], w, h, warmup, frames, budget, r, &err) != CLVR_OK) {
+                fprintf(stderr, "bench_render: %s, %s: %s\n", meshes[mi], cfg[ci].label, err.msg);
+                rc = 1;
+                break;
+            }
+            /* The smoke contract: finite, positive numbers (not timings). */
+            if (!(r->fps > 0) || !isfinite(r->fps) || !(r->mrays_s > 0) || !isfinite(r->mrays_s) ||
+                !(r->rays_per_frame >= (double)w * h * 0.5) || !isfinite(r->image_mean) || !(r->image_mean > 0) ||
+                !(r->samples_per_ray >= 0) || !isfinite(r->samples_per_ray)) {
+                fprintf(stderr,
+                        "bench_render: %s, %s: implausible result: fps %g, Mrays/s %g, rays/frame %g (pixels %u), "
+                        "image mean %g, samples/ray %g\n",
+                        r->mesh, cfg[ci].label, r->fps, r->mrays_s, r->rays_per_frame, w * h, r->image_mean,
+                        r->samples_per_ray);
+                rc = 1;
+            }
+            printf("| %s | %" PRIu64 " | %s | %s | %.3g | %.3g | %.1f (%.1f-%.1f) | %u | %.0f | %.2f | %.2f | %.2f |\n",
+                   r->mesh, r->elements, r->c.label, r->c.shadows ? "on" : "off", r->fps, r->mrays_s, r->frame_s * 1e3,
+                   r->frame_min_s * 1e3, r->frame_max_s * 1e3, r->frames, r->rays_per_frame, r->samples_per_ray,
+                   r->nulls_per_ray, r->load_after);
+            fflush(stdout);
+            ++nrows;
+        }
+        /* dda vs track on this mesh, the adaptive sampling's gain */
+        const row *tr = NULL, *best = NULL;
+        for (uint32_t i = first; i < nrows; ++i) {
+            if (rows[i].c.method == CLVR_RENDER_TRACK) tr = &rows[i];
+            if (rows[i].c.method == CLVR_RENDER_DDA && (!best || rows[i].fps > best->fps)) best = &rows[i];
+        }
+        if (tr && best)
+            printf("| %s | | %s / track | | **%.2fx** | | | | | | | |\n", tr->mesh, best->c.label, best->fps / tr->fps);
+        scene_release(&cl, &g);
+    }
+
+    if (json && nrows) {
+        FILE *f = fopen(json, "w");
+        if (!f) {
+            fprintf(stderr, "bench_render: cannot write %s\n", json);
+            rc = 1;
+        } else {
+            fprintf(f, "{\"bench\": \"render\", \"device\": ");
+            json_str(f, cl.device_name);
+            fprintf(f, ", \"platform\": ");
+            json_str(f, cl.platform_name);
+            fprintf(f, ", \"driver\": ");
+            json_str(f, cl.driver_version);
+            fprintf(f, ", \"width\": %u, \"height\": %u, \"warmup\": %u, \"frames\": %u, \"budget_s\": %g, \"quick\": %d, \"rows\": [",
+                    w, h, warmup, frames, budget, quick);
+            for (uint32_t i = 0; i < nrows; ++i) {
+                const row *r = &rows[i];
+                fprintf(f, "%s\n  {\"mesh\": ", i ? "," : "");
+                json_str(f, r->mesh);
+                fprintf(f, ", \"elements\": %" PRIu64 ", \"preprocess_s\": %.6g, \"method\": \"%s\", \"macrocells\": %u, "
+                           "\"label\": \"%s\", \"shadows\": %d, \"frames\": %u, \"fps\": %.6g, \"mrays_per_s\": %.6g, \"frame_s\": %.6g, "
+                           "\"frame_min_s\": %.6g, \"frame_max_s\": %.6g, \"wall_frame_s\": %.6g, \"rays_per_frame\": %.6g, "
+                           "\"samples_per_ray\": %.6g, \"null_collisions_per_ray\": %.6g, \"image_mean\": %.6g, "
+                           "\"load_before\": %.2f, \"load_after\": %.2f}",
+                        r->elements, r->preprocess_s, method_name(r->c.method), r->c.macrocells, r->c.label,
+                        r->c.shadows, r->frames, r->fps, r->mrays_s, r->frame_s, r->frame_min_s, r->frame_max_s, r->wall_frame_s,
+                        r->rays_per_frame, r->samples_per_ray, r->nulls_per_ray, r->image_mean, r->load_before,
+                        r->load_after);
+            }
+            fprintf(f, "\n]}\n");
+            fclose(f);
+        }
+    }
+    free(rows);
+    clvr_cl_destroy(&cl);
+    return rc;
+}

@@ -1,0 +1,306 @@
+/* limits.c: up-front device-memory estimate and the mesh scan for elements
+ * that render but deserve a warning (limits.h). Host only; no OpenCL call,
+ * so the fuzz targets link it without a device. */
+#include "limits.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "elements.h"
+
+/* Defaults of clvr_preprocess_options_default, repeated so that this module
+ * does not need the preprocessing code linked (fuzz targets). */
+#define LIMITS_DEFAULT_LEAF 16u
+#define LIMITS_DEFAULT_SAMPLING 256u
+#define LIMITS_DEFAULT_BITS 16u
+/* Bytes per pixel of the renderer's image buffers: float4 accumulator,
+ * float4 second moments, 3 uint ray counters (host/render.c). */
+#define LIMITS_PIXEL_BYTES (16u + 16u + 12u)
+/* A BVH over L leaves has about L / 3 nodes of 112 bytes (4-wide). */
+#define LIMITS_BVH_NODE_BYTES 112u
+
+/* Saturating arithmetic: an estimate that overflows is simply "too much". */
+static uint64_t sat_add(uint64_t a, uint64_t b) { return b > UINT64_MAX - a ? UINT64_MAX : a + b; }
+static uint64_t sat_mul(uint64_t a, uint64_t b) { return a && b > UINT64_MAX / a ? UINT64_MAX : a * b; }
+static uint64_t max_u64(uint64_t a, uint64_t b) { return a > b ? a : b; }
+
+void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t width,
+                                uint32_t height, clvr_limits_estimate *out)
+{
+    memset(out, 0, sizeof *out);
+    uint32_t leaf = o && o->leaf_size ? o->leaf_size : LIMITS_DEFAULT_LEAF;
+    uint32_t sampling = o && o->sampling_size ? o->sampling_size : LIMITS_DEFAULT_SAMPLING;
+    uint32_t bits = o && o->index_bits ? o->index_bits : LIMITS_DEFAULT_BITS;
+    uint64_t N = 0, S = 0, V = m->num_vertices;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        N = sat_add(N, m->num_cells[t]);
+        S = sat_add(S, sat_mul(m->num_cells[t], clvr_cell_vertex_count(t)));
+    }
+    out->num_elements = N;
+    out->num_slots = S;
+    out->num_vertices = V;
+
+    /* Preprocessing (host/preprocess.c), two moments that are certain:
+     * during the sort, positions + scalars (16 V), the element indices (4 S)
+     * and two key/value pairs (24 N); during the split, positions, scalars,
+     * the input and the gathered index lists (8 S) and the local indices
+     * (2 or 4 S). */
+    uint64_t sort_phase = sat_add(sat_add(sat_mul(V, 16), sat_mul(S, 4)), sat_mul(N, 24));
+    uint64_t split_phase = sat_add(sat_mul(V, 16), sat_mul(S, bits == 32 ? 12 : 10));
+    out->preprocess_peak_bytes = max_u64(sort_phase, split_phase);
+
+    /* Rendering: local indices, leaf boxes, sampling clusters, BVH nodes and
+     * the image; the clustered vertices (>= one float4 per referenced
+     * vertex) are left out because unreferenced vertices are not copied. */
+    uint64_t leaves = N / leaf + (N % leaf != 0);
+    uint64_t resident = sat_mul(S, bits == 32 ? 4 : 2);
+    resident = sat_add(resident, sat_mul(leaves, sizeof(clvr_box)));
+    resident = sat_add(resident, sat_mul(N / sampling, sizeof(clvr_sampling_cluster)));
+    resident = sat_add(resident, sat_mul(leaves / 3, LIMITS_BVH_NODE_BYTES));
+    uint64_t pixels = (uint64_t)width * height;
+    out->image_bytes = sat_mul(pixels, LIMITS_PIXEL_BYTES);
+    out->render_bytes = sat_add(resident, out->image_bytes);
+    out->peak_bytes = max_u64(out->preprocess_peak_bytes, out->render_bytes);
+
+    /* The largest single buffer, named as clvr_cl_buffer names it. */
+    struct { uint64_t bytes; const char *name; } cand[] = {
+        {sat_mul(V, 12), "vertex positions"},
+        {sat_mul(S, 4), "element indices"},
+        {sat_mul(N, 8), "sort keys"},
+        {sat_mul(pixels, 16), "image accumulator"},
+    };
+    out->largest_buffer = cand[0].name;
+    for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i)
+        if (cand[i].bytes > out->largest_buffer_bytes) {
+            out->largest_buffer_bytes = cand[i].bytes;
+            out->largest_buffer = cand[i].name;
+        }
+}
+
+static double gb(uint64_t b) { return (double)b / 1e9; }
+
+clvr_status clvr_limits_check_named(const clvr_cl *cl, const clvr_mesh *m, const char *what,
+                                    const clvr_preprocess_options *o, uint32_t width, uint32_t height,
+                                    clvr_error *err)
+{
+    clvr_limits_estimate e;
+    clvr_limits_estimate_bytes(m, o, width, height, &e);
+    const char *name = what ? what : "mesh";
+    int image_is_it = e.largest_buffer && strcmp(e.largest_buffer, "image accumulator") == 0;
+    if (e.largest_buffer_bytes > cl->max_alloc_bytes)
+        return clvr_error_set(
+            err, CLVR_ERR_DEVICE_MEMORY,
+            "%s: %llu elements, %llu vertices at %ux%u: the largest buffer (%s) needs %.3f GB but %s allows at most "
+            "%.3f GB per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE); %s",
+            name, (unsigned long long)e.num_elements, (unsigned long long)e.num_vertices, width, height,
+            e.largest_buffer, gb(e.largest_buffer_bytes), cl->device_name, gb(cl->max_alloc_bytes),
+            image_is_it ? "render a smaller --size, or use another --device (clvr --list-devices)"
+                        : "use a smaller (cropped or decimated) mesh, or a device with more memory "
+                          "(--device, see clvr --list-devices)");
+    if (e.peak_bytes > cl->global_mem_bytes) {
+        int render_is_it = e.render_bytes >= e.preprocess_peak_bytes;
+        return clvr_error_set(
+            err, CLVR_ERR_DEVICE_MEMORY,
+            "%s: %llu elements, %llu vertices at %ux%u need at least %.3f GB of device memory (%s: %.3f GB for "
+            "preprocessing, %.3f GB while rendering, %.3f GB of it the image) but %s has %.3f GB "
+            "(CL_DEVICE_GLOBAL_MEM_SIZE); %s",
+            name, (unsigned long long)e.num_elements, (unsigned long long)e.num_vertices, width, height,
+            gb(e.peak_bytes), render_is_it ? "rendering is the peak" : "preprocessing is the peak",
+            gb(e.preprocess_peak_bytes), gb(e.render_bytes), gb(e.image_bytes), cl->device_name,
+            gb(cl->global_mem_bytes),
+            render_is_it && e.image_bytes * 2 > e.render_bytes
+                ? "render a smaller --size, or use another --device (clvr --list-devices)"
+                : "use a smaller (cropped or decimated) mesh, or a device with more memory "
+                  "(--device, see clvr --list-devices)");
+    }
+    return CLVR_OK;
+}
+
+clvr_status clvr_limits_check(const clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o,
+                              uint32_t width, uint32_t height, clvr_error *err)
+{
+    return clvr_limits_check_named(cl, m, NULL, o, width, height, err);
+}
+
+/* ------------------------------------------------------------ mesh scan */
+
+/* Parametric centre of each type (pyramid: below the singular apex). */
+static const float k_centre[CLVR_CELL_TYPE_COUNT][3] = {
+    {0.25f, 0.25f, 0.25f}, {0.5f, 0.5f, 0.25f}, {1.0f / 3.0f, 1.0f / 3.0f, 0.5f}, {0.5f, 0.5f, 0.5f}};
+
+/* Sign of the isoparametric map's Jacobian at the centre for an element in
+ * VTK's own vertex order: VTK orders tets, pyramids and hexes so that the
+ * base's right-hand normal points into the element (positive here) but
+ * wedges so that the normal of (0, 1, 2) points away from (3, 4, 5)
+ * (vtkWedge's documentation), which makes the Jacobian of this map
+ * negative. Checked on VTK's own files (tests/data). */
+static const int k_vtk_sign[CLVR_CELL_TYPE_COUNT] = {1, 1, -1, 1};
+
+/* 1: degenerate, 2: inverted, 0: fine. The determinant is compared with
+ * the product of the columns' sizes, as clvr_solve3 does, so an element is
+ * "degenerate" exactly when it is too flat for the renderer to locate
+ * points in it (in double precision, with float's resolution). */
+static int classify(uint32_t t, const float *pos, const uint32_t *idx)
+{
+    float N[8], Nu[8], Nv[8], Nw[8];
+    clvr_element_shape(t, k_centre[t][0], k_centre[t][1], k_centre[t][2], N, Nu, Nv, Nw);
+    const uint32_t nv = clvr_cell_vertex_count(t);
+    const float *p0 = pos + 3 * (uint64_t)idx[0];
+    double J[3][3] = {{0}};
+    for (uint32_t i = 1; i < nv; ++i) {
+        const float *p = pos + 3 * (uint64_t)idx[i];
+        for (int k = 0; k < 3; ++k) {
+            double d = (double)p[k] - (double)p0[k];
+            J[0][k] += Nu[i] * d;
+            J[1][k] += Nv[i] * d;
+            J[2][k] += Nw[i] * d;
+        }
+    }
+    double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) - J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                 J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    double scale = 1.0;
+    for (int r = 0; r < 3; ++r) scale *= fabs(J[r][0]) + fabs(J[r][1]) + fabs(J[r][2]);
+    if (!(fabs(det) > 1e-7 * scale)) return 1;
+    return det * k_vtk_sign[t] < 0.0 ? 2 : 0;
+}
+
+static void sorted_key(const uint32_t *idx, uint32_t nv, uint32_t *key)
+{
+    memcpy(key, idx, nv * sizeof *key);
+    for (uint32_t i = 1; i < nv; ++i) /* insertion sort of at most 8 */
+        for (uint32_t j = i; j > 0 && key[j - 1] > key[j]; --j) {
+            uint32_t tmp = key[j];
+            key[j] = key[j - 1];
+            key[j - 1] = tmp;
+        }
+}
+
+static uint64_t hash_key(uint32_t t, const uint32_t *key, uint32_t nv)
+{
+    uint64_t h = 0x9e3779b97f4a7c15ull ^ t;
+    for (uint32_t i = 0; i < nv; ++i) {
+        h ^= key[i];
+        h *= 0xff51afd7ed558ccdull; /* murmur3 finalizer steps */
+        h ^= h >> 33;
+    }
+    h *= 0xc4ceb9fe1a85ec53ull;
+    return h ^ (h >> 33);
+}
+
+/* Duplicates by vertex set: open addressing over global element ids + 1. */
+static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
+{
+    uint64_t n = clvr_mesh_num_elements(m), first[CLVR_CELL_TYPE_COUNT], acc = 0;
+    if (n >= 0x7fffffffull) return; /* ids are 32-bit with room for the doubling below */
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        first[t] = acc;
+        acc += m->num_cells[t];
+    }
+    uint64_t cap = 16;
+    while (cap < 2 * n) cap <<= 1;
+    uint32_t *table = calloc((size_t)cap, sizeof *table);
+    if (!table) return;
+    r->duplicates_checked = 1;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
+            uint32_t key[8], other[8];
+            sorted_key(m->indices[t] + e * nv, nv, key);
+            uint64_t h = hash_key(t, key, nv) & (cap - 1);
+            for (;; h = (h + 1) & (cap - 1)) {
+                uint32_t slot = table[h];
+                if (slot == 0) {
+                    table[h] = (uint32_t)(first[t] + e + 1);
+                    break;
+                }
+                uint64_t g = slot - 1;
+                if (g < first[t]) continue; /* another type: never the same element */
+                uint64_t oe = g - first[t];
+                sorted_key(m->indices[t] + oe * nv, nv, other);
+                if (memcmp(key, other, nv * sizeof *key) == 0) {
+                    if (r->duplicates++ == 0) {
+                        r->first_duplicate_type = t;
+                        r->first_duplicate = e;
+                        r->duplicate_of = oe;
+                    }
+                    break;
+                }
+            }
+        }
+    }
+    free(table);
+}
+
+void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out)
+{
+    memset(out, 0, sizeof *out);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
+            int c = classify(t, m->positions, m->indices[t] + e * nv);
+            if (c == 1 && out->degenerate++ == 0) {
+                out->first_degenerate_type = t;
+                out->first_degenerate = e;
+            } else if (c == 2 && out->inverted++ == 0) {
+                out->first_inverted_type = t;
+                out->first_inverted = e;
+            }
+        }
+    }
+    scan_duplicates(m, out);
+    if (m->num_vertices > 0 && m->scalar_min == m->scalar_max) {
+        out->constant_scalar = 1;
+        out->constant_value = m->scalar_min;
+    }
+    /* Unreferenced vertices: a bitmap, skipped when it cannot be had. */
+    uint8_t *used = calloc((size_t)(m->num_vertices / 8 + 1), 1);
+    if (used) {
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            uint64_t ni = clvr_mesh_num_indices(m, t);
+            for (uint64_t j = 0; j < ni; ++j) used[m->indices[t][j] >> 3] |= (uint8_t)(1u << (m->indices[t][j] & 7));
+        }
+        for (uint64_t v = 0; v < m->num_vertices; ++v) out->unused_vertices += !(used[v >> 3] >> (v & 7) & 1);
+        free(used);
+    }
+}
+
+int clvr_limits_print_warnings(FILE *out, const char *what, const clvr_limits_report *r)
+{
+    int n = 0;
+    const char *name = what ? what : "mesh";
+    if (r->degenerate) {
+        fprintf(out,
+                "clvr: warning: %s: %llu degenerate element%s (zero volume), the first is %s[%llu]; "
+                "they contain no point and are skipped when rendering\n",
+                name, (unsigned long long)r->degenerate, r->degenerate == 1 ? "" : "s",
+                clvr_cell_type_name(r->first_degenerate_type), (unsigned long long)r->first_degenerate);
+        ++n;
+    }
+    if (r->inverted) {
+        fprintf(out,
+                "clvr: warning: %s: %llu inverted element%s (vertex order mirrored against VTK's), the first is "
+                "%s[%llu]; they render correctly (containment does not depend on orientation) but other tools "
+                "may reject them\n",
+                name, (unsigned long long)r->inverted, r->inverted == 1 ? "" : "s",
+                clvr_cell_type_name(r->first_inverted_type), (unsigned long long)r->first_inverted);
+        ++n;
+    }
+    if (r->duplicates) {
+        fprintf(out,
+                "clvr: warning: %s: %llu duplicate element%s, the first is %s[%llu] (the same vertices as %s[%llu]); "
+                "overlapping copies render once (the first one found)\n",
+                name, (unsigned long long)r->duplicates, r->duplicates == 1 ? "" : "s",
+                clvr_cell_type_name(r->first_duplicate_type), (unsigned long long)r->first_duplicate,
+                clvr_cell_type_name(r->first_duplicate_type), (unsigned long long)r->duplicate_of);
+        ++n;
+    }
+    if (r->constant_scalar) {
+        fprintf(out,
+                "clvr: warning: %s: the scalar field is constant (%g at every vertex); the transfer-function "
+                "window is widened around it (choose one with --range LO HI)\n",
+                name, (double)r->constant_value);
+        ++n;
+    }
+    return n;
+}

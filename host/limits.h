@@ -1,0 +1,90 @@
+/* limits.h: what a mesh asks of the device and of the renderer, checked
+ * before any long work starts.
+ *
+ * clvr_limits_check estimates the device memory of the whole run from the
+ * mesh counts alone (no OpenCL call) and refuses, with the numbers, a mesh
+ * or image the device cannot hold, instead of failing minutes later in the
+ * middle of preprocessing. clvr_limits_scan looks for elements the renderer
+ * tolerates but the user should hear about: degenerate (zero-volume),
+ * inverted and duplicate elements, and a constant scalar field.
+ *
+ * Where main() calls them: clvr_limits_scan right after the mesh is loaded
+ * (it needs a validated mesh), clvr_limits_check right after clvr_cl_create
+ * and before clvr_preprocess. Errors and warnings name the file. */
+#ifndef CLVR_LIMITS_H
+#define CLVR_LIMITS_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "cl_context.h"
+#include "mesh.h"
+#include "preprocess.h"
+#include "status.h"
+
+/* Device bytes of a run, from counts only. The preprocessing peak is the
+ * figure clvr_preprocess documents (40 bytes per index slot + 36 per element
+ * + 16 per vertex), which covers its sort (keys and values twice), the
+ * gathered index list and the split tables alive at the same time. What
+ * stays for rendering: clustered vertices (float4, at least one per mesh
+ * vertex), 16-bit local indices (2 per slot), leaf boxes (32 bytes per
+ * leaf), instances and sampling clusters, the BVH (about one 112-byte node
+ * per 3 leaves), and the image buffers (accumulator, second moments,
+ * counters: 44 bytes per pixel). Every figure is a lower bound on what the
+ * pipeline allocates, so a refusal is never a false alarm. */
+typedef struct clvr_limits_estimate {
+    uint64_t num_elements, num_slots, num_vertices;
+    uint64_t preprocess_peak_bytes;  /* device bytes at the peak of clvr_preprocess */
+    uint64_t render_bytes;           /* clustered mesh + BVH + image buffers while rendering */
+    uint64_t image_bytes;            /* of render_bytes: the per-pixel buffers */
+    uint64_t peak_bytes;             /* max of the two phases */
+    uint64_t largest_buffer_bytes;   /* the largest single buffer of the run */
+    const char *largest_buffer;      /* its name, as clvr_cl_buffer reports it */
+} clvr_limits_estimate;
+
+/* Fills *out for mesh m (only its counts are read), options o (NULL:
+ * defaults) and a width x height image. Sizes saturate at UINT64_MAX. */
+void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t width,
+                                uint32_t height, clvr_limits_estimate *out);
+
+/* Checks the estimate against cl's CL_DEVICE_GLOBAL_MEM_SIZE and
+ * CL_DEVICE_MAX_MEM_ALLOC_SIZE. CLVR_ERR_DEVICE_MEMORY names the mesh size,
+ * the bytes needed, what the device has, and what to change: a smaller
+ * image, a smaller or cropped mesh, 16-bit instance clusters (index_bits 16,
+ * which halve the resident indices) or another --device. `what` names the
+ * mesh in the message (a path), may be NULL. */
+clvr_status clvr_limits_check(const clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o,
+                              uint32_t width, uint32_t height, clvr_error *err);
+/* The same with a name for the mesh. */
+clvr_status clvr_limits_check_named(const clvr_cl *cl, const clvr_mesh *m, const char *what,
+                                    const clvr_preprocess_options *o, uint32_t width, uint32_t height,
+                                    clvr_error *err);
+
+/* What clvr_limits_scan found. Element ids are per type (tets[i] etc.). */
+typedef struct clvr_limits_report {
+    uint64_t degenerate;        /* |Jacobian| at the parametric centre ~ 0 relative to the element size */
+    uint64_t inverted;          /* negative Jacobian: vertex order mirrored against VTK's */
+    uint64_t duplicates;        /* elements with the same type and vertex set as an earlier one */
+    uint32_t first_degenerate_type, first_inverted_type, first_duplicate_type;
+    uint64_t first_degenerate, first_inverted, first_duplicate;
+    uint64_t duplicate_of;      /* the earlier element first_duplicate repeats (same type) */
+    int duplicates_checked;     /* 0 when the check was skipped (no memory, >= 2^32 elements) */
+    int constant_scalar;        /* every scalar is the same value (scalar_min == scalar_max) */
+    float constant_value;
+    uint64_t unused_vertices;   /* vertices no element references (informational) */
+} clvr_limits_report;
+
+/* Scans a validated mesh (every index < num_vertices, finite values): one
+ * pass over the elements plus a hash of their vertex sets, about 8 bytes
+ * of host memory per element, freed before return. */
+void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out);
+
+/* Prints one "clvr: warning: ..." line per finding to out (stderr in
+ * clvr) and returns how many it printed. `what` names the mesh. The lines
+ * say what the renderer does about it (degenerate elements cover no volume
+ * and are never hit; inverted ones render as their mirror image, which is
+ * the same element; duplicates are found first-come and render once; a
+ * constant field gets a window around its value). */
+int clvr_limits_print_warnings(FILE *out, const char *what, const clvr_limits_report *r);
+
+#endif /* CLVR_LIMITS_H */

@@ -1,0 +1,314 @@
+#!/usr/bin/python3
+"""test_viewer: `clvr --view` under Xvfb (Mesa software OpenGL), driven by a
+CLVR_VIEW_SCRIPT session (see host/viewer.h), proves that the window shows the
+volume; that a colour-map switch changes the mean colour, a zoom the coverage and
+a middle-button pan moves the picture by the dragged pixels; that R and
+C / shift+C restore the first image bit for bit; that resize re-allocates the
+image; that the title reports spp, rates, method and device; that E, P and K
+write files; and that K's command line, rendered offline at the same spp,
+reproduces the viewer's accumulated image. Also: without a display --view fails
+with one line naming the fix, a bad script command fails with its line number,
+and --help lists the controls.
+
+Environment: CLVR_BUILD_DIR (clvr), CLVR_SHARED_DATA (tests/data).
+Exit: 0 all passed, 1 a check failed, 77 when xvfb-run is not installed.
+"""
+
+import os
+import re
+import shlex
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
+BUILD = os.environ.get("CLVR_BUILD_DIR", os.path.join(HERE, "..", "build"))
+CLVR = os.path.abspath(os.path.join(BUILD, "clvr"))
+MESH = os.path.join(DATA, "vtk", "post.vtk")
+BACKGROUND = (0.05, 0.05, 0.07)  # clvr's default, linear
+
+passed = 0
+failed = 0
+
+
+def check(ok, what, got=None, want=None):
+    global passed, failed
+    if ok:
+        passed += 1
+    else:
+        failed += 1
+        extra = f": got {got!r}, want {want!r}" if got is not None or want is not None else ""
+        print(f"FAIL {what}{extra}")
+    return ok
+
+
+def run(args, env=None, cwd=None, timeout=180):
+    e = dict(os.environ)
+    if env:
+        e.update(env)
+    return subprocess.run(args, env=e, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+def read_pfm(path):
+    """Returns (w, h, rows top to bottom of [(r, g, b), ...])."""
+    with open(path, "rb") as f:
+        data = f.read()
+    parts = data.split(b"\n", 3)
+    assert parts[0] == b"PF", f"{path}: not a colour PFM"
+    w, h = map(int, parts[1].split())
+    scale = float(parts[2])
+    fmt = "<" if scale < 0 else ">"
+    floats = struct.unpack(fmt + "%df" % (w * h * 3), parts[3][: w * h * 12])
+    rows = []
+    for y in range(h):  # PFM stores rows bottom to top
+        base = (h - 1 - y) * w * 3
+        rows.append([tuple(floats[base + 3 * x: base + 3 * x + 3]) for x in range(w)])
+    return w, h, rows
+
+
+def strip_rows(h):
+    """Rows at the bottom covered by the transfer-function strip and its markers."""
+    return int(min(max(h / 14.0, 6.0), 24.0)) + 6
+
+
+def volume_stats(img):
+    """Coverage (fraction of non-background pixels above the strip), their mean
+    colour and the x of their centroid."""
+    w, h, rows = img
+    n = covered = 0
+    mean = [0.0, 0.0, 0.0]
+    cx = 0.0
+    for y in range(h - strip_rows(h)):
+        for x, p in enumerate(rows[y]):
+            n += 1
+            if max(abs(p[k] - BACKGROUND[k]) for k in range(3)) > 0.02:
+                covered += 1
+                cx += x
+                for k in range(3):
+                    mean[k] += p[k]
+    if covered:
+        mean = [m / covered for m in mean]
+        cx /= covered
+    return covered / max(n, 1), mean, cx
+
+
+def max_diff(a, b):
+    if a[0] != b[0] or a[1] != b[1]:
+        return float("inf")
+    return max(abs(p[k] - q[k]) for ra, rb in zip(a[2], b[2]) for p, q in zip(ra, rb) for k in range(3))
+
+
+def mean_abs_diff(a, b):
+    tot = cnt = 0
+    for ra, rb in zip(a[2], b[2]):
+        for p, q in zip(ra, rb):
+            tot += sum(abs(p[k] - q[k]) for k in range(3))
+            cnt += 3
+    return tot / max(cnt, 1)
+
+
+def png_size(path):
+    with open(path, "rb") as f:
+        head = f.read(24)
+    if head[:8] != b"\x89PNG\r\n\x1a\n":
+        return None
+    return struct.unpack(">II", head[16:24])
+
+
+SESSION = """\
+# initial view
+frames 3
+shot s0.pfm
+title
+# colour map: next, then back
+key C
+frames 3
+shot s1.pfm
+key C shift
+# pan by 20 pixels to the right
+drag middle 20 0
+frames 3
+shot s_pan.pfm
+# reset the camera: the first image again, bit for bit
+key R
+frames 3
+shot s_reset.pfm
+# zoom in
+scroll 3
+frames 3
+shot s2.pfm
+# orbit
+drag left 60 0
+frames 3
+shot s3.pfm
+# transfer-function window and density
+key ]
+key }
+key +
+frames 2
+shot s4.pfm
+key W
+key -
+# methods and shadows
+key M
+frames 2
+title
+key S
+key M
+frames 1
+title
+# light
+drag left 40 20 light
+key LEFT ctrl
+frames 2
+# window size
+resize 160 120
+frames 3
+shot s5.pfm
+title
+key E
+key P
+key K
+key H
+save acc.pfm
+quit
+"""
+
+
+def main():
+    if not shutil.which("xvfb-run"):
+        print("skipped: xvfb-run is not installed (apt-get install xvfb; see tools/setup-debian.sh)")
+        return 77
+    if not os.path.exists(CLVR):
+        print(f"FAIL {CLVR} does not exist (build the clvr target)")
+        return 1
+
+    # --help lists every control.
+    r = run([CLVR, "--help"])
+    for control in ["Viewer controls", "left drag", "middle drag", "wheel", "R ", "C / shift+C", "[ / ]", "{ / }",
+                    "+ / -", "S ", "M / shift+M", "L+left drag", "E / P", "K ", "H ", "Escape"]:
+        check(control in r.stdout, f"--help mentions the viewer control '{control}'")
+
+    tmp = tempfile.mkdtemp(prefix="clvr-viewer-")
+    try:
+        # No display: one line on stderr with the fix, non-zero exit, and quickly
+        # (before preprocessing).
+        e = dict(os.environ)
+        e.pop("DISPLAY", None)
+        e.pop("WAYLAND_DISPLAY", None)
+        r = subprocess.run([CLVR, "--view", MESH], env=e, capture_output=True, text=True, timeout=60)
+        check(r.returncode == 4, "--view without a display exits 4", r.returncode, 4)
+        lines = r.stderr.strip().splitlines()
+        check(len(lines) == 1 and "display" in r.stderr.lower() and "-o" in r.stderr,
+              "--view without a display says so in one line and suggests -o", r.stderr)
+
+        xvfb = ["xvfb-run", "-a", "-s", "-screen 0 640x480x24"]
+
+        # A bad script command is an error naming the file and line.
+        bad = os.path.join(tmp, "bad.txt")
+        with open(bad, "w") as f:
+            f.write("frames 1\nwiggle 3\n")
+        r = run(xvfb + [CLVR, "--view", "--quiet", "--size", "64x64", MESH], env={"CLVR_VIEW_SCRIPT": bad}, cwd=tmp)
+        check(r.returncode == 2 and "bad.txt:2" in r.stderr and "wiggle" in r.stderr,
+              "an unknown script command fails with file:line", (r.returncode, r.stderr.strip()))
+
+        # The scripted session.
+        script = os.path.join(tmp, "session.txt")
+        with open(script, "w") as f:
+            f.write(SESSION)
+        r = run(xvfb + [CLVR, "--view", "--quiet", "--size", "128x128", MESH], env={"CLVR_VIEW_SCRIPT": script},
+                cwd=tmp)
+        if not check(r.returncode == 0, "the scripted viewer session exits 0", r.returncode, 0):
+            print(r.stdout)
+            print(r.stderr)
+            return 1
+        out = r.stdout
+        shots = {}
+        for name in ["s0", "s1", "s_pan", "s_reset", "s2", "s3", "s4", "s5"]:
+            path = os.path.join(tmp, name + ".pfm")
+            if check(os.path.exists(path), f"screenshot {name}.pfm written"):
+                shots[name] = read_pfm(path)
+        if len(shots) < 8:
+            return 1
+        st = {k: volume_stats(v) for k, v in shots.items()}
+        for k, (cov, mean, cx) in st.items():
+            print(f"{k}: {shots[k][0]}x{shots[k][1]}, coverage {cov:.3f}, mean colour "
+                  f"({mean[0]:.3f}, {mean[1]:.3f}, {mean[2]:.3f}), centroid x {cx:.1f}")
+
+        check(shots["s0"][0:2] == (128, 128), "the window is --size", shots["s0"][0:2], (128, 128))
+        check(st["s0"][0] > 0.10, "the first image shows the volume (> 10% non-background pixels)", st["s0"][0])
+        dcol = sum(abs(a - b) for a, b in zip(st["s0"][1], st["s1"][1]))
+        check(dcol > 0.03, "C (next colour map) changes the mean colour of the volume", dcol, "> 0.03")
+        shift = st["s_pan"][2] - st["s0"][2]
+        check(12.0 < shift < 28.0, "a 20-pixel middle drag pans the picture about 20 pixels right", shift, 20)
+        d = max_diff(shots["s0"], shots["s_reset"])
+        check(d == 0.0, "R and C, shift+C restore the first image exactly (same frames, same seed)", d, 0.0)
+        check(st["s2"][0] > 1.3 * st["s0"][0], "three wheel notches in raise the coverage by > 30%",
+              (st["s0"][0], st["s2"][0]))
+        check(mean_abs_diff(shots["s2"], shots["s3"]) > 0.005, "a left drag (orbit) changes the image",
+              mean_abs_diff(shots["s2"], shots["s3"]))
+        check(mean_abs_diff(shots["s3"], shots["s4"]) > 0.005, "] } + (window, density) change the image",
+              mean_abs_diff(shots["s3"], shots["s4"]))
+        check(shots["s5"][0:2] == (160, 120), "resize 160x120 gives a 160x120 window image", shots["s5"][0:2],
+              (160, 120))
+        check(st["s5"][0] > 0.05, "after the resize the volume is still shown", st["s5"][0])
+
+        titles = re.findall(r"^title: (.*)$", out, re.M)
+        if check(len(titles) == 4, "four title lines printed", len(titles), 4):
+            for t in titles:
+                check(all(w in t for w in ["spp", "fps", "Mrays/s", "density"]) and "clvr" in t,
+                      "the title shows spp, fps, Mrays/s, the transfer function", t)
+            check(" dda " in titles[0] and "3 spp" in titles[0], "title 1: dda, 3 spp", titles[0])
+            check(" march " in titles[1] and "shadows n/a" in titles[1], "title 2: M switches to march", titles[1])
+            check(" track " in titles[2] and "shadows off" in titles[2], "title 3: M then track, S shadows off",
+                  titles[2])
+            m = re.search(r"([0-9.]+) Mrays/s", titles[3])
+            check(m is not None and float(m.group(1)) > 0.0, "Mrays/s is positive while rendering", titles[3])
+
+        exr = os.path.join(tmp, "clvr-view-001.exr")
+        png = os.path.join(tmp, "clvr-view-001.png")
+        if check(os.path.exists(exr), "E saved clvr-view-001.exr", out):
+            with open(exr, "rb") as f:
+                check(f.read(4) == b"\x76\x2f\x31\x01", "clvr-view-001.exr is an OpenEXR file")
+        if check(os.path.exists(png), "P saved clvr-view-001.png"):
+            check(png_size(png) == (160, 120), "the PNG has the window size", png_size(png), (160, 120))
+        check("saved clvr-view-001.exr" in out and "saved clvr-view-001.png" in out, "E and P print the file names")
+        check("Viewer controls" in out and "rotate the light" in out, "H prints the controls")
+
+        view_txt = os.path.join(tmp, "clvr-view.txt")
+        if not check(os.path.exists(view_txt), "K wrote clvr-view.txt"):
+            return 1
+        with open(view_txt) as f:
+            line = f.read().strip()
+        check(line in out, "K prints the same line it writes", line)
+        for opt in ["--camera", "--range", "--colormap", "--density", "--method", "--light", "--size 160x120",
+                    "--shadows off", "--method track"]:
+            check(opt in line, f"the K line has {opt}", line)
+
+        # The K line renders the viewer's image offline.
+        m = re.search(r"saved acc\.pfm \((\d+)x(\d+), (\d+) spp\)", out)
+        if check(m is not None, "save acc.pfm reports its spp", out):
+            spp = m.group(3)
+            args = shlex.split(line)
+            check(args[0] == "clvr", "the K line starts with clvr", args[0])
+            off = os.path.join(tmp, "offline.pfm")
+            r = run([CLVR] + args[1:] + ["--spp", spp, "--quiet", "-o", off], cwd=tmp)
+            if check(r.returncode == 0, "the K line runs offline", (r.returncode, r.stderr)):
+                a, b = read_pfm(os.path.join(tmp, "acc.pfm")), read_pfm(off)
+                d = max_diff(a, b)
+                check(d <= 1e-6, f"offline render of the K line at {spp} spp equals the viewer's image", d, 0.0)
+    finally:
+        if failed == 0:
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            print(f"files kept in {tmp}")
+    return 0
+
+
+if __name__ == "__main__":
+    rc = main()
+    print(f"{passed} passed, {failed} failed")
+    sys.exit(rc if rc else (1 if failed else 0))
