@@ -20,7 +20,7 @@
  * (see the comment at converge_one for the definitions).
  *
  *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
- *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--quick]
+ *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--json FILE]
  *
@@ -129,7 +129,7 @@ static void scene_release(clvr_cl *cl, scene_gpu *g)
 
 /* Loads path ("default": the built-in scene), preprocesses and builds the
  * trees, and bakes clvr's default transfer function over the data range. */
-static clvr_status scene_load(clvr_cl *cl, const char *path, scene_gpu *g, clvr_error *err)
+static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scene_gpu *g, clvr_error *err)
 {
     clvr_status s;
     clvr_mesh m = {0};
@@ -150,7 +150,7 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, scene_gpu *g, clvr_
     if (s == CLVR_OK) s = clvr_accel_build(cl, &g->clustered, &g->accel, err);
     g->preprocess_s = now_s() - t0;
     if (s == CLVR_OK)
-        s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, 1.0f, m.scalar_min, m.scalar_max, err);
+        s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, density, m.scalar_min, m.scalar_max, err);
     if (s == CLVR_OK) {
         clvr_tf_set_extent(&g->tf, m.bounds_lo, m.bounds_hi);
         g->table_n = clvr_tf_table_size(&g->tf);
@@ -439,7 +439,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
     printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
            cl->driver_version);
     fflush(stdout);
-    if (scene_load(cl, mesh, &g, &err) != CLVR_OK) {
+    if (scene_load(cl, mesh, 1.0f, &g, &err) != CLVR_OK) {
         fprintf(stderr, "bench_render: %s\n", err.msg);
         return 1;
     }
@@ -520,7 +520,7 @@ static int usage(void)
 {
     fprintf(stderr,
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
-            "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--quick]\n"
+            "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--json FILE]\n");
     return 2;
@@ -534,6 +534,7 @@ int main(int argc, char **argv)
     uint32_t conv_method = CLVR_RENDER_DDA;
     int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0;
     double target = 0.02, budget = 30.0;
+    float density = 1.0f;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--device") && v) device = argv[++i];
@@ -551,6 +552,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--methods") && v) methods = argv[++i];
         else if (!strcmp(a, "--macrocells") && v) macro = argv[++i];
         else if (!strcmp(a, "--budget") && v) budget = atof(argv[++i]);
+        else if (!strcmp(a, "--density") && v) density = (float)atof(argv[++i]);
         else if (!strcmp(a, "--no-shadows")) shadows = 0;
         else if (!strcmp(a, "--quick")) quick = 1;
         else if (!strcmp(a, "--converge")) converge = 1;
@@ -566,7 +568,7 @@ int main(int argc, char **argv)
         if (!frames_set) frames = 3;
         warmup = 1;
     }
-    if (frames < 1 || ref_spp < 2 || max_spp < 1 || !(target > 0)) return usage();
+    if (frames < 1 || !(density >= 0) || ref_spp < 2 || max_spp < 1 || !(target > 0)) return usage();
     static char notch[1024];
     if (!nmesh) {
         snprintf(notch, sizeof notch, "%s/tests/data/vtk/notch_stress.vtk", CLVR_SOURCE_DIR);
@@ -614,8 +616,9 @@ int main(int argc, char **argv)
         return rc;
     }
 
-    printf("# bench_render: %ux%u, 1 spp per frame, %u warm-up + median of %u frames, shadows %s%s\n", w, h, warmup,
-           frames, shadows ? "on (march: off)" : "off", quick ? " (quick)" : "");
+    printf("# bench_render: %ux%u, 1 spp per frame, %u warm-up + median of %u frames (fewer past %g s), shadows %s, "
+           "default transfer function, density %g%s\n",
+           w, h, warmup, frames, budget, shadows ? "on (march: off)" : "off", density, quick ? " (quick)" : "");
     printf("# device: %s | %s | %s | driver %s | %u compute units\n\n", cl.device_name, cl.platform_name,
            cl.device_version, cl.driver_version, cl.compute_units);
     printf("| mesh | elements | method | shadows | fps | Mrays/s | ms/frame (min-max) | frames | rays/frame | samples/ray | "
@@ -629,7 +632,7 @@ int main(int argc, char **argv)
     for (uint32_t mi = 0; mi < nmesh && !rc; ++mi) {
         scene_gpu g;
         fprintf(stderr, "bench_render: loading %s\n", meshes[mi]);
-        if (scene_load(&cl, meshes[mi], &g, &err) != CLVR_OK) {
+        if (scene_load(&cl, meshes[mi], density, &g, &err) != CLVR_OK) {
             fprintf(stderr, "bench_render: %s\n", err.msg);
             rc = 1;
             break;
@@ -688,8 +691,8 @@ int main(int argc, char **argv)
             json_str(f, cl.platform_name);
             fprintf(f, ", \"driver\": ");
             json_str(f, cl.driver_version);
-            fprintf(f, ", \"width\": %u, \"height\": %u, \"warmup\": %u, \"frames\": %u, \"budget_s\": %g, \"quick\": %d, \"rows\": [",
-                    w, h, warmup, frames, budget, quick);
+            fprintf(f, ", \"width\": %u, \"height\": %u, \"warmup\": %u, \"frames\": %u, \"budget_s\": %g, \"density\": %g, \"quick\": %d, \"rows\": [",
+                    w, h, warmup, frames, budget, density, quick);
             for (uint32_t i = 0; i < nrows; ++i) {
                 const row *r = &rows[i];
                 fprintf(f, "%s\n  {\"mesh\": ", i ? "," : "");

@@ -418,7 +418,7 @@ enum { ASSOC_NONE = -1, ASSOC_POINT = 0, ASSOC_CELL = 1 };
 static clvr_status parse_field(vtk_in *in, vtk_doc *doc, int assoc, uint64_t assoc_count)
 {
     char fname[VTK_TOKEN_MAX], aname[VTK_TOKEN_MAX];
-    uint64_t k;
+    uint64_t k = 0; /* read when the count itself fails to parse */
     clvr_status s = read_word(in, "the FIELD name", fname);
     if (s == CLVR_OK) s = read_count(in, "the FIELD array count", &k);
     for (uint64_t i = 0; i < k && s == CLVR_OK; ++i) {

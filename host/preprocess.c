@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <stdio.h> /* TEMP */
 
 #define ARG(k, i, v) CLVR_CL_CHECK(clSetKernelArg((k), (i), sizeof(v), &(v)))
 
@@ -122,8 +123,8 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
     /* Elements per work-item of the key kernel. Runs of 1024 per work-item
      * measured no faster on PoCL than one element per work-item in groups of
      * 64 (PoCL vectorizes the latter across work-items), so 1 everywhere. */
-    pp->per_item = getenv("PPI") ? (uint32_t)atoi(getenv("PPI")) : 1u; /* TEMP */
-    CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", getenv("PPOPT"), &pp->prog, err)); /* TEMP */
+    pp->per_item = 1u;
+    CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", NULL, &pp->prog, err));
     struct { cl_kernel *k; const char *name; } ks[] = {
         {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->element_keys, "clvr_pp_element_keys"},
         {&pp->scan_reduce, "clvr_pp_scan_reduce"},   {&pp->scan_sums, "clvr_pp_scan_sums"},
@@ -386,7 +387,7 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
     clvr_preprocess_options opt;
     clvr_pp_layout L;
     clvr_pp_split_plan plan;
-    cl_mem pos = NULL, scal = NULL, idx_in = NULL, keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL,
+    cl_mem pos = NULL, scal = NULL, idx_in = NULL, vmap = NULL, keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL,
            idx_sorted = NULL, tk = NULL, segbuf = NULL, recs = NULL, rec_counts = NULL, flags = NULL, sel = NULL,
            nverts = NULL, nleaves = NULL, vsrc = NULL;
     cl_uint4 *segs = NULL;
@@ -419,15 +420,39 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
 
     /* --- upload */
     const uint64_t V = m->num_vertices, N = L.num_elements, S = L.num_slots;
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, V * 12, NULL, "vertex positions", &pos, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, V * 4, NULL, "vertex scalars", &scal, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "element indices", &idx_in, err));
+    /* On a CPU device the kernels can read the mesh where it lies: buffers
+     * made with CL_MEM_USE_HOST_PTR are the host arrays themselves (PoCL
+     * maps them without a copy), which saves the write of every byte and the
+     * page faults of fresh device memory (the upload was ~0.3 s of 10M
+     * hexes). They are read-only, so the const mesh is never written. The
+     * element indices can be borrowed only when one type holds them all,
+     * as the kernels read the types' lists concatenated. Other devices get
+     * copies. */
+    const int zero_copy = (cl->device_type & CL_DEVICE_TYPE_CPU) != 0;
+    int types_used = 0, only_type = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+        if (L.count[t]) { ++types_used; only_type = (int)t; }
+    const int borrow_idx = zero_copy && types_used == 1;
+    {
+        const cl_mem_flags ro = CL_MEM_READ_ONLY | (zero_copy ? CL_MEM_USE_HOST_PTR : 0);
+        double tu = wall_now();
+        CLVR_TRY(clvr_cl_buffer(cl, ro, V * 12, zero_copy ? (void *)m->positions : NULL, "vertex positions", &pos, err));
+        CLVR_TRY(clvr_cl_buffer(cl, ro, V * 4, zero_copy ? (void *)m->scalars : NULL, "vertex scalars", &scal, err));
+        if (borrow_idx)
+            CLVR_TRY(clvr_cl_buffer(cl, ro, S * 4, (void *)m->indices[only_type], "element indices", &idx_in, err));
+        else
+            CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "element indices", &idx_in, err));
+        if (zero_copy) st[CLVR_PP_STAGE_UPLOAD] += wall_now() - tu;
+        if (getenv("PPDBG")) fprintf(stderr, "DBG upload %.4f\n", wall_now() - tu); /* TEMP */
+    }
     {
         cl_event ev[2 + CLVR_CELL_TYPE_COUNT] = {0};
         int ne = 0;
-        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, pos, CL_FALSE, 0, V * 12, m->positions, 0, NULL, &ev[ne++]));
-        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, scal, CL_FALSE, 0, V * 4, m->scalars, 0, NULL, &ev[ne++]));
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+        if (!zero_copy) {
+            CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, pos, CL_FALSE, 0, V * 12, m->positions, 0, NULL, &ev[ne++]));
+            CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, scal, CL_FALSE, 0, V * 4, m->scalars, 0, NULL, &ev[ne++]));
+        }
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && !borrow_idx; ++t)
             if (L.count[t])
                 CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, idx_in, CL_FALSE, L.slot[t] * 4,
                                                    L.count[t] * clvr_cell_vertex_count(t) * 4, m->indices[t], 0,
@@ -486,7 +511,16 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         CLVR_TRY(launch(&pp, k, nc, 64, &st[CLVR_PP_STAGE_SAMPLING], err));
     }
 
-    /* --- greedy instance split with local re-indexing; idx_in becomes the scratch vertex map */
+    /* --- greedy instance split with local re-indexing. The scratch vertex
+     * map takes idx_in's place (same size; idx_in is not read any more),
+     * or a buffer of its own when idx_in is the borrowed mesh array. */
+    if (borrow_idx) {
+        clvr_cl_release(cl, &idx_in);
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "scratch vertex map", &vmap, err));
+    } else {
+        vmap = idx_in;
+        idx_in = NULL;
+    }
     out->num_idx16 = bits32 ? 0 : S;
     out->num_idx32 = bits32 ? S : 0;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx16 * 2, NULL, "16-bit indices", &out->idx16, err));
@@ -525,7 +559,7 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
             cl_int b32 = bits32;
             cl_uint nseg = plan.total_segments, vl = plan.vlimit, me = plan.max_elems, lc = plan.log2cap;
             int i = 0;
-            ARG(k, i++, idx_sorted); ARG(k, i++, idx_in); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32);
+            ARG(k, i++, idx_sorted); ARG(k, i++, vmap); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32);
             ARG(k, i++, b32); ARG(k, i++, segbuf); ARG(k, i++, nseg); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
             ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, vl); ARG(k, i++, me); ARG(k, i++, tk);
             ARG(k, i++, lc); ARG(k, i++, rec_max); ARG(k, i++, recs); ARG(k, i++, rec_counts);
@@ -576,13 +610,13 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         cl_uint ni = (cl_uint)out->num_instances, nv = (cl_uint)out->num_vertices;
         cl_kernel k = pp.vertices;
         int i = 0;
-        ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, idx_in); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
+        ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, vmap); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
         cl_uint tiles = clvr_pp_tiles(&pp, nv);
         cl_ulong chunk = ((cl_ulong)nv + tiles - 1) / tiles;
         ARG(k, i++, ni); ARG(k, i++, nv); ARG(k, i++, chunk); ARG(k, i++, tiles); ARG(k, i++, out->vertices);
         CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_VERTICES], err));
     }
-    clvr_cl_release(cl, &idx_in);
+    clvr_cl_release(cl, &vmap);
     clvr_cl_release(cl, &pos);
     clvr_cl_release(cl, &scal);
 
@@ -621,6 +655,7 @@ cleanup:
     clvr_cl_release(cl, &pos);
     clvr_cl_release(cl, &scal);
     clvr_cl_release(cl, &idx_in);
+    clvr_cl_release(cl, &vmap);
     clvr_cl_release(cl, &keys);
     clvr_cl_release(cl, &vals);
     clvr_cl_release(cl, &keys_tmp);

@@ -492,25 +492,25 @@ static void fb_scale(GLFWwindow *w, float *sx, float *sy)
     *sy = wh > 0 ? (float)fh / (float)wh : 1.0f;
 }
 
+/* The pointer position comes from the motion events, not from
+ * glfwGetCursorPos: on X11 that asks the server for where the pointer is
+ * now, which is ahead of the events still queued. */
 static void on_button(GLFWwindow *w, int button, int action, int mods)
 {
     (void)mods;
     viewer *v = glfwGetWindowUserPointer(w);
-    if (action == GLFW_PRESS) {
-        v->button = button;
-        glfwGetCursorPos(w, &v->mx, &v->my);
-    } else if (button == v->button) {
-        v->button = -1;
-    }
+    if (action == GLFW_PRESS) v->button = button;
+    else if (button == v->button) v->button = -1;
 }
 
 static void on_cursor(GLFWwindow *w, double x, double y)
 {
     viewer *v = glfwGetWindowUserPointer(w);
-    if (v->button < 0) return;
-    float sx, sy;
-    fb_scale(w, &sx, &sy);
-    handle_drag(v, v->button, held_mods(w), (float)(x - v->mx) * sx, (float)(y - v->my) * sy);
+    if (v->button >= 0) {
+        float sx, sy;
+        fb_scale(w, &sx, &sy);
+        handle_drag(v, v->button, held_mods(w), (float)(x - v->mx) * sx, (float)(y - v->my) * sy);
+    }
     v->mx = x;
     v->my = y;
 }
@@ -826,6 +826,28 @@ static int resize_window(viewer *v, int w, int h)
     return 0;
 }
 
+/* `run CMD`: runs a shell command (tests send real X input with xdotool)
+ * and then reads the window events it caused, so that they are handled
+ * before the next script command. */
+static void run_command(viewer *v, char *cmd)
+{
+    cmd[strcspn(cmd, "\r\n")] = 0;
+    fflush(stdout);
+    int rc = system(cmd);
+    if (rc != 0) {
+        v->status = clvr_error_set(v->err, CLVR_ERR_INTERNAL, "%s:%d: '%s' failed (status %d)", v->script_path,
+                                   v->script_line, cmd, rc);
+        return;
+    }
+    /* The X server has queued the events before the command returned; a
+     * short pump reads all of them. */
+    double t0 = now_s();
+    while (now_s() - t0 < 0.2) {
+        glfwPollEvents();
+        usleep(5000);
+    }
+}
+
 /* Runs script commands until one asks for frames, the script ends or a
  * command fails (v->status). */
 static void run_script(viewer *v)
@@ -840,6 +862,11 @@ static void run_script(viewer *v)
         v->script_line++;
         char *hash = strchr(line, '#');
         if (hash) *hash = 0;
+        char *cmd = line + strspn(line, " \t");
+        if (!strncmp(cmd, "run ", 4)) {
+            run_command(v, cmd + 4);
+            continue;
+        }
         char *tok[8];
         int n = 0;
         for (char *p = strtok(line, " \t\r\n"); p && n < 8; p = strtok(NULL, " \t\r\n")) tok[n++] = p;
@@ -988,6 +1015,7 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
     glfwSetCursorPosCallback(v->win, on_cursor);
     glfwSetScrollCallback(v->win, on_scroll);
     glfwSetWindowRefreshCallback(v->win, on_refresh);
+    glfwGetCursorPos(v->win, &v->mx, &v->my);
     glGenTextures(1, &v->tex);
     glGenTextures(1, &v->strip_tex);
     GLuint texs[2] = {v->tex, v->strip_tex};

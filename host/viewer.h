@@ -24,6 +24,8 @@
  *                         with clvr_image_write (.png, .pfm, .exr)
  *   save FILE             write the accumulated image to FILE
  *   title                 print the window title (status line) to stdout
+ *   run CMD...            run a shell command (e.g. xdotool sending real X
+ *                         input), then handle the window events it caused
  *   quit                  close the viewer
  * At the end of the script the viewer stays open for the user unless the
  * script said quit. */

@@ -12,9 +12,6 @@
 
 #include "clvr_shared.h"
 #include "sfc.h"
-#ifndef CLVR_HK
-#define CLVR_HK clvr_hilbert3
-#endif
 
 /* Quantizes one coordinate to the 16-bit grid: (c - lo) * scale, clamped
  * to [0, 65535]. scale = 65536 / largest extent of the global box (one
@@ -38,7 +35,7 @@ CLVR_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const f
         float c = (lo[k] + hi[k]) * 0.5f;
         q[k] = clvr_pp_quantize(c, glo[k], scale);
     }
-    clvr_u64 code = morton ? clvr_morton3(q[0], q[1], q[2]) : CLVR_HK(q[0], q[1], q[2]);
+    clvr_u64 code = morton ? clvr_morton3(q[0], q[1], q[2]) : clvr_hilbert3(q[0], q[1], q[2]);
     return ((clvr_u64)type << 48) | code;
 }
 

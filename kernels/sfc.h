@@ -199,39 +199,6 @@ CLVR_SFC_TABLE clvr_u16 clvr_hilbert3_table[24 * 64] = {
     1202, 1267, 1205,  308, 1137,  240, 1526, 1335, 1274, 1277, 1211,  380, 1401, 1470, 1016, 1087,
 };
 
-/* The paper's 48-bit Hilbert key by the same sweep as clvr_hilbert3_bits
- * with bits = 16, written without branches (every test becomes a mask) and
- * with the Gray encode's excess-work loop as a log-step prefix XOR, so a
- * SIMD device runs it across work-items without divergence. */
-CLVR_INLINE clvr_u64 clvr_hilbert3_sweep16(clvr_u32 X0, clvr_u32 X1, clvr_u32 X2)
-{
-    for (clvr_u32 q = 15u; q >= 1u; --q) {
-        const clvr_u32 P = (1u << q) - 1u;
-        clvr_u32 m = 0u - ((X0 >> q) & 1u);
-        X0 ^= P & m;
-        m = 0u - ((X1 >> q) & 1u);
-        clvr_u32 t = (X0 ^ X1) & P & ~m;
-        X0 ^= (P & m) | t;
-        X1 ^= t;
-        m = 0u - ((X2 >> q) & 1u);
-        t = (X0 ^ X2) & P & ~m;
-        X0 ^= (P & m) | t;
-        X2 ^= t;
-    }
-    X1 ^= X0;
-    X2 ^= X1;
-    /* Bit i of u = parity of X2's bits above i: the XOR of Q - 1 over X2's set bits Q > 1. */
-    clvr_u32 u = X2 >> 1;
-    u ^= u >> 1;
-    u ^= u >> 2;
-    u ^= u >> 4;
-    u ^= u >> 8;
-    X0 ^= u;
-    X1 ^= u;
-    X2 ^= u;
-    return (clvr_sfc_spread3(X0) << 2) | (clvr_sfc_spread3(X1) << 1) | clvr_sfc_spread3(X2);
-}
-
 /* The paper's 48-bit Hilbert key: 16 bits per axis; equal to
  * clvr_hilbert3_bits(x, y, z, 16), computed with the state table from the
  * Morton code of (x, y, z). */

@@ -1,7 +1,7 @@
-/* limits.c: up-front device-memory estimate and the mesh scan for elements
- * that render but deserve a warning (limits.h). Host only; no OpenCL call,
+/* limits_check.c: up-front device-memory estimate and the mesh scan for elements
+ * that render but deserve a warning (limits_check.h). Host only; no OpenCL call,
  * so the fuzz targets link it without a device. */
-#include "limits.h"
+#include "limits_check.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-/* limits.h: what a mesh asks of the device and of the renderer, checked
+/* limits_check.h: what a mesh asks of the device and of the renderer, checked
  * before any long work starts.
  *
  * clvr_limits_check estimates the device memory of the whole run from the
@@ -11,8 +11,8 @@
  * Where main() calls them: clvr_limits_scan right after the mesh is loaded
  * (it needs a validated mesh), clvr_limits_check right after clvr_cl_create
  * and before clvr_preprocess. Errors and warnings name the file. */
-#ifndef CLVR_LIMITS_H
-#define CLVR_LIMITS_H
+#ifndef CLVR_LIMITS_CHECK_H
+#define CLVR_LIMITS_CHECK_H
 
 #include <stdint.h>
 #include <stdio.h>
@@ -87,4 +87,4 @@ void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out);
  * constant field gets a window around its value). */
 int clvr_limits_print_warnings(FILE *out, const char *what, const clvr_limits_report *r);
 
-#endif /* CLVR_LIMITS_H */
+#endif /* CLVR_LIMITS_CHECK_H */

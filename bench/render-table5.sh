@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# bench/render-table5.sh: the paper's Table 5 on our data with bench_render:
+# fps and Mrays/s at 1024x1024, 1 spp per frame, for march, track, bins and
+# dda (32^3 and 128^3 macrocells) on the PLOT3D sets, two real meshes, the
+# AMR-like generated meshes (1M and 10M elements) and a 50M-element mixed mesh.
+# Results go through bench/run-all.sh into bench/results/render/.
+#
+# Usage: bench/render-table5.sh [--build DIR] [--data DIR] [--small] [-- ARGS for bench_render]
+#   --build  build directory (default: build; bench_render, clvr-gen are built there)
+#   --data   where converted and generated meshes are kept (default: /tmp/clvr-bench)
+#   --small  skip the 10M and 50M meshes
+# Big meshes: PoCL's device memory defaults to about 4 GiB, so POCL_MEMORY_LIMIT=20 (GiB).
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+BUILD=$ROOT/build
+DATA=/tmp/clvr-bench
+SMALL=0
+EXTRA=()
+while [ $# -gt 0 ]; do
+  case $1 in
+    --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
+    --data) DATA=$2; shift 2 ;;
+    --small) SMALL=1; shift ;;
+    --) shift; EXTRA=("$@"); break ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+    *) echo "render-table5.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
+  esac
+done
+# Build what is needed; a build that fails (say, another module mid-edit) falls
+# back to binaries already there.
+cmake --build "$BUILD" -j2 --target bench_render clvr-gen clvr >/dev/null 2>&1 ||
+  echo "$(basename "$0"): warning: 'cmake --build $BUILD' failed; using the binaries already built" >&2
+for t in bench_render clvr-gen clvr; do
+  [ -x "$BUILD/$t" ] || { echo "$(basename "$0"): $BUILD/$t missing; build it first" >&2; exit 1; }
+done
+mkdir -p "$DATA"
+CONVERT=$ROOT/tools/clvr-convert
+for n in bluntfin comb post; do
+  [ -f "$DATA/$n.bin" ] || "$CONVERT" "$ROOT/tests/data/plot3d/${n}xyz.bin" "$DATA/$n.bin" --quiet
+done
+[ -f "$DATA/fire.bin" ] || "$CONVERT" "$ROOT/tests/data/vtk/fire_ug.vtu" "$DATA/fire.bin" --quiet
+[ -f "$DATA/amr-1M.bin" ] || "$BUILD/clvr-gen" amr "$DATA/amr-1M.bin" --elements 1M --quiet
+MESHES=(--mesh "$DATA/bluntfin.bin" --mesh "$DATA/comb.bin" --mesh "$DATA/post.bin"
+        --mesh "$ROOT/tests/data/vtk/notch_stress.vtk" --mesh "$DATA/fire.bin" --mesh "$DATA/amr-1M.bin")
+if [ $SMALL = 0 ]; then
+  # The shared generated sets when present (same generator, same sizes).
+  for pair in "amr 10M amr-10M" "mixed 50M mixed-50M"; do
+    read -r kind n name <<<"$pair"
+    f=/tmp/clvr-data/$name.bin
+    [ -f "$f" ] || f=$DATA/$name.bin
+    [ -f "$f" ] || "$BUILD/clvr-gen" "$kind" "$f" --elements "$n" --quiet
+    MESHES+=(--mesh "$f")
+  done
+fi
+export POCL_MEMORY_LIMIT=${POCL_MEMORY_LIMIT:-20}
+echo "render-table5.sh: load before: $(uptime)"
+rc=0
+"$ROOT/bench/run-all.sh" --build "$BUILD" --out "$ROOT/bench/results/render" --only render -- \
+  "${MESHES[@]}" "${EXTRA[@]}" || rc=$?
+echo "render-table5.sh: load after: $(uptime)"
+exit $rc

@@ -1,0 +1,188 @@
+#!/usr/bin/python3
+"""vtk_render.py: frame times of VTK's CPU unstructured-grid volume mappers on a
+clvr .bin tet mesh, for bench/render-vs-vtk.sh. Run with Debian's /usr/bin/python3
+(python3-vtk9) under `xvfb-run -a` (the window is off-screen but VTK's X11 build
+still wants a display).
+
+Usage: vtk_render.py MESH.bin --setup CONVERGE.json --json OUT.json [--size WxH]
+                     [--mappers raycast,pt,zsweep] [--frames N] [--image-dir DIR]
+
+MESH.bin: docs/bin-format.md; only tetrahedra are used (the three mappers take tets;
+other cells are counted and reported). CONVERGE.json: what `bench_render --converge`
+wrote for the same mesh: its camera (eye, target, up, fovy) and its baked transfer
+function (linear rgb and extinction per world unit over the scalar range), so both
+renderers see the same view and the same medium. Extinction sigma becomes VTK's
+per-unit-distance opacity: alpha = 1 - exp(-sigma * u) with ScalarOpacityUnitDistance u.
+Colours are sRGB-encoded for VTK, which blends display values.
+
+Timing per mapper: the first Render() (it builds the mapper's structures) is reported
+apart; then N frames, each after a 1-degree camera azimuth so that no mapper can reuse
+its previous image or sort, timed with wall clock around Render() (these mappers run on
+the CPU; vtkUnstructuredGridVolumeRayCastMapper uses every core through vtkMultiThreader;
+projected tetrahedra sort on the CPU and rasterise through Mesa's llvmpipe). The median
+is the frame time.
+"""
+import argparse
+import json
+import os
+import struct
+import sys
+import time
+
+import numpy as np
+import vtk
+from vtk.util import numpy_support
+
+
+def read_bin(path):
+    with open(path, "rb") as f:
+        head = f.read(256)
+        if head[:8] != b"CLVRMESH":
+            sys.exit(f"vtk_render.py: {path}: not a clvr .bin mesh")
+        nv, nt, npy, nw, nh = struct.unpack_from("<5Q", head, 16)
+        pos = np.fromfile(f, dtype="<f4", count=3 * nv).reshape(nv, 3)
+        sc = np.fromfile(f, dtype="<f4", count=nv)
+        tets = np.fromfile(f, dtype="<u4", count=4 * nt).reshape(nt, 4)
+    return pos, sc, tets, (npy, nw, nh)
+
+
+def build_grid(pos, sc, tets):
+    pts = vtk.vtkPoints()
+    pts.SetData(numpy_support.numpy_to_vtk(np.ascontiguousarray(pos), deep=1))
+    n = tets.shape[0]
+    conn = np.hstack([np.full((n, 1), 4, dtype=np.int64), tets.astype(np.int64)]).ravel()
+    cells = vtk.vtkCellArray()
+    cells.SetCells(n, numpy_support.numpy_to_vtkIdTypeArray(conn, deep=1))
+    ug = vtk.vtkUnstructuredGrid()
+    ug.SetPoints(pts)
+    ug.SetCells(vtk.VTK_TETRA, cells)
+    arr = numpy_support.numpy_to_vtk(np.ascontiguousarray(sc), deep=1)
+    arr.SetName("scalar")
+    ug.GetPointData().SetScalars(arr)
+    return ug
+
+
+def srgb(c):
+    c = max(0.0, min(1.0, c))
+    return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+
+
+def volume_property(tf, unit):
+    lo, hi = tf["range"]
+    table = tf["table"]
+    n = len(table)
+    ctf = vtk.vtkColorTransferFunction()
+    otf = vtk.vtkPiecewiseFunction()
+    step = max(1, n // 64)
+    for i in list(range(0, n, step)) + [n - 1]:
+        r, g, b, sigma = table[i]
+        x = lo + (hi - lo) * i / (n - 1)
+        ctf.AddRGBPoint(x, srgb(r), srgb(g), srgb(b))
+        otf.AddPoint(x, 1.0 - np.exp(-sigma * unit))
+    prop = vtk.vtkVolumeProperty()
+    prop.SetColor(ctf)
+    prop.SetScalarOpacity(otf)
+    prop.SetScalarOpacityUnitDistance(unit)
+    prop.SetInterpolationTypeToLinear()
+    prop.ShadeOff()
+    return prop
+
+
+def make_mapper(name):
+    if name == "raycast":
+        return vtk.vtkUnstructuredGridVolumeRayCastMapper()
+    if name == "pt":
+        return vtk.vtkProjectedTetrahedraMapper()
+    if name == "zsweep":
+        return vtk.vtkUnstructuredGridVolumeZSweepMapper()
+    sys.exit(f"vtk_render.py: unknown mapper {name}")
+
+
+FULL = {"raycast": "vtkUnstructuredGridVolumeRayCastMapper", "pt": "vtkProjectedTetrahedraMapper",
+        "zsweep": "vtkUnstructuredGridVolumeZSweepMapper"}
+
+
+def load1():
+    try:
+        return float(open("/proc/loadavg").read().split()[0])
+    except OSError:
+        return -1.0
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("mesh")
+    ap.add_argument("--setup", required=True)
+    ap.add_argument("--json", required=True)
+    ap.add_argument("--size", default="512x512")
+    ap.add_argument("--mappers", default="raycast,pt,zsweep")
+    ap.add_argument("--frames", type=int, default=3)
+    ap.add_argument("--image-dir")
+    a = ap.parse_args()
+    w, h = (int(v) for v in a.size.split("x"))
+    setup = json.load(open(a.setup))
+    t0 = time.time()
+    pos, sc, tets, others = read_bin(a.mesh)
+    ug = build_grid(pos, sc, tets)
+    build_s = time.time() - t0
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    diag = float(np.linalg.norm(hi - lo))
+    prop = volume_property(setup["tf"], diag / 256.0)
+    cam_j = setup["camera"]
+    bg = (0.05, 0.05, 0.07)
+    print(f"# vtk_render: {os.path.basename(a.mesh)}, {len(tets)} tets ({sum(others)} other cells ignored), "
+          f"{w}x{h}, VTK {vtk.vtkVersion.GetVTKVersion()}, grid built in {build_s:.2f} s", flush=True)
+    rows = []
+    for name in a.mappers.split(","):
+        mapper = make_mapper(name)
+        mapper.SetInputData(ug)
+        vol = vtk.vtkVolume()
+        vol.SetMapper(mapper)
+        vol.SetProperty(prop)
+        ren = vtk.vtkRenderer()
+        ren.SetBackground(*bg)
+        ren.AddVolume(vol)
+        win = vtk.vtkRenderWindow()
+        win.SetOffScreenRendering(1)
+        win.SetSize(w, h)
+        win.AddRenderer(ren)
+        cam = ren.GetActiveCamera()
+        cam.SetPosition(*cam_j["eye"])
+        cam.SetFocalPoint(*cam_j["target"])
+        cam.SetViewUp(*cam_j["up"])
+        cam.SetViewAngle(cam_j["fovy"])
+        ren.ResetCameraClippingRange()
+        load_before = load1()
+        t = time.time()
+        win.Render()
+        first = time.time() - t
+        times = []
+        for _ in range(a.frames):
+            cam.Azimuth(1.0)
+            ren.ResetCameraClippingRange()
+            t = time.time()
+            win.Render()
+            times.append(time.time() - t)
+        med = float(np.median(times))
+        row = {"mapper": FULL[name], "short": name, "first_frame_s": first, "frame_s": med, "frames_s": times,
+               "load_before": load_before, "load_after": load1()}
+        if a.image_dir:
+            os.makedirs(a.image_dir, exist_ok=True)
+            w2i = vtk.vtkWindowToImageFilter()
+            w2i.SetInput(win)
+            w2i.Update()
+            png = vtk.vtkPNGWriter()
+            png.SetFileName(os.path.join(a.image_dir, f"vtk-{name}.png"))
+            png.SetInputConnection(w2i.GetOutputPort())
+            png.Write()
+        print(f"| {FULL[name]} | {first:.2f} | {med:.2f} | {len(times)} | {row['load_after']:.2f} |", flush=True)
+        rows.append(row)
+        win.Finalize()
+        del win, ren, vol, mapper
+    json.dump({"bench": "vtk_render", "mesh": a.mesh, "tets": int(len(tets)), "width": w, "height": h,
+               "vtk": vtk.vtkVersion.GetVTKVersion(), "grid_build_s": build_s, "rows": rows}, open(a.json, "w"),
+              indent=1)
+
+
+if __name__ == "__main__":
+    main()
