@@ -27,6 +27,7 @@
     X(ERR_OPENCL, 4, "OpenCL call failed")                                   \
     X(ERR_KERNEL_BUILD, 4, "OpenCL kernel build failed")                     \
     X(ERR_DEVICE_MEMORY, 4, "not enough device memory")                      \
+    X(ERR_NO_DISPLAY, 4, "no display for the viewer")                        \
     X(ERR_WRITE, 5, "cannot write output file")                              \
     X(ERR_INTERRUPTED, 1, "interrupted")                                     \
     X(ERR_INTERNAL, 1, "internal error")

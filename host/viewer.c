@@ -925,7 +925,7 @@ static clvr_status no_display(clvr_error *err)
 {
     const char *desc = NULL;
     glfwGetError(&desc);
-    return clvr_error_set(err, CLVR_ERR_NO_DEVICE,
+    return clvr_error_set(err, CLVR_ERR_NO_DISPLAY,
                           "--view cannot open a window (%s); run it on a display (or under xvfb-run), or "
                           "render to a file instead: clvr MESH -o image.png",
                           desc ? desc : "no display");
@@ -1002,7 +1002,7 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
     if (!v->win) {
         const char *desc = NULL;
         glfwGetError(&desc);
-        s = clvr_error_set(err, CLVR_ERR_NO_DEVICE,
+        s = clvr_error_set(err, CLVR_ERR_NO_DISPLAY,
                            "--view cannot create an OpenGL window (%s); render to a file instead with -o image.png",
                            desc ? desc : "unknown GLFW error");
         goto cleanup;

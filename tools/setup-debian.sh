@@ -17,7 +17,7 @@ PACKAGES=(
   # tools/clvr-convert (runs with /usr/bin/python3) and test-mesh generation.
   python3-vtk9 python3-numpy tetgen
   # Headless viewer tests.
-  xvfb xauth
+  xvfb xauth xdotool
   # libFuzzer and the sanitizer runtimes for the fuzz targets.
   clang libclang-rt-14-dev
 )
