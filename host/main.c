@@ -217,6 +217,11 @@ int main(int argc, char **argv)
         }
     }
     stats.render_wall_s = now_s() - start;
+    if (frame == 0) { /* interrupted before the first frame finished */
+        fprintf(stderr, "clvr: interrupted before the first frame; no image written\n");
+        rc = 130;
+        goto cleanup;
+    }
 
     size_t npix = (size_t)o.width * o.height;
     pixels = malloc(npix * 4 * sizeof(float));
