@@ -9,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <stdio.h> /* TEMP */
 
 #define ARG(k, i, v) CLVR_CL_CHECK(clSetKernelArg((k), (i), sizeof(v), &(v)))
 
@@ -443,7 +442,6 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         else
             CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "element indices", &idx_in, err));
         if (zero_copy) st[CLVR_PP_STAGE_UPLOAD] += wall_now() - tu;
-        if (getenv("PPDBG")) fprintf(stderr, "DBG upload %.4f\n", wall_now() - tu); /* TEMP */
     }
     {
         cl_event ev[2 + CLVR_CELL_TYPE_COUNT] = {0};

@@ -16,6 +16,8 @@ PACKAGES=(
   cmake make gcc g++ pkg-config
   # tools/clvr-convert (runs with /usr/bin/python3) and test-mesh generation.
   python3-vtk9 python3-numpy tetgen
+  # Benchmarks: Embree 3 (the paper's Table 3 and issue 4 comparisons), VTK C++ for its cell locator.
+  libembree-dev libvtk9-dev
   # Headless viewer tests.
   xvfb xauth xdotool
   # libFuzzer and the sanitizer runtimes for the fuzz targets.
