@@ -388,13 +388,13 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
     if (rc != CL_SUCCESS) {
         size_t logsize = 0;
         clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &logsize);
-        char *log = malloc(logsize + 1);
+        char *log = malloc(logsize + 64); /* room for the injected-failure note */
         if (log) {
             log[0] = 0;
             clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, logsize, log, NULL);
             log[logsize] = 0;
         }
-        if (clvr_cl_fault("clBuildProgram") && log) snprintf(log, logsize + 1, "%s", "(injected by CLVR_FAIL)");
+        if (clvr_cl_fault("clBuildProgram") && log) snprintf(log, logsize + 64, "%s", "(injected by CLVR_FAIL)");
         s = clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "building kernels/%s for %s failed (%s):\n%s", entry,
                            cl->device_name, clvr_cl_error_name(rc), log && *log ? log : "(empty build log)");
         free(log);
@@ -473,8 +473,16 @@ clvr_status clvr_cl_run1d(clvr_cl *cl, cl_kernel k, size_t n, size_t local, cl_e
     size_t global = (n + local - 1) / local * local;
     cl_int rc = CLVR_FAULT_CODE("clEnqueueNDRangeKernel", CL_OUT_OF_RESOURCES);
     if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 1, NULL, &global, &local, 0, NULL, evt);
-    CLVR_CL_CHECK(rc);
-cleanup:
+    if (rc != CL_SUCCESS) {
+        char name[128] = "?";
+        clGetKernelInfo(k, CL_KERNEL_FUNCTION_NAME, sizeof name, name, NULL);
+        int memory = rc == CL_OUT_OF_RESOURCES || rc == CL_MEM_OBJECT_ALLOCATION_FAILURE;
+        s = clvr_error_set(err, memory ? CLVR_ERR_DEVICE_MEMORY : CLVR_ERR_OPENCL,
+                           "OpenCL call clEnqueueNDRangeKernel(%s, %zu work items) failed with %s on %s%s", name, n,
+                           clvr_cl_error_name(rc), cl->device_name,
+                           memory ? "; the device ran out of memory: try a smaller image or mesh, or another --device"
+                                  : "");
+    }
     return s;
 }
 

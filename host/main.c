@@ -15,6 +15,7 @@
 #include "cli.h"
 #include "image.h"
 #include "info.h"
+#include "limits_check.h"
 #include "mesh_io.h"
 #include "preprocess.h"
 #include "render.h"
@@ -119,6 +120,21 @@ int main(int argc, char **argv)
         goto cleanup;
     }
 
+    /* Flaws that render anyway (degenerate, inverted, duplicate elements, a
+     * constant field) get one warning line each, --quiet or not. */
+    {
+        clvr_limits_report lr;
+        clvr_limits_scan(&mesh, &lr);
+        clvr_limits_print_warnings(stderr, mesh_name, &lr);
+    }
+
+    /* The transfer function needs only the scalar range: load it now, so a
+     * typo in --tf FILE fails before minutes of preprocessing. */
+    s = clvr_tf_from_options(&tf, o.colormap, o.tf_file, o.range_set, o.range_lo, o.range_hi, o.density,
+                             mesh.scalar_min, mesh.scalar_max, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    clvr_tf_set_extent(&tf, mesh.bounds_lo, mesh.bounds_hi);
+
     /* --- device */
     s = clvr_cl_create(o.device, &cl, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
@@ -132,6 +148,10 @@ int main(int argc, char **argv)
     clvr_preprocess_options_default(&po);
     po.leaf_size = o.leaf_size;
     if (o.sampling_size) po.sampling_size = o.sampling_size;
+    /* A mesh or image the device cannot hold fails now, with the numbers,
+     * not minutes into preprocessing. */
+    s = clvr_limits_check_named(&cl, &mesh, mesh_name, &po, o.width, o.height, &err);
+    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     t0 = now_s();
     s = clvr_preprocess(&cl, &mesh, &po, &clustered, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
@@ -150,10 +170,6 @@ int main(int argc, char **argv)
     clvr_stats_from_clusters(&stats, &clustered, &bvh);
 
     /* --- transfer function and camera */
-    s = clvr_tf_from_options(&tf, o.colormap, o.tf_file, o.range_set, o.range_lo, o.range_hi, o.density,
-                             mesh.scalar_min, mesh.scalar_max, &err);
-    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    clvr_tf_set_extent(&tf, mesh.bounds_lo, mesh.bounds_hi);
     clvr_camera cam;
     if (o.camera_set)
         s = clvr_camera_look_at(&cam, o.camera, o.camera + 3, o.camera + 6, o.fovy, o.width, o.height, &err);

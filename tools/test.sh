@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${CLVR_BUILD:-build}
 JOBS=${CLVR_JOBS:-2}
-DEFAULT_STAGES=(setup configure build test)
+DEFAULT_STAGES=(setup configure build test sanitize fuzz)
 
 # Packages: tools/setup-debian.sh returns at once when all are installed, and uses
 # sudo itself when it must install as a user that is not root.
@@ -31,6 +31,62 @@ stage_build() {
 
 stage_test() {
   ctest --test-dir "$BUILD" --output-on-failure
+}
+
+# [hostile] The whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer
+# (gcc, build-asan), without the `slow` label. PoCL's own leaks and its LLVM JIT
+# need a few runtime options: see tools/sanitizer.supp and tools/sanitizer.env.
+ASAN_BUILD=${CLVR_ASAN_BUILD:-build-asan}
+stage_sanitize() {
+  mkdir -p "$ASAN_BUILD"
+  cmake -S . -B "$ASAN_BUILD" -DCLVR_SANITIZE=ON -DCLVR_WERROR=ON -DCLVR_BIG_TESTS=OFF \
+    >"$ASAN_BUILD/configure.log" 2>&1 || { cat "$ASAN_BUILD/configure.log" >&2; return 1; }
+  cmake --build "$ASAN_BUILD" -j"$JOBS"
+  (
+    # shellcheck source=tools/sanitizer.env
+    . tools/sanitizer.env
+    ctest --test-dir "$ASAN_BUILD" -LE "slow|$CLVR_SANITIZE_NO_LEAK_LABELS" --output-on-failure
+    ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" \
+      ctest --test-dir "$ASAN_BUILD" -L "$CLVR_SANITIZE_NO_LEAK_LABELS" -LE slow --output-on-failure
+  )
+}
+
+# [hostile] libFuzzer (clang, build-fuzz) on every reader and the transfer-function
+# parser, CLVR_FUZZ_SECONDS each (default 45) with ASan + UBSan, seeded with
+# tests/fuzz/seeds, tests/fuzz/regressions and tests/data. The corpus grows in
+# build-fuzz/corpus between runs. A crash stops the stage with the input's path:
+# fix the parser, then copy the input to tests/fuzz/regressions/<target>/.
+FUZZ_BUILD=${CLVR_FUZZ_BUILD:-build-fuzz}
+FUZZ_SECONDS=${CLVR_FUZZ_SECONDS:-45}
+stage_fuzz() {
+  command -v clang >/dev/null || { echo "fuzz: clang not found (tools/setup-debian.sh installs it)" >&2; return 1; }
+  mkdir -p "$FUZZ_BUILD"
+  CC=clang cmake -S . -B "$FUZZ_BUILD" -DCLVR_FUZZ=ON -DCLVR_WERROR=ON -DCLVR_BIG_TESTS=OFF -DCLVR_VIEWER=OFF \
+    >"$FUZZ_BUILD/configure.log" 2>&1 || { cat "$FUZZ_BUILD/configure.log" >&2; return 1; }
+  cmake --build "$FUZZ_BUILD" -j"$JOBS" --target fuzz_bin fuzz_umesh fuzz_vtk fuzz_tf
+  local t
+  for t in bin umesh vtk tf; do
+    local corpus="$FUZZ_BUILD/corpus/$t" artifacts="$FUZZ_BUILD/artifacts/$t" log="$FUZZ_BUILD/fuzz_$t.log"
+    local seeds=(tests/fuzz/seeds/"$t" tests/fuzz/regressions/"$t") opts=()
+    case $t in
+      umesh) seeds+=(tests/data/umesh) ;;
+      vtk) seeds+=(tests/data/vtk); opts+=(-dict=tests/fuzz/vtk.dict) ;;
+      tf) opts+=(-dict=tests/fuzz/tf.dict) ;;
+    esac
+    mkdir -p "$corpus" "$artifacts"
+    # -max_len keeps the big tests/data files as (truncated) seeds without
+    # slowing every run; leaks are errors (libFuzzer's default with ASan).
+    if ! UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$FUZZ_BUILD/fuzz_$t" \
+        -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+        -artifact_prefix="$artifacts/" -print_final_stats=1 "${opts[@]}" "$corpus" "${seeds[@]}" >"$log" 2>&1; then
+      tail -n 40 "$log" >&2
+      echo "fuzz_$t: crash; input(s): $(ls "$artifacts"/* 2>/dev/null | tr '\n' ' ')" >&2
+      echo "fuzz_$t: fix it, then: cp INPUT tests/fuzz/regressions/$t/<what-it-was> (replayed by ctest)" >&2
+      return 1
+    fi
+    echo "fuzz_$t: $(sed -n 's/^stat::number_of_executed_units: *//p' "$log") runs in ${FUZZ_SECONDS} s," \
+      "$(grep -o 'cov: [0-9]*' "$log" | tail -n 1), corpus $(find "$corpus" -type f | wc -l) files, no crash"
+  done
 }
 
 stages=("$@")
