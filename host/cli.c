@@ -88,8 +88,9 @@ void clvr_cli_print_help(FILE *out)
         "  The strip at the bottom shows the colour map and opacity over the scalar range, with\n"
         "  the window's ends marked in white. Any change restarts the accumulation.\n"
         "\n"
-        "Exit status: 0 success, 2 bad command line, 3 bad input file, 4 OpenCL device problem,\n"
-        "5 cannot write output, 1 other errors. Messages go to stderr.\n",
+        "Exit status: 0 success, 2 bad command line, 3 bad input file, 4 OpenCL device problem\n"
+        "(or no display for --view), 5 cannot write output, 130 interrupted (the image so far is\n"
+        "written), 1 other errors. Messages go to stderr.\n",
         out);
 }
 

@@ -121,9 +121,9 @@ clvr_status clvr_mesh_load(const char *path, const clvr_load_options *opt, clvr_
     if (has_ext(path, ".vtk")) return clvr_mesh_load_vtk(path, opt, out, err);
     if (has_ext(path, ".vtu"))
         return clvr_error_set(err, CLVR_ERR_FORMAT,
-                              "%s: VTK XML (.vtu) is not read directly; save it as a legacy .vtk "
-                              "(e.g. ParaView 'Save Data' as .vtk, or meshio) and load that",
-                              path);
+                              "%s: VTK XML (.vtu) is not read directly; convert it with "
+                              "tools/clvr-convert %s OUT.bin (or save it as legacy .vtk) and load that",
+                              path, path);
     return clvr_error_set(err, CLVR_ERR_FORMAT,
                           "%s: unknown mesh format (%llu bytes); clvr reads clvr .bin, .umesh and legacy VTK .vtk "
                           "unstructured grids",
