@@ -53,7 +53,7 @@ void clvr_cli_print_help(FILE *out)
         "  --segments M           ray segments for --method bins (default 4)\n"
         "  --macrocells R         R^3 macrocell grid for --method dda (default 64)\n"
         "  --leaf-size N          elements per leaf cluster: 1, 4, 8, 16, 32 (default 16)\n"
-        "  --sampling-size N      elements per adaptive sampling cluster (default: automatic)\n"
+        "  --sampling-size N      elements per adaptive sampling cluster (default 16)\n"
         "\n"
         "Scene:\n"
         "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"

@@ -23,7 +23,7 @@ void clvr_preprocess_options_default(clvr_preprocess_options *o)
 {
     memset(o, 0, sizeof *o);
     o->leaf_size = 16;
-    o->sampling_size = 256;
+    o->sampling_size = 16;
     o->morton = 0;
     o->index_bits = 16;
     o->max_instance_elements = 0;
@@ -38,7 +38,7 @@ clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_prep
         return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: leaf_size %u is outside 1..128 (paper: 16)",
                               out->leaf_size);
     if (out->sampling_size < 1)
-        return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: sampling_size must be at least 1 (default 256)");
+        return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: sampling_size must be at least 1 (default 16)");
     if (out->index_bits != 16 && out->index_bits != 32)
         return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: index_bits is %u; use 16 or 32", out->index_bits);
     if (out->max_instance_elements == 0) out->max_instance_elements = out->index_bits == 16 ? 1u << 20 : 1u << 16;

@@ -21,11 +21,11 @@
 
 typedef struct clvr_preprocess_options {
     uint32_t leaf_size;       /* elements per leaf cluster, 1..128 (paper: 16; default 16) */
-    uint32_t sampling_size;   /* elements per adaptive-sampling cluster, >= 1. Default 256: a cluster
-                                 then spans about 6 elements per axis, so its majorant stays local,
-                                 while the sampling tree has N/256 leaves (0.125 B/element) and rays
-                                 cross few clusters (the paper, sec. 5, finds coarse majorant
-                                 structures render fastest because Delta Tracking skips further) */
+    uint32_t sampling_size;   /* elements per adaptive-sampling cluster, >= 1. Default 16, like a
+                                 leaf cluster: measured on the default scene (dda, 64^3 cells),
+                                 16 gives 0.14 samples and 0.10 null collisions per ray against
+                                 0.26 and 0.22 with 256, and twice the rays/s; the bins method is
+                                 about as fast with 16 as with 256. Costs 2 bytes per element. */
     int morton;               /* 0: Hilbert curve (paper); 1: Morton order (for comparison) */
     uint32_t index_bits;      /* 16 (default): instances grow greedily until they would reference
                                  more than 65535 vertices, 16-bit local indices (paper 3.3);
