@@ -12,6 +12,8 @@
  *
  *   bench_locate_embree [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
  *                       [--queries Q] [--leaf N] [--order random|sorted] [--threads T] [--local L]
+ *   defaults: 56^3 cubes cut into 6 Kuhn tets (1,053,696 tets), 1M random points, leaf clusters of 8,
+ *   2 threads, work-group 64
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
  *
  * Last line: `point_queries_vs_embree: RATIO` (clvr queries/s over Embree's;
@@ -67,25 +69,6 @@ static double median(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, cmp_double);
     return v[n / 2];
-}
-
-/* ------------------------------------------------------------ mesh access (original order) */
-
-/* Vertices of original element g (types concatenated in CLVR_CELL_* order). */
-static uint32_t mesh_element(const clvr_mesh *m, uint64_t g, clvr_vec4 *v)
-{
-    uint32_t t = 0;
-    while (t + 1 < CLVR_CELL_TYPE_COUNT && g >= m->num_cells[t]) g -= m->num_cells[t++];
-    const uint32_t nv = clvr_cell_vertex_count(t);
-    const uint32_t *ix = m->indices[t] + g * nv;
-    for (uint32_t k = 0; k < nv; ++k) {
-        const float *p = m->positions + 3 * (uint64_t)ix[k];
-        v[k].x = p[0];
-        v[k].y = p[1];
-        v[k].z = p[2];
-        v[k].w = m->scalars[ix[k]];
-    }
-    return t;
 }
 
 /* ------------------------------------------------------------ clvr */
@@ -209,11 +192,30 @@ static bool emb_monitor(void *user, ssize_t bytes, bool post)
     return true;
 }
 
+/* The mesh as Embree's callbacks read it: original element order, vertices
+ * packed as x y z scalar (one 16-byte load each, as clvr's clustered
+ * vertices; the same bytes as positions + scalars). */
+typedef struct emb_mesh {
+    const clvr_mesh *m;
+    clvr_vec4 *v4;
+} emb_mesh;
+
+static uint32_t emb_element(const emb_mesh *em, uint64_t g, clvr_vec4 *v)
+{
+    const clvr_mesh *m = em->m;
+    uint32_t t = 0;
+    while (t + 1 < CLVR_CELL_TYPE_COUNT && g >= m->num_cells[t]) g -= m->num_cells[t++];
+    const uint32_t nv = clvr_cell_vertex_count(t);
+    const uint32_t *ix = m->indices[t] + g * nv;
+    for (uint32_t k = 0; k < nv; ++k) v[k] = em->v4[ix[k]];
+    return t;
+}
+
 static void emb_bounds(const struct RTCBoundsFunctionArguments *a)
 {
-    const clvr_mesh *m = a->geometryUserPtr;
+    const emb_mesh *m = a->geometryUserPtr;
     clvr_vec4 v[8];
-    const uint32_t t = mesh_element(m, a->primID, v);
+    const uint32_t t = emb_element(m, a->primID, v);
     const uint32_t nv = clvr_cell_vertex_count(t);
     float lx = v[0].x, ly = v[0].y, lz = v[0].z, hx = lx, hy = ly, hz = lz;
     for (uint32_t i = 1; i < nv; ++i) {
@@ -229,7 +231,7 @@ static void emb_bounds(const struct RTCBoundsFunctionArguments *a)
 /* Per-query state rides behind Embree's context (the documented way). */
 typedef struct emb_ctx {
     struct RTCIntersectContext ctx;
-    const clvr_mesh *m;
+    const emb_mesh *m;
     float px, py, pz, scalar;
     int found;
 } emb_ctx;
@@ -239,7 +241,7 @@ static void emb_intersect(const struct RTCIntersectFunctionNArguments *a)
     if (!a->valid[0]) return;
     emb_ctx *q = (emb_ctx *)a->context;
     clvr_vec4 v[8];
-    const uint32_t t = mesh_element(q->m, a->primID, v);
+    const uint32_t t = emb_element(q->m, a->primID, v);
     float s;
     if (!clvr_element_sample(t, v, q->px, q->py, q->pz, &s)) return;
     q->found = 1;
@@ -252,7 +254,7 @@ static void emb_intersect(const struct RTCIntersectFunctionNArguments *a)
 }
 
 typedef struct emb_pq {
-    const clvr_mesh *m;
+    const emb_mesh *m;
     float scalar;
     int found;
 } emb_pq;
@@ -262,7 +264,7 @@ static bool emb_point(struct RTCPointQueryFunctionArguments *a)
     emb_pq *q = a->userPtr;
     if (q->found) return false; /* rtcPointQuery has no early exit; later candidates cost one branch */
     clvr_vec4 v[8];
-    const uint32_t t = mesh_element(q->m, a->primID, v);
+    const uint32_t t = emb_element(q->m, a->primID, v);
     float s;
     if (clvr_element_sample(t, v, a->query->x, a->query->y, a->query->z, &s)) {
         q->found = 1;
@@ -273,7 +275,7 @@ static bool emb_point(struct RTCPointQueryFunctionArguments *a)
 
 typedef struct emb_job {
     RTCScene scene;
-    const clvr_mesh *m;
+    const emb_mesh *m;
     float (*pts)[4];
     uint32_t begin, end;
     int use_pq;
@@ -315,7 +317,7 @@ static void *emb_worker(void *arg)
 }
 
 /* Queries all points on `threads` pthreads; returns wall seconds. */
-static double emb_query(RTCScene scene, const clvr_mesh *m, float (*pts)[4], uint32_t nq, int threads, int use_pq,
+static double emb_query(RTCScene scene, const emb_mesh *m, float (*pts)[4], uint32_t nq, int threads, int use_pq,
                         float *scalars)
 {
     pthread_t th[64];
@@ -333,8 +335,17 @@ static double emb_query(RTCScene scene, const clvr_mesh *m, float (*pts)[4], uin
     return now_s() - t0;
 }
 
-static int run_embree(const clvr_mesh *m, float (*pts)[4], uint32_t nq, int threads, result r[2])
+static int run_embree(const clvr_mesh *mesh, float (*pts)[4], uint32_t nq, int threads, result r[2])
 {
+    emb_mesh em = {mesh, malloc((size_t)(mesh->num_vertices ? mesh->num_vertices : 1) * sizeof(clvr_vec4))};
+    const emb_mesh *m = &em;
+    if (!em.v4) return -1;
+    for (uint64_t i = 0; i < mesh->num_vertices; ++i) {
+        em.v4[i].x = mesh->positions[3 * i];
+        em.v4[i].y = mesh->positions[3 * i + 1];
+        em.v4[i].z = mesh->positions[3 * i + 2];
+        em.v4[i].w = mesh->scalars[i];
+    }
     char cfg[64];
     snprintf(cfg, sizeof cfg, "threads=%d", threads);
     RTCDevice dev = rtcNewDevice(cfg);
@@ -344,7 +355,7 @@ static int run_embree(const clvr_mesh *m, float (*pts)[4], uint32_t nq, int thre
     }
     emb_mem mm = {0, 0, PTHREAD_MUTEX_INITIALIZER};
     rtcSetDeviceMemoryMonitorFunction(dev, emb_monitor, &mm);
-    const uint64_t ne = clvr_mesh_num_elements(m);
+    const uint64_t ne = clvr_mesh_num_elements(mesh);
     const double t0 = now_s();
     RTCScene scene = rtcNewScene(dev);
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
@@ -364,9 +375,12 @@ static int run_embree(const clvr_mesh *m, float (*pts)[4], uint32_t nq, int thre
         o->sort_s = 0.0;
         o->tree_bytes = (uint64_t)(mm.now > 0 ? mm.now : 0);
         o->index_bytes = 0;
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) o->index_bytes += clvr_mesh_num_indices(m, t) * 4u;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) o->index_bytes += clvr_mesh_num_indices(mesh, t) * 4u;
         o->scalars = malloc((size_t)(nq ? nq : 1) * sizeof *o->scalars);
-        if (!o->scalars) return -1;
+        if (!o->scalars) {
+            free(em.v4);
+            return -1;
+        }
         emb_query(scene, m, pts, nq < 1000 ? nq : 1000, threads, api, o->scalars); /* warm-up */
         double t[NRUNS], tc[NRUNS], ld[NRUNS];
         for (int i = 0; i < NRUNS; ++i) {
@@ -385,6 +399,7 @@ static int run_embree(const clvr_mesh *m, float (*pts)[4], uint32_t nq, int thre
     fprintf(stderr, "# embree: peak memory during the build %.1f MB\n", (double)mm.peak / 1e6);
     rtcReleaseScene(scene);
     rtcReleaseDevice(dev);
+    free(em.v4);
     return 0;
 }
 #endif

@@ -59,30 +59,6 @@ CLVR_INLINE clvr_u32 clvr_bvh_node_point_mask(CLVR_GLOBAL const clvr_bvh_node *n
 #endif
 }
 
-/* Like clvr_bvh_node_point_mask, and depth[c] receives how deep p lies in
- * child c's box: the smallest distance from p to one of its faces. A point
- * deep inside a cluster's box is more likely inside one of its elements than
- * a point near the box's rim, where neighbouring clusters' boxes overlap. */
-CLVR_INLINE clvr_u32 clvr_bvh_node_point_depth(CLVR_GLOBAL const clvr_bvh_node *n, float px, float py, float pz,
-                                               float *depth)
-{
-#ifdef __OPENCL_VERSION__
-    CLVR_GLOBAL const float4 *q = (CLVR_GLOBAL const float4 *)n;
-    const float4 dx = fmin(px - q[0], q[3] - px), dy = fmin(py - q[1], q[4] - py), dz = fmin(pz - q[2], q[5] - pz);
-    const float4 d = fmin(fmin(dx, dy), dz);
-    const int4 in = (px >= q[0]) & (py >= q[1]) & (pz >= q[2]) & (px <= q[3]) & (py <= q[4]) & (pz <= q[5]);
-    depth[0] = d.x; depth[1] = d.y; depth[2] = d.z; depth[3] = d.w;
-    return (clvr_u32)((in.x & 1) | (in.y & 2) | (in.z & 4) | (in.w & 8));
-#else
-    for (int c = 0; c < 4; ++c) {
-        const float dx = fmin(px - n->lo_x[c], n->hi_x[c] - px), dy = fmin(py - n->lo_y[c], n->hi_y[c] - py);
-        const float dz = fmin(pz - n->lo_z[c], n->hi_z[c] - pz);
-        depth[c] = fmin(fmin(dx, dy), dz);
-    }
-    return clvr_bvh_node_point_mask(n, px, py, pz);
-#endif
-}
-
 /* Next primitive whose box contains the point; 0 when there is none left. */
 CLVR_INLINE int clvr_bvh_point_next(clvr_bvh_point_iter *it, CLVR_GLOBAL const clvr_bvh_node *nodes, clvr_u32 *prim)
 {

@@ -83,50 +83,31 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
     return 0;
 }
 
-/* Leaf clusters whose boxes hold the query point, collected over both
- * levels before any is searched, so that they can be searched deepest
- * first (see clvr_bvh_node_point_depth): with 4-16 elements per leaf a
- * point lies in the boxes of about ten leaves, and the deepest one holds
- * it about twice as often as a random one. Past CLVR_LOCATE_CANDIDATES a
- * leaf is searched at once, in traversal order (still correct). */
-#ifndef CLVR_LOCATE_CANDIDATES
-#define CLVR_LOCATE_CANDIDATES 16
-#endif
-
-typedef struct clvr_locate_cands {
-    clvr_u32 n;
-    clvr_u32 inst[CLVR_LOCATE_CANDIDATES];
-    clvr_u32 leaf[CLVR_LOCATE_CANDIDATES];
-    float depth[CLVR_LOCATE_CANDIDATES];
-} clvr_locate_cands;
-
-/* Walks instance ci's bottom-level tree and collects the leaves whose
- * boxes hold p; a leaf that does not fit is searched at once (returns 1
- * when it holds p). */
-CLVR_INLINE int clvr_locate_collect(const clvr_instance *inst, clvr_u32 ci, float px, float py, float pz,
-                                    CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_vec4 *vertices,
-                                    CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
-                                    clvr_u32 leaf_size, clvr_locate_cands *cands, float *scalar, clvr_u32 *element_id)
+/* Walks instance inst's bottom-level tree: every leaf cluster whose box
+ * holds p is searched as soon as its parent's box test finds it (no stack
+ * round trip for primitives); inner children go on a private stack.
+ * Measured on PoCL (1M tets, bench_locate): this beats the generic
+ * iterator by 35% on coherent and 50-80% on random queries; collecting all
+ * candidate leaves first to search the deepest-inside first (fewer leaves
+ * searched) lost about 10% on coherent queries and gained nothing clear on
+ * random ones, so leaves are searched in traversal order. */
+CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, float py, float pz,
+                                        CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_vec4 *vertices,
+                                        CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
+                                        clvr_u32 leaf_size, float *scalar, clvr_u32 *element_id)
 {
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = inst->bvh_root;
     for (;;) {
         CLVR_GLOBAL const clvr_bvh_node *n = blas + ref;
-        float depth[4];
-        const clvr_u32 mask = clvr_bvh_node_point_depth(n, px, py, pz, depth);
+        const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
         for (clvr_u32 c = 0; c < 4; ++c) {
             if (!((mask >> c) & 1u)) continue;
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
-                if (cands->n < CLVR_LOCATE_CANDIDATES) {
-                    cands->inst[cands->n] = ci;
-                    cands->leaf[cands->n] = ch & CLVR_BVH_MAX_PRIMS;
-                    cands->depth[cands->n] = depth[c];
-                    ++cands->n;
-                } else if (clvr_locate_in_leaf(inst, ch & CLVR_BVH_MAX_PRIMS, px, py, pz, vertices, idx16, idx32,
-                                               leaf_size, scalar, element_id)) {
+                if (clvr_locate_in_leaf(inst, ch & CLVR_BVH_MAX_PRIMS, px, py, pz, vertices, idx16, idx32, leaf_size,
+                                        scalar, element_id))
                     return 1;
-                }
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
             }
@@ -148,8 +129,6 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
                             clvr_u32 *element_id)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
-    clvr_locate_cands cands;
-    cands.n = 0;
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = tlas_root;
     for (;;) {
@@ -160,30 +139,16 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
                 const clvr_instance inst = instances[ch & CLVR_BVH_MAX_PRIMS];
-                if (clvr_locate_collect(&inst, ch & CLVR_BVH_MAX_PRIMS, px, py, pz, blas, vertices, idx16, idx32,
-                                        leaf_size, &cands, scalar, element_id))
+                if (clvr_locate_in_instance(&inst, px, py, pz, blas, vertices, idx16, idx32, leaf_size, scalar,
+                                            element_id))
                     return 1;
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
             }
         }
-        if (sp == 0) break;
+        if (sp == 0) return 0;
         ref = stack[--sp];
     }
-    /* Deepest candidate first (selection: the list is short). */
-    for (clvr_u32 k = 0; k < cands.n; ++k) {
-        clvr_u32 best = k;
-        for (clvr_u32 j = k + 1; j < cands.n; ++j)
-            if (cands.depth[j] > cands.depth[best]) best = j;
-        const clvr_u32 ci = cands.inst[best], leaf = cands.leaf[best];
-        cands.inst[best] = cands.inst[k];
-        cands.leaf[best] = cands.leaf[k];
-        cands.depth[best] = cands.depth[k];
-        const clvr_instance inst = instances[ci];
-        if (clvr_locate_in_leaf(&inst, leaf, px, py, pz, vertices, idx16, idx32, leaf_size, scalar, element_id))
-            return 1;
-    }
-    return 0;
 }
 
 /* The renderer's entry point: clvr_locate without the element id. */
