@@ -1,4 +1,5 @@
 #include "cli.h"
+#include "render.h"
 
 #include <errno.h>
 #include <math.h>
@@ -96,28 +97,28 @@ void clvr_cli_print_help(FILE *out)
 
 static void defaults(clvr_options *o)
 {
+    /* Rendering defaults live in one place, the renderer's. */
+    clvr_render_settings rs;
+    clvr_render_settings_default(&rs);
     memset(o, 0, sizeof *o);
     o->output = "clvr.png";
-    o->width = o->height = 512;
+    o->width = rs.width;
+    o->height = rs.height;
     o->spp = 64;
-    o->seed = 1;
-    o->method = CLVR_METHOD_DDA;
-    o->bins = 32;
-    o->segments = 4;
-    o->macrocells = 64;
-    o->shadows = 1;
+    o->seed = rs.seed;
+    o->method = (clvr_method)rs.method;
+    o->bins = rs.bins;
+    o->segments = rs.segments;
+    o->macrocells = rs.macrocells;
+    o->shadows = rs.shadows;
     o->leaf_size = 16;
     o->fovy = 40.0f;
     o->colormap = "cool-warm";
     o->density = 1.0f;
-    o->light_dir[0] = 1.0f;
-    o->light_dir[1] = 2.0f;
-    o->light_dir[2] = 1.5f;
-    o->light_intensity = 1.0f;
-    o->ambient = 0.3f;
-    o->background[0] = 0.05f;
-    o->background[1] = 0.05f;
-    o->background[2] = 0.07f;
+    memcpy(o->light_dir, rs.light_dir, sizeof o->light_dir);
+    o->light_intensity = rs.light_intensity;
+    o->ambient = rs.ambient;
+    memcpy(o->background, rs.background, sizeof o->background);
 }
 
 static clvr_status parse_u64(const char *opt, const char *v, uint64_t lo, uint64_t hi, uint64_t *out, clvr_error *err)

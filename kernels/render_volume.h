@@ -169,6 +169,33 @@ inline int clvr_segments_next(const clvr_volume *v, clvr_segments *it, float3 or
 
 /* ------------------------------------------------------------ integrators */
 
+/* Spends the free flight's remaining optical depth *tau inside one segment
+ * [a, b) of majorant m > 0: tentative collisions at tau / m, accepted with
+ * probability extinction / m (Woodcock). Returns 1 with the collision, or 0
+ * with *tau reduced by the segment's optical depth m * (b - a). */
+inline int clvr_track_segment(const clvr_volume *v, float3 org, float3 dir, float a, float b, float m, float *tau,
+                              clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
+{
+    float t = a;
+    for (;;) {
+        const float fly = *tau / m;
+        if (t + fly >= b) {
+            *tau = fmax(*tau - (b - t) * m, 0.0f);
+            return 0;
+        }
+        t += fly;
+        float4 med = clvr_volume_at(v, org + dir * t);
+        ++*samples;
+        if (clvr_rng_next(rng) * m < med.w) {
+            *t_hit = t;
+            *medium = med;
+            return 1;
+        }
+        ++*nulls;
+        *tau = -log(1.0f - clvr_rng_next(rng));
+    }
+}
+
 /* Delta tracking (Woodcock) along [t0, t1]: returns 1 and the collision's
  * medium (rgb + extinction) when a real collision happens, 0 when the ray
  * leaves. A free flight is an optical depth tau ~ Exp(1) spent across the
@@ -183,27 +210,8 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
     clvr_segments_begin(v, &it, org, dir, t0, t1);
     float a, b, m;
     float tau = -log(1.0f - clvr_rng_next(rng));
-    while (clvr_segments_next(v, &it, org, dir, &a, &b, &m)) {
-        if (!(m > 0.0f)) continue; /* empty space: skipped */
-        float t = a;
-        for (;;) {
-            float step = tau / m;
-            if (t + step >= b) {
-                tau = fmax(tau - (b - t) * m, 0.0f);
-                break;
-            }
-            t += step;
-            float4 med = clvr_volume_at(v, org + dir * t);
-            ++*samples;
-            if (clvr_rng_next(rng) * m < med.w) {
-                *t_hit = t;
-                *medium = med;
-                return 1;
-            }
-            ++*nulls;
-            tau = -log(1.0f - clvr_rng_next(rng));
-        }
-    }
+    while (clvr_segments_next(v, &it, org, dir, &a, &b, &m))
+        if (m > 0.0f && clvr_track_segment(v, org, dir, a, b, m, &tau, rng, t_hit, medium, samples, nulls)) return 1;
     return 0;
 }
 
@@ -238,25 +246,7 @@ inline int clvr_delta_track_dda(const clvr_volume *v, float3 org, float3 dir, fl
         const float tx = fmin(fmin(tnext.x, tnext.y), tnext.z);
         const float b = fmin(tx, t1);
         const float m = v->grid[idx];
-        if (m > 0.0f) {
-            for (;;) {
-                const float fly = tau / m;
-                if (t + fly >= b) {
-                    tau = fmax(tau - (b - t) * m, 0.0f);
-                    break;
-                }
-                t += fly;
-                float4 med = clvr_volume_at(v, org + dir * t);
-                ++*samples;
-                if (clvr_rng_next(rng) * m < med.w) {
-                    *t_hit = t;
-                    *medium = med;
-                    return 1;
-                }
-                ++*nulls;
-                tau = -log(1.0f - clvr_rng_next(rng));
-            }
-        }
+        if (m > 0.0f && clvr_track_segment(v, org, dir, t, b, m, &tau, rng, t_hit, medium, samples, nulls)) return 1;
         if (tx >= t1) return 0;
         t = b;
         if (tnext.x <= tx) {
