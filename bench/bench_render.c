@@ -284,8 +284,8 @@ static const char *base_name(const char *p)
  *                 converged image, with the reference's own noise removed
  *   rmse_rel(n) = rmse(n) / mean(ref rgb)
  * The primary criterion is rmse <= target (RMSE of rgb in [0, 1] units);
- * rmse_rel is reported beside it. Checkpoints at n = 1, 2, 3, 4, 6, 8, 12,
- * ...; the time is the summed device time of the n frames (and wall time).
+ * rmse_rel is reported beside it. Checkpoints at n = 1, 2, ..., 16, then
+ * steps of n/16; the time is the summed device time of the n frames (and wall time).
  * A 1/n fit (mse * n is constant for an unbiased estimator) gives the
  * interpolated spp and time to the target as well. */
 typedef struct conv_point {
@@ -293,7 +293,7 @@ typedef struct conv_point {
     double dev_s, wall_s, rmse_raw, rmse, rmse_rel;
 } conv_point;
 
-#define MAX_POINTS 64
+#define MAX_POINTS 128
 
 typedef struct conv_result {
     int shadows;
@@ -319,12 +319,11 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
     const size_t npix = (size_t)w * h, nf = npix * 4;
     float *sum = malloc(nf * sizeof(float)), *sq = malloc(nf * sizeof(float)), *ref = malloc(nf * sizeof(float)),
           *img = malloc(nf * sizeof(float));
-    double *ft = calloc(max_spp, sizeof *ft);
     config c = {method, 0, shadows, ""};
     memset(out, 0, sizeof *out);
     out->shadows = shadows;
     out->load_before = load1();
-    if (!sum || !sq || !ref || !img || !ft) {
+    if (!sum || !sq || !ref || !img) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
         goto done;
     }
@@ -360,8 +359,8 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
         s = clvr_renderer_frame(rd, err);
         wall += now_s() - t0;
         if (s != CLVR_OK || n != next) continue;
-        /* checkpoints 1, 2, 3, 4, 6, 8, 12, 16, ...: powers of two and 1.5 times them */
-        next = (n & (n - 1)) == 0 ? (n < 2 ? 2 : n + n / 2) : (n / 3) * 4;
+        /* checkpoints every frame up to 16, then in steps of n/16 (about 6%) */
+        next = n < 16 ? n + 1 : n + n / 16;
         if (next > max_spp && n < max_spp) next = max_spp;
         s = clvr_renderer_read(rd, img, &rc, err);
         if (s != CLVR_OK) break;
@@ -407,7 +406,6 @@ done:
     free(sq);
     free(ref);
     free(img);
-    free(ft);
     return s;
 }
 

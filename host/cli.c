@@ -52,7 +52,7 @@ void clvr_cli_print_help(FILE *out)
         "  --step S               march step in world units (default: diagonal / 512)\n"
         "  --bins N               bins per ray segment for --method bins, 1..32 (default 32)\n"
         "  --segments M           ray segments for --method bins (default 4)\n"
-        "  --macrocells R         R^3 macrocell grid for --method dda (default 64)\n"
+        "  --macrocells R         R^3 macrocell grid for --method dda (default 32)\n"
         "  --leaf-size N          elements per leaf cluster: 1, 4, 8, 16, 32 (default 16)\n"
         "  --sampling-size N      elements per adaptive sampling cluster (default 16)\n"
         "\n"
