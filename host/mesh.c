@@ -19,6 +19,16 @@ int clvr_add_u64(uint64_t a, uint64_t b, uint64_t *out)
     return 0;
 }
 
+void clvr_mesh_set_scalar_name(clvr_mesh *m, const char *name, size_t len)
+{
+    size_t n = 0;
+    for (; n < len && n < CLVR_SCALAR_NAME_MAX - 1 && name[n]; ++n) {
+        unsigned char c = (unsigned char)name[n];
+        m->scalar_name[n] = (c < 0x20 || c == 0x7f || c == '"' || c == '\\') ? '?' : (char)c;
+    }
+    m->scalar_name[n] = 0;
+}
+
 const char *clvr_cell_type_name(uint32_t t)
 {
     static const char *names[CLVR_CELL_TYPE_COUNT] = {"tets", "pyramids", "wedges", "hexes"};

@@ -53,6 +53,12 @@ clvr_status clvr_mesh_validate(const clvr_mesh *m, const char *what, clvr_error 
 int clvr_mul_u64(uint64_t a, uint64_t b, uint64_t *out);
 int clvr_add_u64(uint64_t a, uint64_t b, uint64_t *out);
 
+/* Sets m->scalar_name from len bytes of name (stopping at a NUL), at most
+ * CLVR_SCALAR_NAME_MAX - 1 of them. Names come from files and end up in
+ * one-line messages, --info and JSON, so control characters, quotes and
+ * backslashes become '?'. */
+void clvr_mesh_set_scalar_name(clvr_mesh *m, const char *name, size_t len);
+
 /* Name of a cell type: "tets", "pyramids", "wedges", "hexes". */
 const char *clvr_cell_type_name(uint32_t t);
 

@@ -202,7 +202,7 @@ clvr_status clvr_mesh_parse_bin(const void *data, size_t size, const char *name,
     if (s != CLVR_OK) return s;
     s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
     if (s != CLVR_OK) return s;
-    memcpy(out->scalar_name, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
+    clvr_mesh_set_scalar_name(out, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
     const uint8_t *p = (const uint8_t *)data + BIN_HEADER_SIZE;
     for (uint32_t a = 0; a < BIN_ARRAY_COUNT; ++a) {
         if (hd.array_bytes[a]) memcpy(bin_array_ptr(out, a), p, (size_t)hd.array_bytes[a]);
@@ -257,7 +257,7 @@ clvr_status clvr_mesh_load_bin(const char *path, const clvr_load_options *opt, c
     /* The size matches the header exactly, so allocating is safe now. */
     s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
     if (s != CLVR_OK) goto cleanup;
-    memcpy(out->scalar_name, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
+    clvr_mesh_set_scalar_name(out, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
     for (uint32_t a = 0; a < BIN_ARRAY_COUNT && s == CLVR_OK; ++a)
         s = read_full(fd, bin_array_ptr(out, a), hd.array_bytes[a], path, bin_array_name(a), err);
     if (s != CLVR_OK) {

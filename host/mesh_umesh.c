@@ -267,9 +267,7 @@ clvr_status clvr_mesh_parse_umesh(const void *data, size_t size, const char *nam
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         if (counts[t])
             memcpy(out->indices[t], c.data + cells[t].offset, (size_t)(clvr_mesh_num_indices(out, t) * 4));
-    size_t nl = chosen->name_len < CLVR_SCALAR_NAME_MAX - 1 ? chosen->name_len : CLVR_SCALAR_NAME_MAX - 1;
-    memcpy(out->scalar_name, chosen->name, nl);
-    out->scalar_name[nl] = 0;
+    clvr_mesh_set_scalar_name(out, chosen->name, chosen->name_len);
 
     clvr_mesh_update_ranges(out);
     if (opt && opt->skip_validation) return CLVR_OK;

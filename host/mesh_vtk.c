@@ -906,7 +906,7 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
     }
     s = clvr_mesh_alloc(out, doc.num_points, counts, err);
     if (s != CLVR_OK) goto done;
-    snprintf(out->scalar_name, sizeof out->scalar_name, "%.63s", sc->name);
+    clvr_mesh_set_scalar_name(out, sc->name, strlen(sc->name));
 
     {
         vit it;
