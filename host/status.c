@@ -41,6 +41,14 @@ clvr_status clvr_error_set(clvr_error *err, clvr_status s, const char *fmt, ...)
         err->status = s;
         vsnprintf(err->msg, sizeof err->msg, fmt, ap);
         va_end(ap);
+        /* Messages quote names and text from untrusted files: control
+         * characters become '?' so a message stays one line and cannot drive
+         * the terminal. Kernel build failures keep the compiler log's lines. */
+        const int keep_lines = s == CLVR_ERR_KERNEL_BUILD;
+        for (char *c = err->msg; *c; ++c) {
+            unsigned char u = (unsigned char)*c;
+            if ((u < 0x20 || u == 0x7f) && !(keep_lines && (u == '\n' || u == '\t'))) *c = '?';
+        }
     }
     return s;
 }

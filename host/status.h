@@ -52,7 +52,10 @@ const char *clvr_status_text(clvr_status s);
 int clvr_status_exit_code(clvr_status s);
 
 /* Records status s and a printf-style message in err (err may be NULL) and
- * returns s, so callers write `return clvr_error_set(err, CLVR_ERR_IO, ...)`. */
+ * returns s, so callers write `return clvr_error_set(err, CLVR_ERR_IO, ...)`.
+ * The message is one line: control characters (from quoted file contents)
+ * become '?', except newlines and tabs of CLVR_ERR_KERNEL_BUILD messages,
+ * which carry the compiler's log. */
 clvr_status clvr_error_set(clvr_error *err, clvr_status s, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))

@@ -74,10 +74,11 @@ stage_fuzz() {
       tf) opts+=(-dict=tests/fuzz/tf.dict) ;;
     esac
     mkdir -p "$corpus" "$artifacts"
+    # -seed=1: the same mutation sequence on every run, so CI is repeatable.
     # -max_len keeps the big tests/data files as (truncated) seeds without
     # slowing every run; leaks are errors (libFuzzer's default with ASan).
     if ! UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$FUZZ_BUILD/fuzz_$t" \
-        -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+        -seed=1 -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
         -artifact_prefix="$artifacts/" -print_final_stats=1 "${opts[@]}" "$corpus" "${seeds[@]}" >"$log" 2>&1; then
       tail -n 40 "$log" >&2
       echo "fuzz_$t: crash; input(s): $(ls "$artifacts"/* 2>/dev/null | tr '\n' ' ')" >&2
