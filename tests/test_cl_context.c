@@ -2,6 +2,8 @@
  * error for a spec that matches nothing, embedded-source builds with include
  * expansion, build-log reporting, shared-struct layout agreement, and fault
  * injection through CLVR_FAIL. */
+#include <stddef.h>
+
 #include "cl_context.h"
 #include "clvr_shared.h"
 #include "test_util.h"
@@ -38,7 +40,7 @@ int main(void)
         TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof a, a, "a", &ba, &err), CLVR_OK, &err);
         TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof b, b, "b", &bb, &err), CLVR_OK, &err);
         TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_WRITE_ONLY, sizeof c, NULL, "c", &bc, &err), CLVR_OK, &err);
-        TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_WRITE_ONLY, 2 * sizeof(cl_uint), NULL, "sizes", &bs, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_WRITE_ONLY, 64 * sizeof(cl_uint), NULL, "sizes", &bs, &err), CLVR_OK, &err);
         TU_CHECK_STATUS(clvr_cl_kernel(prog, "clvr_selftest_add", &k, &err), CLVR_OK, &err);
         TU_CHECK_STATUS(clvr_cl_kernel(prog, "clvr_selftest_sizes", &ks, &err), CLVR_OK, &err);
         cl_uint n = N;
@@ -53,10 +55,35 @@ int main(void)
         TU_CHECK_EQ_U64(bad, 0);
         clSetKernelArg(ks, 0, sizeof bs, &bs);
         TU_CHECK_STATUS(clvr_cl_run1d(&cl, ks, 1, 1, NULL, &err), CLVR_OK, &err);
-        cl_uint sizes[2] = {0, 0};
+        cl_uint sizes[64] = {0};
         clEnqueueReadBuffer(cl.queue, bs, CL_TRUE, 0, sizeof sizes, sizes, 0, NULL, NULL);
-        TU_CHECK_EQ_U64(sizes[0], sizeof(clvr_box));
-        TU_CHECK_EQ_U64(sizes[1], 8);
+        /* Host layout of each shared struct, in the kernel's order. */
+#define LAYOUT(T, field) {#T "." #field, sizeof(T), offsetof(T, field)}
+        const struct { const char *what; size_t size, offset; } layout[] = {
+            LAYOUT(clvr_box, hi),
+            LAYOUT(clvr_instance, first_index),
+            LAYOUT(clvr_instance, bvh_root),
+            LAYOUT(clvr_sampling_cluster, hi),
+            LAYOUT(clvr_pp_instance_rec, first_element),
+            LAYOUT(clvr_bvh_node, child),
+            LAYOUT(clvr_bvh_tree, num_prims),
+            LAYOUT(clvr_camera, fovy),
+            LAYOUT(clvr_camera, height),
+            LAYOUT(clvr_frame, ambient),
+            LAYOUT(clvr_frame, tlas_root),
+        };
+#undef LAYOUT
+        const size_t nl = sizeof layout / sizeof layout[0];
+        for (size_t i = 0; i < nl; ++i) {
+            if (sizes[2 * i] != layout[i].size || sizes[2 * i + 1] != layout[i].offset) {
+                ++tu_fail_;
+                fprintf(stderr, "layout of %s: device size %u offset %u, host size %zu offset %zu\n", layout[i].what,
+                        sizes[2 * i], sizes[2 * i + 1], layout[i].size, layout[i].offset);
+            } else {
+                ++tu_pass_;
+            }
+        }
+        TU_CHECK_EQ_U64(sizes[2 * nl], 8);
         clReleaseKernel(k);
         clReleaseKernel(ks);
         clvr_cl_release(&cl, &ba);
