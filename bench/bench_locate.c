@@ -19,6 +19,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "clock.h"
+#include "bench_util.h"
 #include "bvh.h"
 #include "cl_context.h"
 #include "mesh_io.h"
@@ -26,44 +28,11 @@
 #include "../tests/bvh_fixture.h"
 #include "bench_points.h"
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 typedef struct row {
     uint32_t n;
     double qps, qps_cpu, load, bytes_per_elem, index_bytes_per_elem, build_ms, found;
     uint32_t blas_nodes, tlas_nodes;
 } row;
-
-static double load1(void)
-{
-    double l = -1.0;
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (f) {
-        if (fscanf(f, "%lf", &l) != 1) l = -1.0;
-        fclose(f);
-    }
-    return l;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* CPU seconds of this process (all threads): queries per CPU second stays
- * meaningful on a machine shared with other jobs, where wall time is not. */
-static double cpu_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
@@ -115,21 +84,18 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     CLVR_CL_CHECK(clFinish(cl->queue));
     double t[NRUNS], tc[NRUNS], ld[NRUNS];
     for (int r = 0; r < NRUNS; ++r) {
-        const double c0 = cpu_s();
+        const double c0 = clvr_clock_cpu_s();
         CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, g_local, &evt, err));
         CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-        tc[r] = cpu_s() - c0;
+        tc[r] = clvr_clock_cpu_s() - c0;
         t[r] = clvr_cl_event_seconds(evt);
-        ld[r] = load1();
+        ld[r] = bench_load1();
         clReleaseEvent(evt);
         evt = NULL;
     }
-    qsort(t, NRUNS, sizeof *t, cmp_double);
-    qsort(tc, NRUNS, sizeof *tc, cmp_double);
-    qsort(ld, NRUNS, sizeof *ld, cmp_double);
-    out->qps = nq / t[NRUNS / 2];
-    out->qps_cpu = nq / tc[NRUNS / 2];
-    out->load = ld[NRUNS / 2];
+    out->qps = nq / bench_median(t, NRUNS);
+    out->qps_cpu = nq / bench_median(tc, NRUNS);
+    out->load = bench_median(ld, NRUNS);
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, (size_t)nq * 4, ids, 0, NULL, NULL));
     uint32_t found = 0;
     for (uint32_t i = 0; i < nq; ++i) found += ids[i] != CLVR_BVH_NOT_FOUND;
@@ -182,7 +148,7 @@ int main(int argc, char **argv)
         clvr_cl_destroy(&cl);
         return 4;
     }
-    double t0 = now_s();
+    double t0 = clvr_clock_monotonic_s();
     const clvr_status ms = mesh_path ? clvr_mesh_load(mesh_path, NULL, &m, &err)
                                      : fx_grid_mesh(cubes, kind, 0.2f, 1.0f, 0.0f, 1, &m, &err);
     if (ms != CLVR_OK) {
@@ -199,7 +165,7 @@ int main(int argc, char **argv)
     printf("# bench_locate: %s, %llu elements (%s), %u %s queries, work-group %zu\n", cl.device_name,
            (unsigned long long)ne, what, nq, order, g_local);
     printf("# device: %s | %s | driver %s | compute units %u | mesh %s in %.1f s\n", cl.platform_name,
-           cl.device_version, cl.driver_version, cl.compute_units, mesh_path ? "loaded" : "generated", now_s() - t0);
+           cl.device_version, cl.driver_version, cl.compute_units, mesh_path ? "loaded" : "generated", clvr_clock_monotonic_s() - t0);
     printf("\n| N | point queries/s | queries per CPU-second | load (1 min) | BVH bytes/element | index bytes/element "
            "| BLAS nodes | TLAS nodes | build ms | found |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");

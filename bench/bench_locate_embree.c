@@ -26,6 +26,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "clock.h"
+#include "bench_util.h"
 #include "bvh.h"
 #include "cl_context.h"
 #include "mesh_io.h"
@@ -41,36 +43,6 @@
 
 #define NRUNS 5
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static double load1(void)
-{
-    double l = -1.0;
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (f) {
-        if (fscanf(f, "%lf", &l) != 1) l = -1.0;
-        fclose(f);
-    }
-    return l;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return v[n / 2];
-}
-
 /* ------------------------------------------------------------ clvr */
 
 typedef struct result {
@@ -79,13 +51,6 @@ typedef struct result {
     float *scalars;
     uint32_t *found_flags;
 } result;
-
-static double cpu_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, float (*pts)[4], uint32_t nq, size_t local,
                             result *r, clvr_error *err)
@@ -140,18 +105,18 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     CLVR_CL_CHECK(clFinish(cl->queue));
     double t[NRUNS], tc[NRUNS], ld[NRUNS];
     for (int i = 0; i < NRUNS; ++i) {
-        const double c0 = cpu_s();
+        const double c0 = clvr_clock_cpu_s();
         CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, nq, local, &evt, err));
         CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-        tc[i] = cpu_s() - c0;
+        tc[i] = clvr_clock_cpu_s() - c0;
         t[i] = clvr_cl_event_seconds(evt);
-        ld[i] = load1();
+        ld[i] = bench_load1();
         clReleaseEvent(evt);
         evt = NULL;
     }
-    r->qps = nq / median(t, NRUNS);
-    r->qps_cpu = nq / median(tc, NRUNS);
-    r->load = median(ld, NRUNS);
+    r->qps = nq / bench_median(t, NRUNS);
+    r->qps_cpu = nq / bench_median(tc, NRUNS);
+    r->load = bench_median(ld, NRUNS);
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, (size_t)nq * 4, ids, 0, NULL, NULL));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dsc, CL_TRUE, 0, (size_t)nq * 4, r->scalars, 0, NULL, NULL));
     uint32_t found = 0;
@@ -323,7 +288,7 @@ static double emb_query(RTCScene scene, const emb_mesh *m, float (*pts)[4], uint
     pthread_t th[64];
     int started[64];
     emb_job jobs[64];
-    const double t0 = now_s();
+    const double t0 = clvr_clock_monotonic_s();
     for (int i = 0; i < threads; ++i) {
         jobs[i] = (emb_job){scene, m, pts, (uint32_t)((uint64_t)nq * i / threads),
                             (uint32_t)((uint64_t)nq * (i + 1) / threads), use_pq, scalars};
@@ -332,7 +297,7 @@ static double emb_query(RTCScene scene, const emb_mesh *m, float (*pts)[4], uint
     }
     for (int i = 0; i < threads; ++i)
         if (started[i]) pthread_join(th[i], NULL);
-    return now_s() - t0;
+    return clvr_clock_monotonic_s() - t0;
 }
 
 static int run_embree(const clvr_mesh *mesh, float (*pts)[4], uint32_t nq, int threads, result r[2])
@@ -356,7 +321,7 @@ static int run_embree(const clvr_mesh *mesh, float (*pts)[4], uint32_t nq, int t
     emb_mem mm = {0, 0, PTHREAD_MUTEX_INITIALIZER};
     rtcSetDeviceMemoryMonitorFunction(dev, emb_monitor, &mm);
     const uint64_t ne = clvr_mesh_num_elements(mesh);
-    const double t0 = now_s();
+    const double t0 = clvr_clock_monotonic_s();
     RTCScene scene = rtcNewScene(dev);
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, (unsigned)ne);
@@ -368,7 +333,7 @@ static int run_embree(const clvr_mesh *mesh, float (*pts)[4], uint32_t nq, int t
     rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
     rtcCommitScene(scene);
-    const double build = now_s() - t0;
+    const double build = clvr_clock_monotonic_s() - t0;
     for (int api = 0; api < 2; ++api) {
         result *o = &r[api];
         o->build_s = build;
@@ -384,14 +349,14 @@ static int run_embree(const clvr_mesh *mesh, float (*pts)[4], uint32_t nq, int t
         emb_query(scene, m, pts, nq < 1000 ? nq : 1000, threads, api, o->scalars); /* warm-up */
         double t[NRUNS], tc[NRUNS], ld[NRUNS];
         for (int i = 0; i < NRUNS; ++i) {
-            const double c0 = cpu_s();
+            const double c0 = clvr_clock_cpu_s();
             t[i] = emb_query(scene, m, pts, nq, threads, api, o->scalars);
-            tc[i] = cpu_s() - c0;
-            ld[i] = load1();
+            tc[i] = clvr_clock_cpu_s() - c0;
+            ld[i] = bench_load1();
         }
-        o->qps = nq / median(t, NRUNS);
-        o->qps_cpu = nq / median(tc, NRUNS);
-        o->load = median(ld, NRUNS);
+        o->qps = nq / bench_median(t, NRUNS);
+        o->qps_cpu = nq / bench_median(tc, NRUNS);
+        o->load = bench_median(ld, NRUNS);
         uint32_t found = 0;
         for (uint32_t i = 0; i < nq; ++i) found += o->scalars[i] == o->scalars[i];
         o->found = nq ? (double)found / nq : 0.0;

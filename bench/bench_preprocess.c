@@ -22,6 +22,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "clock.h"
 #include "bounds.h"
 #include "mesh_io.h"
 #include "preprocess.h"
@@ -38,13 +39,6 @@ static double loadavg(void)
         fclose(f);
     }
     return l;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 /* Structured hex grid n^3 with a smooth scalar. */
@@ -209,9 +203,9 @@ static double embree_build(RTCDevice dev, const struct RTCBuildPrimitive *src, s
         a.splitPrimitive = NULL;
         a.buildProgress = NULL;
         a.userPtr = NULL;
-        double t0 = now_s();
+        double t0 = clvr_clock_monotonic_s();
         void *root = rtcBuildBVH(&a);
-        double t1 = now_s();
+        double t1 = clvr_clock_monotonic_s();
         rtcReleaseBVH(bvh);
         if (!root || rtcGetDeviceError(dev) != RTC_ERROR_NONE) return -1.0;
         if (best < 0 || t1 - t0 < best) best = t1 - t0;
@@ -292,13 +286,13 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
     for (int r = 0; r < repeat; ++r) {
         memcpy(k2, keys, N * 8);
         memcpy(v2, vals, N * 4);
-        double t0 = now_s();
+        double t0 = clvr_clock_monotonic_s();
         c_radix2(k2, v2, kt, vt, N);
-        double t1 = now_s();
+        double t1 = clvr_clock_monotonic_s();
         if (t1 - t0 < t_radix) t_radix = t1 - t0;
-        t0 = now_s();
+        t0 = clvr_clock_monotonic_s();
         memcpy(kt, keys, N * 8);
-        t1 = now_s();
+        t1 = clvr_clock_monotonic_s();
         if (t1 - t0 < t_memcpy) t_memcpy = t1 - t0;
     }
     double hilbert = stage[CLVR_PP_STAGE_KEYS] + stage[CLVR_PP_STAGE_SORT] + stage[CLVR_PP_STAGE_GATHER] +
@@ -345,7 +339,7 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
 #ifdef CLVR_HAVE_EMBREE
     struct RTCBuildPrimitive *prims = malloc(N * sizeof *prims), *work = malloc(N * sizeof *work);
     if (bc->embree && prims && work) {
-        double t0 = now_s();
+        double t0 = clvr_clock_monotonic_s();
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
             const uint32_t vpe = clvr_cell_vertex_count(t);
             for (uint64_t e = 0; e < L.count[t]; ++e) {
@@ -357,7 +351,7 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
                 p->primID = (unsigned int)(L.first[t] + e);
             }
         }
-        t_boxes = now_s() - t0;
+        t_boxes = clvr_clock_monotonic_s() - t0;
         /* rtcBuildBVH accepts leaves of at most RTC_BUILD_MAX_PRIMITIVES_PER_LEAF
          * (32) primitives (larger ones crash Embree 3.13), so the 100k column
          * cannot be built with it and stays "n/a". */

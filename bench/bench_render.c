@@ -32,7 +32,10 @@
 #include <string.h>
 #include <time.h>
 
+#include "clock.h"
+#include "bench_util.h"
 #include "accel.h"
+#include "cli.h"
 #include "camera.h"
 #include "cl_context.h"
 #include "mesh_io.h"
@@ -44,47 +47,10 @@
 #define MAX_MESHES 16
 #define MAX_CONFIGS 8
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* 1-minute load average, -1 when unknown. */
-static double load1(void)
-{
-    double l = -1.0;
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (f) {
-        if (fscanf(f, "%lf", &l) != 1) l = -1.0;
-        fclose(f);
-    }
-    return l;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, uint32_t n)
-{
-    qsort(v, n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-static const char *method_name(uint32_t m)
-{
-    static const char *names[] = {"march", "track", "bins", "dda"};
-    return m < 4 ? names[m] : "?";
-}
-
 static int parse_method(const char *s, uint32_t *m)
 {
     for (uint32_t i = 0; i < 4; ++i)
-        if (!strcmp(s, method_name(i))) { *m = i; return 1; }
+        if (!strcmp(s, clvr_method_name((clvr_method)i))) { *m = i; return 1; }
     return 0;
 }
 
@@ -145,10 +111,10 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scen
     memcpy(g->hi, m.bounds_hi, sizeof g->hi);
     clvr_preprocess_options po;
     clvr_preprocess_options_default(&po);
-    double t0 = now_s();
+    double t0 = clvr_clock_monotonic_s();
     s = clvr_preprocess(cl, &m, &po, &g->clustered, err);
     if (s == CLVR_OK) s = clvr_accel_build(cl, &g->clustered, &g->accel, err);
-    g->preprocess_s = now_s() - t0;
+    g->preprocess_s = clvr_clock_monotonic_s() - t0;
     if (s == CLVR_OK)
         s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, density, m.scalar_min, m.scalar_max, err);
     if (s == CLVR_OK) {
@@ -216,7 +182,7 @@ static clvr_status bench_one(clvr_cl *cl, scene_gpu *g, const config *c, uint32_
         goto done;
     }
     r->c = *c;
-    r->load_before = load1();
+    r->load_before = bench_load1();
     s = renderer_for(cl, g, c, w, h, 1, &rd, NULL, err);
     /* Calibration: the first warm-up frame's time caps the timed frames at
      * about budget_s (at least one), so that marching a 10M-element mesh at
@@ -234,9 +200,9 @@ static clvr_status bench_one(clvr_cl *cl, scene_gpu *g, const config *c, uint32_
     }
     if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &c0, err);
     for (uint32_t i = 0; s == CLVR_OK && i < frames; ++i) {
-        double t0 = now_s();
+        double t0 = clvr_clock_monotonic_s();
         s = clvr_renderer_frame(rd, err);
-        wall[i] = now_s() - t0;
+        wall[i] = clvr_clock_monotonic_s() - t0;
         clvr_render_counters ci;
         if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &ci, err);
         dev[i] = ci.last_frame_s;
@@ -244,14 +210,14 @@ static clvr_status bench_one(clvr_cl *cl, scene_gpu *g, const config *c, uint32_
     if (s == CLVR_OK) s = clvr_renderer_read(rd, img, &c1, err);
     if (s != CLVR_OK) goto done;
     r->frames = frames;
-    r->load_after = load1();
+    r->load_after = bench_load1();
     const double rays = (double)(c1.rays - c0.rays), samples = (double)(c1.samples - c0.samples),
                  nulls = (double)(c1.null_collisions - c0.null_collisions);
     r->rays_per_frame = rays / frames;
     r->samples_per_ray = rays > 0 ? samples / rays : 0.0;
     r->nulls_per_ray = rays > 0 ? nulls / rays : 0.0;
-    r->wall_frame_s = median(wall, frames);
-    r->frame_s = median(dev, frames);
+    r->wall_frame_s = bench_median(wall, frames);
+    r->frame_s = bench_median(dev, frames);
     r->frame_min_s = dev[0];
     r->frame_max_s = dev[frames - 1];
     r->fps = r->frame_s > 0 ? 1.0 / r->frame_s : 0.0;
@@ -322,7 +288,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
     config c = {method, 0, shadows, ""};
     memset(out, 0, sizeof *out);
     out->shadows = shadows;
-    out->load_before = load1();
+    out->load_before = bench_load1();
     if (!sum || !sq || !ref || !img) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
         goto done;
@@ -355,9 +321,9 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
     double wall = 0.0, fit_acc = 0.0, fit_acc_rel = 0.0;
     uint32_t fit_n = 0, next = 1;
     for (uint32_t n = 1; s == CLVR_OK && n <= max_spp; ++n) {
-        double t0 = now_s();
+        double t0 = clvr_clock_monotonic_s();
         s = clvr_renderer_frame(rd, err);
-        wall += now_s() - t0;
+        wall += clvr_clock_monotonic_s() - t0;
         if (s != CLVR_OK || n != next) continue;
         /* checkpoints every frame up to 16, then in steps of n/16 (about 6%) */
         next = n < 16 ? n + 1 : n + n / 16;
@@ -399,7 +365,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
         out->fit_spp_rel = fit_acc_rel / fit_n / (target * target);
         out->fit_s_rel = out->fit_spp_rel * out->frame_s;
     }
-    out->load_after = load1();
+    out->load_after = bench_load1();
 done:
     clvr_renderer_destroy(rd);
     free(sum);
@@ -433,7 +399,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
     conv_result res[2];
     clvr_camera cam;
     printf("# bench_render --converge: %s, %s, %ux%u, reference %u spp, target RMSE %.3g\n", base_name(mesh),
-           method_name(method), w, h, ref_spp, target);
+           clvr_method_name((clvr_method)method), w, h, ref_spp, target);
     printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
            cl->driver_version);
     fflush(stdout);
@@ -477,7 +443,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
         json_str(f, mesh);
         fprintf(f, ", \"elements\": %" PRIu64 ", \"method\": \"%s\", \"width\": %u, \"height\": %u, \"ref_spp\": %u, "
                    "\"target\": %g, \"preprocess_s\": %.6g,\n",
-                g.elements, method_name(method), w, h, ref_spp, target, g.preprocess_s);
+                g.elements, clvr_method_name((clvr_method)method), w, h, ref_spp, target, g.preprocess_s);
         fprintf(f, " \"camera\": {\"eye\": [%.9g, %.9g, %.9g], \"target\": [%.9g, %.9g, %.9g], \"up\": [%.9g, %.9g, %.9g], "
                    "\"fovy\": %.9g},\n",
                 cam.origin[0], cam.origin[1], cam.origin[2], cam.target[0], cam.target[1], cam.target[2], cam.up[0],
@@ -595,7 +561,7 @@ int main(int argc, char **argv)
                 }
             } else if (ncfg < MAX_CONFIGS) {
                 config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, ""};
-                snprintf(c.label, sizeof c.label, "%s", method_name(m));
+                snprintf(c.label, sizeof c.label, "%s", clvr_method_name((clvr_method)m));
                 cfg[ncfg++] = c;
             }
         }
@@ -700,7 +666,7 @@ int main(int argc, char **argv)
                            "\"frame_min_s\": %.6g, \"frame_max_s\": %.6g, \"wall_frame_s\": %.6g, \"rays_per_frame\": %.6g, "
                            "\"samples_per_ray\": %.6g, \"null_collisions_per_ray\": %.6g, \"image_mean\": %.6g, "
                            "\"load_before\": %.2f, \"load_after\": %.2f}",
-                        r->elements, r->preprocess_s, method_name(r->c.method), r->c.macrocells, r->c.label,
+                        r->elements, r->preprocess_s, clvr_method_name((clvr_method)r->c.method), r->c.macrocells, r->c.label,
                         r->c.shadows, r->frames, r->fps, r->mrays_s, r->frame_s, r->frame_min_s, r->frame_max_s, r->wall_frame_s,
                         r->rays_per_frame, r->samples_per_ray, r->nulls_per_ray, r->image_mean, r->load_before,
                         r->load_after);

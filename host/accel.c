@@ -1,19 +1,13 @@
+#include "clock.h"
 #include "accel.h"
 
 #include <string.h>
 #include <time.h>
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    double t0 = now_s();
+    double t0 = clvr_clock_monotonic_s();
     memset(out, 0, sizeof *out);
     if (c->num_instances > 0xffffffffull || c->num_leaves > CLVR_BVH_MAX_PRIMS || c->num_sampling > CLVR_BVH_MAX_PRIMS)
         return clvr_error_set(err, CLVR_ERR_OVERFLOW,
@@ -26,7 +20,7 @@ clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, cl
                                          &out->sampling_nodes, err));
     out->sampling_node_count = clvr_bvh_nodes_bound((uint32_t)c->num_sampling);
     out->tlas_root = out->two_level.tlas_root;
-    out->build_s = now_s() - t0;
+    out->build_s = clvr_clock_monotonic_s() - t0;
 cleanup:
     if (s != CLVR_OK) clvr_accel_release(cl, out);
     return s;

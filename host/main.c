@@ -9,6 +9,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "clock.h"
 #include "accel.h"
 #include "camera.h"
 #include "cl_context.h"
@@ -35,13 +36,6 @@ static void on_signal(int sig)
 {
     (void)sig;
     g_interrupted = 1;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 static int fail(const clvr_error *err)
@@ -103,11 +97,11 @@ int main(int argc, char **argv)
     }
 
     /* --- mesh */
-    double t0 = now_s();
+    double t0 = clvr_clock_monotonic_s();
     if (!o.quiet && !o.info) fprintf(stderr, "clvr: loading %s\n", o.mesh_path ? o.mesh_path : "the built-in scene");
     s = load_mesh(&o, &mesh, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    stats.load_s = now_s() - t0;
+    stats.load_s = clvr_clock_monotonic_s() - t0;
     const char *mesh_name = o.mesh_path ? o.mesh_path : "(built-in default scene)";
     if (o.info) {
         clvr_info_print(stdout, mesh_name, &mesh);
@@ -152,12 +146,12 @@ int main(int argc, char **argv)
      * not minutes into preprocessing. */
     s = clvr_limits_check_named(&cl, &mesh, mesh_name, &po, o.width, o.height, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    t0 = now_s();
+    t0 = clvr_clock_monotonic_s();
     s = clvr_preprocess(&cl, &mesh, &po, &clustered, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     s = clvr_accel_build(&cl, &clustered, &bvh, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    stats.preprocess_s = now_s() - t0;
+    stats.preprocess_s = clvr_clock_monotonic_s() - t0;
     if (!o.quiet)
         fprintf(stderr,
                 "clvr: clustered in %.2f s: %llu instance clusters (%llu with 16-bit indices), %llu leaf clusters, "
@@ -219,12 +213,12 @@ int main(int argc, char **argv)
     /* --- progressive rendering */
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
-    double start = now_s(), last_report = start;
+    double start = clvr_clock_monotonic_s(), last_report = start;
     uint32_t frame = 0;
     for (; frame < o.spp && !g_interrupted; ++frame) {
         s = clvr_renderer_frame(renderer, &err);
         if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-        double t = now_s();
+        double t = clvr_clock_monotonic_s();
         if (!o.quiet && (t - last_report > 1.0 || frame + 1 == o.spp)) {
             double per = (t - start) / (frame + 1);
             fprintf(stderr, "clvr: frame %u/%u, %.2f s/frame, %.0f s left\n", frame + 1, o.spp, per,
@@ -232,7 +226,7 @@ int main(int argc, char **argv)
             last_report = t;
         }
     }
-    stats.render_wall_s = now_s() - start;
+    stats.render_wall_s = clvr_clock_monotonic_s() - start;
     if (frame == 0) { /* interrupted before the first frame finished */
         fprintf(stderr, "clvr: interrupted before the first frame; no image written\n");
         rc = 130;

@@ -6,6 +6,7 @@
  * along the bottom. Input is turned into edits by handlers that the GLFW
  * callbacks and the CLVR_VIEW_SCRIPT test hook share, so scripted tests
  * drive the same code as a person does. See viewer.h and docs/viewer.md. */
+#include "clock.h"
 #include "viewer.h"
 
 #include <GLFW/glfw3.h>
@@ -94,13 +95,6 @@ typedef struct viewer {
     int script_line;
     long wait_frames;
 } viewer;
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* --- small vector helpers ---------------------------------------------- */
 
@@ -750,7 +744,7 @@ static void screenshot(viewer *v, const char *path)
 
 static void update_title(viewer *v, int force)
 {
-    double t = now_s();
+    double t = clvr_clock_monotonic_s();
     if (!force && t - v->t_title < TITLE_PERIOD_S) return;
     double dt = t - v->t_title;
     if (dt > 0.0 && v->frames_since_title > 0) {
@@ -815,9 +809,9 @@ static int parse_key(const char *name, int *key, int *mods)
 static int resize_window(viewer *v, int w, int h)
 {
     glfwSetWindowSize(v->win, w, h);
-    double t0 = now_s();
+    double t0 = clvr_clock_monotonic_s();
     int fw = 0, fh = 0;
-    while (now_s() - t0 < 5.0) {
+    while (clvr_clock_monotonic_s() - t0 < 5.0) {
         glfwPollEvents();
         glfwGetFramebufferSize(v->win, &fw, &fh);
         if (fw == w && fh == h) return 1;
@@ -841,8 +835,8 @@ static void run_command(viewer *v, char *cmd)
     }
     /* The X server has queued the events before the command returned; a
      * short pump reads all of them. */
-    double t0 = now_s();
-    while (now_s() - t0 < 0.2) {
+    double t0 = clvr_clock_monotonic_s();
+    while (clvr_clock_monotonic_s() - t0 < 0.2) {
         glfwPollEvents();
         usleep(5000);
     }
@@ -1028,7 +1022,7 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
     }
     update_strip(v);
     if (!o->quiet) fprintf(stderr, "clvr: viewer open; press H for the controls, Q to quit\n");
-    v->t_title = now_s();
+    v->t_title = clvr_clock_monotonic_s();
 
     while (!v->quit && v->status == CLVR_OK && !glfwWindowShouldClose(v->win)) {
         int fw, fh;

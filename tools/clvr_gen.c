@@ -44,6 +44,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "clock.h"
 #include "mesh.h"
 #include "mesh_io.h"
 #include "scene.h"
@@ -67,13 +68,6 @@ typedef struct gen_args {
 } gen_args;
 
 /* ------------------------------------------------------------ small utilities */
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static uint64_t splitmix64(uint64_t *state)
 {
@@ -148,14 +142,14 @@ static void progress_start(progress *p, int quiet, const char *what, uint64_t to
     p->quiet = quiet;
     p->total = total;
     p->done = 0;
-    p->t0 = p->last = now_s();
+    p->t0 = p->last = clvr_clock_monotonic_s();
     p->what = what;
 }
 
 static void progress_add(progress *p, uint64_t n)
 {
     p->done += n;
-    double t = now_s();
+    double t = clvr_clock_monotonic_s();
     if (p->quiet || t - p->last < 1.0) return;
     p->last = t;
     fprintf(stderr, "\rclvr-gen: %s %5.1f%%  %.1fM elements/s   ", p->what,
@@ -177,7 +171,7 @@ static void print_summary(const gen_args *a, uint64_t nv, const uint64_t nc[CLVR
            " wedges, %" PRIu64 " hexes; %" PRIu64 " vertices; %.3f GB; %.2f s\n",
            a->out, a->kind, total, a->elements,
            a->elements ? 100.0 * ((double)total - (double)a->elements) / (double)a->elements : 0.0, nc[0], nc[1], nc[2],
-           nc[3], nv, (double)bin_bytes(nv, nc) / 1e9, now_s() - t0);
+           nc[3], nv, (double)bin_bytes(nv, nc) / 1e9, clvr_clock_monotonic_s() - t0);
 }
 
 /* ------------------------------------------------------------ mixed */
@@ -198,7 +192,7 @@ static uint64_t sum4(const uint64_t c[CLVR_CELL_TYPE_COUNT]) { return c[0] + c[1
 
 static clvr_status gen_mixed(const gen_args *a, clvr_error *err)
 {
-    const double t0 = now_s();
+    const double t0 = clvr_clock_monotonic_s();
     clvr_scene_box_params p;
     uint64_t nv, nc[CLVR_CELL_TYPE_COUNT];
     clvr_status s;
@@ -409,7 +403,7 @@ static void amr_count(amr_ctx *c, uint32_t nb, uint64_t *hexes, uint64_t *verts)
 
 static clvr_status gen_amr(const gen_args *a, clvr_error *err)
 {
-    const double t0 = now_s();
+    const double t0 = clvr_clock_monotonic_s();
     clvr_status s = CLVR_OK;
     amr_ctx *c = malloc(sizeof *c);
     if (!c) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "clvr-gen amr: out of memory");
@@ -712,7 +706,7 @@ done:
 
 static clvr_status gen_cellvar_delaunay(const gen_args *a, clvr_error *err)
 {
-    const double t0 = now_s();
+    const double t0 = clvr_clock_monotonic_s();
     double npts = (double)a->elements / TETS_PER_POINT;
     double r = cbrt(POISSON_DENSITY / (npts > 4 ? npts : 4));
     float *pts = NULL, *sc = NULL;
@@ -799,7 +793,7 @@ static clvr_status gen_cellvar_lattice(const gen_args *a, clvr_error *err)
                                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
     static const uint8_t kuhn[6][4] = {{0, 1, 2, 6}, {0, 1, 6, 5}, {0, 3, 6, 2},
                                        {0, 3, 7, 6}, {0, 4, 5, 6}, {0, 4, 6, 7}};
-    const double t0 = now_s();
+    const double t0 = clvr_clock_monotonic_s();
     uint32_t cubes = (uint32_t)fmax(1.0, floor(cbrt((double)a->elements / 6.0) + 0.5));
     const uint32_t m = cubes + 1;
     const double h = 1.0 / cubes, disp = a->variance * h;
