@@ -18,6 +18,8 @@ import subprocess
 import sys
 import tempfile
 
+from checklib import Checks
+
 try:
     import numpy as np
     import vtk
@@ -32,19 +34,7 @@ CONVERT = os.environ.get("CLVR_CONVERT", os.path.join(HERE, "..", "tools", "clvr
 BUILD = os.environ.get("CLVR_BUILD_DIR", "")
 CLVR = os.path.join(BUILD, "clvr") if BUILD else ""
 
-passed = 0
-failed = 0
-
-
-def check(ok, what, got=None, want=None):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        extra = f": got {got!r}, want {want!r}" if got is not None or want is not None else ""
-        print(f"FAIL {what}{extra}")
-    return ok
+check = Checks()
 
 
 # Independent .bin reader -------------------------------------------------------------
@@ -575,8 +565,8 @@ def main():
         print(f"clvr --info: {info_note}")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    print(f"{passed} passed, {failed} failed")
-    return 1 if failed else 0
+    check.summary()
+    return 1 if check.failed else 0
 
 
 if __name__ == "__main__":

@@ -24,6 +24,8 @@ import subprocess
 import sys
 import tempfile
 
+from checklib import Checks
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
 BUILD = os.environ.get("CLVR_BUILD_DIR", os.path.join(HERE, "..", "build"))
@@ -31,19 +33,7 @@ CLVR = os.path.abspath(os.path.join(BUILD, "clvr"))
 MESH = os.path.join(DATA, "vtk", "post.vtk")
 BACKGROUND = (0.05, 0.05, 0.07)  # clvr's default, linear
 
-passed = 0
-failed = 0
-
-
-def check(ok, what, got=None, want=None):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        extra = f": got {got!r}, want {want!r}" if got is not None or want is not None else ""
-        print(f"FAIL {what}{extra}")
-    return ok
+check = Checks()
 
 
 def run(args, env=None, cwd=None, timeout=180):
@@ -384,7 +374,7 @@ def main():
         if xvfb_proc:
             xvfb_proc.terminate()
             xvfb_proc.wait()
-        if failed == 0:
+        if check.failed == 0:
             shutil.rmtree(tmp, ignore_errors=True)
         else:
             print(f"files kept in {tmp}")
@@ -393,5 +383,5 @@ def main():
 
 if __name__ == "__main__":
     rc = main()
-    print(f"{passed} passed, {failed} failed")
-    sys.exit(rc if rc else (1 if failed else 0))
+    check.summary()
+    sys.exit(rc if rc else (1 if check.failed else 0))

@@ -22,19 +22,10 @@
 
 #include "limits_check.h"
 #include "mesh_io.h"
+#include "fuzz_assert.h"
 
 typedef clvr_status (*fuzz_parse_fn)(const void *data, size_t size, const char *name, const clvr_load_options *opt,
                                      clvr_mesh *out, clvr_error *err);
-
-#define FUZZ_ASSERT(cond, ...)                                                          \
-    do {                                                                                \
-        if (!(cond)) {                                                                  \
-            fprintf(stderr, "fuzz contract broken at %s:%d: %s: ", __FILE__, __LINE__, #cond); \
-            fprintf(stderr, __VA_ARGS__);                                               \
-            fputc('\n', stderr);                                                        \
-            abort();                                                                    \
-        }                                                                               \
-    } while (0)
 
 /* Reads every byte of an array so that a short allocation is caught; the
  * sum is returned so the compiler keeps the loop. */
