@@ -402,10 +402,3 @@ clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, floa
 cleanup:
     return s;
 }
-
-uint64_t clvr_renderer_bytes(const clvr_renderer *r)
-{
-    uint64_t npix = (uint64_t)r->accum_w * r->accum_h;
-    uint64_t cells = (uint64_t)r->grid_res * r->grid_res * r->grid_res;
-    return npix * (4 + 4 + 3) * 4 + cells * 12 + r->mesh->num_sampling * 4 + (uint64_t)r->tf_n * 16;
-}

@@ -72,7 +72,5 @@ clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float 
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *global_majorant,
                                          clvr_error *err);
 
-/* Device bytes held by the renderer. */
-uint64_t clvr_renderer_bytes(const clvr_renderer *r);
 
 #endif

@@ -53,48 +53,27 @@ inline int clvr_ray_box(float3 org, float3 dir, float3 lo, float3 hi, float *t0,
     return a <= b;
 }
 
-/* ------------------------------------------------------------ majorant segments */
+/* ------------------------------------------------------------ majorant segments
+ * The segment iterator of the `track` and `bins` methods; `dda` walks its
+ * grid in its own loop (clvr_delta_track_dda). */
 
 typedef struct clvr_segments {
     uint method;
     float t, tend;   /* next segment starts at t; the ray ends at tend */
     int done;
-    /* dda */
-    int3 cell, step, res;
-    float3 tnext, tdelta;
     /* bins */
     uint seg, nbins, bin;
     float seg_t0, bin_len;
     float bins[32];
 } clvr_segments;
 
-inline void clvr_segments_begin(const clvr_volume *v, clvr_segments *it, float3 org, float3 dir, float t0, float t1)
+inline void clvr_segments_begin(const clvr_volume *v, clvr_segments *it, float t0, float t1)
 {
     const clvr_frame *f = v->f;
     it->method = f->method;
     it->t = t0;
     it->tend = t1;
     it->done = !(t0 < t1);
-    if (it->method == CLVR_RENDER_DDA && !it->done) {
-        /* Amanatides-Woo setup at the entry point. */
-        float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
-        int r = (int)f->grid_res;
-        it->res = (int3)(r);
-        float3 cs = (hi - lo) / (float)r;
-        float3 p = org + dir * t0;
-        int3 c = convert_int3_rtn((p - lo) / cs);
-        c = clamp(c, (int3)(0), (int3)(r - 1));
-        it->cell = c;
-        it->step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
-        float3 inv = 1.0f / dir;
-        float3 next_bound = lo + convert_float3(c + max(it->step, (int3)(0))) * cs;
-        it->tnext = (next_bound - org) * inv;
-        it->tdelta = fabs(cs * inv);
-        /* Axes the ray does not move along never cross a boundary. */
-        if (dir.x == 0.0f) { it->tnext.x = INFINITY; it->tdelta.x = INFINITY; }
-        if (dir.y == 0.0f) { it->tnext.y = INFINITY; it->tdelta.y = INFINITY; }
-        if (dir.z == 0.0f) { it->tnext.z = INFINITY; it->tdelta.z = INFINITY; }
-    }
     if (it->method == CLVR_RENDER_BINS) {
         it->seg = 0;
         it->nbins = f->bins;
@@ -129,20 +108,6 @@ inline int clvr_segments_next(const clvr_volume *v, clvr_segments *it, float3 or
                               float *m)
 {
     if (it->done) return 0;
-    if (it->method == CLVR_RENDER_DDA) {
-        int3 c = it->cell;
-        if (any(c < (int3)(0)) || any(c >= it->res)) { it->done = 1; return 0; }
-        float tx = fmin(fmin(it->tnext.x, it->tnext.y), it->tnext.z);
-        *a = it->t;
-        *b = fmin(tx, it->tend);
-        *m = v->grid[((uint)c.z * (uint)it->res.y + (uint)c.y) * (uint)it->res.x + (uint)c.x];
-        it->t = *b;
-        if (tx >= it->tend) it->done = 1;
-        if (it->tnext.x <= tx) { it->cell.x += it->step.x; it->tnext.x += it->tdelta.x; }
-        else if (it->tnext.y <= tx) { it->cell.y += it->step.y; it->tnext.y += it->tdelta.y; }
-        else { it->cell.z += it->step.z; it->tnext.z += it->tdelta.z; }
-        return 1;
-    }
     if (it->method == CLVR_RENDER_BINS) {
         if (it->bin == it->nbins) {
             if (it->seg == v->f->segments) { it->done = 1; return 0; }
@@ -207,7 +172,7 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
                             float *t_hit, float4 *medium, uint *samples, uint *nulls)
 {
     clvr_segments it;
-    clvr_segments_begin(v, &it, org, dir, t0, t1);
+    clvr_segments_begin(v, &it, t0, t1);
     float a, b, m;
     float tau = -log(1.0f - clvr_rng_next(rng));
     while (clvr_segments_next(v, &it, org, dir, &a, &b, &m))
@@ -216,8 +181,8 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 }
 
 /* Delta tracking through the macrocell grid with a dedicated 3D-DDA loop
- * (Amanatides & Woo 1987): the generic segment iterator costs a call and a
- * large private struct per cell, and rays cross ~100 cells of a 64^3 grid,
+ * (Amanatides & Woo 1987): a generic segment iterator would cost a call and
+ * a large private struct per cell, and rays cross dozens of cells,
  * so here the walk is one tight loop with an incremental cell index. Same
  * estimator as clvr_delta_track: one optical depth spent across cells. */
 inline int clvr_delta_track_dda(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, clvr_rng *rng,
