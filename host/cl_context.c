@@ -474,14 +474,11 @@ clvr_status clvr_cl_run1d(clvr_cl *cl, cl_kernel k, size_t n, size_t local, cl_e
     cl_int rc = CLVR_FAULT_CODE("clEnqueueNDRangeKernel", CL_OUT_OF_RESOURCES);
     if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 1, NULL, &global, &local, 0, NULL, evt);
     if (rc != CL_SUCCESS) {
-        char name[128] = "?";
+        /* Name the kernel: "clEnqueueNDRangeKernel(clvr_sort_scatter, 1031 work items)". */
+        char name[128] = "?", call[192];
         clGetKernelInfo(k, CL_KERNEL_FUNCTION_NAME, sizeof name, name, NULL);
-        int memory = rc == CL_OUT_OF_RESOURCES || rc == CL_MEM_OBJECT_ALLOCATION_FAILURE;
-        s = clvr_error_set(err, memory ? CLVR_ERR_DEVICE_MEMORY : CLVR_ERR_OPENCL,
-                           "OpenCL call clEnqueueNDRangeKernel(%s, %zu work items) failed with %s on %s%s", name, n,
-                           clvr_cl_error_name(rc), cl->device_name,
-                           memory ? "; the device ran out of memory: try a smaller image or mesh, or another --device"
-                                  : "");
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s, %zu work items)", name, n);
+        s = clvr_cl_fail(err, call, rc, __FILE__, __LINE__);
     }
     return s;
 }

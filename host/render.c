@@ -334,7 +334,12 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
                         (r->set.height + local[1] - 1) / local[1] * local[1]};
     cl_int rc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
     if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 2, NULL, global, local, 0, NULL, &evt);
-    CLVR_CL_CHECK(rc);
+    if (rc != CL_SUCCESS) {
+        char call[96];
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(clvr_render_frame, %ux%u)", r->set.width, r->set.height);
+        s = clvr_cl_fail(err, call, rc, __FILE__, __LINE__);
+        goto cleanup;
+    }
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
     r->last_frame_s = clvr_cl_event_seconds(evt);
     r->kernel_s += r->last_frame_s;
