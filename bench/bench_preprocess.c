@@ -442,8 +442,18 @@ int main(int argc, char **argv)
         clvr_mesh_free(&m);
     }
     for (const char *p = sizes; p && *p && !rc;) {
-        uint64_t want = strtoull(p, (char **)&p, 10);
-        if (*p == ',') ++p;
+        /* N, or N with a K/M/G suffix (10M = 10,000,000), comma separated. */
+        char *end;
+        uint64_t want = strtoull(p, &end, 10);
+        if (*end == 'K' || *end == 'k') want *= 1000ull, ++end;
+        else if (*end == 'M' || *end == 'm') want *= 1000000ull, ++end;
+        else if (*end == 'G' || *end == 'g') want *= 1000000000ull, ++end;
+        if (end == p || (*end && *end != ',') || want == 0 || want > 4000000000ull) {
+            fprintf(stderr, "bench_preprocess: --elements '%s': expected counts such as 1000000,10M (1 .. 4G)\n", sizes);
+            rc = 2;
+            break;
+        }
+        p = *end == ',' ? end + 1 : end;
         uint32_t n = (uint32_t)llround(cbrt((double)want));
         if (n < 1) n = 1;
         clvr_mesh m = {0};

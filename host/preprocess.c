@@ -119,13 +119,11 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
     /* A few tiles per compute unit balance the load on a CPU; GPUs want many. */
     pp->max_tiles = cl->device_type & CL_DEVICE_TYPE_GPU ? 4096u : 8u * cu;
     if (pp->max_tiles > 4096u) pp->max_tiles = 4096u;
-    /* Elements per work-item of the key kernel. Runs of 1024 per work-item
-     * measured no faster on PoCL than one element per work-item in groups of
-     * 64 (PoCL vectorizes the latter across work-items), so 1 everywhere. */
-    pp->per_item = 1u;
     CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", NULL, &pp->prog, err));
     struct { cl_kernel *k; const char *name; } ks[] = {
-        {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->element_keys, "clvr_pp_element_keys"},
+        {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->keys_type[0], "clvr_pp_keys_tet"},
+        {&pp->keys_type[1], "clvr_pp_keys_pyramid"}, {&pp->keys_type[2], "clvr_pp_keys_wedge"},
+        {&pp->keys_type[3], "clvr_pp_keys_hex"},
         {&pp->scan_reduce, "clvr_pp_scan_reduce"},   {&pp->scan_sums, "clvr_pp_scan_sums"},
         {&pp->scan_apply, "clvr_pp_scan_apply"},     {&pp->select_scatter, "clvr_pp_select_scatter"},
         {&pp->radix_andor, "clvr_pp_radix_andor"},   {&pp->radix_hist, "clvr_pp_radix_hist"},
@@ -144,7 +142,7 @@ cleanup:
 void clvr_pp_destroy(clvr_pp *pp)
 {
     if (!pp) return;
-    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->element_keys, &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply,
+    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->keys_type[0], &pp->keys_type[1], &pp->keys_type[2], &pp->keys_type[3], &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply,
                        &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
                        &pp->sampling, &pp->leaf_boxes, &pp->instance_bounds, &pp->split, &pp->rec_flags,
                        &pp->inst_counts, &pp->inst_write, &pp->vertices};
@@ -206,18 +204,19 @@ clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layo
                          int morton, cl_mem keys, cl_mem vals, double *sec, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    cl_kernel k = pp->element_keys;
-    cl_uint n = (cl_uint)l->num_elements, e1 = (cl_uint)l->first[1], e2 = (cl_uint)l->first[2],
-            e3 = (cl_uint)l->first[3];
-    cl_ulong s1 = l->slot[1], s2 = l->slot[2], s3 = l->slot[3];
     cl_float gx = b->lo[0], gy = b->lo[1], gz = b->lo[2], scale = clvr_pp_scale(b);
     cl_int mo = morton;
-    cl_uint per = pp->per_item;
-    int i = 0;
-    ARG(k, i++, pos); ARG(k, i++, idx); ARG(k, i++, n); ARG(k, i++, per); ARG(k, i++, e1); ARG(k, i++, e2);
-    ARG(k, i++, e3); ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, gx); ARG(k, i++, gy);
-    ARG(k, i++, gz); ARG(k, i++, scale); ARG(k, i++, mo); ARG(k, i++, keys); ARG(k, i++, vals);
-    CLVR_TRY(launch(pp, k, ((uint64_t)n + per - 1) / per, per == 1 ? 64 : 1, sec, err));
+    for (cl_uint t = 0; t < 4; ++t) {
+        cl_uint count = (cl_uint)l->count[t], first = (cl_uint)l->first[t];
+        if (count == 0) continue;
+        cl_ulong slot0 = l->slot[t];
+        cl_kernel k = pp->keys_type[t];
+        int i = 0;
+        ARG(k, i++, pos); ARG(k, i++, idx); ARG(k, i++, slot0); ARG(k, i++, count); ARG(k, i++, first); ARG(k, i++, gx);
+        ARG(k, i++, gy); ARG(k, i++, gz); ARG(k, i++, scale); ARG(k, i++, mo); ARG(k, i++, t); ARG(k, i++, keys);
+        ARG(k, i++, vals);
+        CLVR_TRY(launch(pp, k, count, 64, sec, err));
+    }
 cleanup:
     return s;
 }

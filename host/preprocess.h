@@ -118,11 +118,10 @@ void clvr_clustered_host_free(clvr_clustered_host *h);
 typedef struct clvr_pp {
     clvr_cl *cl;
     cl_program prog;
-    cl_kernel bounds_tiles, element_keys, scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
+    cl_kernel bounds_tiles, keys_type[4], scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
         radix_hist, radix_scatter, gather, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
         inst_write, vertices;
     uint32_t max_tiles;       /* tiles per tiled launch: a few per compute unit */
-    uint32_t per_item;        /* elements per work-item of the key kernel (1: groups of 64) */
 } clvr_pp;
 
 clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err);

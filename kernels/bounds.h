@@ -17,17 +17,18 @@
  * to [0, 65535]. scale = 65536 / largest extent of the global box (one
  * scale for the three axes keeps the cells cubic, so curve neighbours are
  * spatial neighbours), 0 when the box is a point. NaN maps to 0. */
-CLVR_INLINE clvr_u32 clvr_pp_quantize(float c, float lo, float scale)
+CLVR_FORCE_INLINE clvr_u32 clvr_pp_quantize(float c, float lo, float scale)
 {
+    /* Selects, not branches, in the per-element key kernels. */
     float q = (c - lo) * scale;
-    if (!(q > 0.0f)) return 0u;
-    if (q >= 65535.0f) return 65535u;
+    q = q > 0.0f ? q : 0.0f;
+    q = q < 65535.0f ? q : 65535.0f;
     return (clvr_u32)q;
 }
 
 /* Sort key of an element whose box is (lo, hi): the curve key of the box
  * centre, with the type in bits 48..49. morton != 0 selects Morton order. */
-CLVR_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const float *hi, const float *glo,
+CLVR_FORCE_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const float *hi, const float *glo,
                                          float scale, int morton)
 {
     clvr_u32 q[3];
@@ -35,7 +36,11 @@ CLVR_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const f
         float c = (lo[k] + hi[k]) * 0.5f;
         q[k] = clvr_pp_quantize(c, glo[k], scale);
     }
-    clvr_u64 code = morton ? clvr_morton3(q[0], q[1], q[2]) : clvr_hilbert3(q[0], q[1], q[2]);
+    /* The Hilbert key is computed from the Morton key anyway; selecting
+     * between the two (rather than branching) keeps the code branch-free. */
+    const clvr_u64 m = clvr_morton3(q[0], q[1], q[2]);
+    const clvr_u64 h = clvr_hilbert3_from_morton(m);
+    clvr_u64 code = morton ? m : h;
     return ((clvr_u64)type << 48) | code;
 }
 
@@ -47,7 +52,7 @@ CLVR_INLINE clvr_u32 clvr_pp_type_of(clvr_u64 g, clvr_u64 b1, clvr_u64 b2, clvr_
 }
 
 /* Grows a box (lo, hi) by a point. */
-CLVR_INLINE void clvr_pp_box_grow(float *lo, float *hi, float x, float y, float z)
+CLVR_FORCE_INLINE void clvr_pp_box_grow(float *lo, float *hi, float x, float y, float z)
 {
     lo[0] = x < lo[0] ? x : lo[0];
     lo[1] = y < lo[1] ? y : lo[1];
@@ -59,13 +64,14 @@ CLVR_INLINE void clvr_pp_box_grow(float *lo, float *hi, float x, float y, float 
 
 /* Box of the vpe vertices idx[0..vpe-1] of an element; positions are
  * x y z interleaved (the mesh's float3 array). */
-CLVR_INLINE void clvr_pp_element_box(const CLVR_GLOBAL float *pos, const CLVR_GLOBAL clvr_u32 *idx, clvr_u32 vpe,
+CLVR_FORCE_INLINE void clvr_pp_element_box(const CLVR_GLOBAL float *pos, const CLVR_GLOBAL clvr_u32 *idx, clvr_u32 vpe,
                                      float *lo, float *hi)
 {
     clvr_u64 v = idx[0];
     lo[0] = hi[0] = pos[3 * v];
     lo[1] = hi[1] = pos[3 * v + 1];
     lo[2] = hi[2] = pos[3 * v + 2];
+    CLVR_UNROLL
     for (clvr_u32 k = 1; k < vpe; ++k) {
         v = idx[k];
         clvr_pp_box_grow(lo, hi, pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]);

@@ -20,6 +20,11 @@ typedef long clvr_i64;
 #define CLVR_GLOBAL __global
 #define CLVR_CONSTANT __constant
 #define CLVR_INLINE inline
+/* For small hot helpers of per-element kernels: inlined, no call is left
+ * in the work-item loop a CPU device compiles the kernel into. */
+#define CLVR_FORCE_INLINE inline __attribute__((always_inline))
+/* Full unrolling of a short fixed-count loop in such kernels. */
+#define CLVR_UNROLL _Pragma("unroll")
 #define CLVR_STATIC_ASSERT(cond, msg)
 #else
 #include <stdint.h>
@@ -32,6 +37,8 @@ typedef int64_t clvr_i64;
 #define CLVR_GLOBAL
 #define CLVR_CONSTANT const
 #define CLVR_INLINE static inline
+#define CLVR_FORCE_INLINE static inline
+#define CLVR_UNROLL
 #define CLVR_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
 #endif
 

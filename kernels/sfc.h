@@ -19,7 +19,7 @@
 #include "clvr_shared.h"
 
 /* Spreads the low 16 bits of v so that bit i moves to bit 3i. */
-CLVR_INLINE clvr_u64 clvr_sfc_spread3(clvr_u32 v)
+CLVR_FORCE_INLINE clvr_u64 clvr_sfc_spread3(clvr_u32 v)
 {
     clvr_u64 x = v & 0xffffu;
     x = (x | (x << 32)) & 0x1f00000000ffffull;
@@ -44,7 +44,7 @@ CLVR_INLINE clvr_u32 clvr_sfc_compact3(clvr_u64 x)
 
 /* Morton key of (x, y, z), each < 2^16: x's bits are the most significant of
  * each triple. */
-CLVR_INLINE clvr_u64 clvr_morton3(clvr_u32 x, clvr_u32 y, clvr_u32 z)
+CLVR_FORCE_INLINE clvr_u64 clvr_morton3(clvr_u32 x, clvr_u32 y, clvr_u32 z)
 {
     return (clvr_sfc_spread3(x) << 2) | (clvr_sfc_spread3(y) << 1) | clvr_sfc_spread3(z);
 }
@@ -201,18 +201,24 @@ CLVR_SFC_TABLE clvr_u16 clvr_hilbert3_table[24 * 64] = {
 
 /* The paper's 48-bit Hilbert key: 16 bits per axis; equal to
  * clvr_hilbert3_bits(x, y, z, 16), computed with the state table from the
- * Morton code of (x, y, z). */
-CLVR_INLINE clvr_u64 clvr_hilbert3(clvr_u32 x, clvr_u32 y, clvr_u32 z)
+ * Morton code m = clvr_morton3(x, y, z): 8 dependent table steps, fully
+ * unrolled on the device. */
+CLVR_FORCE_INLINE clvr_u64 clvr_hilbert3_from_morton(clvr_u64 m)
 {
-    const clvr_u64 m = clvr_morton3(x, y, z);
     clvr_u64 key = 0;
     clvr_u32 state = 0;
+    CLVR_UNROLL
     for (int shift = 3 * CLVR_SFC_BITS - 6; shift >= 0; shift -= 6) {
         const clvr_u32 e = clvr_hilbert3_table[state * 64u + (clvr_u32)((m >> shift) & 63u)];
         key = (key << 6) | (e & 63u);
         state = e >> 6;
     }
     return key;
+}
+
+CLVR_INLINE clvr_u64 clvr_hilbert3(clvr_u32 x, clvr_u32 y, clvr_u32 z)
+{
+    return clvr_hilbert3_from_morton(clvr_morton3(x, y, z));
 }
 
 /* Inverse of clvr_hilbert3_bits (Skilling's TransposetoAxes): writes the
