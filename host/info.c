@@ -9,6 +9,9 @@ void clvr_info_print(FILE *out, const char *name, const clvr_mesh *m)
     fprintf(out, "elements    %llu\n", (unsigned long long)n);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         fprintf(out, "  %-9s %llu\n", clvr_cell_type_name(t), (unsigned long long)m->num_cells[t]);
+    if (m->skipped_cells)
+        fprintf(out, "left out    %llu cells of other types (surface, line, polyhedron)\n",
+                (unsigned long long)m->skipped_cells);
     fprintf(out, "bounds      [%g, %g, %g] - [%g, %g, %g]\n", m->bounds_lo[0], m->bounds_lo[1], m->bounds_lo[2],
             m->bounds_hi[0], m->bounds_hi[1], m->bounds_hi[2]);
     fprintf(out, "scalar      %s, range [%g, %g]\n", m->scalar_name[0] ? m->scalar_name : "(unnamed)", m->scalar_min,

@@ -120,6 +120,11 @@ int main(int argc, char **argv)
         clvr_limits_report lr;
         clvr_limits_scan(&mesh, &lr);
         clvr_limits_print_warnings(stderr, mesh_name, &lr);
+        if (mesh.skipped_cells)
+            fprintf(stderr,
+                    "clvr: warning: %s: %llu cell%s of other types (surface, line or polyhedron cells) left out; "
+                    "clvr renders tetrahedra, pyramids, wedges and hexahedra\n",
+                    mesh_name, (unsigned long long)mesh.skipped_cells, mesh.skipped_cells == 1 ? "" : "s");
     }
 
     /* The transfer function needs only the scalar range: load it now, so a

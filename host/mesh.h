@@ -23,6 +23,8 @@ typedef struct clvr_mesh {
     char scalar_name[CLVR_SCALAR_NAME_MAX];        /* NUL-terminated, may be empty */
     float bounds_lo[3], bounds_hi[3];              /* of all vertices (clvr_mesh_update_ranges) */
     float scalar_min, scalar_max;                  /* of all scalars */
+    uint64_t skipped_cells;                        /* cells of other types the loader left out
+                                                    * (VTK/umesh surface and line cells) */
 } clvr_mesh;
 
 /* Allocates arrays for the given counts (zeroed struct first). On failure

@@ -260,6 +260,7 @@ clvr_status clvr_mesh_parse_umesh(const void *data, size_t size, const char *nam
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) counts[t] = cells[t].count;
     s = clvr_mesh_alloc(out, verts.count, counts, err);
     if (s != CLVR_OK) return s;
+    out->skipped_cells = tris.count + quads.count;
     if (verts.count) {
         memcpy(out->positions, c.data + verts.offset, (size_t)(verts.count * 12));
         memcpy(out->scalars, c.data + chosen->values.offset, (size_t)(verts.count * 4));

@@ -13,8 +13,9 @@
  * Cells of type 10 (tetra), 14 (pyramid), 13 (wedge) and 12 (hexahedron)
  * are kept in file order, and so are the quadratic versions of those four,
  * reduced to their corners (see vtk_to_clvr_type); all others (vertices,
- * lines, triangles, quads, polyhedra, Lagrange cells) are skipped without a
- * message, since library code prints nothing. Every point is kept so that
+ * lines, triangles, quads, polyhedra, Lagrange cells) are skipped; library
+ * code prints nothing, so their number goes to mesh->skipped_cells and the
+ * CLI warns. Every point is kept so that
  * point data lines up.
  *
  * The scalar is opt->scalar_name, searched among point arrays and then
@@ -906,6 +907,7 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
     }
     s = clvr_mesh_alloc(out, doc.num_points, counts, err);
     if (s != CLVR_OK) goto done;
+    out->skipped_cells = skipped;
     clvr_mesh_set_scalar_name(out, sc->name, strlen(sc->name));
 
     {

@@ -213,6 +213,10 @@ def make_bin_single_tet(d, n):
     return _write(d, n, ".bin", mg.bin_bytes(mg.unit_tet()))
 
 
+def make_vtk_tets_and_triangles(d, n):
+    return _write(d, n, ".vtk", mg.vtk_bytes(mg.tet_grid(2), extra_cells=((5, (0, 1, 2)), (5, (0, 1, 3)))))
+
+
 def make_vtk_single_hex(d, n):
     return _write(d, n, ".vtk", mg.vtk_bytes(mg.hex_grid(1), binary=True))
 

@@ -526,6 +526,8 @@ static void test_vtk_synthetic(void)
     TU_CHECK_STATUS(parse_str(vtk_51, "v51.vtk", "s", &b, &err), CLVR_OK, &err);
     TU_CHECK_EQ_U64(a.num_cells[CLVR_CELL_TET], 2);
     TU_CHECK_EQ_U64(clvr_mesh_num_elements(&a), 2);
+    TU_CHECK_EQ_U64(a.skipped_cells, 1); /* the vertex cell */
+    TU_CHECK_EQ_U64(b.skipped_cells, 1);
     TU_CHECK(arrays_equal(&a, &b));
     TU_CHECK(a.scalars[0] == 0.5f && a.positions[14] == 1.0f);
     clvr_mesh_free(&b);
@@ -725,6 +727,7 @@ static void test_umesh(void)
     TU_CHECK_STATUS(clvr_mesh_load(path, NULL, &m, &err), CLVR_OK, &err);
     TU_CHECK_EQ_U64(m.num_vertices, 60);
     for (uint32_t t = 0; t < 4; ++t) TU_CHECK_EQ_U64(m.num_cells[t], 2);
+    TU_CHECK_EQ_U64(m.skipped_cells, 4); /* 2 triangles, 2 quads */
     const uint32_t tet0[4] = {7, 8, 9, 10}, pyr1[5] = {41, 42, 43, 44, 45}, wdg0[6] = {16, 17, 18, 19, 20, 21};
     const uint32_t hex1[8] = {52, 53, 54, 55, 56, 57, 58, 59};
     check_indices(&m, CLVR_CELL_TET, 0, tet0, "umesh");
