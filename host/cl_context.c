@@ -448,6 +448,10 @@ static cl_mem huge_page_buffer(clvr_cl *cl, cl_mem_flags flags, size_t bytes, vo
     if (!(cl->device_type & CL_DEVICE_TYPE_CPU) || bytes < CLVR_HUGE_PAGE ||
         (flags & (CL_MEM_USE_HOST_PTR | CL_MEM_ALLOC_HOST_PTR)))
         return NULL;
+    /* CLVR_HUGE_PAGES=0 leaves every buffer to the driver (for comparisons,
+     * or where huge pages are unwelcome). */
+    const char *env = getenv("CLVR_HUGE_PAGES");
+    if (env && !strcmp(env, "0")) return NULL;
     size_t rounded = (bytes + CLVR_HUGE_PAGE - 1) / CLVR_HUGE_PAGE * CLVR_HUGE_PAGE;
     void *p = aligned_alloc(CLVR_HUGE_PAGE, rounded);
     if (!p) return NULL;
