@@ -176,19 +176,42 @@ static void sorted_key(const uint32_t *idx, uint32_t nv, uint32_t *key)
         }
 }
 
-static uint64_t hash_key(uint32_t t, const uint32_t *key, uint32_t nv)
+/* Hash of an element's vertex set, independent of the vertices' order: a
+ * sum of strongly mixed ids (splitmix64's finalizer), so no sort and no
+ * data-dependent branch per element; equal hashes are confirmed by
+ * comparing the sorted vertex lists. */
+static uint64_t mix64(uint64_t x)
 {
-    uint64_t h = 0x9e3779b97f4a7c15ull ^ t;
-    for (uint32_t i = 0; i < nv; ++i) {
-        h ^= key[i];
-        h *= 0xff51afd7ed558ccdull; /* murmur3 finalizer steps */
-        h ^= h >> 33;
-    }
-    h *= 0xc4ceb9fe1a85ec53ull;
-    return h ^ (h >> 33);
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
 }
 
-/* Duplicates by vertex set: open addressing over global element ids + 1. */
+/* Type of global element id g (ids count the four type lists in order). */
+static uint32_t type_of(uint64_t g, const uint64_t first[CLVR_CELL_TYPE_COUNT])
+{
+    return (uint32_t)(g >= first[1]) + (uint32_t)(g >= first[2]) + (uint32_t)(g >= first[3]);
+}
+
+static uint64_t element_hash(const clvr_mesh *m, uint32_t t, uint64_t e)
+{
+    const uint32_t nv = clvr_cell_vertex_count(t);
+    const uint32_t *ix = m->indices[t] + e * nv;
+    uint64_t h = 0;
+    for (uint32_t i = 0; i < nv; ++i) h += mix64(ix[i]);
+    return mix64(h ^ t);
+}
+
+/* Duplicates by vertex set, as a cache-conscious hash join: the elements'
+ * (hash, id) pairs are first partitioned by the hash's top bits (a
+ * streaming pass with 256 output runs, in id order), then each partition
+ * gets an open-addressing table small enough for the cache. One table over
+ * all elements (128 MB at 10M) took a cache miss per element and 1.5 s of
+ * the 2.1 s scan of a 10M-hex mesh. Key vectors are compared only when the
+ * 64-bit hashes match. Within a partition elements come in id order, so
+ * the table keeps the earliest of equal elements and every later one
+ * counts as a duplicate of it, as a single pass in id order would. */
 static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
 {
     uint64_t n = clvr_mesh_num_elements(m), first[CLVR_CELL_TYPE_COUNT], acc = 0;
@@ -197,38 +220,87 @@ static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
         first[t] = acc;
         acc += m->num_cells[t];
     }
-    uint64_t cap = 16;
-    while (cap < 2 * n) cap <<= 1;
-    uint32_t *table = calloc((size_t)cap, sizeof *table);
-    if (!table) return;
-    r->duplicates_checked = 1;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        const uint32_t nv = clvr_cell_vertex_count(t);
+    /* Partitions of about 32k elements (a 64k-slot table of 4 bytes per
+     * partition), at most 1024. */
+    uint32_t pbits = 0;
+    while (pbits < 10 && (n >> pbits) > 32768) ++pbits;
+    const uint32_t np = 1u << pbits;
+    uint64_t *hs = malloc((n ? n : 1) * sizeof *hs);
+    uint32_t *ids = malloc((n ? n : 1) * sizeof *ids);
+    uint64_t *start = calloc(np + 1, sizeof *start);
+    uint32_t *table = NULL;
+    if (!hs || !ids || !start) goto done;
+    uint32_t key[8], other[8];
+    /* Pass 1: partition sizes. Pass 2: scatter (hash, id) in id order. */
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
-            uint32_t key[8], other[8];
-            sorted_key(m->indices[t] + e * nv, nv, key);
-            uint64_t h = hash_key(t, key, nv) & (cap - 1);
-            for (;; h = (h + 1) & (cap - 1)) {
-                uint32_t slot = table[h];
+            uint64_t h = element_hash(m, t, e);
+            ++start[pbits ? (h >> (64 - pbits)) + 1 : 1];
+        }
+    uint64_t maxp = 0;
+    for (uint32_t p = 0; p < np; ++p) {
+        if (start[p + 1] > maxp) maxp = start[p + 1];
+        start[p + 1] += start[p];
+    }
+    {
+        uint64_t *fill = malloc(np * sizeof *fill);
+        if (!fill) goto done;
+        memcpy(fill, start, np * sizeof *fill);
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+            for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
+                uint64_t h = element_hash(m, t, e);
+                uint64_t at = fill[pbits ? h >> (64 - pbits) : 0]++;
+                hs[at] = h;
+                ids[at] = (uint32_t)(first[t] + e);
+            }
+        free(fill);
+    }
+    uint64_t cap = 16;
+    while (cap < 2 * maxp) cap <<= 1;
+    table = malloc(cap * sizeof *table);
+    if (!table) goto done;
+    r->duplicates_checked = 1;
+    uint64_t best = UINT64_MAX; /* global id of the first duplicate */
+    for (uint32_t p = 0; p < np; ++p) {
+        const uint64_t b = start[p], e = start[p + 1];
+        uint64_t c = 16;
+        while (c < 2 * (e - b)) c <<= 1;
+        memset(table, 0, c * sizeof *table);
+        for (uint64_t i = b; i < e; ++i) {
+            const uint64_t h = hs[i];
+            const uint32_t t = type_of(ids[i], first);
+            int have_key = 0;
+            for (uint64_t s = h & (c - 1);; s = (s + 1) & (c - 1)) {
+                const uint32_t slot = table[s];
                 if (slot == 0) {
-                    table[h] = (uint32_t)(first[t] + e + 1);
+                    table[s] = (uint32_t)(i - b + 1);
                     break;
                 }
-                uint64_t g = slot - 1;
-                if (g < first[t]) continue; /* another type: never the same element */
-                uint64_t oe = g - first[t];
-                sorted_key(m->indices[t] + oe * nv, nv, other);
+                const uint64_t j = b + slot - 1;
+                if (hs[j] != h || type_of(ids[j], first) != t) continue;
+                const uint32_t nv = clvr_cell_vertex_count(t);
+                if (!have_key) {
+                    sorted_key(m->indices[t] + (ids[i] - first[t]) * nv, nv, key);
+                    have_key = 1;
+                }
+                sorted_key(m->indices[t] + (ids[j] - first[t]) * nv, nv, other);
                 if (memcmp(key, other, nv * sizeof *key) == 0) {
-                    if (r->duplicates++ == 0) {
+                    ++r->duplicates;
+                    if (ids[i] < best) {
+                        best = ids[i];
                         r->first_duplicate_type = t;
-                        r->first_duplicate = e;
-                        r->duplicate_of = oe;
+                        r->first_duplicate = ids[i] - first[t];
+                        r->duplicate_of = ids[j] - first[t];
                     }
                     break;
                 }
             }
         }
     }
+done:
+    free(hs);
+    free(ids);
+    free(start);
     free(table);
 }
 

@@ -228,6 +228,112 @@ static void test_scan_files(void)
     }
 }
 
+/* ---- duplicates on big random meshes against a sort-based reference:
+ * elements ordered by (type, sorted vertex set, id); every element that is
+ * not first in its group is a duplicate of the group's first. Sizes run
+ * past the scan's one-partition case (32k elements). */
+typedef struct dup_ref_item {
+    uint32_t type, key[8];
+    uint64_t id; /* within the type */
+} dup_ref_item;
+
+static int dup_ref_cmp(const void *a, const void *b)
+{
+    const dup_ref_item *x = a, *y = b;
+    if (x->type != y->type) return x->type < y->type ? -1 : 1;
+    int c = memcmp(x->key, y->key, sizeof x->key);
+    if (c) return c;
+    return x->id < y->id ? -1 : x->id > y->id;
+}
+
+static void sort8(uint32_t *k, uint32_t n)
+{
+    for (uint32_t i = 1; i < n; ++i)
+        for (uint32_t j = i; j > 0 && k[j - 1] > k[j]; --j) {
+            uint32_t t = k[j];
+            k[j] = k[j - 1];
+            k[j - 1] = t;
+        }
+}
+
+static void test_scan_duplicates_random(void)
+{
+    const uint64_t sizes[] = {0, 1, 2, 40000, 100003, 300007};
+    uint64_t rng = 12345;
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si) {
+        const uint64_t n = sizes[si];
+        clvr_mesh m;
+        memset(&m, 0, sizeof m);
+        /* Few vertices, so random vertex sets also repeat by chance. */
+        m.num_vertices = 64;
+        m.num_cells[CLVR_CELL_TET] = n - n / 3;
+        m.num_cells[CLVR_CELL_HEX] = n / 3;
+        m.positions = calloc(3 * m.num_vertices, sizeof(float));
+        m.scalars = calloc(m.num_vertices, sizeof(float));
+        for (uint32_t v = 0; v < m.num_vertices; ++v) m.positions[3 * v] = (float)v; /* geometry unused here */
+        dup_ref_item *items = malloc((n ? n : 1) * sizeof *items);
+        uint64_t k = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            m.indices[t] = malloc((m.num_cells[t] ? m.num_cells[t] : 1) * nv * sizeof(uint32_t));
+            for (uint64_t e = 0; e < m.num_cells[t]; ++e) {
+                uint32_t *ix = m.indices[t] + e * nv;
+                rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+                if (e > 0 && (rng >> 60) == 0) {
+                    /* A planted duplicate: an earlier element, vertices rotated. */
+                    uint64_t o = (rng >> 20) % e;
+                    for (uint32_t i = 0; i < nv; ++i) ix[i] = m.indices[t][o * nv + (i + 1) % nv];
+                } else {
+                    /* Distinct ids from 64 vertices: tets repeat by chance now and then. */
+                    uint64_t used = 0;
+                    for (uint32_t i = 0; i < nv; ++i) {
+                        uint32_t v;
+                        do {
+                            rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+                            v = (uint32_t)(rng >> 58);
+                        } while (used >> v & 1);
+                        used |= 1ull << v;
+                        ix[i] = v;
+                    }
+                }
+                dup_ref_item *it = &items[k++];
+                memset(it, 0, sizeof *it);
+                it->type = t;
+                it->id = e;
+                memcpy(it->key, ix, nv * sizeof *ix);
+                sort8(it->key, nv);
+            }
+        }
+        qsort(items, n, sizeof *items, dup_ref_cmp);
+        uint64_t dups = 0, first_g = UINT64_MAX, first_t = 0, first_e = 0, of = 0;
+        for (uint64_t i = 0, g0 = 0; i < n; ++i) {
+            if (i > 0 && items[i].type == items[i - 1].type && !memcmp(items[i].key, items[i - 1].key, sizeof items[i].key)) {
+                ++dups;
+                uint64_t g = items[i].type == CLVR_CELL_TET ? items[i].id : m.num_cells[0] + items[i].id;
+                if (g < first_g) {
+                    first_g = g;
+                    first_t = items[i].type;
+                    first_e = items[i].id;
+                    of = items[g0].id;
+                }
+            } else
+                g0 = i;
+        }
+        clvr_limits_report r;
+        clvr_limits_scan(&m, &r);
+        TU_CHECK(r.duplicates_checked);
+        TU_CHECK_EQ_U64(r.duplicates, dups);
+        if (dups) {
+            TU_CHECK_EQ_U64(r.first_duplicate_type, first_t);
+            TU_CHECK_EQ_U64(r.first_duplicate, first_e);
+            TU_CHECK_EQ_U64(r.duplicate_of, of);
+        }
+        if (n > 1000) TU_CHECK(dups > 100); /* the test plants enough to mean something */
+        free(items);
+        clvr_mesh_free(&m);
+    }
+}
+
 int main(void)
 {
     test_estimate();
@@ -235,5 +341,6 @@ int main(void)
     test_scan_tets();
     test_scan_other_types();
     test_scan_files();
+    test_scan_duplicates_random();
     return tu_finish("test_limits");
 }
