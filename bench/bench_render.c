@@ -21,8 +21,13 @@
  *
  *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
  *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
+ *                [--sampler ld|independent]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
- *                [--max-spp M] [--json FILE]
+ *                [--max-spp M] [--sampler ld|independent] [--json FILE]
+ *
+ * --sampler: the renderer's frame sampler (default ld, the renderer's
+ * default); --converge renders its reference with independent frames always
+ * and the measured run with this sampler.
  *
  * Without --mesh: the built-in default scene and tests/data/vtk/notch_stress.vtk. */
 #include <inttypes.h>
@@ -58,6 +63,7 @@ typedef struct config {
     uint32_t method, macrocells;
     int shadows;
     char label[32];
+    uint32_t sampler; /* CLVR_SAMPLER_* */
 } config;
 
 typedef struct row {
@@ -139,6 +145,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     rs.width = w;
     rs.height = h;
     rs.seed = seed;
+    rs.sampler = c->sampler;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
     clvr_camera cam;
@@ -276,8 +283,8 @@ typedef struct conv_result {
 
 static float clamp01(float v) { return v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v; }
 
-static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int shadows, uint32_t w, uint32_t h,
-                                uint32_t ref_spp, uint32_t max_spp, double target, conv_result *out,
+static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, uint32_t sampler, int shadows, uint32_t w,
+                                uint32_t h, uint32_t ref_spp, uint32_t max_spp, double target, conv_result *out,
                                 clvr_camera *cam, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -285,7 +292,10 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
     const size_t npix = (size_t)w * h, nf = npix * 4;
     float *sum = malloc(nf * sizeof(float)), *sq = malloc(nf * sizeof(float)), *ref = malloc(nf * sizeof(float)),
           *img = malloc(nf * sizeof(float));
-    config c = {method, 0, shadows, ""};
+    /* The reference always uses independent frames: its own noise, which is
+     * subtracted below, is estimated from its per-pixel moments, and that
+     * estimate is only right for independent frames. */
+    config c = {method, 0, shadows, "", CLVR_SAMPLER_INDEPENDENT};
     memset(out, 0, sizeof *out);
     out->shadows = shadows;
     out->load_before = bench_load1();
@@ -316,7 +326,9 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, int 
     clvr_renderer_destroy(rd);
     rd = NULL;
 
-    /* Progressive run with another seed. */
+    /* Progressive run with another seed, with the sampler under test (its
+     * frames may be correlated; nothing below needs its own moments). */
+    c.sampler = sampler;
     s = renderer_for(cl, g, &c, w, h, 1, &rd, NULL, err);
     double wall = 0.0, fit_acc = 0.0, fit_acc_rel = 0.0;
     uint32_t fit_n = 0, next = 1;
@@ -391,15 +403,16 @@ static void json_point(FILE *f, const conv_point *p)
             p->spp, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
 }
 
-static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t w, uint32_t h, uint32_t ref_spp,
-                        uint32_t max_spp, double target, const char *json)
+static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t sampler, uint32_t w, uint32_t h,
+                        uint32_t ref_spp, uint32_t max_spp, double target, const char *json)
 {
     clvr_error err = {0};
     scene_gpu g;
     conv_result res[2];
     clvr_camera cam;
-    printf("# bench_render --converge: %s, %s, %ux%u, reference %u spp, target RMSE %.3g\n", base_name(mesh),
-           clvr_method_name((clvr_method)method), w, h, ref_spp, target);
+    printf("# bench_render --converge: %s, %s, %ux%u, reference %u spp (independent frames), measured run: %s "
+           "sampler, target RMSE %.3g\n", base_name(mesh), clvr_method_name((clvr_method)method), w, h, ref_spp,
+           sampler == CLVR_SAMPLER_LD ? "ld" : "independent", target);
     printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
            cl->driver_version);
     fflush(stdout);
@@ -408,7 +421,8 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
         return 1;
     }
     for (int sh = 0; sh < 2; ++sh) {
-        if (converge_one(cl, &g, method, sh, w, h, ref_spp, max_spp, target, &res[sh], &cam, &err) != CLVR_OK) {
+        if (converge_one(cl, &g, method, sampler, sh, w, h, ref_spp, max_spp, target, &res[sh], &cam, &err) !=
+            CLVR_OK) {
             fprintf(stderr, "bench_render: %s\n", err.msg);
             scene_release(cl, &g);
             return 1;
@@ -442,8 +456,9 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
         fprintf(f, ", \"mesh\": ");
         json_str(f, mesh);
         fprintf(f, ", \"elements\": %" PRIu64 ", \"method\": \"%s\", \"width\": %u, \"height\": %u, \"ref_spp\": %u, "
-                   "\"target\": %g, \"preprocess_s\": %.6g,\n",
-                g.elements, clvr_method_name((clvr_method)method), w, h, ref_spp, target, g.preprocess_s);
+                   "\"target\": %g, \"preprocess_s\": %.6g, \"sampler\": \"%s\", \"ref_sampler\": \"independent\",\n",
+                g.elements, clvr_method_name((clvr_method)method), w, h, ref_spp, target, g.preprocess_s,
+                sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
         fprintf(f, " \"camera\": {\"eye\": [%.9g, %.9g, %.9g], \"target\": [%.9g, %.9g, %.9g], \"up\": [%.9g, %.9g, %.9g], "
                    "\"fovy\": %.9g},\n",
                 cam.origin[0], cam.origin[1], cam.origin[2], cam.target[0], cam.target[1], cam.target[2], cam.up[0],
@@ -485,8 +500,9 @@ static int usage(void)
     fprintf(stderr,
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
             "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
+            "                    [--sampler ld|independent]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
-            "                    [--max-spp M] [--json FILE]\n");
+            "                    [--max-spp M] [--sampler ld|independent] [--json FILE]\n");
     return 2;
 }
 
@@ -494,6 +510,7 @@ int main(int argc, char **argv)
 {
     const char *device = NULL, *json = NULL, *meshes[MAX_MESHES];
     const char *methods = "march,track,bins,dda", *macro = "32,128";
+    uint32_t sampler = CLVR_SAMPLER_LD;
     uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024;
     uint32_t conv_method = CLVR_RENDER_DDA;
     int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0;
@@ -518,6 +535,12 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--budget") && v) budget = atof(argv[++i]);
         else if (!strcmp(a, "--density") && v) density = (float)atof(argv[++i]);
         else if (!strcmp(a, "--no-shadows")) shadows = 0;
+        else if (!strcmp(a, "--sampler") && v) {
+            const char *sv = argv[++i];
+            if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
+            else if (!strcmp(sv, "independent")) sampler = CLVR_SAMPLER_INDEPENDENT;
+            else return usage();
+        }
         else if (!strcmp(a, "--quick")) quick = 1;
         else if (!strcmp(a, "--converge")) converge = 1;
         else if (!strcmp(a, "--method") && v) {
@@ -554,13 +577,13 @@ int main(int argc, char **argv)
                 snprintf(mb, sizeof mb, "%s", macro);
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, (uint32_t)atoi(t), shadows, ""};
+                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
-                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, ""};
+                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler};
                 snprintf(c.label, sizeof c.label, "%s", clvr_method_name((clvr_method)m));
                 cfg[ncfg++] = c;
             }
@@ -574,8 +597,8 @@ int main(int argc, char **argv)
         return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
     }
     if (converge) {
-        int rc = run_converge(&cl, meshes[0], conv_method, size_set ? w : 512, size_set ? h : 512, ref_spp, max_spp,
-                              target, json);
+        int rc = run_converge(&cl, meshes[0], conv_method, sampler, size_set ? w : 512, size_set ? h : 512, ref_spp,
+                              max_spp, target, json);
         clvr_cl_destroy(&cl);
         return rc;
     }

@@ -9,11 +9,15 @@
 # then a fresh run (seed B) until its RMSE against the reference is <= 2%; RMSE is
 # over linear rgb clamped to [0,1], every pixel, with the reference's own noise
 # (from its per-pixel moments) subtracted; "rel" divides by the reference's mean
-# rgb. Both with and without shadows (VTK's mappers have none).
+# rgb. Both with and without shadows (VTK's mappers have none). The reference
+# always uses independent frames (its noise estimate needs them); the measured
+# run uses --sampler (default ld, the renderer's default: low-discrepancy
+# frames, each unbiased, see kernels/rng.h).
 #
 # Usage: bench/render-vs-vtk.sh [--build DIR] [--data DIR] [--elements N] [--size WxH]
 #                               [--ref-spp R] [--max-spp M] [--vtk-frames N] [--mappers LIST]
-#   defaults: build, /tmp/clvr-bench, 1M, 512x512, 256, 256, 3, raycast,pt,zsweep
+#                               [--sampler ld|independent]
+#   defaults: build, /tmp/clvr-bench, 1M, 512x512, 256, 256, 3, raycast,pt,zsweep, ld
 # Output: a Markdown table with the ratios on stdout; bench/results/render-vs-vtk/
 # <date>-<slug>.md and .json (clvr's and VTK's raw JSON side by side).
 set -euo pipefail
@@ -26,6 +30,7 @@ REF=256
 MAXSPP=256
 VFRAMES=3
 MAPPERS=raycast,pt,zsweep
+SAMPLER=ld
 while [ $# -gt 0 ]; do
   case $1 in
     --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
@@ -36,6 +41,7 @@ while [ $# -gt 0 ]; do
     --max-spp) MAXSPP=$2; shift 2 ;;
     --vtk-frames) VFRAMES=$2; shift 2 ;;
     --mappers) MAPPERS=$2; shift 2 ;;
+    --sampler) SAMPLER=$2; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "render-vs-vtk.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
   esac
@@ -59,7 +65,7 @@ trap 'rm -rf "$WORK"' EXIT
 
 echo "render-vs-vtk.sh: clvr converge on $MESH ($SIZE, reference $REF spp); $(uptime)" >&2
 "$BUILD/bench_render" --converge --mesh "$MESH" --size "$SIZE" --ref-spp "$REF" --max-spp "$MAXSPP" \
-  --json "$WORK/clvr.json" >"$WORK/clvr.md"
+  --sampler "$SAMPLER" --json "$WORK/clvr.json" >"$WORK/clvr.md"
 echo "render-vs-vtk.sh: VTK mappers ($MAPPERS); $(uptime)" >&2
 # xvfb-run -a can lose a race for a display number with another xvfb-run on a
 # shared machine ("bad X server connection"): try a few times.
@@ -85,7 +91,7 @@ p = lines.append
 p(f"# clvr vs VTK unstructured volume mappers")
 p("")
 p(f"mesh `{os.path.basename(clvr['mesh'])}` ({clvr['elements']} tets), {clvr['width']}x{clvr['height']}, "
-  f"clvr `{clvr['method']}` on {clvr['device']} (driver {clvr['driver']}), VTK {vtkr['vtk']}, commit {commit}, "
+  f"clvr `{clvr['method']}` ({clvr.get('sampler', 'independent')} frames) on {clvr['device']} (driver {clvr['driver']}), VTK {vtkr['vtk']}, commit {commit}, "
   f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}, host {socket.gethostname()}, {os.cpu_count()} cores")
 p("")
 p("| renderer | shadows | time (s) | what | vs fastest VTK mapper | load |")

@@ -49,6 +49,10 @@ void clvr_cli_print_help(FILE *out)
         "Rendering:\n"
         "  --method M             march | track | bins | dda (default dda)\n"
         "  --shadows on|off       volumetric shadow ray toward the light (default on)\n"
+        "  --sampler ld|independent  random numbers across frames: ld (default) draws the sub-pixel\n"
+        "                         position and first free flights from a per-pixel shifted\n"
+        "                         low-discrepancy sequence (faster convergence, frames correlated);\n"
+        "                         independent frames give valid per-frame error bars\n"
         "  --step S               march step in world units (default: diagonal / 512)\n"
         "  --bins N               bins per ray segment for --method bins, 1..32 (default 32)\n"
         "  --segments M           ray segments for --method bins (default 4)\n"
@@ -111,6 +115,7 @@ static void defaults(clvr_options *o)
     o->segments = rs.segments;
     o->macrocells = rs.macrocells;
     o->shadows = rs.shadows;
+    o->sampler = rs.sampler;
     o->leaf_size = 16;
     o->fovy = 40.0f;
     o->colormap = "cool-warm";
@@ -228,6 +233,14 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
                 if (!strcmp(v, "on")) o->shadows = 1;
                 else if (!strcmp(v, "off")) o->shadows = 0;
                 else s = clvr_error_set(err, CLVR_ERR_USAGE, "--shadows expects on or off, got '%s'", v);
+            }
+        }
+        else if (!strcmp(a, "--sampler")) {
+            const char *v = NEXT();
+            if (v) {
+                if (!strcmp(v, "ld")) o->sampler = CLVR_SAMPLER_LD;
+                else if (!strcmp(v, "independent")) o->sampler = CLVR_SAMPLER_INDEPENDENT;
+                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--sampler expects ld or independent, got '%s'", v);
             }
         }
         else if (!strcmp(a, "--leaf-size")) {

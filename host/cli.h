@@ -40,6 +40,7 @@ typedef struct clvr_options {
     uint32_t bins, segments;     /* --bins N (<= 32), --segments M */
     uint32_t macrocells;         /* --macrocells R */
     int shadows;                 /* --shadows on|off */
+    uint32_t sampler;            /* --sampler: CLVR_SAMPLER_LD or CLVR_SAMPLER_INDEPENDENT */
     /* clustering */
     uint32_t leaf_size;          /* --leaf-size N: 1, 4, 8, 16, 32 */
     uint32_t sampling_size;      /* --sampling-size N: elements per sampling cluster, 0: default */

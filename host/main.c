@@ -186,6 +186,7 @@ int main(int argc, char **argv)
     rs.height = o.height;
     rs.seed = o.seed;
     rs.shadows = o.shadows && o.method != CLVR_METHOD_MARCH;
+    rs.sampler = o.sampler;
     rs.step = o.step;
     rs.bins = o.bins;
     rs.segments = o.segments;

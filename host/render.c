@@ -13,8 +13,8 @@ struct clvr_renderer {
     clvr_frame frame;
     clvr_camera cam;
     cl_program prog_render, prog_majorant;
-    cl_kernel k_render, k_cluster_maj, k_grid_clear, k_grid_splat, k_grid_maj;
-    cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters, cluster_maj, grid_range, grid_maj;
+    cl_kernel k_render, k_cluster_maj, k_grid_clear, k_grid_splat_el, k_grid_maj, k_grid_blocks;
+    cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters, cluster_maj, grid_range, grid_maj, block_maj;
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
     uint32_t grid_res;         /* resolution of grid_range/grid_maj */
     uint32_t accum_w, accum_h; /* size of accum buffers */
@@ -29,6 +29,10 @@ void clvr_render_settings_default(clvr_render_settings *s)
     s->method = CLVR_RENDER_DDA;
     s->width = s->height = 512;
     s->seed = 1;
+    /* Low-discrepancy frames: the progressive image reaches a given error
+     * in fewer frames (bench_render --converge); tests that need
+     * independent frames ask for CLVR_SAMPLER_INDEPENDENT. */
+    s->sampler = CLVR_SAMPLER_LD;
     s->shadows = 1;
     s->bins = 32;
     s->segments = 4;
@@ -68,32 +72,46 @@ cleanup:
     return s;
 }
 
-/* Rasterizes the sampling clusters' scalar ranges into an R^3 grid (once per
- * mesh and resolution). */
+/* Rasterizes the elements' scalar ranges into an R^3 grid and allocates its
+ * coarse level of blocks (once per mesh and resolution; majorants follow in
+ * update_majorants). */
 static clvr_status build_grid(clvr_renderer *r, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_cl *cl = r->cl;
     uint32_t res = r->set.macrocells;
     uint64_t cells = (uint64_t)res * res * res;
-    cl_uint ncells = (cl_uint)cells, nclusters = (cl_uint)r->mesh->num_sampling;
+    cl_uint ncells = (cl_uint)cells;
     if (r->grid_res == res) return CLVR_OK;
     clvr_cl_release(cl, &r->grid_range);
     clvr_cl_release(cl, &r->grid_maj);
+    clvr_cl_release(cl, &r->block_maj);
     r->grid_res = 0;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)cells * 2 * sizeof(cl_uint), NULL, "macrocell ranges",
                             &r->grid_range, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)cells * sizeof(cl_float), NULL, "macrocell majorants",
                             &r->grid_maj, err));
+    {
+        uint64_t rc = (res + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)(rc * rc * rc) * sizeof(cl_float), NULL,
+                                "macrocell block majorants", &r->block_maj, err));
+    }
     CLVR_TRY(upload_frame(r, err));
     ARG(r->k_grid_clear, 0, r->grid_range);
     ARG(r->k_grid_clear, 1, ncells);
     CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_clear, cells, 64, NULL, err));
-    ARG(r->k_grid_splat, 0, r->mesh->sampling);
-    ARG(r->k_grid_splat, 1, nclusters);
-    ARG(r->k_grid_splat, 2, r->frame_buf);
-    ARG(r->k_grid_splat, 3, r->grid_range);
-    CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_splat, nclusters, 64, NULL, err));
+    /* Per element, not per sampling cluster: tighter cells (majorant.cl). */
+    const clvr_clustered *m = r->mesh;
+    cl_uint ninst = (cl_uint)m->num_instances, nelem = (cl_uint)m->num_elements;
+    ARG(r->k_grid_splat_el, 0, m->instances);
+    ARG(r->k_grid_splat_el, 1, ninst);
+    ARG(r->k_grid_splat_el, 2, m->vertices);
+    ARG(r->k_grid_splat_el, 3, m->idx16);
+    ARG(r->k_grid_splat_el, 4, m->idx32);
+    ARG(r->k_grid_splat_el, 5, nelem);
+    ARG(r->k_grid_splat_el, 6, r->frame_buf);
+    ARG(r->k_grid_splat_el, 7, r->grid_range);
+    if (nelem) CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_splat_el, nelem, 64, NULL, err));
     r->grid_res = res;
 cleanup:
     return s;
@@ -122,6 +140,14 @@ static clvr_status update_majorants(clvr_renderer *r, clvr_error *err)
     ARG(r->k_grid_maj, 3, r->frame_buf);
     ARG(r->k_grid_maj, 4, r->grid_maj);
     CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_maj, ncells, 64, NULL, err));
+    {
+        cl_uint res = r->grid_res, rc = (res + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
+        ARG(r->k_grid_blocks, 0, r->grid_maj);
+        ARG(r->k_grid_blocks, 1, res);
+        ARG(r->k_grid_blocks, 2, r->block_maj);
+        ARG(r->k_grid_blocks, 3, rc);
+        CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_blocks, (size_t)rc * rc * rc, 64, NULL, err));
+    }
     /* The global majorant of `track` is the largest cluster majorant. */
     maj = malloc((size_t)(nclusters ? nclusters : 1) * sizeof(float));
     if (!maj) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading majorants"); goto cleanup; }
@@ -160,11 +186,11 @@ cleanup:
 clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_settings *set, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    if (set->method > CLVR_RENDER_DDA || set->width == 0 || set->height == 0 || set->bins == 0 ||
-        set->bins > CLVR_RENDER_MAX_BINS || set->segments == 0 || set->macrocells == 0)
-        return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, %ux%u, %u bins, %u segments, "
-                              "%u macrocells)", set->method, set->width, set->height, set->bins, set->segments,
-                              set->macrocells);
+    if (set->method > CLVR_RENDER_DDA || set->sampler > CLVR_SAMPLER_LD || set->width == 0 || set->height == 0 ||
+        set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS || set->segments == 0 || set->macrocells == 0)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, sampler %u, %ux%u, %u bins, "
+                              "%u segments, %u macrocells)", set->method, set->sampler, set->width, set->height,
+                              set->bins, set->segments, set->macrocells);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
@@ -192,6 +218,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->seed_lo = (clvr_u32)set->seed;
     f->seed_hi = (clvr_u32)(set->seed >> 32);
     f->shadows = set->shadows ? 1u : 0u;
+    f->sampler = set->sampler;
     f->bins = set->bins;
     f->segments = set->segments;
     f->grid_res = set->macrocells;
@@ -235,8 +262,9 @@ clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const 
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_frame", &r->k_render, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_cluster_majorants", &r->k_cluster_maj, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_clear", &r->k_grid_clear, err));
-    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_splat", &r->k_grid_splat, err));
+    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_splat_elements", &r->k_grid_splat_el, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_majorants", &r->k_grid_maj, err));
+    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_blocks", &r->k_grid_blocks, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_frame), NULL, "frame parameters", &r->frame_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_camera), NULL, "camera", &r->cam_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)(mesh->num_sampling ? mesh->num_sampling : 1) * sizeof(float),
@@ -252,13 +280,14 @@ cleanup:
 void clvr_renderer_destroy(clvr_renderer *r)
 {
     if (!r) return;
-    cl_kernel ks[] = {r->k_render, r->k_cluster_maj, r->k_grid_clear, r->k_grid_splat, r->k_grid_maj};
+    cl_kernel ks[] = {r->k_render, r->k_cluster_maj, r->k_grid_clear, r->k_grid_splat_el, r->k_grid_maj,
+                      r->k_grid_blocks};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
         if (ks[i]) clReleaseKernel(ks[i]);
     if (r->prog_render) clReleaseProgram(r->prog_render);
     if (r->prog_majorant) clReleaseProgram(r->prog_majorant);
     cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters,
-                      &r->cluster_maj, &r->grid_range, &r->grid_maj};
+                      &r->cluster_maj, &r->grid_range, &r->grid_maj, &r->block_maj};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -323,6 +352,7 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     ARG(k, i++, b->two_level.tlas);
     ARG(k, i++, b->two_level.blas);
     ARG(k, i++, r->grid_maj);
+    ARG(k, i++, r->block_maj);
     ARG(k, i++, b->sampling_nodes);
     ARG(k, i++, m->sampling);
     ARG(k, i++, r->cluster_maj);
@@ -392,10 +422,14 @@ cleanup:
     return s;
 }
 
-clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *global_majorant,
-                                         clvr_error *err)
+clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
+                                         float *global_majorant, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
+    const size_t rc = (r->grid_res + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
+    if (blocks)
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->block_maj, CL_TRUE, 0, rc * rc * rc * sizeof(float), blocks,
+                                          0, NULL, NULL));
     if (clusters && r->mesh->num_sampling)
         CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->cluster_maj, CL_TRUE, 0,
                                           (size_t)r->mesh->num_sampling * sizeof(float), clusters, 0, NULL, NULL));

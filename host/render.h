@@ -18,6 +18,7 @@ typedef struct clvr_render_settings {
     uint32_t method;           /* CLVR_RENDER_* */
     uint32_t width, height;
     uint64_t seed;
+    uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
     int shadows;
     float step;                /* march step; <= 0: mesh diagonal / 512 */
     uint32_t bins, segments;   /* bins method (bins <= CLVR_RENDER_MAX_BINS) */
@@ -68,9 +69,11 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
  * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL). */
 clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float *rgba_sumsq, clvr_error *err);
 
-/* The majorant of every sampling cluster / macrocell (tests). */
-clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *global_majorant,
-                                         clvr_error *err);
+/* The majorant of every sampling cluster / macrocell / macrocell block
+ * (ceil(macrocells / CLVR_DDA_BLOCK)^3, see clvr_shared.h) (tests); any may
+ * be NULL. */
+clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
+                                         float *global_majorant, clvr_error *err);
 
 
 #endif

@@ -330,6 +330,7 @@ static void print_command_line(viewer *v)
             (unsigned long long)v->rs.seed);
     appendf(line, cap, " --method %s --shadows %s", clvr_method_name((clvr_method)v->rs.method),
             v->shadows ? "on" : "off");
+    if (v->rs.sampler != d.sampler) appendf(line, cap, " --sampler independent");
     if (v->rs.step != d.step) appendf(line, cap, " --step %.9g", (double)v->rs.step);
     if (v->rs.bins != d.bins) appendf(line, cap, " --bins %u", v->rs.bins);
     if (v->rs.segments != d.segments) appendf(line, cap, " --segments %u", v->rs.segments);

@@ -359,11 +359,38 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #define CLVR_RENDER_TRACK 1u
 #define CLVR_RENDER_BINS 2u
 #define CLVR_RENDER_DDA 3u
+
+/* Samplers, the values of clvr_frame.sampler. independent: every uniform of
+ * a frame from the counter-based generator keyed by (pixel, frame, seed),
+ * frames independent. ld: the first CLVR_LD_DIMS uniforms (sub-pixel
+ * position, first free flight of the primary and of the shadow ray, the
+ * march offset) from a per-pixel shifted Kronecker sequence over the frame
+ * index (kernels/rng.h), the rest as independent; each frame is still
+ * unbiased, the running mean converges faster, but frames are correlated. */
+#define CLVR_SAMPLER_INDEPENDENT 0u
+#define CLVR_SAMPLER_LD 1u
 /* Largest --bins (the paper's 32 ray payload registers). */
 #define CLVR_RENDER_MAX_BINS 32u
 
+/* dda: the macrocell grid has a second, coarse level of blocks of
+ * CLVR_DDA_BLOCK^3 cells (partial blocks at the far faces), each with the
+ * largest majorant of its cells. A ray walks the blocks; it descends into a
+ * block's cells only where the block's expected tentative collisions
+ * (majorant times chord) exceed CLVR_DDA_DESCEND, otherwise it tracks the
+ * block as one segment with the block majorant (still a true majorant, so
+ * unbiased; the choice depends on the ray only, never on its random
+ * numbers). Sparse or thin media then cost a few block steps per ray
+ * instead of dozens of cell steps. Both measured on amr-1M and tets-1M
+ * (bench/bench_render.c). */
+#ifndef CLVR_DDA_BLOCK
+#define CLVR_DDA_BLOCK 4
+#endif
+#ifndef CLVR_DDA_DESCEND
+#define CLVR_DDA_DESCEND 0.1f
+#endif
+
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 144 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 160 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* bounds of the mesh */
     float vol_hi[4];
@@ -385,8 +412,10 @@ typedef struct clvr_frame {
     clvr_u32 grid_res;        /* dda method: macrocells per axis */
     clvr_u32 leaf_size;       /* elements per leaf cluster */
     clvr_u32 tlas_root;       /* root node of the top-level tree */
+    clvr_u32 sampler;         /* CLVR_SAMPLER_* */
+    clvr_u32 pad0, pad1, pad2;
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 144, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 160, "clvr_frame layout");
 
 /* [frame: types] */
 

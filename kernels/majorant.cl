@@ -1,9 +1,11 @@
 /* majorant.cl: maximum extinction (majorants) for adaptive delta tracking
  * (paper 3.4.1 and 3.4.3). Cluster scalar ranges are mapped through the
- * transfer function whenever it changes; for the dda method the clusters'
+ * transfer function whenever it changes; for the dda method the elements'
  * scalar ranges are first rasterized into a macrocell grid with atomics
- * (once per mesh), then each cell's range is mapped the same way. Cells that
- * no cluster touches keep an empty range and get majorant 0 (skipped). */
+ * (once per mesh and grid size), then each cell's range is mapped the same
+ * way, and each block of cells takes the largest of its cells (the coarse
+ * level, see CLVR_DDA_BLOCK). Cells that no element touches keep an empty
+ * range and get majorant 0 (skipped). */
 #include "clvr_shared.h"
 
 /* Float <-> uint mapping that preserves order, so atomic_min/atomic_max on
@@ -39,29 +41,56 @@ __kernel void clvr_grid_clear(__global uint *grid, uint cells)
     grid[2 * i + 1] = 0u;
 }
 
-/* Rasterizes each cluster's scalar range into every cell its box overlaps.
- * The box is grown by a hundredth of a cell so that points a rounding error
- * outside a cell boundary are still covered by the DDA's cell. */
-__kernel void clvr_grid_splat(__global const clvr_sampling_cluster *clusters, uint n, __global const clvr_frame *fp,
-                              __global uint *grid)
+/* Rasterizes each element's vertex scalar range into every cell its own box
+ * overlaps, grown by a hundredth of a cell so that points a rounding error
+ * outside a cell boundary (or found in the element within its tolerance)
+ * are still covered by the DDA's cell. Tighter than the
+ * sampling clusters' boxes: a cluster of 16 elements along the Hilbert curve
+ * can mix a large coarse element with small ones near a feature, and its
+ * box then carries the feature's scalars over cells the feature never
+ * reaches (AMR meshes). Interpolation inside an element stays within its
+ * vertices' scalar range, so every cell still bounds every point in it.
+ * Instances are sorted by first_element (preprocessing emits them in global
+ * element order); each work item finds its own by binary search. */
+__kernel void clvr_grid_splat_elements(__global const clvr_instance *inst, uint ninst,
+                                       __global const float4 *vertices, __global const ushort *idx16,
+                                       __global const uint *idx32, uint nelem, __global const clvr_frame *fp,
+                                       __global uint *grid)
 {
-    uint i = get_global_id(0);
-    if (i >= n) return;
+    uint e = get_global_id(0);
+    if (e >= nelem || ninst == 0) return;
+    uint a = 0, b = ninst; /* inst[a].first_element <= e < inst[b].first_element */
+    while (b - a > 1) {
+        uint m = (a + b) / 2;
+        if (inst[m].first_element <= e) a = m;
+        else b = m;
+    }
+    const uint type = inst[a].type, nv = clvr_cell_vertex_count(type), first_vertex = inst[a].first_vertex;
+    const ulong base = inst[a].first_index + (ulong)(e - inst[a].first_element) * nv;
+    const int wide = inst[a].index_bits == 32u;
+    float3 blo = (float3)(INFINITY), bhi = (float3)(-INFINITY);
+    float smin = INFINITY, smax = -INFINITY;
+    for (uint k = 0; k < nv; ++k) {
+        uint li = wide ? idx32[base + k] : (uint)idx16[base + k];
+        float4 p = vertices[first_vertex + li];
+        blo = fmin(blo, p.xyz);
+        bhi = fmax(bhi, p.xyz);
+        smin = fmin(smin, p.w);
+        smax = fmax(smax, p.w);
+    }
     const clvr_frame f = *fp;
     const int r = (int)f.grid_res;
     float3 lo = vload3(0, f.vol_lo), hi = vload3(0, f.vol_hi);
     float3 cs = (hi - lo) / (float)r;
-    float3 blo = vload3(0, clusters[i].lo), bhi = vload3(0, clusters[i].hi);
     int3 c0 = clamp(convert_int3_rtn((blo - lo) / cs - 0.01f), (int3)(0), (int3)(r - 1));
     int3 c1 = clamp(convert_int3_rtn((bhi - lo) / cs + 0.01f), (int3)(0), (int3)(r - 1));
-    uint smin = clvr_ordered_from_float(clusters[i].lo[3]);
-    uint smax = clvr_ordered_from_float(clusters[i].hi[3]);
+    uint omin = clvr_ordered_from_float(smin), omax = clvr_ordered_from_float(smax);
     for (int z = c0.z; z <= c1.z; ++z)
         for (int y = c0.y; y <= c1.y; ++y)
             for (int x = c0.x; x <= c1.x; ++x) {
                 uint c = ((uint)z * (uint)r + (uint)y) * (uint)r + (uint)x;
-                atomic_min(&grid[2 * c], smin);
-                atomic_max(&grid[2 * c + 1], smax);
+                atomic_min(&grid[2 * c], omin);
+                atomic_max(&grid[2 * c + 1], omax);
             }
 }
 
@@ -76,4 +105,19 @@ __kernel void clvr_grid_majorants(__global const uint *grid, uint cells, __globa
     if (a > b) { out[i] = 0.0f; return; }
     out[i] = clvr_tf_max_extinction(tf, f.tf_size, f.tf_lo, f.tf_hi, f.density, clvr_float_from_ordered(a),
                                     clvr_float_from_ordered(b));
+}
+
+/* Coarse level of the grid: the largest majorant of each block's cells
+ * (CLVR_DDA_BLOCK^3, fewer at the far faces when the block count does not
+ * divide r). rc = ceil(r / CLVR_DDA_BLOCK) blocks per axis. */
+__kernel void clvr_grid_blocks(__global const float *cells, uint r, __global float *blocks, uint rc)
+{
+    uint i = get_global_id(0);
+    if (i >= rc * rc * rc) return;
+    const uint bx = i % rc, by = (i / rc) % rc, bz = i / (rc * rc), B = (uint)CLVR_DDA_BLOCK;
+    float m = 0.0f;
+    for (uint z = bz * B; z < min(bz * B + B, r); ++z)
+        for (uint y = by * B; y < min(by * B + B, r); ++y)
+            for (uint x = bx * B; x < min(bx * B + B, r); ++x) m = fmax(m, cells[(z * r + y) * r + x]);
+    blocks[i] = m;
 }

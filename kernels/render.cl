@@ -19,6 +19,7 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
                                 __global const ushort *idx16, __global const uint *idx32,
                                 __global const clvr_instance *instances, __global const clvr_bvh_node *tlas,
                                 __global const clvr_bvh_node *blas, __global const float *grid_majorants,
+                                __global const float *block_majorants,
                                 __global const clvr_bvh_node *sampling_bvh, __global const clvr_sampling_cluster *sampling,
                                 __global const float *cluster_majorants, __global float4 *accum, __global float4 *accum_sq,
                                 __global uint *counters)
@@ -38,20 +39,27 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
     v.tlas = tlas;
     v.blas = blas;
     v.grid = grid_majorants;
+    v.blocks = block_majorants;
     v.sampling_bvh = sampling_bvh;
     v.sampling = sampling;
     v.cluster_majorants = cluster_majorants;
 
     clvr_rng rng = clvr_rng_make(pixel, f.frame_index, f.seed_lo, f.seed_hi);
+    float ld[CLVR_LD_DIMS];
+    const float *ldp = NULL;
+    if (f.sampler == CLVR_SAMPLER_LD) {
+        clvr_ld_sample(pixel, f.frame_index, f.seed_lo, f.seed_hi, ld);
+        ldp = ld;
+    }
     float3 org, dir;
-    clvr_render_primary_ray(cam, &f, x, y, &rng, &org, &dir);
+    clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir);
 
     float4 result;
     uint samples = 0, nulls = 0, rays = 1;
     if (f.method == CLVR_RENDER_MARCH)
-        result = clvr_render_march(&v, org, dir, &rng, &samples);
+        result = clvr_render_march(&v, org, dir, &rng, ldp, &samples);
     else
-        result = clvr_render_track(&v, org, dir, &rng, &samples, &nulls, &rays);
+        result = clvr_render_track(&v, org, dir, &rng, ldp, &samples, &nulls, &rays);
 
     if (f.frame_index == 0) { accum[pixel] = result; accum_sq[pixel] = result * result; }
     else { accum[pixel] += result; accum_sq[pixel] += result * result; }

@@ -18,6 +18,7 @@ typedef struct clvr_volume {
     __global const clvr_bvh_node *tlas;
     __global const clvr_bvh_node *blas;
     __global const float *grid;
+    __global const float *blocks; /* dda: coarse level, see CLVR_DDA_BLOCK */
     __global const clvr_bvh_node *sampling_bvh;
     __global const clvr_sampling_cluster *sampling;
     __global const float *cluster_majorants;
@@ -163,56 +164,57 @@ inline int clvr_track_segment(const clvr_volume *v, float3 org, float3 dir, floa
 
 /* Delta tracking (Woodcock) along [t0, t1]: returns 1 and the collision's
  * medium (rgb + extinction) when a real collision happens, 0 when the ray
- * leaves. A free flight is an optical depth tau ~ Exp(1) spent across the
- * piecewise-constant majorant segments (tau / m world units in a segment of
- * majorant m); this equals restarting the flight at every boundary
- * (memorylessness) but needs one logarithm per tentative collision instead
- * of one per segment, which matters for DDA rays crossing many cells. */
-inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, clvr_rng *rng,
-                            float *t_hit, float4 *medium, uint *samples, uint *nulls)
+ * leaves. u in [0, 1) is the uniform of the first free flight (the caller's
+ * sampler decides where it comes from, see clvr_frame.sampler); later
+ * decisions draw from rng. A free flight is an optical depth tau ~ Exp(1)
+ * spent across the piecewise-constant majorant segments (tau / m world
+ * units in a segment of majorant m); this equals restarting the flight at
+ * every boundary (memorylessness) but needs one logarithm per tentative
+ * collision instead of one per segment, which matters for DDA rays crossing
+ * many cells. */
+inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u,
+                            clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
 {
     clvr_segments it;
     clvr_segments_begin(v, &it, t0, t1);
     float a, b, m;
-    float tau = -log(1.0f - clvr_rng_next(rng));
+    float tau = -log(1.0f - u);
     while (clvr_segments_next(v, &it, org, dir, &a, &b, &m))
         if (m > 0.0f && clvr_track_segment(v, org, dir, a, b, m, &tau, rng, t_hit, medium, samples, nulls)) return 1;
     return 0;
 }
 
-/* Delta tracking through the macrocell grid with a dedicated 3D-DDA loop
- * (Amanatides & Woo 1987): a generic segment iterator would cost a call and
- * a large private struct per cell, and rays cross dozens of cells,
- * so here the walk is one tight loop with an incremental cell index. Same
- * estimator as clvr_delta_track: one optical depth spent across cells. */
-inline int clvr_delta_track_dda(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, clvr_rng *rng,
-                                float *t_hit, float4 *medium, uint *samples, uint *nulls)
+/* 3D-DDA (Amanatides & Woo 1987) over the cells of one axis-aligned grid
+ * region, cells lo_c..hi_c (inclusive) of size cs from origin lo, along
+ * [ta, tb): calls the tracker on each cell's majorant. Returns 1 with a
+ * collision, 0 when the ray leaves the region (tau spent accordingly). A
+ * dedicated loop with an incremental cell index: a generic segment iterator
+ * would cost a call and a large private struct per cell. */
+inline int clvr_dda_cells(const clvr_volume *v, __global const float *maj, int r, float3 lo, float3 cs, int3 lo_c,
+                          int3 hi_c, float3 org, float3 dir, float3 inv, int3 step, float ta, float tb, float *tau,
+                          clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
 {
-    const clvr_frame *f = v->f;
-    const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
-    const int r = (int)f->grid_res;
-    const float3 cs = (hi - lo) / (float)r;
-    const float3 p0 = org + dir * t0;
-    int3 c = clamp(convert_int3_rtn((p0 - lo) / cs), (int3)(0), (int3)(r - 1));
-    const int3 step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
-    const float3 inv = 1.0f / dir;
+    const float3 p0 = org + dir * ta;
+    const int3 c = clamp(convert_int3_rtn((p0 - lo) / cs), lo_c, hi_c);
     float3 tnext = (lo + convert_float3(c + max(step, (int3)(0))) * cs - org) * inv;
     float3 tdelta = fabs(cs * inv);
     if (dir.x == 0.0f) { tnext.x = INFINITY; tdelta.x = INFINITY; }
     if (dir.y == 0.0f) { tnext.y = INFINITY; tdelta.y = INFINITY; }
     if (dir.z == 0.0f) { tnext.z = INFINITY; tdelta.z = INFINITY; }
-    /* Cells left before the ray leaves the grid along each axis. */
-    int3 left = (int3)(step.x > 0 ? r - 1 - c.x : c.x, step.y > 0 ? r - 1 - c.y : c.y, step.z > 0 ? r - 1 - c.z : c.z);
+    /* Cells left before the ray leaves the region along each axis. */
+    int3 left = (int3)(step.x > 0 ? hi_c.x - c.x : c.x - lo_c.x, step.y > 0 ? hi_c.y - c.y : c.y - lo_c.y,
+                       step.z > 0 ? hi_c.z - c.z : c.z - lo_c.z);
     const int sx = step.x, sy = step.y * r, sz = step.z * r * r;
     int idx = (c.z * r + c.y) * r + c.x;
-    float t = t0;
-    float tau = -log(1.0f - clvr_rng_next(rng));
+    float t = ta;
     for (;;) {
         const float tx = fmin(fmin(tnext.x, tnext.y), tnext.z);
-        const float b = fmin(tx, t1);
-        const float m = v->grid[idx];
-        if (m > 0.0f && clvr_track_segment(v, org, dir, t, b, m, &tau, rng, t_hit, medium, samples, nulls)) return 1;
-        if (tx >= t1) return 0;
+        const float b = fmin(tx, tb);
+        const float m = maj[idx], depth = m * (b - t);
+        if (depth < *tau) *tau -= depth; /* passes the cell: as clvr_track_segment, without its division */
+        else if (m > 0.0f && clvr_track_segment(v, org, dir, t, b, m, tau, rng, t_hit, medium, samples, nulls))
+            return 1;
+        if (tx >= tb) return 0;
         t = b;
         if (tnext.x <= tx) {
             if (left.x-- == 0) return 0;
@@ -230,17 +232,92 @@ inline int clvr_delta_track_dda(const clvr_volume *v, float3 org, float3 dir, fl
     }
 }
 
-/* The tracker of the frame's method. */
-inline int clvr_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, clvr_rng *rng, float *t_hit,
-                      float4 *medium, uint *samples, uint *nulls)
+/* Delta tracking through the two-level macrocell grid: a DDA over the
+ * blocks (see CLVR_DDA_BLOCK); a block is skipped when empty, tracked as one
+ * segment of the block majorant when its expected tentative collisions
+ * m * chord are at most CLVR_DDA_DESCEND, and walked cell by cell otherwise.
+ * The segmentation depends on the ray alone, so every choice is a valid
+ * piecewise-constant majorant. Same estimator as clvr_delta_track: one
+ * optical depth, drawn from u, spent across segments. */
+inline int clvr_delta_track_dda(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u,
+                                clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
 {
-    if (v->f->method == CLVR_RENDER_DDA)
-        return clvr_delta_track_dda(v, org, dir, t0, t1, rng, t_hit, medium, samples, nulls);
-    return clvr_delta_track(v, org, dir, t0, t1, rng, t_hit, medium, samples, nulls);
+    const clvr_frame *f = v->f;
+    const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
+    const int r = (int)f->grid_res, B = CLVR_DDA_BLOCK, rc = (r + B - 1) / B;
+    const float3 cs = (hi - lo) / (float)r, bs = cs * (float)B;
+    const float3 p0 = org + dir * t0;
+    int3 c = clamp(convert_int3_rtn((p0 - lo) / bs), (int3)(0), (int3)(rc - 1));
+    const int3 step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
+    const float3 inv = 1.0f / dir;
+    float3 tnext = (lo + convert_float3(c + max(step, (int3)(0))) * bs - org) * inv;
+    float3 tdelta = fabs(bs * inv);
+    if (dir.x == 0.0f) { tnext.x = INFINITY; tdelta.x = INFINITY; }
+    if (dir.y == 0.0f) { tnext.y = INFINITY; tdelta.y = INFINITY; }
+    if (dir.z == 0.0f) { tnext.z = INFINITY; tdelta.z = INFINITY; }
+    int3 left = (int3)(step.x > 0 ? rc - 1 - c.x : c.x, step.y > 0 ? rc - 1 - c.y : c.y,
+                       step.z > 0 ? rc - 1 - c.z : c.z);
+    const int sx = step.x, sy = step.y * rc, sz = step.z * rc * rc;
+    int idx = (c.z * rc + c.y) * rc + c.x;
+    float t = t0;
+    float tau = -log(1.0f - u);
+    for (;;) {
+        const float tx = fmin(fmin(tnext.x, tnext.y), tnext.z);
+        const float b = fmin(tx, t1);
+        const float m = v->blocks[idx];
+        const float depth = m * (b - t);
+        if (m > 0.0f) {
+            /* The choice between the block and its cells must not look at
+             * tau (that would bias the flight); only the block's own
+             * segment may skip the division when the flight passes it. */
+            if (depth > CLVR_DDA_DESCEND) {
+                if (clvr_dda_cells(v, v->grid, r, lo, cs, c * B, min(c * B + B, (int3)(r)) - 1, org, dir, inv, step, t,
+                                   b, &tau, rng, t_hit, medium, samples, nulls))
+                    return 1;
+            } else if (depth < tau) {
+                tau -= depth;
+            } else if (clvr_track_segment(v, org, dir, t, b, m, &tau, rng, t_hit, medium, samples, nulls)) {
+                return 1;
+            }
+        }
+        if (tx >= t1) return 0;
+        t = b;
+        if (tnext.x <= tx) {
+            if (left.x-- == 0) return 0;
+            idx += sx;
+            c.x += step.x;
+            tnext.x += tdelta.x;
+        } else if (tnext.y <= tx) {
+            if (left.y-- == 0) return 0;
+            idx += sy;
+            c.y += step.y;
+            tnext.y += tdelta.y;
+        } else {
+            if (left.z-- == 0) return 0;
+            idx += sz;
+            c.z += step.z;
+            tnext.z += tdelta.z;
+        }
+    }
 }
 
-inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, uint *samples,
-                                 uint *nulls, uint *rays)
+/* The tracker of the frame's method. */
+inline int clvr_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u, clvr_rng *rng,
+                      float *t_hit, float4 *medium, uint *samples, uint *nulls)
+{
+    if (v->f->method == CLVR_RENDER_DDA)
+        return clvr_delta_track_dda(v, org, dir, t0, t1, u, rng, t_hit, medium, samples, nulls);
+    return clvr_delta_track(v, org, dir, t0, t1, u, rng, t_hit, medium, samples, nulls);
+}
+
+/* One primary ray with delta tracking and, with shadows, a delta-tracked
+ * shadow ray. ld: the frame's low-discrepancy uniforms (CLVR_LD_DIMS), or
+ * NULL for the independent sampler; dimension 2 drives the primary ray's
+ * first free flight and 3 the shadow ray's. Without ld the draws come from
+ * rng in the order of the original sampler (primary flight right away,
+ * shadow flight after the primary ray's draws). */
+inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
+                                 uint *samples, uint *nulls, uint *rays)
 {
     const clvr_frame *f = v->f;
     float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
@@ -249,7 +326,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     if (!clvr_ray_box(org, dir, lo, hi, &t0, &t1)) return bg;
     float t;
     float4 med;
-    if (!clvr_track(v, org, dir, t0, t1, rng, &t, &med, samples, nulls)) return bg;
+    const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
+    if (!clvr_track(v, org, dir, t0, t1, u_primary, rng, &t, &med, samples, nulls)) return bg;
     float light = 1.0f;
     if (f->shadows) {
         float3 p = org + dir * t, ldir = vload3(0, f->light_dir);
@@ -258,7 +336,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         if (clvr_ray_box(p, ldir, lo, hi, &s0, &s1)) {
             float ts;
             float4 m2;
-            if (clvr_track(v, p, ldir, s0, s1, rng, &ts, &m2, samples, nulls)) light = 0.0f;
+            const float u_shadow = ld ? ld[3] : clvr_rng_next(rng);
+            if (clvr_track(v, p, ldir, s0, s1, u_shadow, rng, &ts, &m2, samples, nulls)) light = 0.0f;
         }
     }
     float shade = f->ambient + f->light_intensity * light;
@@ -266,8 +345,10 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
 }
 
 /* Front-to-back alpha compositing at a fixed step with a random offset per
- * frame (so frames average to the continuous integral); no shadows. */
-inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, uint *samples)
+ * frame (so frames average to the continuous integral); no shadows. ld as in
+ * clvr_render_track: dimension 2 gives the offset. */
+inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
+                                uint *samples)
 {
     const clvr_frame *f = v->f;
     float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
@@ -277,7 +358,8 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, cl
     float3 c = (float3)(0.0f);
     float T = 1.0f;
     const float shade = f->ambient + f->light_intensity;
-    for (float t = t0 + clvr_rng_next(rng) * f->step; t < t1 && T > 1e-6f; t += f->step) {
+    const float u = ld ? ld[2] : clvr_rng_next(rng);
+    for (float t = t0 + u * f->step; t < t1 && T > 1e-6f; t += f->step) {
         float4 med = clvr_volume_at(v, org + dir * t);
         ++*samples;
         float dt = fmin(f->step, t1 - t);
@@ -288,11 +370,12 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, cl
     return (float4)(c + T * bg.xyz, 1.0f - T);
 }
 
-/* Primary ray through pixel (x, y) with a random sub-pixel position. */
+/* Primary ray through pixel (x, y) with a random sub-pixel position
+ * (dimensions 0 and 1 of ld, or two draws of rng when ld is NULL). */
 inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
-                                    clvr_rng *rng, float3 *org, float3 *dir)
+                                    clvr_rng *rng, const float *ld, float3 *org, float3 *dir)
 {
-    float jx = clvr_rng_next(rng), jy = clvr_rng_next(rng);
+    float jx = ld ? ld[0] : clvr_rng_next(rng), jy = ld ? ld[1] : clvr_rng_next(rng);
     clvr_camera c = *cam;
     float o[3], d[3];
     clvr_camera_ray(&c, (float)x + jx, (float)y + jy, o, d);

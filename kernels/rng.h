@@ -35,4 +35,46 @@ CLVR_INLINE float clvr_rng_next(clvr_rng *r)
     return (float)(v >> 8) * (1.0f / 16777216.0f);
 }
 
+/* ------------------------------------------------------------ low discrepancy
+ * The first CLVR_LD_DIMS uniforms of a pixel's frame can come from a
+ * randomly shifted Kronecker sequence over the frame index instead (the R_d
+ * sequence of Roberts 2018: alpha_k = phi_4^-k mod 1 with phi_4^5 = phi_4 + 1;
+ * Cranley & Patterson 1976 rotation by a hash of pixel and seed, no frame):
+ *   u_k(n) = frac(shift_k(pixel, seed) + n * alpha_k),
+ * in 32-bit fixed point so that n * alpha wraps exactly for any n. Each
+ * frame alone is uniform (the shift is), so every frame stays an unbiased
+ * estimate, while the frames of one pixel fill [0,1)^4 evenly and their
+ * average converges faster than independent frames. Frames of one pixel are
+ * therefore NOT independent: per-pixel variance estimates from the running
+ * moments are not the variance of the mean (use the independent sampler, or
+ * independent replicates with different seeds, for error bars). */
+#define CLVR_LD_DIMS 4u
+
+/* pcg4d (Jarzynski & Olano 2020): four 32-bit inputs to four well-mixed
+ * outputs in a few multiplies, cheaper than four chained pcg hashes. */
+CLVR_INLINE void clvr_pcg4d(clvr_u32 v[4])
+{
+    for (int k = 0; k < 4; ++k) v[k] = v[k] * 1664525u + 1013904223u;
+    v[0] += v[1] * v[3];
+    v[1] += v[2] * v[0];
+    v[2] += v[0] * v[1];
+    v[3] += v[1] * v[2];
+    for (int k = 0; k < 4; ++k) v[k] ^= v[k] >> 16u;
+    v[0] += v[1] * v[3];
+    v[1] += v[2] * v[0];
+    v[2] += v[0] * v[1];
+    v[3] += v[1] * v[2];
+}
+
+/* The CLVR_LD_DIMS uniforms of (pixel, frame) for the seed. The shifts hash
+ * pixel and seed only (they must stay fixed across frames), with a constant
+ * that keeps them unrelated to clvr_rng_make's keys. */
+CLVR_INLINE void clvr_ld_sample(clvr_u32 pixel, clvr_u32 frame, clvr_u32 seed_lo, clvr_u32 seed_hi, float *u)
+{
+    const clvr_u32 alpha[4] = {3679390609u, 3152041523u, 2700274805u, 2313257605u};
+    clvr_u32 v[4] = {pixel, seed_lo, seed_hi, 0x5bd1e995u};
+    clvr_pcg4d(v);
+    for (int k = 0; k < 4; ++k) u[k] = (float)((v[k] + frame * alpha[k]) >> 8) * (1.0f / 16777216.0f);
+}
+
 #endif

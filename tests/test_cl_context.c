@@ -70,7 +70,7 @@ int main(void)
             LAYOUT(clvr_camera, fovy),
             LAYOUT(clvr_camera, height),
             LAYOUT(clvr_frame, ambient),
-            LAYOUT(clvr_frame, tlas_root),
+            LAYOUT(clvr_frame, sampler),
         };
 #undef LAYOUT
         const size_t nl = sizeof layout / sizeof layout[0];

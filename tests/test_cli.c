@@ -1,6 +1,7 @@
 /* Proves the command-line contract: defaults, every option's parsing, and a
  * clear usage error (naming the option) for each kind of bad value. */
 #include "cli.h"
+#include "clvr_shared.h"
 #include "test_util.h"
 
 static clvr_status parse(clvr_options *o, clvr_error *err, int n, const char **args)
@@ -41,12 +42,14 @@ int main(void)
     TU_CHECK_EQ_U64(o.width, 512);
     TU_CHECK_EQ_U64(o.spp, 64);
     TU_CHECK(o.method == CLVR_METHOD_DDA && o.shadows == 1 && o.leaf_size == 16);
+    TU_CHECK(o.sampler == CLVR_SAMPLER_LD);
 
     TU_CHECK_STATUS(PARSE(&o, &err, "--device", "pocl", "--size", "640x480", "--spp", "7", "--seed", "99",
                           "-o", "x.exr", "--scalar", "p", "--stats-json", "s.json", "--method", "bins",
                           "--bins", "16", "--segments", "3", "--shadows", "off", "--range", "-1", "2.5",
                           "--camera", "1,2,3,0,0,0,0,0,1", "--light", "0,0,1", "--background", "1,1,1",
-                          "--leaf-size", "8", "--macrocells", "32", "--fovy", "30", "--density", "2.5"),
+                          "--leaf-size", "8", "--macrocells", "32", "--fovy", "30", "--density", "2.5",
+                          "--sampler", "independent"),
                     CLVR_OK, &err);
     TU_CHECK(strcmp(o.device, "pocl") == 0 && strcmp(o.output, "x.exr") == 0 && strcmp(o.scalar_name, "p") == 0);
     TU_CHECK_EQ_U64(o.width, 640);
@@ -54,6 +57,7 @@ int main(void)
     TU_CHECK_EQ_U64(o.spp, 7);
     TU_CHECK_EQ_U64(o.seed, 99);
     TU_CHECK(o.method == CLVR_METHOD_BINS && o.bins == 16 && o.segments == 3 && o.shadows == 0);
+    TU_CHECK(o.sampler == CLVR_SAMPLER_INDEPENDENT);
     TU_CHECK(o.range_set && o.range_lo == -1.0f && o.range_hi == 2.5f);
     TU_CHECK(o.camera_set && o.camera[0] == 1.0f && o.camera[8] == 1.0f);
     TU_CHECK(o.leaf_size == 8 && o.macrocells == 32 && o.fovy == 30.0f && o.density == 2.5f);
@@ -71,6 +75,7 @@ int main(void)
     expect_usage("--method", "raymarch");
     expect_usage("--bins", "33");
     expect_usage("--shadows", "maybe");
+    expect_usage("--sampler", "sobol");
     expect_usage("--leaf-size", "3");
     expect_usage("--leaf-size", "2");
     expect_usage("--camera", "1,2,3");

@@ -1,19 +1,28 @@
 /* Proves the renderer statistically, never against stored images:
  * 1. homogeneous box of all four element types with constant extinction:
  *    per-pixel opacity matches 1 - exp(-sigma * d) within a confidence
- *    interval, for track, dda and bins;
+ *    interval, for track, dda and bins, and for track and dda with the
+ *    low-discrepancy sampler (whose per-pixel error is below the
+ *    independent frames' binomial standard error used as the bound);
  * 2. track, bins and dda converge to the same image (per-pixel difference of
- *    means within k standard errors) on a mixed mesh and on a real file;
+ *    means within k standard errors) on a mixed mesh and on a real file, and
+ *    so does dda with the low-discrepancy sampler (its per-frame variance
+ *    overstates the variance of its mean, so the bound only gets looser);
  * 3. march with a small step agrees with delta tracking without shadows;
  * 4. majorants (sampling clusters, macrocells, global) are true upper bounds
- *    of the extinction for random transfer functions;
- * 5. the same seed gives the same image, another seed another one. */
+ *    of the extinction for random transfer functions, and every block of
+ *    the dda grid's coarse level bounds its cells;
+ * 5. the same seed gives the same image, another seed another one (both
+ *    samplers);
+ * 6. the low-discrepancy sequence itself (host, the kernels' code): each
+ *    frame uniform over pixels, the frames of a pixel evenly spread. */
 #include "accel.h"
 #include "cli.h"
 #include "camera.h"
 #include "mesh_io.h"
 #include "preprocess.h"
 #include "render.h"
+#include "rng.h"
 #include "scene.h"
 #include "test_util.h"
 #include "tf.h"
@@ -45,6 +54,9 @@ static int fixture_open(fixture *fx, clvr_cl *cl, clvr_mesh *mesh_moved, uint32_
     clvr_render_settings_default(&fx->set);
     fx->set.width = w;
     fx->set.height = h;
+    /* Error bars below come from per-pixel moments, which need independent
+     * frames; the low-discrepancy sampler is tested with replicates. */
+    fx->set.sampler = CLVR_SAMPLER_INDEPENDENT;
     clvr_status s = clvr_preprocess(cl, &fx->mesh, &po, &fx->c, &err);
     if (s == CLVR_OK) s = clvr_accel_build(cl, &fx->c, &fx->a, &err);
     if (s == CLVR_OK) s = clvr_renderer_create(cl, &fx->c, &fx->a, &fx->set, &fx->r, &err);
@@ -149,18 +161,31 @@ static void test_homogeneous(clvr_cl *cl)
     const uint32_t W = 24, H = 24, N = 400;
     fixture fx;
     if (fixture_open(&fx, cl, &m, W, H)) return;
-    const float sigma = 1.5f;
-    float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
-    set_table(&fx, table, 2, 0.0f, 2.0f);
     const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
     clvr_camera cam;
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
     TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
     fx.set.shadows = 0;
-    const uint32_t methods[3] = {CLVR_RENDER_TRACK, CLVR_RENDER_DDA, CLVR_RENDER_BINS};
-    for (int mi = 0; mi < 3; ++mi) {
-        fx.set.method = methods[mi];
-        fx.set.macrocells = 7;
+    /* Cases: each method; then the low-discrepancy sampler; then dda on a
+     * fine grid in a thin medium, where every block's optical depth is
+     * below CLVR_DDA_DESCEND (tracked as one segment per block) and, with
+     * sigma 1, where blocks are partly tracked whole and partly walked. */
+    const struct {
+        uint32_t method, sampler, macrocells;
+        float sigma;
+    } cases[] = {
+        {CLVR_RENDER_TRACK, CLVR_SAMPLER_INDEPENDENT, 7, 1.5f}, {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 7, 1.5f},
+        {CLVR_RENDER_BINS, CLVR_SAMPLER_INDEPENDENT, 7, 1.5f},  {CLVR_RENDER_TRACK, CLVR_SAMPLER_LD, 7, 1.5f},
+        {CLVR_RENDER_DDA, CLVR_SAMPLER_LD, 7, 1.5f},            {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 0.4f},
+        {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 1.0f},
+    };
+    for (size_t mi = 0; mi < sizeof cases / sizeof cases[0]; ++mi) {
+        const float sigma = cases[mi].sigma;
+        float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
+        set_table(&fx, table, 2, 0.0f, 2.0f);
+        fx.set.method = cases[mi].method;
+        fx.set.sampler = cases[mi].sampler;
+        fx.set.macrocells = cases[mi].macrocells;
         fx.set.bins = 8;
         fx.set.segments = 2;
         float *mean, *var;
@@ -195,13 +220,49 @@ static void test_homogeneous(clvr_cl *cl)
                 covered += hits == 256;
                 if (fabs(got - expect) > K_SIGMA * se + 1e-6) {
                     if (bad < 5)
-                        fprintf(stderr, "homogeneous %s: pixel (%u,%u) opacity %.4f, expected %.4f +- %.4f\n",
-                                clvr_method_name((clvr_method)methods[mi]), x, y, got, expect, K_SIGMA * se);
+                        fprintf(stderr, "homogeneous %s%s: pixel (%u,%u) opacity %.4f, expected %.4f +- %.4f\n",
+                                clvr_method_name((clvr_method)cases[mi].method), cases[mi].sampler ? " (ld)" : "", x,
+                                y, got, expect, K_SIGMA * se);
                     ++bad;
                 }
             }
         TU_CHECK_EQ_U64(bad, 0);
         TU_CHECK(tested > (int)(W * H) / 2 && covered > 50);
+        /* Aggregate over the tested pixels: a small bias spread over the
+         * image (say a sampler dimension that is not uniform) shows here. */
+        {
+            double dsum = 0, vsum = 0;
+            for (uint32_t y = 0; y < H; ++y)
+                for (uint32_t x = 0; x < W; ++x) {
+                    double acc = 0;
+                    int hits = 0;
+                    for (int sy = 0; sy < 16; ++sy)
+                        for (int sx = 0; sx < 16; ++sx) {
+                            float o[3], d[3];
+                            clvr_camera_ray(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16, o, d);
+                            double t0 = 0, t1 = 1e30;
+                            for (int k = 0; k < 3; ++k) {
+                                double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
+                                if (a > b) { double t = a; a = b; b = t; }
+                                t0 = a > t0 ? a : t0;
+                                t1 = b < t1 ? b : t1;
+                            }
+                            double len = t1 > t0 ? t1 - t0 : 0;
+                            hits += len > 0;
+                            acc += 1 - exp(-sigma * len);
+                        }
+                    if (hits != 256) continue;
+                    double expect = acc / 256;
+                    dsum += mean[4 * (y * W + x) + 3] - expect;
+                    vsum += expect * (1 - expect) / N;
+                }
+            if (fabs(dsum) > K_SIGMA * sqrt(vsum)) {
+                fprintf(stderr, "homogeneous %s%s: covered pixels' opacity off by %g on average (%.1f SE)\n",
+                        clvr_method_name((clvr_method)cases[mi].method), cases[mi].sampler ? " (ld)" : "",
+                        dsum / covered, fabs(dsum) / sqrt(vsum));
+                ++tu_fail_;
+            }
+        }
         free(mean);
         free(var);
     }
@@ -257,6 +318,22 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
         TU_CHECK_EQ_U64(compare(what, mt, vt, N, md, vd, N, np, 1e-5), 0);
         snprintf(what, sizeof what, "%s shadows %s: bins vs dda", name, shadows ? "on" : "off");
         TU_CHECK_EQ_U64(compare(what, mb, vb, N, md, vd, N, np, 1e-5), 0);
+        {
+            /* dda with the low-discrepancy sampler against track with
+             * independent frames. Its frames are correlated, so its
+             * per-pixel sample variance over N is not the variance of its
+             * mean; for these negatively correlated frames it is larger,
+             * which only loosens the bound, never biases it. */
+            float *ml, *vl;
+            fx.set.sampler = CLVR_SAMPLER_LD;
+            fx.set.seed = 15;
+            render_stats(&fx, N, &ml, &vl);
+            fx.set.sampler = CLVR_SAMPLER_INDEPENDENT;
+            snprintf(what, sizeof what, "%s shadows %s: track vs dda (ld sampler)", name, shadows ? "on" : "off");
+            TU_CHECK_EQ_U64(compare(what, mt, vt, N, ml, vl, N, np, 1e-5), 0);
+            free(ml);
+            free(vl);
+        }
         /* The image is not trivially empty: some pixels are mostly opaque. */
         int opaque = 0;
         for (size_t i = 3; i < np; i += 4) opaque += mt[i] > 0.3f;
@@ -305,7 +382,9 @@ static void test_majorants(clvr_cl *cl)
     const uint32_t R = 13;
     fx.set.macrocells = R;
     TU_CHECK_STATUS(clvr_renderer_set_settings(fx.r, &fx.set, &err), CLVR_OK, &err);
-    float *cmaj = malloc(fx.c.num_sampling * sizeof(float)), *gmaj = malloc((size_t)R * R * R * sizeof(float));
+    const uint32_t RB = (R + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
+    float *cmaj = malloc(fx.c.num_sampling * sizeof(float)), *gmaj = malloc((size_t)R * R * R * sizeof(float)),
+          *bmaj = malloc((size_t)RB * RB * RB * sizeof(float));
     uint64_t rng = 7;
     int violations = 0, checks = 0;
     for (int trial = 0; trial < 20; ++trial) {
@@ -318,7 +397,22 @@ static void test_majorants(clvr_cl *cl)
         float lo = -0.2f + 0.4f * tu_randf(&rng), hi = lo + 0.3f + tu_randf(&rng);
         set_table(&fx, table, N, lo, hi);
         float gm;
-        TU_CHECK_STATUS(clvr_renderer_read_majorants(fx.r, cmaj, gmaj, &gm, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_renderer_read_majorants(fx.r, cmaj, gmaj, bmaj, &gm, &err), CLVR_OK, &err);
+        /* Coarse level: every block bounds each of its cells (R = 13 is not
+         * a multiple of the block size: partial blocks at the far faces). */
+        for (uint32_t z = 0; z < R; ++z)
+            for (uint32_t y = 0; y < R; ++y)
+                for (uint32_t x = 0; x < R; ++x) {
+                    const uint32_t B = CLVR_DDA_BLOCK;
+                    float cm = gmaj[((size_t)z * R + y) * R + x];
+                    float bm = bmaj[((size_t)(z / B) * RB + y / B) * RB + x / B];
+                    ++checks;
+                    if (!(cm <= bm)) {
+                        if (violations < 5)
+                            fprintf(stderr, "cell (%u,%u,%u) majorant %g > its block's %g\n", x, y, z, cm, bm);
+                        ++violations;
+                    }
+                }
         for (int q = 0; q < 400; ++q) {
             /* a random element, a random point inside it (convex combination
              * of its vertices: elements of this mesh are convex), and any
@@ -366,6 +460,7 @@ static void test_majorants(clvr_cl *cl)
     TU_CHECK(checks > 1000);
     free(cmaj);
     free(gmaj);
+    free(bmaj);
     free(pos);
     clvr_clustered_host_free(&h);
     fixture_close(&fx);
@@ -389,22 +484,75 @@ static void test_seeds(clvr_cl *cl)
     clvr_camera cam;
     clvr_camera_frame_box(&cam, fx.mesh.bounds_lo, fx.mesh.bounds_hi, 40.0f, 16, 16, &err);
     clvr_renderer_set_camera(fx.r, &cam, &err);
-    float *a, *va, *b, *vb, *c, *vc;
-    fx.set.seed = 5;
-    render_stats(&fx, 3, &a, &va);
-    render_stats(&fx, 3, &b, &vb);
-    fx.set.seed = 6;
-    render_stats(&fx, 3, &c, &vc);
-    TU_CHECK(memcmp(a, b, 16 * 16 * 4 * sizeof(float)) == 0);
-    TU_CHECK(memcmp(a, c, 16 * 16 * 4 * sizeof(float)) != 0);
-    free(a); free(va); free(b); free(vb); free(c); free(vc);
+    for (uint32_t sampler = CLVR_SAMPLER_INDEPENDENT; sampler <= CLVR_SAMPLER_LD; ++sampler) {
+        float *a, *va, *b, *vb, *c, *vc;
+        fx.set.sampler = sampler;
+        fx.set.seed = 5;
+        render_stats(&fx, 3, &a, &va);
+        render_stats(&fx, 3, &b, &vb);
+        fx.set.seed = 6;
+        render_stats(&fx, 3, &c, &vc);
+        TU_CHECK(memcmp(a, b, 16 * 16 * 4 * sizeof(float)) == 0);
+        TU_CHECK(memcmp(a, c, 16 * 16 * 4 * sizeof(float)) != 0);
+        free(a); free(va); free(b); free(vb); free(c); free(vc);
+    }
     fixture_close(&fx);
+}
+
+/* ---- 6. the low-discrepancy sequence (kernels/rng.h, run on the host) */
+static void test_ld_sequence(void)
+{
+    /* Over pixels at a fixed frame: each dimension uniform (mean 1/2,
+     * variance 1/12) and the dimensions uncorrelated; that is what keeps
+     * every frame unbiased. 4096 pixels: standard errors ~0.005. */
+    enum { P = 4096, D = CLVR_LD_DIMS };
+    for (uint32_t frame = 0; frame < 300; frame += 299) {
+        double sum[D] = {0}, sq[D] = {0}, cross[D][D] = {{0}};
+        int out_of_range = 0;
+        for (uint32_t p = 0; p < P; ++p) {
+            float u[D];
+            clvr_ld_sample(p, frame, 7, 0, u);
+            for (int a = 0; a < (int)D; ++a) {
+                out_of_range += !(u[a] >= 0.0f && u[a] < 1.0f);
+                sum[a] += u[a];
+                sq[a] += (double)u[a] * u[a];
+                for (int b = 0; b < a; ++b) cross[a][b] += ((double)u[a] - 0.5) * ((double)u[b] - 0.5);
+            }
+        }
+        TU_CHECK_EQ_U64(out_of_range, 0);
+        for (int a = 0; a < (int)D; ++a) {
+            double mean = sum[a] / P, var = sq[a] / P - mean * mean;
+            TU_CHECK(fabs(mean - 0.5) < 5 * sqrt(1.0 / 12 / P));
+            TU_CHECK(fabs(var - 1.0 / 12) < 0.01);
+            for (int b = 0; b < a; ++b) TU_CHECK(fabs(cross[a][b] / P * 12) < 5.0 / sqrt((double)P));
+        }
+    }
+    /* Over the frames of one pixel: every 2D projection of 256 frames on a
+     * 16x16 grid puts at most 4 points in a cell (independent draws put 8
+     * or more in some cell of these 6 x 64 projections; a Kronecker sequence
+     * spreads them evenly, which is its point). */
+    int worst = 0;
+    for (uint32_t p = 0; p < 64; ++p) {
+        float u[256][D];
+        for (uint32_t n = 0; n < 256; ++n) clvr_ld_sample(p * 7919u, n, 7, 0, u[n]);
+        for (int a = 0; a < (int)D; ++a)
+            for (int b = 0; b < a; ++b) {
+                int cells[16][16] = {{0}};
+                for (int n = 0; n < 256; ++n) {
+                    int c = ++cells[(int)(u[n][a] * 16)][(int)(u[n][b] * 16)];
+                    worst = c > worst ? c : worst;
+                }
+            }
+    }
+    if (worst > 4) fprintf(stderr, "ld sequence: %d of 256 frames in one 1/16 x 1/16 cell\n", worst);
+    TU_CHECK(worst <= 4);
 }
 
 int main(void)
 {
     clvr_cl cl;
     clvr_error err = {0};
+    test_ld_sequence();
     tu_open_device(&cl);
     test_homogeneous(&cl);
     test_majorants(&cl);
