@@ -12,13 +12,13 @@
 /* Defaults of clvr_preprocess_options_default, repeated so that this module
  * does not need the preprocessing code linked (fuzz targets). */
 #define LIMITS_DEFAULT_LEAF 16u
-#define LIMITS_DEFAULT_SAMPLING 256u
+#define LIMITS_DEFAULT_SAMPLING 16u
 #define LIMITS_DEFAULT_BITS 16u
 /* Bytes per pixel of the renderer's image buffers: float4 accumulator,
  * float4 second moments, 3 uint ray counters (host/render.c). */
 #define LIMITS_PIXEL_BYTES (16u + 16u + 12u)
-/* A BVH over L leaves has about L / 3 nodes of 112 bytes (4-wide). */
-#define LIMITS_BVH_NODE_BYTES 112u
+/* A BVH over L leaves has about L / 3 nodes (4-wide). */
+#define LIMITS_BVH_NODE_BYTES sizeof(clvr_bvh_node)
 
 /* Saturating arithmetic: an estimate that overflows is simply "too much". */
 static uint64_t sat_add(uint64_t a, uint64_t b) { return b > UINT64_MAX - a ? UINT64_MAX : a + b; }
