@@ -119,6 +119,9 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
     /* A few tiles per compute unit balance the load on a CPU; GPUs want many. */
     pp->max_tiles = cl->device_type & CL_DEVICE_TYPE_GPU ? 4096u : 8u * cu;
     if (pp->max_tiles > 4096u) pp->max_tiles = 4096u;
+    /* The bucket phase runs one work-item per bucket: a CPU's shape. Below
+     * 2^16 items the whole array fits in cache anyway. */
+    pp->sort_hybrid_min = cl->device_type & CL_DEVICE_TYPE_GPU ? UINT64_MAX : 1u << 16;
     CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", NULL, &pp->prog, err));
     struct { cl_kernel *k; const char *name; } ks[] = {
         {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->keys_type[0], "clvr_pp_keys_tet"},
@@ -132,6 +135,7 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
         {&pp->instance_bounds, "clvr_pp_instance_bounds"}, {&pp->split, "clvr_pp_split"},
         {&pp->rec_flags, "clvr_pp_rec_flags"},       {&pp->inst_counts, "clvr_pp_inst_counts"},
         {&pp->inst_write, "clvr_pp_inst_write"},     {&pp->vertices, "clvr_pp_vertices"},
+        {&pp->radix_buckets, "clvr_pp_radix_buckets"},
     };
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i) CLVR_TRY(clvr_cl_kernel(pp->prog, ks[i].name, ks[i].k, err));
 cleanup:
@@ -145,7 +149,7 @@ void clvr_pp_destroy(clvr_pp *pp)
     cl_kernel *ks[] = {&pp->bounds_tiles, &pp->keys_type[0], &pp->keys_type[1], &pp->keys_type[2], &pp->keys_type[3], &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply,
                        &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
                        &pp->sampling, &pp->leaf_boxes, &pp->instance_bounds, &pp->split, &pp->rec_flags,
-                       &pp->inst_counts, &pp->inst_write, &pp->vertices};
+                       &pp->inst_counts, &pp->inst_write, &pp->vertices, &pp->radix_buckets};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
         if (*ks[i]) { clReleaseKernel(*ks[i]); *ks[i] = NULL; }
     if (pp->prog) clReleaseProgram(pp->prog);
@@ -215,7 +219,7 @@ clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layo
         ARG(k, i++, pos); ARG(k, i++, idx); ARG(k, i++, slot0); ARG(k, i++, count); ARG(k, i++, first); ARG(k, i++, gx);
         ARG(k, i++, gy); ARG(k, i++, gz); ARG(k, i++, scale); ARG(k, i++, mo); ARG(k, i++, t); ARG(k, i++, keys);
         ARG(k, i++, vals);
-        CLVR_TRY(launch(pp, k, count, 64, sec, err));
+        CLVR_TRY(launch(pp, k, (count + 1u) / 2u, 64, sec, err)); /* two elements per work-item */
     }
 cleanup:
     return s;
@@ -284,12 +288,56 @@ cleanup:
     return s;
 }
 
+/* Digit histograms per tile at `shift`, scanned in place (digit-major), so
+ * hist[d * tiles + t] is where tile t's first key of digit d goes. */
+static clvr_status radix_count(clvr_pp *pp, cl_mem keys, cl_ulong n, cl_ulong chunk, cl_uint tiles, cl_uint shift,
+                               cl_mem hist, cl_mem sums, double *sec, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_ulong hn = (cl_ulong)tiles * CLVR_PP_RADIX;
+    cl_uint one = 1;
+    cl_int noflags = 0;
+    cl_kernel k = pp->radix_hist;
+    ARG(k, 0, keys); ARG(k, 1, n); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, shift); ARG(k, 5, hist);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    /* The histogram table is scanned with scan.cl's kernels: one tile is enough for it. */
+    k = pp->scan_reduce;
+    ARG(k, 0, hist); ARG(k, 1, hn); ARG(k, 2, hn); ARG(k, 3, one); ARG(k, 4, noflags); ARG(k, 5, sums);
+    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+    k = pp->scan_sums;
+    ARG(k, 0, sums); ARG(k, 1, one);
+    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+    k = pp->scan_apply;
+    ARG(k, 0, hist); ARG(k, 1, hist); ARG(k, 2, hn); ARG(k, 3, hn); ARG(k, 4, one); ARG(k, 5, sums);
+    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+cleanup:
+    return s;
+}
+
+/* Stable scatter by the digit at `shift` from the table of radix_count;
+ * swaps the handles so that *keys / *vals hold the result. */
+static clvr_status radix_scatter(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp,
+                                 cl_ulong n, cl_ulong chunk, cl_uint tiles, cl_uint shift, cl_mem hist, double *sec,
+                                 clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_kernel k = pp->radix_scatter;
+    ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, n); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, shift);
+    ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
+    t = *vals; *vals = *vals_tmp; *vals_tmp = t;
+cleanup:
+    return s;
+}
+
 clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
                          double *sec, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_mem andor = NULL, hist = NULL, sums = NULL;
     cl_ulong *ao = NULL;
+    cl_uint *table = NULL;
     if (n < 2) return CLVR_OK;
     if (n > 0xffffffffull)
         return clvr_error_set(err, CLVR_ERR_OVERFLOW, "radix sort of %llu items: at most 2^32 - 1 are supported",
@@ -297,10 +345,8 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
     cl_uint tiles = clvr_pp_tiles(pp, n);
     cl_ulong chunk = (n + tiles - 1) / tiles, nn = n;
     cl_uint hn = tiles * CLVR_PP_RADIX;
-    cl_ulong hnn = hn;
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * tiles * sizeof(cl_ulong), NULL, "sort and/or", &andor, err));
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, hn * sizeof(cl_uint), NULL, "sort histograms", &hist, err));
-    /* The histogram table is scanned with scan.cl's kernels: one tile is enough for it. */
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * sizeof(cl_uint), NULL, "sort scan sums", &sums, err));
     cl_kernel k = pp->radix_andor;
     ARG(k, 0, *keys); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, andor);
@@ -311,31 +357,53 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
     cl_ulong all_and = ~0ull, any_or = 0;
     for (cl_uint t = 0; t < tiles; ++t) { all_and &= ao[2 * t]; any_or |= ao[2 * t + 1]; }
     const cl_ulong varying = all_and ^ any_or; /* bits that differ between some keys */
+    if (varying == 0) goto cleanup;            /* all keys equal: the input order is the stable order */
+
+    /* Hybrid: the top digit is the 8 bits ending at the highest varying bit;
+     * the digits below it that vary are left to the bucket kernel. */
+    cl_uint top = 63;
+    while (!((varying >> top) & 1u)) --top;
+    const cl_uint msd = top + 1 > CLVR_PP_RADIX_BITS ? top + 1 - CLVR_PP_RADIX_BITS : 0;
+    cl_uint digits = 0, passes = 0;
+    for (cl_uint j = 0; j * CLVR_PP_RADIX_BITS < msd; ++j) {
+        cl_uint shift = j * CLVR_PP_RADIX_BITS;
+        cl_ulong below = msd - shift < CLVR_PP_RADIX_BITS ? (1ull << (msd - shift)) - 1 : CLVR_PP_RADIX - 1;
+        if ((varying >> shift) & below) { digits |= 1u << j; ++passes; }
+    }
+    if (n >= pp->sort_hybrid_min && passes > 0) {
+        CLVR_TRY(radix_count(pp, *keys, nn, chunk, tiles, msd, hist, sums, sec, err));
+        table = malloc(hn * sizeof *table);
+        if (!table) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory in sort"); goto cleanup; }
+        CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, hist, CL_TRUE, 0, hn * sizeof *table, table, 0, NULL, NULL));
+        uint64_t largest = 0;
+        for (cl_uint d = 0; d < CLVR_PP_RADIX; ++d) {
+            uint64_t end = d + 1 < CLVR_PP_RADIX ? table[(d + 1) * tiles] : n, size = end - table[d * tiles];
+            if (size > largest) largest = size;
+        }
+        /* Keys piled into a few top digits (a tiny dense region of a big
+         * box) would leave one work-item sorting most of the array: then the
+         * plain LSD sort below, which spreads every pass over all tiles. */
+        if (largest <= n / 16) {
+            CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, msd, hist, sec, err));
+            k = pp->radix_buckets;
+            ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, *keys_tmp); ARG(k, 3, *vals_tmp); ARG(k, 4, hist);
+            ARG(k, 5, tiles); ARG(k, 6, nn); ARG(k, 7, digits);
+            CLVR_TRY(launch(pp, k, CLVR_PP_RADIX, 1, sec, err));
+            if (passes & 1u) {
+                cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
+                t = *vals; *vals = *vals_tmp; *vals_tmp = t;
+            }
+            goto cleanup;
+        }
+    }
     for (cl_uint shift = 0; shift < 64; shift += CLVR_PP_RADIX_BITS) {
         if (((varying >> shift) & (CLVR_PP_RADIX - 1)) == 0) continue; /* digit constant: order kept */
-        k = pp->radix_hist;
-        ARG(k, 0, *keys); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, shift); ARG(k, 5, hist);
-        CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
-        cl_uint one = 1;
-        cl_int noflags = 0;
-        k = pp->scan_reduce;
-        ARG(k, 0, hist); ARG(k, 1, hnn); ARG(k, 2, hnn); ARG(k, 3, one); ARG(k, 4, noflags); ARG(k, 5, sums);
-        CLVR_TRY(launch(pp, k, 1, 1, sec, err));
-        k = pp->scan_sums;
-        ARG(k, 0, sums); ARG(k, 1, one);
-        CLVR_TRY(launch(pp, k, 1, 1, sec, err));
-        k = pp->scan_apply;
-        ARG(k, 0, hist); ARG(k, 1, hist); ARG(k, 2, hnn); ARG(k, 3, hnn); ARG(k, 4, one); ARG(k, 5, sums);
-        CLVR_TRY(launch(pp, k, 1, 1, sec, err));
-        k = pp->radix_scatter;
-        ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, nn); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, shift);
-        ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp);
-        CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
-        cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
-        t = *vals; *vals = *vals_tmp; *vals_tmp = t;
+        CLVR_TRY(radix_count(pp, *keys, nn, chunk, tiles, shift, hist, sums, sec, err));
+        CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, shift, hist, sec, err));
     }
 cleanup:
     free(ao);
+    free(table);
     clvr_cl_release(pp->cl, &andor);
     clvr_cl_release(pp->cl, &hist);
     clvr_cl_release(pp->cl, &sums);

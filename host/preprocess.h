@@ -120,8 +120,10 @@ typedef struct clvr_pp {
     cl_program prog;
     cl_kernel bounds_tiles, keys_type[4], scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
         radix_hist, radix_scatter, gather, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
-        inst_write, vertices;
+        inst_write, vertices, radix_buckets;
     uint32_t max_tiles;       /* tiles per tiled launch: a few per compute unit */
+    uint64_t sort_hybrid_min; /* sorts of at least this many items go hybrid (top digit, then buckets
+                                 from cache; kernels/sort.cl); UINT64_MAX on GPUs; tests lower it */
 } clvr_pp;
 
 clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err);

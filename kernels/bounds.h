@@ -26,22 +26,42 @@ CLVR_FORCE_INLINE clvr_u32 clvr_pp_quantize(float c, float lo, float scale)
     return (clvr_u32)q;
 }
 
-/* Sort key of an element whose box is (lo, hi): the curve key of the box
- * centre, with the type in bits 48..49. morton != 0 selects Morton order. */
-CLVR_FORCE_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const float *hi, const float *glo,
-                                         float scale, int morton)
+/* Morton code of the quantized centre of the box (lo, hi). */
+CLVR_FORCE_INLINE clvr_u64 clvr_pp_centre_morton(const float *lo, const float *hi, const float *glo, float scale)
 {
     clvr_u32 q[3];
     for (int k = 0; k < 3; ++k) {
         float c = (lo[k] + hi[k]) * 0.5f;
         q[k] = clvr_pp_quantize(c, glo[k], scale);
     }
+    return clvr_morton3(q[0], q[1], q[2]);
+}
+
+/* Sort key of an element whose box is (lo, hi): the curve key of the box
+ * centre, with the type in bits 48..49. morton != 0 selects Morton order. */
+CLVR_FORCE_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, const float *hi, const float *glo,
+                                         float scale, int morton)
+{
+    const clvr_u64 m = clvr_pp_centre_morton(lo, hi, glo, scale);
     /* The Hilbert key is computed from the Morton key anyway; selecting
      * between the two (rather than branching) keeps the code branch-free. */
-    const clvr_u64 m = clvr_morton3(q[0], q[1], q[2]);
     const clvr_u64 h = clvr_hilbert3_from_morton(m);
     clvr_u64 code = morton ? m : h;
     return ((clvr_u64)type << 48) | code;
+}
+
+/* clvr_pp_element_key of two elements at once (boxes 0 and 1), bit for bit
+ * the same keys, with the two Hilbert table chains interleaved
+ * (clvr_hilbert3_from_morton2): the key kernels' form. */
+CLVR_FORCE_INLINE void clvr_pp_element_key2(clvr_u32 type, const float *lo0, const float *hi0, const float *lo1,
+                                      const float *hi1, const float *glo, float scale, int morton, clvr_u64 *k0,
+                                      clvr_u64 *k1)
+{
+    const clvr_u64 m0 = clvr_pp_centre_morton(lo0, hi0, glo, scale), m1 = clvr_pp_centre_morton(lo1, hi1, glo, scale);
+    clvr_u64 h0, h1;
+    clvr_hilbert3_from_morton2(m0, m1, &h0, &h1);
+    *k0 = ((clvr_u64)type << 48) | (morton ? m0 : h0);
+    *k1 = ((clvr_u64)type << 48) | (morton ? m1 : h1);
 }
 
 /* Type of the element with global id g, given the first ids of pyramids,

@@ -7,7 +7,14 @@
  * (work-item t owns [t * chunk, min(n, (t + 1) * chunk))), so a CPU device
  * streams through memory with 256 private counters per tile.
  * Passes whose digit is equal for all keys are skipped by the host, which
- * learns them from the AND and OR of all keys (clvr_pp_radix_andor). */
+ * learns them from the AND and OR of all keys (clvr_pp_radix_andor).
+ *
+ * Large sorts on CPU devices go hybrid (host/preprocess.c decides): one
+ * such pass on the top varying 8 bits splits the keys into 256 buckets in
+ * memory order, then clvr_pp_radix_buckets finishes each bucket with the
+ * remaining LSD passes. A bucket of n/256 keys fits a core's L2 cache, so
+ * those passes run from cache instead of streaming the whole array through
+ * memory each time. */
 #include "clvr_shared.h"
 
 /* Per-tile AND and OR of the keys: out[2t] = AND, out[2t + 1] = OR. */
@@ -56,5 +63,45 @@ __kernel void clvr_pp_radix_scatter(__global const ulong *keys, __global const u
         uint p = o[(uint)(k >> shift) & (CLVR_PP_RADIX - 1u)]++;
         keys_out[p] = k;
         vals_out[p] = vals[i];
+    }
+}
+
+/* Work-item d finishes bucket d of the hybrid sort: after the stable top-digit
+ * scatter, bucket d is [offs[d * ntiles], offs[(d + 1) * ntiles]) (the end of
+ * the last is n), all its keys share the top digit, in input order. Stable
+ * LSD passes on the digits whose bit is set in `digits` (bit j: shift 8j)
+ * ping-pong over the bucket's own range between (ka, va) and (kb, vb), so the
+ * result is in (kb, vb) when the number of passes is odd, else in (ka, va),
+ * for every bucket alike. */
+__kernel void clvr_pp_radix_buckets(__global ulong *ka, __global uint *va, __global ulong *kb, __global uint *vb,
+                                    __global const uint *offs, uint ntiles, ulong n, uint digits)
+{
+    uint d = (uint)get_global_id(0);
+    if (d >= CLVR_PP_RADIX) return;
+    ulong b = offs[d * ntiles], e = d + 1u < CLVR_PP_RADIX ? (ulong)offs[(d + 1u) * ntiles] : n;
+    uint o[CLVR_PP_RADIX];
+    for (uint j = 0; j < 64u / CLVR_PP_RADIX_BITS; ++j) {
+        if (((digits >> j) & 1u) == 0u) continue;
+        uint shift = j * CLVR_PP_RADIX_BITS;
+        for (uint x = 0; x < CLVR_PP_RADIX; ++x) o[x] = 0;
+        for (ulong i = b; i < e; ++i) ++o[(uint)(ka[i] >> shift) & (CLVR_PP_RADIX - 1u)];
+        uint acc = 0;
+        for (uint x = 0; x < CLVR_PP_RADIX; ++x) {
+            uint c = o[x];
+            o[x] = acc;
+            acc += c;
+        }
+        for (ulong i = b; i < e; ++i) {
+            ulong k = ka[i];
+            ulong p = b + o[(uint)(k >> shift) & (CLVR_PP_RADIX - 1u)]++;
+            kb[p] = k;
+            vb[p] = va[i];
+        }
+        __global ulong *tk = ka;
+        ka = kb;
+        kb = tk;
+        __global uint *tv = va;
+        va = vb;
+        vb = tv;
     }
 }

@@ -4,7 +4,9 @@
  * exclusive sums equal, selections equal, and the sort equals a stable
  * reference sort for full 64-bit keys, 48-bit curve-like keys and keys with
  * many duplicates (stability: equal keys keep their input order, which the
- * values, set to the input positions, reveal). */
+ * values, set to the input positions, reveal). The sort is checked in its
+ * three shapes: the device's default, hybrid at every size (top digit, then
+ * the bucket kernel) and plain LSD at every size. */
 #include "preprocess.h"
 #include "test_util.h"
 
@@ -104,14 +106,21 @@ int main(int argc, char **argv)
     TU_CHECK_STATUS(clvr_pp_create(&cl, &pp, &err), CLVR_OK, &err);
     if (!pp.prog) return tu_finish("test_sort");
     uint64_t rng = 1234;
+    const uint64_t hybrid_default = pp.sort_hybrid_min, hybrid_min[] = {hybrid_default, 0, UINT64_MAX};
     if (big) {
-        test_sort(&cl, &pp, (1ull << 24) + 3, 1, &rng);
+        for (size_t m = 0; m < 3; ++m) {
+            pp.sort_hybrid_min = hybrid_min[m];
+            test_sort(&cl, &pp, (1ull << 24) + 3, 1, &rng);
+        }
         test_scan_select(&cl, &pp, (1ull << 24) + 3, &rng);
     } else {
         const uint64_t sizes[] = {0, 1, 2, 3, 255, 256, 257, 1031, 4097, 65537, 100003, (1u << 20) + 7};
         for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) {
             test_scan_select(&cl, &pp, sizes[i], &rng);
-            for (int kind = 0; kind < 3; ++kind) test_sort(&cl, &pp, sizes[i], kind, &rng);
+            for (size_t m = 0; m < 3; ++m) {
+                pp.sort_hybrid_min = hybrid_min[m];
+                for (int kind = 0; kind < 3; ++kind) test_sort(&cl, &pp, sizes[i], kind, &rng);
+            }
         }
     }
     clvr_pp_destroy(&pp);
