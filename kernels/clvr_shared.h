@@ -42,6 +42,21 @@ typedef int64_t clvr_i64;
 #define CLVR_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
 #endif
 
+/* A hint to start loading the cache line at p (no fault, no effect on
+ * results). Point location on a CPU device is bound by dependent cache
+ * misses; asking for the next lines before they are needed overlaps them.
+ * A no-op where the compiler lacks the builtin (other OpenCL compilers). */
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_prefetch)
+#define CLVR_PREFETCH(p) __builtin_prefetch((CLVR_GLOBAL const void *)(p))
+#endif
+#endif
+#ifndef CLVR_PREFETCH
+#define CLVR_PREFETCH(p) ((void)(p))
+#endif
+/* Bytes per cache line that CLVR_PREFETCH fetches (x86, most ARM cores). */
+#define CLVR_CACHE_LINE 64u
+
 /* ---------------------------------------------------------------- mesh */
 /* Element types, in the order of the mesh's four index lists. Vertex order
  * within an element is VTK's (VTK_TETRA 10, VTK_PYRAMID 14, VTK_WEDGE 13,
