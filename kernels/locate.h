@@ -12,6 +12,7 @@
 #include "clvr_shared.h"
 #include "elements.h"
 #include "bvh_traverse.h"
+#include "bvh_build.h" /* clvr_bvh_level_first */
 
 /* Loads the vertices of element e (global sorted id, inside instance
  * `inst`) into v[0 .. vertex_count(inst->type) - 1]. */
@@ -128,6 +129,9 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, flo
 {
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = inst->bvh_root;
+    /* Nodes from here on are the lowest level (their children are leaves):
+     * node level0 + m covers leaves 4m .. 4m + 3 (bvh_build.h). */
+    const clvr_u32 level0 = inst->bvh_root + clvr_bvh_level_first(inst->num_leaves, 0);
     for (;;) {
         CLVR_GLOBAL const clvr_bvh_node *n = blas + ref;
         const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
@@ -141,6 +145,17 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, flo
             } else {
                 CLVR_PREFETCH(blas + ch);
                 CLVR_PREFETCH((CLVR_GLOBAL const clvr_u8 *)(blas + ch) + CLVR_CACHE_LINE);
+                /* A lowest-level node: its four leaves' index blocks too, in
+                 * parallel with the node itself. Random points search about
+                 * 40% of them (1M tets, leaves of 8), and the misses saved
+                 * outweigh the lines wasted: +9% to +16% measured on PoCL.
+                 * One level further (a level-1 node's four children, 7
+                 * lines) lost 5%. */
+                if (ch >= level0) {
+                    const clvr_u32 leaf = inst->first_leaf + 4u * (ch - level0);
+                    for (clvr_u32 j = 0; j < 4u && leaf + j < inst->first_leaf + inst->num_leaves; ++j)
+                        clvr_prefetch_leaf(inst, leaf + j, idx16, idx32, leaf_size);
+                }
             }
         }
         for (clvr_u32 c = 0; c < 4; ++c) {
