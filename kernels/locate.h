@@ -122,6 +122,48 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
     return 0;
 }
 
+/* First node of instance inst's lowest level (whose children are leaves):
+ * node level0 + m covers leaves 4m .. 4m + 3 (bvh_build.h). */
+CLVR_INLINE clvr_u32 clvr_locate_level0(const clvr_instance *inst)
+{
+    clvr_u32 level0 = inst->bvh_root;
+    for (clvr_u32 s = (inst->num_leaves + 3u) / 4u; s > 1u;) {
+        s = (s + 3u) / 4u;
+        level0 += s;
+    }
+    return level0;
+}
+
+/* CLVR_LOCATE_INCOHERENT: asks for the lines of every child in mask of node
+ * n before any is searched, so that their misses overlap: for a leaf, its
+ * tets' vertices (clvr_prefetch_leaf_vertices); for an inner node, its two
+ * lines and, on the lowest level, its four leaves' index blocks (random
+ * points search about 40% of them: 13.0 nodes, 2.45 leaves, 16.1 tets per
+ * query on 1M tets, leaves of 8). One level further (a level-1 node's four
+ * children, 7 lines) lost 5% and is not done. */
+CLVR_INLINE void clvr_locate_prefetch_children(const clvr_instance *inst, CLVR_GLOBAL const clvr_bvh_node *n,
+                                               clvr_u32 mask, clvr_u32 level0, CLVR_GLOBAL const clvr_bvh_node *blas,
+                                               CLVR_GLOBAL const clvr_vec4 *vertices,
+                                               CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
+                                               clvr_u32 leaf_size)
+{
+    for (clvr_u32 c = 0; c < 4; ++c) {
+        if (!((mask >> c) & 1u)) continue;
+        const clvr_u32 ch = n->child[c];
+        if (ch & CLVR_BVH_LEAF_BIT) {
+            clvr_prefetch_leaf_vertices(inst, ch & CLVR_BVH_MAX_PRIMS, vertices, idx16, idx32, leaf_size);
+            continue;
+        }
+        CLVR_PREFETCH(blas + ch);
+        CLVR_PREFETCH((CLVR_GLOBAL const clvr_u8 *)(blas + ch) + CLVR_CACHE_LINE);
+        if (ch >= level0) {
+            const clvr_u32 leaf = inst->first_leaf + 4u * (ch - level0);
+            for (clvr_u32 j = 0; j < 4u && leaf + j < inst->first_leaf + inst->num_leaves; ++j)
+                clvr_prefetch_leaf(inst, leaf + j, idx16, idx32, leaf_size);
+        }
+    }
+}
+
 /* Walks instance inst's bottom-level tree: every leaf cluster whose box
  * holds p is searched as soon as its parent's box test finds it (no stack
  * round trip for primitives); inner children go on a private stack.
@@ -129,43 +171,22 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
  * iterator by 35% on coherent and 50-80% on random queries; collecting all
  * candidate leaves first to search the deepest-inside first (fewer leaves
  * searched) lost about 10% on coherent queries and gained nothing clear on
- * random ones, so leaves are searched in traversal order. */
+ * random ones, so leaves are searched in traversal order. hints: see
+ * CLVR_LOCATE_INCOHERENT; results do not depend on them. */
 CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, float py, float pz,
                                         CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_vec4 *vertices,
                                         CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
-                                        clvr_u32 leaf_size, float *scalar, clvr_u32 *element_id)
+                                        clvr_u32 leaf_size, clvr_u32 hints, float *scalar, clvr_u32 *element_id)
 {
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = inst->bvh_root;
-    /* Nodes from here on are the lowest level (their children are leaves):
-     * node level0 + m covers leaves 4m .. 4m + 3 (bvh_build.h). */
-    const clvr_u32 level0 = inst->bvh_root + clvr_bvh_level_first(inst->num_leaves, 0);
+    const int prefetch = (hints & CLVR_LOCATE_INCOHERENT) != 0u;
+    const clvr_u32 level0 = prefetch ? clvr_locate_level0(inst) : 0u;
     for (;;) {
         CLVR_GLOBAL const clvr_bvh_node *n = blas + ref;
         const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
-        /* Ask for every hit child's lines before searching any: the search
-         * of one leaf then hides the misses of the others. */
-        for (clvr_u32 c = 0; c < 4; ++c) {
-            if (!((mask >> c) & 1u)) continue;
-            const clvr_u32 ch = n->child[c];
-            if (ch & CLVR_BVH_LEAF_BIT) {
-                clvr_prefetch_leaf_vertices(inst, ch & CLVR_BVH_MAX_PRIMS, vertices, idx16, idx32, leaf_size);
-            } else {
-                CLVR_PREFETCH(blas + ch);
-                CLVR_PREFETCH((CLVR_GLOBAL const clvr_u8 *)(blas + ch) + CLVR_CACHE_LINE);
-                /* A lowest-level node: its four leaves' index blocks too, in
-                 * parallel with the node itself. Random points search about
-                 * 40% of them (1M tets, leaves of 8), and the misses saved
-                 * outweigh the lines wasted: +9% to +16% measured on PoCL.
-                 * One level further (a level-1 node's four children, 7
-                 * lines) lost 5%. */
-                if (ch >= level0) {
-                    const clvr_u32 leaf = inst->first_leaf + 4u * (ch - level0);
-                    for (clvr_u32 j = 0; j < 4u && leaf + j < inst->first_leaf + inst->num_leaves; ++j)
-                        clvr_prefetch_leaf(inst, leaf + j, idx16, idx32, leaf_size);
-                }
-            }
-        }
+        if (prefetch)
+            clvr_locate_prefetch_children(inst, n, mask, level0, blas, vertices, idx16, idx32, leaf_size);
         for (clvr_u32 c = 0; c < 4; ++c) {
             if (!((mask >> c) & 1u)) continue;
             const clvr_u32 ch = n->child[c];
@@ -186,11 +207,13 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, flo
  * its interpolated scalar and global sorted element id; 0 (and element id
  * CLVR_BVH_NOT_FOUND) otherwise. tlas_root is the top-level root (0 for
  * clvr_bvh builds); each instance's bvh_root is its bottom-level root in
- * blas. leaf_size: elements per leaf cluster, as the clustering used. */
+ * blas. leaf_size: elements per leaf cluster, as the clustering used.
+ * hints: CLVR_LOCATE_COHERENT or CLVR_LOCATE_INCOHERENT (a speed hint only:
+ * the result is the same bit for bit). */
 CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr_bvh_node *tlas, clvr_u32 tlas_root,
                             CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_instance *instances,
                             CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
-                            CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, float *scalar,
+                            CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, clvr_u32 hints, float *scalar,
                             clvr_u32 *element_id)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
@@ -204,8 +227,8 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
                 const clvr_instance inst = instances[ch & CLVR_BVH_MAX_PRIMS];
-                if (clvr_locate_in_instance(&inst, px, py, pz, blas, vertices, idx16, idx32, leaf_size, scalar,
-                                            element_id))
+                if (clvr_locate_in_instance(&inst, px, py, pz, blas, vertices, idx16, idx32, leaf_size, hints,
+                                            scalar, element_id))
                     return 1;
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
@@ -216,7 +239,9 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
     }
 }
 
-/* The renderer's entry point: clvr_locate without the element id. */
+/* The renderer's entry point: clvr_locate without the element id. The
+ * samples of one ray, and of neighbouring rays, are close to each other, so
+ * coherent: the prefetches of CLVR_LOCATE_INCOHERENT would only cost there. */
 CLVR_INLINE int clvr_locate_point(float px, float py, float pz, CLVR_GLOBAL const clvr_bvh_node *tlas,
                                   CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_instance *instances,
                                   CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
@@ -224,7 +249,8 @@ CLVR_INLINE int clvr_locate_point(float px, float py, float pz, CLVR_GLOBAL cons
                                   float *scalar)
 {
     clvr_u32 e;
-    return clvr_locate(px, py, pz, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, scalar, &e);
+    return clvr_locate(px, py, pz, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size,
+                       CLVR_LOCATE_COHERENT, scalar, &e);
 }
 
 #endif /* CLVR_LOCATE_H */
