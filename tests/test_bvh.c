@@ -42,6 +42,12 @@ static void test_arithmetic(void)
         TU_CHECK_EQ_U64(clvr_bvh_height(n), h);
         TU_CHECK_EQ_U64(clvr_bvh_level_first(n, clvr_bvh_height(n) - 1), 0); /* root first */
         TU_CHECK_EQ_U64(clvr_bvh_level_first(n, 0) + clvr_bvh_level_size(n, 0), total);
+        /* point location's shortcut to the lowest level (its prefetches) */
+        clvr_instance inst;
+        memset(&inst, 0, sizeof inst);
+        inst.num_leaves = n;
+        inst.bvh_root = 1000u;
+        TU_CHECK_EQ_U64(clvr_locate_level0(&inst), 1000u + clvr_bvh_level_first(n, 0));
     }
 }
 
