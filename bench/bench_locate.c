@@ -12,7 +12,10 @@
  * to other jobs than wall time).
  *
  *   bench_locate [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
- *                [--queries Q] [--leaf N] [--order random|sorted] [--local L]
+ *                [--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent]
+ *
+ * --hint: the query hint passed to the kernel (CLVR_LOCATE_*, clvr_shared.h);
+ * default incoherent for random points, coherent for sorted ones.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,6 +39,7 @@ typedef struct row {
 
 static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
+static cl_uint g_hints = CLVR_LOCATE_INCOHERENT; /* query hint of the kernel (--order, --hint) */
 #define NRUNS 5
 
 static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh *m, uint32_t leaf,
@@ -79,6 +83,7 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 9, sizeof(cl_uint), &ls));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 10, sizeof(cl_mem), &dsc));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 11, sizeof(cl_mem), &deid));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 12, sizeof(cl_uint), &g_hints));
     /* warm-up, then the median of NRUNS timed runs */
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, g_local, NULL, err));
     CLVR_CL_CHECK(clFinish(cl->queue));
@@ -113,7 +118,7 @@ cleanup:
 
 int main(int argc, char **argv)
 {
-    const char *device = NULL, *json = NULL, *kind_name = "tets", *mesh_path = NULL, *order = "random";
+    const char *device = NULL, *json = NULL, *kind_name = "tets", *mesh_path = NULL, *order = "random", *hint = NULL;
     uint32_t cubes = 56, nq = 1u << 20;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--device") && i + 1 < argc) device = argv[++i];
@@ -125,14 +130,21 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--order") && i + 1 < argc) order = argv[++i];
         else if (!strcmp(argv[i], "--local") && i + 1 < argc) g_local = (size_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--leaf") && i + 1 < argc) g_leaf = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--hint") && i + 1 < argc) hint = argv[++i];
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted] [--local L]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent]\n",
                     argv[0]);
             return 2;
         }
     }
+    if (!hint) hint = !strcmp(order, "sorted") ? "coherent" : "incoherent";
+    if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) {
+        fprintf(stderr, "bench_locate: --hint must be coherent or incoherent\n");
+        return 2;
+    }
+    g_hints = !strcmp(hint, "coherent") ? CLVR_LOCATE_COHERENT : CLVR_LOCATE_INCOHERENT;
     const uint32_t kind = !strcmp(kind_name, "hexes") ? FX_HEXES : !strcmp(kind_name, "mixed") ? FX_MIXED : FX_TETS;
     clvr_cl cl;
     clvr_error err = {0};
@@ -162,8 +174,8 @@ int main(int argc, char **argv)
         return 1;
     }
     const char *what = mesh_path ? mesh_path : kind_name;
-    printf("# bench_locate: %s, %llu elements (%s), %u %s queries, work-group %zu\n", cl.device_name,
-           (unsigned long long)ne, what, nq, order, g_local);
+    printf("# bench_locate: %s, %llu elements (%s), %u %s queries, work-group %zu, hint %s\n", cl.device_name,
+           (unsigned long long)ne, what, nq, order, g_local, hint);
     printf("# device: %s | %s | driver %s | compute units %u | mesh %s in %.1f s\n", cl.platform_name,
            cl.device_version, cl.driver_version, cl.compute_units, mesh_path ? "loaded" : "generated", clvr_clock_monotonic_s() - t0);
     printf("\n| N | point queries/s | queries per CPU-second | load (1 min) | BVH bytes/element | index bytes/element "
@@ -191,8 +203,8 @@ int main(int argc, char **argv)
             rc = 5;
         } else {
             fprintf(f, "{\"bench\": \"locate\", \"device\": \"%s\", \"elements\": %llu, \"mesh\": \"%s\", "
-                       "\"queries\": %u, \"order\": \"%s\", \"local\": %zu, \"rows\": [",
-                    cl.device_name, (unsigned long long)ne, what, nq, order, g_local);
+                       "\"queries\": %u, \"order\": \"%s\", \"local\": %zu, \"hint\": \"%s\", \"rows\": [",
+                    cl.device_name, (unsigned long long)ne, what, nq, order, g_local, hint);
             for (int i = 0; i < nrows; ++i)
                 fprintf(f, "%s{\"N\": %u, \"queries_per_s\": %.6g, \"queries_per_cpu_s\": %.6g, \"load\": %.2f, "
                            "\"bvh_bytes_per_element\": %.4f, \"index_bytes_per_element\": %.4f, \"blas_nodes\": %u, "

@@ -15,6 +15,8 @@
  *   defaults: 56^3 cubes cut into 6 Kuhn tets (1,053,696 tets), 1M random points, leaf clusters of 8,
  *   2 threads, work-group 64
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
+ *                       [--hint coherent|incoherent]  (clvr's query hint, CLVR_LOCATE_*; default
+ *                       incoherent for random points, coherent for sorted ones)
  *
  * Last line: `point_queries_vs_embree: RATIO` (clvr queries/s over Embree's;
  * "n/a" without Embree). Built without Embree (CLVR_HAVE_EMBREE unset) it
@@ -53,7 +55,7 @@ typedef struct result {
 } result;
 
 static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, float (*pts)[4], uint32_t nq, size_t local,
-                            result *r, clvr_error *err)
+                            cl_uint hints, result *r, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_bvh_kernels k;
@@ -101,6 +103,7 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 9, sizeof(cl_uint), &ls));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 10, sizeof(cl_mem), &args[7]));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 11, sizeof(cl_mem), &args[8]));
+    CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 12, sizeof(cl_uint), &hints));
     CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, nq, local, NULL, err)); /* warm-up */
     CLVR_CL_CHECK(clFinish(cl->queue));
     double t[NRUNS], tc[NRUNS], ld[NRUNS];
@@ -413,7 +416,8 @@ static double agreement(const float *a, const float *b, uint32_t nq, float tol)
 
 int main(int argc, char **argv)
 {
-    const char *device = NULL, *json = NULL, *mesh_path = NULL, *dump = NULL, *kind_name = "tets", *order = "random";
+    const char *device = NULL, *json = NULL, *mesh_path = NULL, *dump = NULL, *kind_name = "tets", *order = "random",
+               *hint = NULL;
     uint32_t cubes = 56, nq = 1000000, leaf = 8;
     int threads = 2;
     size_t local = 64;
@@ -429,14 +433,22 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--local") && i + 1 < argc) local = (size_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--dump") && i + 1 < argc) dump = argv[++i];
+        else if (!strcmp(argv[i], "--hint") && i + 1 < argc) hint = argv[++i];
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted] [--threads T] [--local L] [--dump FILE]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted] [--threads T] [--local L] [--dump FILE] "
+                    "[--hint coherent|incoherent]\n",
                     argv[0]);
             return 2;
         }
     }
+    if (!hint) hint = !strcmp(order, "sorted") ? "coherent" : "incoherent";
+    if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) {
+        fprintf(stderr, "bench_locate_embree: --hint must be coherent or incoherent\n");
+        return 2;
+    }
+    const cl_uint hints = !strcmp(hint, "coherent") ? CLVR_LOCATE_COHERENT : CLVR_LOCATE_INCOHERENT;
     if (threads < 1 || threads > 64 || leaf < 1 || leaf > 128) {
         fprintf(stderr, "bench_locate_embree: --threads must be 1..64 and --leaf 1..128\n");
         return 2;
@@ -479,11 +491,11 @@ int main(int argc, char **argv)
     printf("# bench_locate_embree: %s, %llu elements (%s), %u %s queries, leaf clusters of %u, %d threads\n",
            mesh_path ? mesh_path : "generated grid", (unsigned long long)ne, mesh_path ? "file" : kind_name, nq, order,
            leaf, threads);
-    printf("# device: %s | %s | driver %s | compute units %u | clvr work-group %zu\n", cl.device_name,
-           cl.device_version, cl.driver_version, cl.compute_units, local);
+    printf("# device: %s | %s | driver %s | compute units %u | clvr work-group %zu, hint %s\n", cl.device_name,
+           cl.device_version, cl.driver_version, cl.compute_units, local, hint);
     result rc;
     memset(&rc, 0, sizeof rc);
-    if (run_clvr(&cl, &m, leaf, pts, nq, local, &rc, &err) != CLVR_OK) {
+    if (run_clvr(&cl, &m, leaf, pts, nq, local, hints, &rc, &err) != CLVR_OK) {
         fprintf(stderr, "bench_locate_embree: clvr: %s\n", err.msg);
         return 1;
     }
@@ -517,8 +529,8 @@ int main(int argc, char **argv)
         FILE *f = fopen(json, "w");
         if (f) {
             fprintf(f, "{\"bench\": \"locate_embree\", \"device\": \"%s\", \"elements\": %llu, \"queries\": %u, "
-                       "\"order\": \"%s\", \"leaf\": %u, \"threads\": %d, \"rows\": [",
-                    cl.device_name, (unsigned long long)ne, nq, order, leaf, threads);
+                       "\"order\": \"%s\", \"hint\": \"%s\", \"leaf\": %u, \"threads\": %d, \"rows\": [",
+                    cl.device_name, (unsigned long long)ne, nq, order, hint, leaf, threads);
             const result *rows[3] = {&rc, &re[0], &re[1]};
             const char *names[3] = {"clvr", "embree_intersect1", "embree_point_query"};
             for (int i = 0; i < (have_embree ? 3 : 1); ++i)

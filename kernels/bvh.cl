@@ -26,19 +26,20 @@ __kernel void clvr_bvh_build_level(__global clvr_bvh_node *nodes, __global const
 }
 
 /* Point location for n points (xyz, w ignored): scalar and element id
- * (CLVR_BVH_NOT_FOUND when outside). */
+ * (CLVR_BVH_NOT_FOUND when outside). hints: CLVR_LOCATE_COHERENT or
+ * CLVR_LOCATE_INCOHERENT (speed only, same results). */
 __kernel void clvr_locate_points(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
                                  uint tlas_root, __global const clvr_bvh_node *blas,
                                  __global const clvr_instance *instances, __global const float4 *vertices,
                                  __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
-                                 __global float *scalars, __global uint *element_ids)
+                                 __global float *scalars, __global uint *element_ids, uint hints)
 {
     const uint i = get_global_id(0);
     if (i >= n) return;
     const float4 p = points[i];
     float s = 0.0f;
     uint e;
-    clvr_locate(p.x, p.y, p.z, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, &s, &e);
+    clvr_locate(p.x, p.y, p.z, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, hints, &s, &e);
     scalars[i] = s;
     element_ids[i] = e;
 }

@@ -42,6 +42,21 @@ typedef int64_t clvr_i64;
 #define CLVR_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
 #endif
 
+/* A hint to start loading the cache line at p (no fault, no effect on
+ * results). Point location on a CPU device is bound by dependent cache
+ * misses; asking for the next lines before they are needed overlaps them.
+ * A no-op where the compiler lacks the builtin (other OpenCL compilers). */
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_prefetch)
+#define CLVR_PREFETCH(p) __builtin_prefetch((CLVR_GLOBAL const void *)(p))
+#endif
+#endif
+#ifndef CLVR_PREFETCH
+#define CLVR_PREFETCH(p) ((void)(p))
+#endif
+/* Bytes per cache line that CLVR_PREFETCH fetches (x86, most ARM cores). */
+#define CLVR_CACHE_LINE 64u
+
 /* ---------------------------------------------------------------- mesh */
 /* Element types, in the order of the mesh's four index lists. Vertex order
  * within an element is VTK's (VTK_TETRA 10, VTK_PYRAMID 14, VTK_WEDGE 13,
@@ -187,6 +202,18 @@ CLVR_STATIC_ASSERT(sizeof(clvr_bvh_node) == 112, "clvr_bvh_node layout");
 #define CLVR_BVH_MAX_PRIMS 0x7fffffffu
 /* Element id reported by point location when no element contains the point. */
 #define CLVR_BVH_NOT_FOUND 0xffffffffu
+/* Query hints of point location (kernels/locate.h, the clvr_locate_points
+ * kernel), in the spirit of Embree's coherent/incoherent ray flags; they
+ * change speed, never a result. COHERENT: neighbouring queries are close
+ * (the renderer's samples, sorted points): the tree walk as is.
+ * INCOHERENT: queries are scattered (random points): the walk prefetches
+ * every hit child's lines, a lowest-level node's leaf index blocks and a
+ * hit leaf's tet vertices before searching, so that the cache misses that
+ * bound it overlap. Measured on PoCL, 1M tets, leaves of 8, interleaved
+ * runs: random points +23% to +40% queries/s; sorted points lose 12% to
+ * 20% with INCOHERENT, hence the hint. */
+#define CLVR_LOCATE_COHERENT 0u
+#define CLVR_LOCATE_INCOHERENT 1u
 /* Traversal stack entries. A packed tree over n < 2^32 primitives has at
  * most 16 levels and needs at most 3 * 16 + 1 entries. */
 #ifndef CLVR_BVH_STACK_SIZE

@@ -47,6 +47,44 @@ CLVR_INLINE void clvr_load_tet(const clvr_instance *inst, clvr_u32 e, CLVR_GLOBA
     }
 }
 
+/* Prefetches the first line of leaf cluster `leaf`'s index block (instance
+ * inst): the line its search, or clvr_prefetch_leaf_vertices, stalls on
+ * first. */
+CLVR_INLINE void clvr_prefetch_leaf(const clvr_instance *inst, clvr_u32 leaf, CLVR_GLOBAL const clvr_u16 *idx16,
+                                    CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size)
+{
+    const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
+    const clvr_u64 base = inst->first_index + (clvr_u64)(leaf - inst->first_leaf) * leaf_size * nv;
+    if (inst->index_bits == 16u) CLVR_PREFETCH(idx16 + base);
+    else CLVR_PREFETCH(idx32 + base);
+}
+
+/* Prefetches what the search of leaf cluster `leaf` will load first: for
+ * tets, the vertices of all its elements (reading its indices, which the
+ * parent's visit prefetched), so that the vertex misses of a leaf overlap
+ * instead of waiting one tet, and one mispredicted box test, after another;
+ * for other types, its index block. Called for every leaf a node's box test
+ * finds, before any of them is searched. Measured on PoCL (1M tets, 1M
+ * random points, leaf clusters of 8, interleaved runs): +9% for the
+ * vertices of the leaf being searched, +2% to +7% more for those of its hit
+ * siblings too. */
+CLVR_INLINE void clvr_prefetch_leaf_vertices(const clvr_instance *inst, clvr_u32 leaf,
+                                             CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
+                                             CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size)
+{
+    if (inst->type != CLVR_CELL_TET) {
+        clvr_prefetch_leaf(inst, leaf, idx16, idx32, leaf_size);
+        return;
+    }
+    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
+    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
+    const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
+    CLVR_GLOBAL const clvr_vec4 *vb = vertices + inst->first_vertex;
+    const clvr_u64 base = inst->first_index + (clvr_u64)(first - inst->first_element) * 4u;
+    for (clvr_u32 i = 0; i < 4u * (end - first); ++i)
+        CLVR_PREFETCH(vb + (inst->index_bits == 16u ? (clvr_u32)idx16[base + i] : idx32[base + i]));
+}
+
 /* Tests the elements of leaf cluster `leaf` of instance inst; returns 1 and
  * the scalar and element id of the first one that contains p. Each
  * candidate is first rejected by its vertex box (most of a leaf's elements
@@ -83,6 +121,51 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
     return 0;
 }
 
+/* First node of instance inst's lowest level (whose children are leaves):
+ * node level0 + m covers leaves 4m .. 4m + 3. Equals bvh_root +
+ * clvr_bvh_level_first(num_leaves, 0) of bvh_build.h (test_bvh checks),
+ * without its O(height^2) loops: those, run per instance visit, cost
+ * sorted points 9%. */
+CLVR_INLINE clvr_u32 clvr_locate_level0(const clvr_instance *inst)
+{
+    clvr_u32 level0 = inst->bvh_root;
+    for (clvr_u32 s = (inst->num_leaves + 3u) / 4u; s > 1u;) {
+        s = (s + 3u) / 4u;
+        level0 += s;
+    }
+    return level0;
+}
+
+/* CLVR_LOCATE_INCOHERENT: asks for the lines of every child in mask of node
+ * n before any is searched, so that their misses overlap: for a leaf, its
+ * tets' vertices (clvr_prefetch_leaf_vertices); for an inner node, its two
+ * lines and, on the lowest level, its four leaves' index blocks (random
+ * points search about 40% of them: 13.0 nodes, 2.45 leaves, 16.1 tets per
+ * query on 1M tets, leaves of 8). One level further (a level-1 node's four
+ * children, 7 lines) lost 5% and is not done. */
+CLVR_INLINE void clvr_locate_prefetch_children(const clvr_instance *inst, CLVR_GLOBAL const clvr_bvh_node *n,
+                                               clvr_u32 mask, clvr_u32 level0, CLVR_GLOBAL const clvr_bvh_node *blas,
+                                               CLVR_GLOBAL const clvr_vec4 *vertices,
+                                               CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
+                                               clvr_u32 leaf_size)
+{
+    for (clvr_u32 c = 0; c < 4; ++c) {
+        if (!((mask >> c) & 1u)) continue;
+        const clvr_u32 ch = n->child[c];
+        if (ch & CLVR_BVH_LEAF_BIT) {
+            clvr_prefetch_leaf_vertices(inst, ch & CLVR_BVH_MAX_PRIMS, vertices, idx16, idx32, leaf_size);
+            continue;
+        }
+        CLVR_PREFETCH(blas + ch);
+        CLVR_PREFETCH((CLVR_GLOBAL const clvr_u8 *)(blas + ch) + CLVR_CACHE_LINE);
+        if (ch >= level0) {
+            const clvr_u32 leaf = inst->first_leaf + 4u * (ch - level0);
+            for (clvr_u32 j = 0; j < 4u && leaf + j < inst->first_leaf + inst->num_leaves; ++j)
+                clvr_prefetch_leaf(inst, leaf + j, idx16, idx32, leaf_size);
+        }
+    }
+}
+
 /* Walks instance inst's bottom-level tree: every leaf cluster whose box
  * holds p is searched as soon as its parent's box test finds it (no stack
  * round trip for primitives); inner children go on a private stack.
@@ -90,17 +173,22 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_instance *inst, clvr_u32 leaf, fl
  * iterator by 35% on coherent and 50-80% on random queries; collecting all
  * candidate leaves first to search the deepest-inside first (fewer leaves
  * searched) lost about 10% on coherent queries and gained nothing clear on
- * random ones, so leaves are searched in traversal order. */
+ * random ones, so leaves are searched in traversal order. hints: see
+ * CLVR_LOCATE_INCOHERENT; results do not depend on them. */
 CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, float py, float pz,
                                         CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_vec4 *vertices,
                                         CLVR_GLOBAL const clvr_u16 *idx16, CLVR_GLOBAL const clvr_u32 *idx32,
-                                        clvr_u32 leaf_size, float *scalar, clvr_u32 *element_id)
+                                        clvr_u32 leaf_size, clvr_u32 hints, float *scalar, clvr_u32 *element_id)
 {
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = inst->bvh_root;
+    const int prefetch = (hints & CLVR_LOCATE_INCOHERENT) != 0u;
+    const clvr_u32 level0 = prefetch ? clvr_locate_level0(inst) : 0u;
     for (;;) {
         CLVR_GLOBAL const clvr_bvh_node *n = blas + ref;
         const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
+        if (prefetch)
+            clvr_locate_prefetch_children(inst, n, mask, level0, blas, vertices, idx16, idx32, leaf_size);
         for (clvr_u32 c = 0; c < 4; ++c) {
             if (!((mask >> c) & 1u)) continue;
             const clvr_u32 ch = n->child[c];
@@ -121,11 +209,13 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_instance *inst, float px, flo
  * its interpolated scalar and global sorted element id; 0 (and element id
  * CLVR_BVH_NOT_FOUND) otherwise. tlas_root is the top-level root (0 for
  * clvr_bvh builds); each instance's bvh_root is its bottom-level root in
- * blas. leaf_size: elements per leaf cluster, as the clustering used. */
+ * blas. leaf_size: elements per leaf cluster, as the clustering used.
+ * hints: CLVR_LOCATE_COHERENT or CLVR_LOCATE_INCOHERENT (a speed hint only:
+ * the result is the same bit for bit). */
 CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr_bvh_node *tlas, clvr_u32 tlas_root,
                             CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_instance *instances,
                             CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
-                            CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, float *scalar,
+                            CLVR_GLOBAL const clvr_u32 *idx32, clvr_u32 leaf_size, clvr_u32 hints, float *scalar,
                             clvr_u32 *element_id)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
@@ -139,8 +229,8 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
                 const clvr_instance inst = instances[ch & CLVR_BVH_MAX_PRIMS];
-                if (clvr_locate_in_instance(&inst, px, py, pz, blas, vertices, idx16, idx32, leaf_size, scalar,
-                                            element_id))
+                if (clvr_locate_in_instance(&inst, px, py, pz, blas, vertices, idx16, idx32, leaf_size, hints,
+                                            scalar, element_id))
                     return 1;
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
@@ -151,7 +241,9 @@ CLVR_INLINE int clvr_locate(float px, float py, float pz, CLVR_GLOBAL const clvr
     }
 }
 
-/* The renderer's entry point: clvr_locate without the element id. */
+/* The renderer's entry point: clvr_locate without the element id. The
+ * samples of one ray, and of neighbouring rays, are close to each other, so
+ * coherent: the prefetches of CLVR_LOCATE_INCOHERENT would only cost there. */
 CLVR_INLINE int clvr_locate_point(float px, float py, float pz, CLVR_GLOBAL const clvr_bvh_node *tlas,
                                   CLVR_GLOBAL const clvr_bvh_node *blas, CLVR_GLOBAL const clvr_instance *instances,
                                   CLVR_GLOBAL const clvr_vec4 *vertices, CLVR_GLOBAL const clvr_u16 *idx16,
@@ -159,7 +251,8 @@ CLVR_INLINE int clvr_locate_point(float px, float py, float pz, CLVR_GLOBAL cons
                                   float *scalar)
 {
     clvr_u32 e;
-    return clvr_locate(px, py, pz, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, scalar, &e);
+    return clvr_locate(px, py, pz, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size,
+                       CLVR_LOCATE_COHERENT, scalar, &e);
 }
 
 #endif /* CLVR_LOCATE_H */

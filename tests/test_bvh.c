@@ -8,7 +8,10 @@
  *   leaf sizes 1..32, 16- and 32-bit instances, far from the origin:
  *   random points, points on faces, edges and vertices, points just outside;
  *   host and device point location agree with brute force (same element, or
- *   a neighbour brute force also accepts, with the same scalar),
+ *   a neighbour brute force also accepts, with the same scalar), with each
+ *   other (same element; the device runs CLVR_LOCATE_INCOHERENT, the host
+ *   CLVR_LOCATE_COHERENT) and across the two query hints on the host (same
+ *   element, same scalar bits),
  * - the same on the meshes in tests/data (vtk, umesh) when they load. */
 #include "test_util.h"
 
@@ -39,6 +42,12 @@ static void test_arithmetic(void)
         TU_CHECK_EQ_U64(clvr_bvh_height(n), h);
         TU_CHECK_EQ_U64(clvr_bvh_level_first(n, clvr_bvh_height(n) - 1), 0); /* root first */
         TU_CHECK_EQ_U64(clvr_bvh_level_first(n, 0) + clvr_bvh_level_size(n, 0), total);
+        /* point location's shortcut to the lowest level (its prefetches) */
+        clvr_instance inst;
+        memset(&inst, 0, sizeof inst);
+        inst.num_leaves = n;
+        inst.bvh_root = 1000u;
+        TU_CHECK_EQ_U64(clvr_locate_level0(&inst), 1000u + clvr_bvh_level_first(n, 0));
     }
 }
 
@@ -329,7 +338,8 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     make_queries(&c, m, nq, &rs, &q);
     uint32_t *want_e = malloc(nq * sizeof *want_e);
     float *want_s = malloc(nq * sizeof *want_s);
-    int host_bad = 0, found = 0;
+    uint32_t *host_e = malloc(nq * sizeof *host_e);
+    int host_bad = 0, found = 0, hint_diff = 0;
     for (uint32_t i = 0; i < nq; ++i) {
         const float *p = q.p[i];
         want_s[i] = 0.0f;
@@ -337,8 +347,15 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         float s = 0.0f;
         uint32_t e = 0;
         const int ok = clvr_locate(p[0], p[1], p[2], hb.tlas, hb.tlas_root, hb.blas, c.instances, c.vertices, c.idx16,
-                                   c.idx32, leaf_size, &s, &e);
+                                   c.idx32, leaf_size, CLVR_LOCATE_COHERENT, &s, &e);
         found += ok;
+        host_e[i] = e;
+        /* the query hint changes speed only: same element, same bits */
+        float s2 = 0.0f;
+        uint32_t e2 = 0;
+        const int ok2 = clvr_locate(p[0], p[1], p[2], hb.tlas, hb.tlas_root, hb.blas, c.instances, c.vertices,
+                                    c.idx16, c.idx32, leaf_size, CLVR_LOCATE_INCOHERENT, &s2, &e2);
+        if (ok2 != ok || e2 != e || memcmp(&s2, &s, sizeof s) != 0) ++hint_diff;
         if (ok != (e != CLVR_BVH_NOT_FOUND) || !judge(&c, p, e, s, want_e[i], want_s[i])) {
             if (host_bad < 5)
                 fprintf(stderr, "%s N=%u: host point (%.9g %.9g %.9g): got %u (%g), brute force %u (%g)\n", name,
@@ -347,6 +364,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         }
     }
     TU_CHECK_EQ_U64(host_bad, 0);
+    TU_CHECK_EQ_U64(hint_diff, 0);
     TU_CHECK(found > (int)nq / 3); /* the queries do hit the mesh */
 
     /* device build and device point location */
@@ -383,7 +401,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         TU_CHECK(nodes_equal(tmp, hb.blas, hb.blas_nodes));
         free(tmp);
     }
-    cl_uint n = nq, ls = leaf_size, root = db.tlas_root;
+    cl_uint n = nq, ls = leaf_size, root = db.tlas_root, hints = CLVR_LOCATE_INCOHERENT;
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 0, sizeof(cl_mem), &dpts));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 1, sizeof(cl_uint), &n));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 2, sizeof(cl_mem), &db.tlas));
@@ -396,6 +414,9 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 9, sizeof(cl_uint), &ls));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 10, sizeof(cl_mem), &dsc));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 11, sizeof(cl_mem), &deid));
+    /* incoherent on the device, coherent on the host: the element ids must
+     * still agree (checked below) */
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 12, sizeof(cl_uint), &hints));
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, 64, NULL, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dsc, CL_TRUE, 0, nq * sizeof(float), dscal, 0, NULL, NULL));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, nq * sizeof(uint32_t), delem, 0, NULL, NULL));
@@ -410,6 +431,9 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
                 ++dev_bad;
             }
         TU_CHECK_EQ_U64(dev_bad, 0);
+        int host_dev_diff = 0;
+        for (uint32_t i = 0; i < nq; ++i) host_dev_diff += delem[i] != host_e[i];
+        TU_CHECK_EQ_U64(host_dev_diff, 0);
     }
 cleanup:
     if (s != CLVR_OK) {
@@ -430,6 +454,7 @@ cleanup:
     free(delem);
     free(want_e);
     free(want_s);
+    free(host_e);
     free(q.p);
     clvr_bvh_host_free(&hb);
     fx_clustered_free(&c);
