@@ -13,25 +13,10 @@
 # Big meshes: PoCL's device memory defaults to about 4 GiB, so POCL_MEMORY_LIMIT=20 (GiB).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-BUILD=$ROOT/build
-DATA=/tmp/clvr-bench
-SMALL=0
-EXTRA=()
-while [ $# -gt 0 ]; do
-  case $1 in
-    --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
-    --data) DATA=$2; shift 2 ;;
-    --small) SMALL=1; shift ;;
-    --) shift; EXTRA=("$@"); break ;;
-    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
-    *) echo "locate-table2.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
-  esac
-done
-cmake --build "$BUILD" -j2 --target bench_locate clvr-gen clvr >/dev/null 2>&1 ||
-  echo "$(basename "$0"): warning: 'cmake --build $BUILD' failed; using the binaries already built" >&2
-for t in bench_locate clvr-gen clvr; do
-  [ -x "$BUILD/$t" ] || { echo "$(basename "$0"): $BUILD/$t missing; build it first" >&2; exit 1; }
-done
+# shellcheck source=bench/table_common.sh
+. "$ROOT/bench/table_common.sh"
+table_args "$@"
+table_build bench_locate clvr-gen clvr
 mkdir -p "$DATA"
 CONVERT=$ROOT/tools/clvr-convert
 MESHES=()

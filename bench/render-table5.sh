@@ -12,27 +12,10 @@
 # Big meshes: PoCL's device memory defaults to about 4 GiB, so POCL_MEMORY_LIMIT=20 (GiB).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-BUILD=$ROOT/build
-DATA=/tmp/clvr-bench
-SMALL=0
-EXTRA=()
-while [ $# -gt 0 ]; do
-  case $1 in
-    --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
-    --data) DATA=$2; shift 2 ;;
-    --small) SMALL=1; shift ;;
-    --) shift; EXTRA=("$@"); break ;;
-    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
-    *) echo "render-table5.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
-  esac
-done
-# Build what is needed; a build that fails (say, another module mid-edit) falls
-# back to binaries already there.
-cmake --build "$BUILD" -j2 --target bench_render clvr-gen clvr >/dev/null 2>&1 ||
-  echo "$(basename "$0"): warning: 'cmake --build $BUILD' failed; using the binaries already built" >&2
-for t in bench_render clvr-gen clvr; do
-  [ -x "$BUILD/$t" ] || { echo "$(basename "$0"): $BUILD/$t missing; build it first" >&2; exit 1; }
-done
+# shellcheck source=bench/table_common.sh
+. "$ROOT/bench/table_common.sh"
+table_args "$@"
+table_build bench_render clvr-gen clvr
 mkdir -p "$DATA"
 CONVERT=$ROOT/tools/clvr-convert
 for n in bluntfin comb post; do
