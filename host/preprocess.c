@@ -314,6 +314,13 @@ cleanup:
     return s;
 }
 
+/* The sort's result moves to the other buffer pair. */
+static void swap_pairs(cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp)
+{
+    cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
+    t = *vals; *vals = *vals_tmp; *vals_tmp = t;
+}
+
 /* Stable scatter by the digit at `shift` from the table of radix_count;
  * swaps the handles so that *keys / *vals hold the result. */
 static clvr_status radix_scatter(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp,
@@ -325,8 +332,7 @@ static clvr_status radix_scatter(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem
     ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, n); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, shift);
     ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp);
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
-    cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
-    t = *vals; *vals = *vals_tmp; *vals_tmp = t;
+    swap_pairs(keys, vals, keys_tmp, vals_tmp);
 cleanup:
     return s;
 }
@@ -389,10 +395,7 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
             ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, *keys_tmp); ARG(k, 3, *vals_tmp); ARG(k, 4, hist);
             ARG(k, 5, tiles); ARG(k, 6, nn); ARG(k, 7, digits);
             CLVR_TRY(launch(pp, k, CLVR_PP_RADIX, 1, sec, err));
-            if (passes & 1u) {
-                cl_mem t = *keys; *keys = *keys_tmp; *keys_tmp = t;
-                t = *vals; *vals = *vals_tmp; *vals_tmp = t;
-            }
+            if (passes & 1u) swap_pairs(keys, vals, keys_tmp, vals_tmp);
             goto cleanup;
         }
     }
