@@ -139,12 +139,10 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (!hint) hint = !strcmp(order, "sorted") ? "coherent" : "incoherent";
-    if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) {
+    if (bench_query_hint(hint, !strcmp(order, "sorted"), &hint, &g_hints)) {
         fprintf(stderr, "bench_locate: --hint must be coherent or incoherent\n");
         return 2;
     }
-    g_hints = !strcmp(hint, "coherent") ? CLVR_LOCATE_COHERENT : CLVR_LOCATE_INCOHERENT;
     const uint32_t kind = !strcmp(kind_name, "hexes") ? FX_HEXES : !strcmp(kind_name, "mixed") ? FX_MIXED : FX_TETS;
     clvr_cl cl;
     clvr_error err = {0};

@@ -443,12 +443,11 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (!hint) hint = !strcmp(order, "sorted") ? "coherent" : "incoherent";
-    if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) {
+    cl_uint hints;
+    if (bench_query_hint(hint, !strcmp(order, "sorted"), &hint, &hints)) {
         fprintf(stderr, "bench_locate_embree: --hint must be coherent or incoherent\n");
         return 2;
     }
-    const cl_uint hints = !strcmp(hint, "coherent") ? CLVR_LOCATE_COHERENT : CLVR_LOCATE_INCOHERENT;
     if (threads < 1 || threads > 64 || leaf < 1 || leaf > 128) {
         fprintf(stderr, "bench_locate_embree: --threads must be 1..64 and --leaf 1..128\n");
         return 2;

@@ -70,4 +70,16 @@ static inline float (*bench_make_points(const clvr_mesh *m, uint32_t nq, int sor
     return tmp;
 }
 
+/* The query hint of --hint NAME (NULL: coherent for sorted points,
+ * incoherent for random ones) into *hints (CLVR_LOCATE_*); the name it took
+ * into *name. Returns 0, or -1 when NAME is neither. */
+static inline int bench_query_hint(const char *hint, int sorted, const char **name, unsigned *hints)
+{
+    if (!hint) hint = sorted ? "coherent" : "incoherent";
+    if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) return -1;
+    *name = hint;
+    *hints = !strcmp(hint, "coherent") ? CLVR_LOCATE_COHERENT : CLVR_LOCATE_INCOHERENT;
+    return 0;
+}
+
 #endif /* CLVR_BENCH_POINTS_H */

@@ -26,12 +26,7 @@ for n in bluntfin comb post; do
 done
 MESHES+=(cubes) # bench_locate's own 1M Kuhn tets
 if [ $SMALL = 0 ]; then
-  for n in 10M 50M; do
-    f=/tmp/clvr-data/mixed-$n.bin
-    [ -f "$f" ] || f=$DATA/mixed-$n.bin
-    [ -f "$f" ] || "$BUILD/clvr-gen" mixed "$f" --elements "$n" --quiet
-    MESHES+=("$f")
-  done
+  MESHES+=("$(table_generated mixed 10M mixed-10M)" "$(table_generated mixed 50M mixed-50M)")
 fi
 export POCL_MEMORY_LIMIT=${POCL_MEMORY_LIMIT:-20}
 DEV=$("$BUILD/clvr" --list-devices 2>/dev/null | sed -n 's/^ *device 0:0 *//p' | head -n 1)

@@ -26,14 +26,7 @@ done
 MESHES=(--mesh "$DATA/bluntfin.bin" --mesh "$DATA/comb.bin" --mesh "$DATA/post.bin"
         --mesh "$ROOT/tests/data/vtk/notch_stress.vtk" --mesh "$DATA/fire.bin" --mesh "$DATA/amr-1M.bin")
 if [ $SMALL = 0 ]; then
-  # The shared generated sets when present (same generator, same sizes).
-  for pair in "amr 10M amr-10M" "mixed 50M mixed-50M"; do
-    read -r kind n name <<<"$pair"
-    f=/tmp/clvr-data/$name.bin
-    [ -f "$f" ] || f=$DATA/$name.bin
-    [ -f "$f" ] || "$BUILD/clvr-gen" "$kind" "$f" --elements "$n" --quiet
-    MESHES+=(--mesh "$f")
-  done
+  MESHES+=(--mesh "$(table_generated amr 10M amr-10M)" --mesh "$(table_generated mixed 50M mixed-50M)")
 fi
 export POCL_MEMORY_LIMIT=${POCL_MEMORY_LIMIT:-20}
 echo "render-table5.sh: load before: $(uptime)"

@@ -7,7 +7,10 @@
 # table_build TARGET...: builds the targets in BUILD; a build that fails (say,
 #   another module mid-edit) falls back to binaries already there; exits when
 #   one is missing.
-# Both expect ROOT (the repository) to be set.
+# table_generated KIND N NAME: prints the path of generated mesh NAME.bin:
+#   the shared /tmp/clvr-data one when present (same generator, same sizes),
+#   else DATA's, which clvr-gen KIND --elements N writes when missing.
+# All expect ROOT (the repository) to be set.
 
 table_args() {
   BUILD=$ROOT/build
@@ -33,4 +36,11 @@ table_build() {
   for t in "$@"; do
     [ -x "$BUILD/$t" ] || { echo "$(basename "$0"): $BUILD/$t missing; build it first" >&2; exit 1; }
   done
+}
+
+table_generated() {
+  local f=/tmp/clvr-data/$3.bin
+  [ -f "$f" ] || f=$DATA/$3.bin
+  [ -f "$f" ] || "$BUILD/clvr-gen" "$1" "$f" --elements "$2" --quiet
+  echo "$f"
 }
