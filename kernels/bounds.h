@@ -51,15 +51,13 @@ CLVR_FORCE_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, c
 }
 
 /* clvr_pp_element_key of two elements at once (boxes 0 and 1), bit for bit
- * the same keys, with the two Hilbert table chains interleaved
- * (clvr_hilbert3_from_morton2): the key kernels' form. */
+ * the same keys: the key kernels' form (two elements per work-item). */
 CLVR_FORCE_INLINE void clvr_pp_element_key2(clvr_u32 type, const float *lo0, const float *hi0, const float *lo1,
                                       const float *hi1, const float *glo, float scale, int morton, clvr_u64 *k0,
                                       clvr_u64 *k1)
 {
     const clvr_u64 m0 = clvr_pp_centre_morton(lo0, hi0, glo, scale), m1 = clvr_pp_centre_morton(lo1, hi1, glo, scale);
-    clvr_u64 h0, h1;
-    clvr_hilbert3_from_morton2(m0, m1, &h0, &h1);
+    const clvr_u64 h0 = clvr_hilbert3_from_morton(m0), h1 = clvr_hilbert3_from_morton(m1);
     *k0 = ((clvr_u64)type << 48) | (morton ? m0 : h0);
     *k1 = ((clvr_u64)type << 48) | (morton ? m1 : h1);
 }

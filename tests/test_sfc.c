@@ -72,11 +72,15 @@ static void test_full_curve(void)
     /* Keys use exactly 48 bits. */
     TU_CHECK(clvr_hilbert3(65535, 65535, 65535) < (1ull << 48));
     TU_CHECK(clvr_hilbert3(65535, 0, 0) >= (1ull << 47));
-    /* Morton: spread and compact invert; x is the most significant axis. */
+    /* Morton: spread and compact invert; x is the most significant axis; the
+     * byte-table encoder equals the shift-mask spreading. */
     uint64_t bad_m = 0;
     for (int r = 0; r < 10000; ++r) {
         uint32_t v = (uint32_t)tu_rand(&rng) & 0xffff;
         bad_m += clvr_sfc_compact3(clvr_sfc_spread3(v)) != v;
+        uint32_t x = (uint32_t)tu_rand(&rng) & 0xffff, y = (uint32_t)tu_rand(&rng) & 0xffff,
+                 z = (uint32_t)tu_rand(&rng) & 0xffff;
+        bad_m += clvr_morton3(x, y, z) != ((clvr_sfc_spread3(x) << 2) | (clvr_sfc_spread3(y) << 1) | clvr_sfc_spread3(z));
     }
     TU_CHECK_EQ_U64(bad_m, 0);
     TU_CHECK_EQ_U64(clvr_morton3(1, 0, 0), 4);
