@@ -135,7 +135,7 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
         {&pp->instance_bounds, "clvr_pp_instance_bounds"}, {&pp->split, "clvr_pp_split"},
         {&pp->rec_flags, "clvr_pp_rec_flags"},       {&pp->inst_counts, "clvr_pp_inst_counts"},
         {&pp->inst_write, "clvr_pp_inst_write"},     {&pp->vertices, "clvr_pp_vertices"},
-        {&pp->radix_buckets, "clvr_pp_radix_buckets"},
+        {&pp->radix_buckets, "clvr_pp_radix_buckets"}, {&pp->iota, "clvr_pp_iota"},
     };
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i) CLVR_TRY(clvr_cl_kernel(pp->prog, ks[i].name, ks[i].k, err));
 cleanup:
@@ -149,7 +149,7 @@ void clvr_pp_destroy(clvr_pp *pp)
     cl_kernel *ks[] = {&pp->bounds_tiles, &pp->keys_type[0], &pp->keys_type[1], &pp->keys_type[2], &pp->keys_type[3], &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply,
                        &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
                        &pp->sampling, &pp->leaf_boxes, &pp->instance_bounds, &pp->split, &pp->rec_flags,
-                       &pp->inst_counts, &pp->inst_write, &pp->vertices, &pp->radix_buckets};
+                       &pp->inst_counts, &pp->inst_write, &pp->vertices, &pp->radix_buckets, &pp->iota};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
         if (*ks[i]) { clReleaseKernel(*ks[i]); *ks[i] = NULL; }
     if (pp->prog) clReleaseProgram(pp->prog);
@@ -209,7 +209,7 @@ clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layo
 {
     clvr_status s = CLVR_OK;
     cl_float gx = b->lo[0], gy = b->lo[1], gz = b->lo[2], scale = clvr_pp_scale(b);
-    cl_int mo = morton;
+    cl_int mo = morton, with_vals = vals != NULL;
     for (cl_uint t = 0; t < 4; ++t) {
         cl_uint count = (cl_uint)l->count[t], first = (cl_uint)l->first[t];
         if (count == 0) continue;
@@ -218,7 +218,9 @@ clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layo
         int i = 0;
         ARG(k, i++, pos); ARG(k, i++, idx); ARG(k, i++, slot0); ARG(k, i++, count); ARG(k, i++, first); ARG(k, i++, gx);
         ARG(k, i++, gy); ARG(k, i++, gz); ARG(k, i++, scale); ARG(k, i++, mo); ARG(k, i++, t); ARG(k, i++, keys);
-        ARG(k, i++, vals);
+        cl_mem vbuf = with_vals ? vals : keys; /* a valid buffer either way; unused without values */
+        ARG(k, i++, vbuf);
+        ARG(k, i++, with_vals);
         CLVR_TRY(launch(pp, k, (count + 1u) / 2u, 64, sec, err)); /* two elements per work-item */
     }
 cleanup:
@@ -324,13 +326,13 @@ static void swap_pairs(cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *val
 /* Stable scatter by the digit at `shift` from the table of radix_count;
  * swaps the handles so that *keys / *vals hold the result. */
 static clvr_status radix_scatter(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp,
-                                 cl_ulong n, cl_ulong chunk, cl_uint tiles, cl_uint shift, cl_mem hist, double *sec,
-                                 clvr_error *err)
+                                 cl_ulong n, cl_ulong chunk, cl_uint tiles, cl_uint shift, cl_mem hist, cl_uint iota,
+                                 double *sec, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_kernel k = pp->radix_scatter;
     ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, n); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, shift);
-    ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp);
+    ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp); ARG(k, 9, iota);
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     swap_pairs(keys, vals, keys_tmp, vals_tmp);
 cleanup:
@@ -338,16 +340,17 @@ cleanup:
 }
 
 clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
-                         double *sec, clvr_error *err)
+                         int iota_vals, double *sec, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_mem andor = NULL, hist = NULL, sums = NULL;
     cl_ulong *ao = NULL;
     cl_uint *table = NULL;
-    if (n < 2) return CLVR_OK;
     if (n > 0xffffffffull)
         return clvr_error_set(err, CLVR_ERR_OVERFLOW, "radix sort of %llu items: at most 2^32 - 1 are supported",
                               (unsigned long long)n);
+    cl_uint iota = iota_vals != 0; /* values still to make: the first scatter makes them */
+    if (n < 2) goto done;
     cl_uint tiles = clvr_pp_tiles(pp, n);
     cl_ulong chunk = (n + tiles - 1) / tiles, nn = n;
     cl_uint hn = tiles * CLVR_PP_RADIX;
@@ -363,7 +366,7 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
     cl_ulong all_and = ~0ull, any_or = 0;
     for (cl_uint t = 0; t < tiles; ++t) { all_and &= ao[2 * t]; any_or |= ao[2 * t + 1]; }
     const cl_ulong varying = all_and ^ any_or; /* bits that differ between some keys */
-    if (varying == 0) goto cleanup;            /* all keys equal: the input order is the stable order */
+    if (varying == 0) goto done; /* all keys equal: the input order is the stable order */
 
     /* Hybrid: the top digit is the 8 bits ending at the highest varying bit;
      * the digits below it that vary are left to the bucket kernel. */
@@ -390,7 +393,8 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
          * box) would leave one work-item sorting most of the array: then the
          * plain LSD sort below, which spreads every pass over all tiles. */
         if (largest <= n / 16) {
-            CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, msd, hist, sec, err));
+            CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, msd, hist, iota, sec, err));
+            iota = 0;
             k = pp->radix_buckets;
             ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, *keys_tmp); ARG(k, 3, *vals_tmp); ARG(k, 4, hist);
             ARG(k, 5, tiles); ARG(k, 6, nn); ARG(k, 7, digits);
@@ -402,7 +406,15 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
     for (cl_uint shift = 0; shift < 64; shift += CLVR_PP_RADIX_BITS) {
         if (((varying >> shift) & (CLVR_PP_RADIX - 1)) == 0) continue; /* digit constant: order kept */
         CLVR_TRY(radix_count(pp, *keys, nn, chunk, tiles, shift, hist, sums, sec, err));
-        CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, shift, hist, sec, err));
+        CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, shift, hist, iota, sec, err));
+        iota = 0;
+    }
+done:
+    if (iota && n > 0) { /* no pass ran: the values are still to make */
+        cl_uint n32 = (cl_uint)n;
+        cl_kernel ki = pp->iota;
+        ARG(ki, 0, *vals); ARG(ki, 1, n32);
+        CLVR_TRY(launch(pp, ki, n, 64, sec, err));
     }
 cleanup:
     free(ao);
@@ -448,8 +460,65 @@ static void fill_stats(clvr_clustered *c, const clvr_mesh *m)
     c->avg_leaf_elements = c->num_leaves ? (double)c->num_elements / (double)c->num_leaves : 0.0;
 }
 
+void clvr_pp_workspace_release(clvr_cl *cl, clvr_pp_workspace *ws)
+{
+    if (!ws) return;
+    for (int i = 0; i < CLVR_PP_WS_COUNT; ++i) clvr_cl_release(cl, &ws->buf[i]);
+    memset(ws, 0, sizeof *ws);
+}
+
+/* A read-write scratch buffer of at least `bytes`: workspace slot `slot`
+ * (grown when too small), or a buffer of its own without a workspace. The
+ * caller owns one reference either way and gives it back with ws_drop. */
+static clvr_status ws_get(clvr_cl *cl, clvr_pp_workspace *ws, int slot, uint64_t bytes, const char *what, cl_mem *out,
+                          clvr_error *err)
+{
+    if (!ws) return clvr_cl_buffer(cl, CL_MEM_READ_WRITE, bytes, NULL, what, out, err);
+    if (!ws->buf[slot] || ws->bytes[slot] < bytes) {
+        clvr_cl_release(cl, &ws->buf[slot]);
+        ws->bytes[slot] = 0;
+        clvr_status s = clvr_cl_buffer(cl, CL_MEM_READ_WRITE, bytes, NULL, what, &ws->buf[slot], err);
+        if (s != CLVR_OK) return s;
+        ws->bytes[slot] = bytes;
+    }
+    clRetainMemObject(ws->buf[slot]);
+    *out = ws->buf[slot];
+    return CLVR_OK;
+}
+
+/* Gives back the caller's reference to a buffer from ws_get (or any
+ * buffer): the workspace keeps its own, so its memory stays counted. */
+static void ws_drop(clvr_cl *cl, clvr_pp_workspace *ws, cl_mem *m)
+{
+    if (!*m) return;
+    for (int i = 0; ws && i < CLVR_PP_WS_COUNT; ++i)
+        if (ws->buf[i] == *m) {
+            clReleaseMemObject(*m);
+            *m = NULL;
+            return;
+        }
+    clvr_cl_release(cl, m);
+}
+
+/* The buffer leaves the workspace (it becomes part of a result). */
+static void ws_detach(clvr_pp_workspace *ws, cl_mem m)
+{
+    for (int i = 0; ws && i < CLVR_PP_WS_COUNT; ++i)
+        if (ws->buf[i] == m) {
+            clReleaseMemObject(ws->buf[i]);
+            ws->buf[i] = NULL;
+            ws->bytes[i] = 0;
+        }
+}
+
 clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o, clvr_clustered *out,
                             clvr_error *err)
+{
+    return clvr_preprocess_ws(cl, m, o, NULL, out, err);
+}
+
+clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o,
+                               clvr_pp_workspace *ws, clvr_clustered *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_pp pp = {0};
@@ -510,7 +579,7 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         if (borrow_idx)
             CLVR_TRY(clvr_cl_buffer(cl, ro, S * 4, (void *)m->indices[only_type], "element indices", &idx_in, err));
         else
-            CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "element indices", &idx_in, err));
+            CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_IDX_IN, S * 4, "element indices", &idx_in, err));
         if (zero_copy) st[CLVR_PP_STAGE_UPLOAD] += wall_now() - tu;
     }
     {
@@ -532,20 +601,21 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
     CLVR_TRY(clvr_pp_bounds(&pp, pos, scal, V, &out->bounds, &st[CLVR_PP_STAGE_BOUNDS], err));
     out->scalar_min = out->bounds.lo[3];
     out->scalar_max = out->bounds.hi[3];
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 8, NULL, "sort keys", &keys, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 4, NULL, "sort values", &vals, err));
-    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, &out->bounds, opt.morton, keys, vals, &st[CLVR_PP_STAGE_KEYS], err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 8, NULL, "sort keys (scratch)", &keys_tmp, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, N * 4, NULL, "sort values (scratch)", &vals_tmp, err));
-    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, N, &st[CLVR_PP_STAGE_SORT], err));
-    clvr_cl_release(cl, &keys);
-    clvr_cl_release(cl, &keys_tmp);
-    clvr_cl_release(cl, &vals_tmp);
+    CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS, N * 8, "sort keys", &keys, err));
+    CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS, N * 4, "sort values", &vals, err));
+    /* The values (element ids) are made by the sort's first pass. */
+    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, &out->bounds, opt.morton, keys, NULL, &st[CLVR_PP_STAGE_KEYS], err));
+    CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS_TMP, N * 8, "sort keys (scratch)", &keys_tmp, err));
+    CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS_TMP, N * 4, "sort values (scratch)", &vals_tmp, err));
+    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, N, 1, &st[CLVR_PP_STAGE_SORT], err));
+    ws_drop(cl, ws, &keys);
+    ws_drop(cl, ws, &keys_tmp);
+    ws_drop(cl, ws, &vals_tmp);
 
     /* --- gather in curve order */
     cl_uint n32 = (cl_uint)N, e1 = (cl_uint)L.first[1], e2 = (cl_uint)L.first[2], e3 = (cl_uint)L.first[3];
     cl_ulong s1 = L.slot[1], s2 = L.slot[2], s3 = L.slot[3];
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "sorted element indices", &idx_sorted, err));
+    CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_IDX_SORTED, S * 4, "sorted element indices", &idx_sorted, err));
     {
         cl_kernel k = pp.gather;
         int i = 0;
@@ -556,8 +626,11 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         ARG(k, i++, s3);
         CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_GATHER], err));
     }
-    if (opt.keep_order) { out->order = vals; vals = NULL; }
-    else clvr_cl_release(cl, &vals);
+    if (opt.keep_order) {
+        ws_detach(ws, vals);
+        out->order = vals;
+        vals = NULL;
+    } else ws_drop(cl, ws, &vals);
 
     /* --- sampling clusters (from the sorted lists and the mesh's own vertices) */
     {
@@ -584,7 +657,7 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
      * or a buffer of its own when idx_in is the borrowed mesh array. */
     if (borrow_idx) {
         clvr_cl_release(cl, &idx_in);
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, S * 4, NULL, "scratch vertex map", &vmap, err));
+        CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VMAP, S * 4, "scratch vertex map", &vmap, err));
     } else {
         vmap = idx_in;
         idx_in = NULL;
@@ -595,7 +668,7 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx32 * 4, NULL, "32-bit indices", &out->idx32, err));
     {
         const uint64_t cap = 1ull << plan.log2cap, tables = plan.total_segments;
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, tables * cap * 8, NULL, "split hash maps", &tk, err));
+        CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_HASH, tables * cap * 8, "split hash maps", &tk, err));
         cl_ulong zero = 0;
         cl_event ev = NULL;
         CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, tk, &zero, sizeof zero, 0, tables * cap * 8, 0, NULL, &ev));
@@ -633,9 +706,9 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
             ARG(k, i++, lc); ARG(k, i++, rec_max); ARG(k, i++, recs); ARG(k, i++, rec_counts);
             CLVR_TRY(launch(&pp, k, nseg, 1, &st[CLVR_PP_STAGE_SPLIT], err));
         }
-        clvr_cl_release(cl, &tk);
+        ws_drop(cl, ws, &tk);
         clvr_cl_release(cl, &segbuf);
-        clvr_cl_release(cl, &idx_sorted);
+        ws_drop(cl, ws, &idx_sorted);
 
         /* --- instance table: flagged select of the used record slots, scans of the counts */
         double *si = &st[CLVR_PP_STAGE_INSTANCES];
@@ -684,7 +757,7 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
         ARG(k, i++, ni); ARG(k, i++, nv); ARG(k, i++, chunk); ARG(k, i++, tiles); ARG(k, i++, out->vertices);
         CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_VERTICES], err));
     }
-    clvr_cl_release(cl, &vmap);
+    ws_drop(cl, ws, &vmap);
     clvr_cl_release(cl, &pos);
     clvr_cl_release(cl, &scal);
 
@@ -722,14 +795,14 @@ clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preproce
 cleanup:
     clvr_cl_release(cl, &pos);
     clvr_cl_release(cl, &scal);
-    clvr_cl_release(cl, &idx_in);
-    clvr_cl_release(cl, &vmap);
-    clvr_cl_release(cl, &keys);
-    clvr_cl_release(cl, &vals);
-    clvr_cl_release(cl, &keys_tmp);
-    clvr_cl_release(cl, &vals_tmp);
-    clvr_cl_release(cl, &idx_sorted);
-    clvr_cl_release(cl, &tk);
+    ws_drop(cl, ws, &idx_in);
+    ws_drop(cl, ws, &vmap);
+    ws_drop(cl, ws, &keys);
+    ws_drop(cl, ws, &vals);
+    ws_drop(cl, ws, &keys_tmp);
+    ws_drop(cl, ws, &vals_tmp);
+    ws_drop(cl, ws, &idx_sorted);
+    ws_drop(cl, ws, &tk);
     clvr_cl_release(cl, &segbuf);
     free(segs);
     clvr_cl_release(cl, &recs);

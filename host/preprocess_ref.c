@@ -237,12 +237,23 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
             uint32_t e1 = e0 + opt.leaf_size < c->first_element + c->num_elements ? e0 + opt.leaf_size
                                                                                   : c->first_element + c->num_elements;
             float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            /* Element box first, then the leaf's: the device's order of
+             * comparisons (clvr_pp_leaf_boxes), so ties of -0 and +0 resolve
+             * alike. */
             for (uint32_t e = e0; e < e1; ++e) {
                 uint64_t sl = c->first_index + (uint64_t)(e - c->first_element) * vpe;
+                float elo[3] = {INFINITY, INFINITY, INFINITY}, ehi[3] = {-INFINITY, -INFINITY, -INFINITY};
                 for (uint32_t k = 0; k < vpe; ++k) {
                     uint32_t li = c->index_bits == 16 ? h->idx16[sl + k] : h->idx32[sl + k];
                     const float *v = h->vertices + 4 * ((uint64_t)c->first_vertex + li);
-                    clvr_pp_box_grow(lo, hi, v[0], v[1], v[2]);
+                    if (k == 0)
+                        for (int a = 0; a < 3; ++a) elo[a] = ehi[a] = v[a];
+                    else
+                        clvr_pp_box_grow(elo, ehi, v[0], v[1], v[2]);
+                }
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = elo[a] < lo[a] ? elo[a] : lo[a];
+                    hi[a] = ehi[a] > hi[a] ? ehi[a] : hi[a];
                 }
             }
             clvr_box *bx = &h->leaf_boxes[c->first_leaf + l];

@@ -29,7 +29,7 @@ __kernel void clvr_pp_bounds_tiles(__global const float *pos, __global const flo
     }
 }
 
-/* Sort keys and original global element ids of the elements of one type:
+/* Sort keys and (with_vals) original global element ids of the elements of one type:
  * work-item i handles elements first + 2i and first + 2i + 1 (the second
  * only when it exists), whose vpe indices start at idx[slot0 + e * vpe].
  * Two elements per work-item (clvr_pp_element_key2) measured faster than
@@ -42,7 +42,7 @@ __kernel void clvr_pp_bounds_tiles(__global const float *pos, __global const flo
 #define CLVR_PP_KEYS_KERNEL(NAME, VPE)                                                                                \
     __kernel void NAME(__global const float *pos, __global const uint *idx, ulong slot0, uint count, uint first,    \
                        float glo_x, float glo_y, float glo_z, float scale, int morton, uint type,                \
-                       __global ulong *keys, __global uint *vals)                                               \
+                       __global ulong *keys, __global uint *vals, int with_vals)                                \
     {                                                                                                            \
         uint e0 = 2u * (uint)get_global_id(0);                                                                   \
         if (e0 >= count) return;                                                                                 \
@@ -54,10 +54,10 @@ __kernel void clvr_pp_bounds_tiles(__global const float *pos, __global const flo
         ulong k0, k1;                                                                                            \
         clvr_pp_element_key2(type, lo0, hi0, lo1, hi1, glo, scale, morton, &k0, &k1);                            \
         keys[first + e0] = k0;                                                                                   \
-        vals[first + e0] = first + e0;                                                                           \
+        if (with_vals) vals[first + e0] = first + e0;                                                            \
         if (e1 != e0) {                                                                                          \
             keys[first + e1] = k1;                                                                               \
-            vals[first + e1] = first + e1;                                                                       \
+            if (with_vals) vals[first + e1] = first + e1;                                                        \
         }                                                                                                        \
     }
 CLVR_PP_KEYS_KERNEL(clvr_pp_keys_tet, 4u)

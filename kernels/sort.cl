@@ -48,10 +48,12 @@ __kernel void clvr_pp_radix_hist(__global const ulong *keys, ulong n, ulong chun
     for (uint d = 0; d < CLVR_PP_RADIX; ++d) hist[d * ntiles + t] = h[d];
 }
 
-/* Stable scatter of tile t from the scanned histogram table. */
+/* Stable scatter of tile t from the scanned histogram table. iota != 0:
+ * the values are the indices 0..n-1, made here instead of read (the sort's
+ * first pass over element ids, which nobody had to write). */
 __kernel void clvr_pp_radix_scatter(__global const ulong *keys, __global const uint *vals, ulong n, ulong chunk,
                                     uint ntiles, uint shift, __global const uint *offs, __global ulong *keys_out,
-                                    __global uint *vals_out)
+                                    __global uint *vals_out, uint iota)
 {
     uint t = (uint)get_global_id(0);
     if (t >= ntiles) return;
@@ -62,8 +64,15 @@ __kernel void clvr_pp_radix_scatter(__global const ulong *keys, __global const u
         ulong k = keys[i];
         uint p = o[(uint)(k >> shift) & (CLVR_PP_RADIX - 1u)]++;
         keys_out[p] = k;
-        vals_out[p] = vals[i];
+        vals_out[p] = iota ? (uint)i : vals[i];
     }
+}
+
+/* vals[i] = i: the values of a sort that has no pass to make them. */
+__kernel void clvr_pp_iota(__global uint *vals, uint n)
+{
+    uint i = (uint)get_global_id(0);
+    if (i < n) vals[i] = i;
 }
 
 /* Work-item d finishes bucket d of the hybrid sort: after the stable top-digit

@@ -443,6 +443,58 @@ static void run_all_options(clvr_cl *cl, const char *name, const clvr_mesh *m, i
     run_case(cl, name, m, &o, 1, 0);
 }
 
+/* A workspace reused across calls (growing, then shrinking meshes; one
+ * index list uploaded, one borrowed) gives exactly what fresh buffers give,
+ * and a kept result (its `order` came from the workspace) survives the
+ * calls after it. */
+static void test_workspace(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    uint64_t rng = 11;
+    clvr_mesh ms[3] = {{0}};
+    TU_CHECK_STATUS(make_grid(&ms[0], 24, 10, 10, 3, &err), CLVR_OK, &err);  /* mixed: indices uploaded */
+    TU_CHECK_STATUS(make_grid(&ms[1], 17, 13, 11, 0, &err), CLVR_OK, &err);  /* hexes only: borrowed */
+    TU_CHECK_STATUS(make_random(&ms[2], 300007, 65537, &rng, &err), CLVR_OK, &err);
+    const int seq[] = {0, 1, 2, 0, 1};
+    const int n = (int)(sizeof seq / sizeof seq[0]);
+    const cl_ulong before = cl->allocated_bytes;
+    clvr_pp_workspace ws = {0};
+    clvr_clustered kept = {0};
+    clvr_clustered_host kept_ref = {0};
+    for (int i = 0; i < n; ++i) {
+        const clvr_mesh *m = &ms[seq[i]];
+        clvr_preprocess_options o;
+        clvr_preprocess_options_default(&o);
+        o.keep_order = i != 2;
+        clvr_clustered c = {0}, r = {0};
+        clvr_clustered_host h = {0}, rh = {0};
+        TU_CHECK_STATUS(clvr_preprocess_ws(cl, m, &o, &ws, &c, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_preprocess(cl, m, &o, &r, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_clustered_download(cl, &c, &h, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_clustered_download(cl, &r, &rh, &err), CLVR_OK, &err);
+        TU_CHECK(same_arrays(&c, &h, &r, &rh));
+        TU_CHECK((c.order != NULL) == (o.keep_order != 0));
+        clvr_clustered_host_free(&h);
+        clvr_clustered_release(cl, &r);
+        if (i == 0) {
+            kept = c;
+            kept_ref = rh;
+        } else {
+            clvr_clustered_release(cl, &c);
+            clvr_clustered_host_free(&rh);
+        }
+    }
+    clvr_clustered_host kh = {0};
+    TU_CHECK_STATUS(clvr_clustered_download(cl, &kept, &kh, &err), CLVR_OK, &err);
+    TU_CHECK(kh.order != NULL && same_arrays(&kept, &kh, &kept, &kept_ref));
+    clvr_clustered_host_free(&kh);
+    clvr_clustered_host_free(&kept_ref);
+    clvr_clustered_release(cl, &kept);
+    clvr_pp_workspace_release(cl, &ws);
+    TU_CHECK_EQ_U64(cl->allocated_bytes, before);
+    for (int i = 0; i < 3; ++i) clvr_mesh_free(&ms[i]);
+}
+
 static void test_errors(clvr_cl *cl)
 {
     clvr_error err = {0};
@@ -514,6 +566,7 @@ int main(int argc, char **argv)
         return tu_finish("test_preprocess --big");
     }
     test_errors(&cl);
+    test_workspace(&cl);
     struct { const char *name; uint32_t nx, ny, nz; int mode; } grids[] = {
         {"hex 1x1x1", 1, 1, 1, 0}, {"hex 2x1x1", 2, 1, 1, 0}, {"hex 17x13x11", 17, 13, 11, 0},
         {"tets 9x10x11", 9, 10, 11, 1}, {"wedges 5x7x3", 5, 7, 3, 2}, {"mixed 24x10x10", 24, 10, 10, 3},

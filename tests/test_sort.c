@@ -54,23 +54,30 @@ static void test_scan_select(clvr_cl *cl, clvr_pp *pp, uint64_t n, uint64_t *rng
     free(in); free(ref); free(dev); free(flags); free(vals);
 }
 
-/* kind 0: full 64-bit keys; 1: 48-bit keys with a 2-bit type above; 2: 5 distinct keys. */
-static void test_sort(clvr_cl *cl, clvr_pp *pp, uint64_t n, int kind, uint64_t *rng)
+/* kind 0: full 64-bit keys; 1: 48-bit keys with a 2-bit type above; 2: 5 distinct keys; 3: all keys equal
+ * (no pass runs). */
+static void test_sort(clvr_cl *cl, clvr_pp *pp, uint64_t n, int kind, int iota, uint64_t *rng)
 {
     clvr_error err = {0};
     uint64_t *keys = malloc((n + 1) * 8), *rk = malloc((n + 1) * 8), *dk = malloc((n + 1) * 8);
     uint32_t *vals = malloc((n + 1) * 4), *rv = malloc((n + 1) * 4), *dv = malloc((n + 1) * 4);
     for (uint64_t i = 0; i < n; ++i) {
         uint64_t r = tu_rand(rng);
-        keys[i] = kind == 0 ? r : kind == 1 ? ((r >> 62) << 48) | (r & ((1ull << 48) - 1)) : (r % 5) * 0x0101010101ull;
+        keys[i] = kind == 0   ? r
+                  : kind == 1 ? ((r >> 62) << 48) | (r & ((1ull << 48) - 1))
+                  : kind == 2 ? (r % 5) * 0x0101010101ull
+                              : 42;
         vals[i] = (uint32_t)i;
     }
     memcpy(rk, keys, n * 8);
     memcpy(rv, vals, n * 4);
     TU_CHECK_EQ_U64(clvr_pp_ref_sort(rk, rv, n), 0);
+    /* iota: the values are not uploaded (the buffer holds garbage) and the
+     * sort makes them; they are the reference's values 0..n-1 either way. */
+    for (uint64_t i = 0; iota && i < n; ++i) vals[i] = 0xdeadbeefu;
     cl_mem bk = upload(cl, keys, n * 8), bv = upload(cl, vals, n * 4), tk = upload(cl, NULL, n * 8),
            tv = upload(cl, NULL, n * 4);
-    TU_CHECK_STATUS(clvr_pp_sort(pp, &bk, &bv, &tk, &tv, n, NULL, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_pp_sort(pp, &bk, &bv, &tk, &tv, n, iota, NULL, &err), CLVR_OK, &err);
     download(cl, bk, dk, n * 8);
     download(cl, bv, dv, n * 4);
     uint64_t bad_k = 0, bad_v = 0, unsorted = 0, unstable = 0;
@@ -82,8 +89,9 @@ static void test_sort(clvr_cl *cl, clvr_pp *pp, uint64_t n, int kind, uint64_t *
             unstable += dk[i - 1] == dk[i] && dv[i - 1] > dv[i];
         }
     }
-    if (bad_k || bad_v) fprintf(stderr, "sort n=%llu kind=%d: %llu keys, %llu values differ\n", (unsigned long long)n, kind,
-                                (unsigned long long)bad_k, (unsigned long long)bad_v);
+    if (bad_k || bad_v)
+        fprintf(stderr, "sort n=%llu kind=%d iota=%d: %llu keys, %llu values differ\n", (unsigned long long)n, kind, iota,
+                (unsigned long long)bad_k, (unsigned long long)bad_v);
     TU_CHECK_EQ_U64(bad_k, 0);
     TU_CHECK_EQ_U64(bad_v, 0);
     TU_CHECK_EQ_U64(unsorted, 0);
@@ -110,7 +118,7 @@ int main(int argc, char **argv)
     if (big) {
         for (size_t m = 0; m < 3; ++m) {
             pp.sort_hybrid_min = hybrid_min[m];
-            test_sort(&cl, &pp, (1ull << 24) + 3, 1, &rng);
+            test_sort(&cl, &pp, (1ull << 24) + 3, 1, (int)(m & 1), &rng);
         }
         test_scan_select(&cl, &pp, (1ull << 24) + 3, &rng);
     } else {
@@ -119,7 +127,8 @@ int main(int argc, char **argv)
             test_scan_select(&cl, &pp, sizes[i], &rng);
             for (size_t m = 0; m < 3; ++m) {
                 pp.sort_hybrid_min = hybrid_min[m];
-                for (int kind = 0; kind < 3; ++kind) test_sort(&cl, &pp, sizes[i], kind, &rng);
+                for (int kind = 0; kind < 4; ++kind)
+                    for (int iota = 0; iota <= 1; ++iota) test_sort(&cl, &pp, sizes[i], kind, iota, &rng);
             }
         }
     }
