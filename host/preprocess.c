@@ -339,12 +339,35 @@ cleanup:
     return s;
 }
 
-clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
-                         int iota_vals, double *sec, clvr_error *err)
+/* *varying = the bits that differ between some of the n keys (their AND
+ * xor their OR). */
+static clvr_status sort_varying(clvr_pp *pp, cl_mem keys, cl_ulong n, cl_ulong chunk, cl_uint tiles,
+                                cl_ulong *varying, double *sec, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    cl_mem andor = NULL, hist = NULL, sums = NULL;
+    cl_mem andor = NULL;
     cl_ulong *ao = NULL;
+    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * tiles * sizeof(cl_ulong), NULL, "sort and/or", &andor, err));
+    cl_kernel k = pp->radix_andor;
+    ARG(k, 0, keys); ARG(k, 1, n); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, andor);
+    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    ao = malloc(2 * tiles * sizeof *ao);
+    if (!ao) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory in sort"); goto cleanup; }
+    CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, andor, CL_TRUE, 0, 2 * tiles * sizeof *ao, ao, 0, NULL, NULL));
+    cl_ulong all_and = ~0ull, any_or = 0;
+    for (cl_uint t = 0; t < tiles; ++t) { all_and &= ao[2 * t]; any_or |= ao[2 * t + 1]; }
+    *varying = all_and ^ any_or;
+cleanup:
+    free(ao);
+    clvr_cl_release(pp->cl, &andor);
+    return s;
+}
+
+clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
+                         int iota_vals, uint64_t varying_hint, double *sec, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem hist = NULL, sums = NULL;
     cl_uint *table = NULL;
     if (n > 0xffffffffull)
         return clvr_error_set(err, CLVR_ERR_OVERFLOW, "radix sort of %llu items: at most 2^32 - 1 are supported",
@@ -354,19 +377,17 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
     cl_uint tiles = clvr_pp_tiles(pp, n);
     cl_ulong chunk = (n + tiles - 1) / tiles, nn = n;
     cl_uint hn = tiles * CLVR_PP_RADIX;
-    CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * tiles * sizeof(cl_ulong), NULL, "sort and/or", &andor, err));
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, hn * sizeof(cl_uint), NULL, "sort histograms", &hist, err));
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * sizeof(cl_uint), NULL, "sort scan sums", &sums, err));
-    cl_kernel k = pp->radix_andor;
-    ARG(k, 0, *keys); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, andor);
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
-    ao = malloc(2 * tiles * sizeof *ao);
-    if (!ao) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory in sort"); goto cleanup; }
-    CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, andor, CL_TRUE, 0, 2 * tiles * sizeof *ao, ao, 0, NULL, NULL));
-    cl_ulong all_and = ~0ull, any_or = 0;
-    for (cl_uint t = 0; t < tiles; ++t) { all_and &= ao[2 * t]; any_or |= ao[2 * t + 1]; }
-    const cl_ulong varying = all_and ^ any_or; /* bits that differ between some keys */
-    if (varying == 0) goto done; /* all keys equal: the input order is the stable order */
+    /* The caller's hint (a superset of the varying bits) spares the pass
+     * that finds them, unless the hybrid sort below falls back to LSD,
+     * which skips constant digits and so needs them exactly. */
+    cl_ulong varying = varying_hint;
+    int exact = varying == 0;
+    if (exact) {
+        CLVR_TRY(sort_varying(pp, *keys, nn, chunk, tiles, &varying, sec, err));
+        if (varying == 0) goto done; /* all keys equal: the input order is the stable order */
+    }
 
     /* Hybrid: the top digit is the 8 bits ending at the highest varying bit;
      * the digits below it that vary are left to the bucket kernel. */
@@ -390,18 +411,23 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
             if (size > largest) largest = size;
         }
         /* Keys piled into a few top digits (a tiny dense region of a big
-         * box) would leave one work-item sorting most of the array: then the
-         * plain LSD sort below, which spreads every pass over all tiles. */
+         * box, or a hint wider than the keys) would leave one work-item
+         * sorting most of the array: then the plain LSD sort below, which
+         * spreads every pass over all tiles. */
         if (largest <= n / 16) {
             CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, msd, hist, iota, sec, err));
             iota = 0;
-            k = pp->radix_buckets;
+            cl_kernel k = pp->radix_buckets;
             ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, *keys_tmp); ARG(k, 3, *vals_tmp); ARG(k, 4, hist);
             ARG(k, 5, tiles); ARG(k, 6, nn); ARG(k, 7, digits);
             CLVR_TRY(launch(pp, k, CLVR_PP_RADIX, 1, sec, err));
             if (passes & 1u) swap_pairs(keys, vals, keys_tmp, vals_tmp);
             goto cleanup;
         }
+    }
+    if (!exact) {
+        CLVR_TRY(sort_varying(pp, *keys, nn, chunk, tiles, &varying, sec, err));
+        if (varying == 0) goto done;
     }
     for (cl_uint shift = 0; shift < 64; shift += CLVR_PP_RADIX_BITS) {
         if (((varying >> shift) & (CLVR_PP_RADIX - 1)) == 0) continue; /* digit constant: order kept */
@@ -417,9 +443,7 @@ done:
         CLVR_TRY(launch(pp, ki, n, 64, sec, err));
     }
 cleanup:
-    free(ao);
     free(table);
-    clvr_cl_release(pp->cl, &andor);
     clvr_cl_release(pp->cl, &hist);
     clvr_cl_release(pp->cl, &sums);
     return s;
@@ -607,7 +631,16 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, &out->bounds, opt.morton, keys, NULL, &st[CLVR_PP_STAGE_KEYS], err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS_TMP, N * 8, "sort keys (scratch)", &keys_tmp, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS_TMP, N * 4, "sort values (scratch)", &vals_tmp, err));
-    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, N, 1, &st[CLVR_PP_STAGE_SORT], err));
+    {
+        /* The keys are type << 48 | 48-bit curve key: the host knows which
+         * type bits can differ, so the sort need not find out (a pass over
+         * the keys) unless it falls back to plain LSD. */
+        uint64_t type_and = 3, type_or = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+            if (L.count[t]) { type_and &= t; type_or |= t; }
+        const uint64_t hint = ((type_and ^ type_or) << 48) | ((1ull << 48) - 1);
+        CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, N, 1, hint, &st[CLVR_PP_STAGE_SORT], err));
+    }
     ws_drop(cl, ws, &keys);
     ws_drop(cl, ws, &keys_tmp);
     ws_drop(cl, ws, &vals_tmp);

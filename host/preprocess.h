@@ -195,9 +195,11 @@ clvr_status clvr_pp_select(clvr_pp *pp, cl_mem flags, cl_mem values, cl_mem out,
  * hold the input; tmp buffers are the same sizes; on return the handles
  * may have been swapped so that *keys / *vals hold the result. iota_vals:
  * the values are 0..n-1 and *vals holds nothing yet (the first pass makes
- * them, which saves writing and reading n values). */
+ * them, which saves writing and reading n values). varying_hint: 0, or a
+ * mask with every key bit that may differ between keys set (a superset is
+ * fine, a missing bit is not): spares the hybrid sort a pass over the keys. */
 clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_tmp, cl_mem *vals_tmp, uint64_t n,
-                         int iota_vals, double *sec, clvr_error *err);
+                         int iota_vals, uint64_t varying_hint, double *sec, clvr_error *err);
 
 /* ------------------------------------------------------------ references
  * Plain C, same contracts on host arrays (host/preprocess_ref.c). */

@@ -56,7 +56,7 @@ static void test_scan_select(clvr_cl *cl, clvr_pp *pp, uint64_t n, uint64_t *rng
 
 /* kind 0: full 64-bit keys; 1: 48-bit keys with a 2-bit type above; 2: 5 distinct keys; 3: all keys equal
  * (no pass runs). */
-static void test_sort(clvr_cl *cl, clvr_pp *pp, uint64_t n, int kind, int iota, uint64_t *rng)
+static void test_sort(clvr_cl *cl, clvr_pp *pp, uint64_t n, int kind, int iota, uint64_t hint, uint64_t *rng)
 {
     clvr_error err = {0};
     uint64_t *keys = malloc((n + 1) * 8), *rk = malloc((n + 1) * 8), *dk = malloc((n + 1) * 8);
@@ -77,7 +77,7 @@ static void test_sort(clvr_cl *cl, clvr_pp *pp, uint64_t n, int kind, int iota, 
     for (uint64_t i = 0; iota && i < n; ++i) vals[i] = 0xdeadbeefu;
     cl_mem bk = upload(cl, keys, n * 8), bv = upload(cl, vals, n * 4), tk = upload(cl, NULL, n * 8),
            tv = upload(cl, NULL, n * 4);
-    TU_CHECK_STATUS(clvr_pp_sort(pp, &bk, &bv, &tk, &tv, n, iota, NULL, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_pp_sort(pp, &bk, &bv, &tk, &tv, n, iota, hint, NULL, &err), CLVR_OK, &err);
     download(cl, bk, dk, n * 8);
     download(cl, bv, dv, n * 4);
     uint64_t bad_k = 0, bad_v = 0, unsorted = 0, unstable = 0;
@@ -118,17 +118,24 @@ int main(int argc, char **argv)
     if (big) {
         for (size_t m = 0; m < 3; ++m) {
             pp.sort_hybrid_min = hybrid_min[m];
-            test_sort(&cl, &pp, (1ull << 24) + 3, 1, (int)(m & 1), &rng);
+            test_sort(&cl, &pp, (1ull << 24) + 3, 1, (int)(m & 1), m == 0 ? (3ull << 48) | ((1ull << 48) - 1) : 0, &rng);
         }
         test_scan_select(&cl, &pp, (1ull << 24) + 3, &rng);
     } else {
+        /* Varying-bit hints: none, all bits, and the preprocessing's (type
+         * bits over a 48-bit curve key), a superset of kinds 1..3's varying
+         * bits but not of kind 0's, which gets all bits instead. */
+        const uint64_t pp_hint = (3ull << 48) | ((1ull << 48) - 1);
         const uint64_t sizes[] = {0, 1, 2, 3, 255, 256, 257, 1031, 4097, 65537, 100003, (1u << 20) + 7};
         for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) {
             test_scan_select(&cl, &pp, sizes[i], &rng);
             for (size_t m = 0; m < 3; ++m) {
                 pp.sort_hybrid_min = hybrid_min[m];
                 for (int kind = 0; kind < 4; ++kind)
-                    for (int iota = 0; iota <= 1; ++iota) test_sort(&cl, &pp, sizes[i], kind, iota, &rng);
+                    for (int iota = 0; iota <= 1; ++iota)
+                        for (int h = 0; h < 3; ++h)
+                            test_sort(&cl, &pp, sizes[i], kind, iota,
+                                      h == 0 ? 0 : h == 1 || kind == 0 ? ~0ull : pp_hint, &rng);
             }
         }
     }
