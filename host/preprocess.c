@@ -524,6 +524,40 @@ static void ws_drop(clvr_cl *cl, clvr_pp_workspace *ws, cl_mem *m)
     clvr_cl_release(cl, m);
 }
 
+/* A result buffer of at least `bytes`: a recycled one from workspace slot
+ * `slot` (it leaves the workspace), or a new one. */
+static clvr_status ws_take(clvr_cl *cl, clvr_pp_workspace *ws, int slot, uint64_t bytes, const char *what,
+                           cl_mem *out, clvr_error *err)
+{
+    if (ws && bytes > 0 && ws->buf[slot] && ws->bytes[slot] >= bytes) {
+        *out = ws->buf[slot];
+        ws->buf[slot] = NULL;
+        ws->bytes[slot] = 0;
+        return CLVR_OK;
+    }
+    return clvr_cl_buffer(cl, CL_MEM_READ_WRITE, bytes, NULL, what, out, err);
+}
+
+void clvr_pp_workspace_recycle(clvr_cl *cl, clvr_pp_workspace *ws, clvr_clustered *c)
+{
+    if (!c) return;
+    struct { cl_mem *m; int slot; } give[] = {
+        {&c->vertices, CLVR_PP_WS_OUT_VERTICES}, {&c->idx16, CLVR_PP_WS_OUT_IDX16},
+        {&c->idx32, CLVR_PP_WS_OUT_IDX32}, {&c->leaf_boxes, CLVR_PP_WS_OUT_LEAF_BOXES},
+        {&c->sampling, CLVR_PP_WS_OUT_SAMPLING},
+    };
+    for (size_t i = 0; ws && i < sizeof give / sizeof give[0]; ++i) {
+        size_t n = 0;
+        if (!*give[i].m || clGetMemObjectInfo(*give[i].m, CL_MEM_SIZE, sizeof n, &n, NULL) != CL_SUCCESS) continue;
+        if (ws->buf[give[i].slot] && ws->bytes[give[i].slot] >= n) continue; /* keep the bigger one */
+        clvr_cl_release(cl, &ws->buf[give[i].slot]);
+        ws->buf[give[i].slot] = *give[i].m;
+        ws->bytes[give[i].slot] = n;
+        *give[i].m = NULL;
+    }
+    clvr_clustered_release(cl, c);
+}
+
 /* The buffer leaves the workspace (it becomes part of a result). */
 static void ws_detach(clvr_pp_workspace *ws, cl_mem m)
 {
@@ -673,8 +707,8 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
             nc += (L.count[t] + opt.sampling_size - 1) / opt.sampling_size;
         }
         out->num_sampling = nc;
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nc * sizeof(clvr_sampling_cluster), NULL,
-                                "sampling clusters", &out->sampling, err));
+        CLVR_TRY(ws_take(cl, ws, CLVR_PP_WS_OUT_SAMPLING, nc * sizeof(clvr_sampling_cluster), "sampling clusters",
+                         &out->sampling, err));
         cl_uint ncl = (cl_uint)nc, size = opt.sampling_size, c1 = (cl_uint)cfirst[1], c2 = (cl_uint)cfirst[2],
                 c3 = (cl_uint)cfirst[3];
         cl_kernel k = pp.sampling;
@@ -697,8 +731,8 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     }
     out->num_idx16 = bits32 ? 0 : S;
     out->num_idx32 = bits32 ? S : 0;
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx16 * 2, NULL, "16-bit indices", &out->idx16, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_idx32 * 4, NULL, "32-bit indices", &out->idx32, err));
+    CLVR_TRY(ws_take(cl, ws, CLVR_PP_WS_OUT_IDX16, out->num_idx16 * 2, "16-bit indices", &out->idx16, err));
+    CLVR_TRY(ws_take(cl, ws, CLVR_PP_WS_OUT_IDX32, out->num_idx32 * 4, "32-bit indices", &out->idx32, err));
     {
         const uint64_t cap = 1ull << plan.log2cap, tables = plan.total_segments;
         CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_HASH, tables * cap * 8, "split hash maps", &tk, err));
@@ -778,7 +812,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     }
 
     /* --- clustered vertices */
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_vertices * 16, NULL, "clustered vertices", &out->vertices,
+    CLVR_TRY(ws_take(cl, ws, CLVR_PP_WS_OUT_VERTICES, out->num_vertices * 16, "clustered vertices", &out->vertices,
                             err));
     {
         cl_uint ni = (cl_uint)out->num_instances, nv = (cl_uint)out->num_vertices;
@@ -795,7 +829,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     clvr_cl_release(cl, &scal);
 
     /* --- leaf boxes, then instance bounds from them */
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, out->num_leaves * sizeof(clvr_box), NULL, "leaf boxes",
+    CLVR_TRY(ws_take(cl, ws, CLVR_PP_WS_OUT_LEAF_BOXES, out->num_leaves * sizeof(clvr_box), "leaf boxes",
                             &out->leaf_boxes, err));
     {
         cl_uint ni = (cl_uint)out->num_instances, nl = (cl_uint)out->num_leaves, leaf = opt.leaf_size;

@@ -118,6 +118,12 @@ enum {
     CLVR_PP_WS_IDX_SORTED,
     CLVR_PP_WS_VMAP,
     CLVR_PP_WS_HASH,
+    /* result buffers handed back by clvr_pp_workspace_recycle */
+    CLVR_PP_WS_OUT_VERTICES,
+    CLVR_PP_WS_OUT_IDX16,
+    CLVR_PP_WS_OUT_IDX32,
+    CLVR_PP_WS_OUT_LEAF_BOXES,
+    CLVR_PP_WS_OUT_SAMPLING,
     CLVR_PP_WS_COUNT
 };
 typedef struct clvr_pp_workspace {
@@ -126,6 +132,11 @@ typedef struct clvr_pp_workspace {
 } clvr_pp_workspace;
 /* Releases the workspace's buffers; leaves it zeroed (ready for reuse). */
 void clvr_pp_workspace_release(clvr_cl *cl, clvr_pp_workspace *ws);
+/* Releases a result that is no longer needed, handing its big arrays
+ * (vertices, indices, leaf boxes, sampling clusters) to ws, whose next
+ * clvr_preprocess_ws writes its result into them where they are big
+ * enough (the previous time step's buffers, say). *c is left zeroed. */
+void clvr_pp_workspace_recycle(clvr_cl *cl, clvr_pp_workspace *ws, clvr_clustered *c);
 /* clvr_preprocess with scratch from (and kept in) ws; ws == NULL is
  * clvr_preprocess, which frees each scratch buffer as soon as it is dead. */
 clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o,

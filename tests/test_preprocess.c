@@ -444,9 +444,9 @@ static void run_all_options(clvr_cl *cl, const char *name, const clvr_mesh *m, i
 }
 
 /* A workspace reused across calls (growing, then shrinking meshes; one
- * index list uploaded, one borrowed) gives exactly what fresh buffers give,
- * and a kept result (its `order` came from the workspace) survives the
- * calls after it. */
+ * index list uploaded, one borrowed; results recycled into it) gives
+ * exactly what fresh buffers give, and a kept result (its `order` came from
+ * the workspace) survives the calls after it. */
 static void test_workspace(clvr_cl *cl)
 {
     clvr_error err = {0};
@@ -480,7 +480,10 @@ static void test_workspace(clvr_cl *cl)
             kept = c;
             kept_ref = rh;
         } else {
-            clvr_clustered_release(cl, &c);
+            /* Its arrays become the next call's (stale contents: every
+             * element must be written again). */
+            clvr_pp_workspace_recycle(cl, &ws, &c);
+            TU_CHECK(c.vertices == NULL && c.leaf_boxes == NULL && c.instances == NULL);
             clvr_clustered_host_free(&rh);
         }
     }
