@@ -54,16 +54,18 @@
 
 static int parse_method(const char *s, uint32_t *m)
 {
-    for (uint32_t i = 0; i < 4; ++i)
-        if (!strcmp(s, clvr_method_name((clvr_method)i))) { *m = i; return 1; }
-    return 0;
+    *m = clvr_render_method_from_name(s);
+    return *m < CLVR_RENDER_COUNT;
 }
 
 typedef struct config {
     uint32_t method, macrocells;
     int shadows;
     char label[32];
-    uint32_t sampler; /* CLVR_SAMPLER_* */
+    uint32_t sampler;   /* CLVR_SAMPLER_* */
+    uint32_t estimator; /* CLVR_ESTIMATOR_* */
+    uint32_t urm_steps; /* 0: the renderer's default */
+    float urm_kappa;    /* 0: the renderer's default */
 } config;
 
 typedef struct row {
@@ -146,6 +148,9 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     rs.height = h;
     rs.seed = seed;
     rs.sampler = c->sampler;
+    rs.estimator = c->estimator;
+    if (c->urm_steps) rs.urm_steps = c->urm_steps;
+    if (c->urm_kappa > 0.0f) rs.urm_kappa = c->urm_kappa;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
     clvr_camera cam;
@@ -245,92 +250,173 @@ static const char *base_name(const char *p)
 }
 
 /* ---------------------------------------------------------------- converge
- * Time to equal quality. The reference is R spp with seed 0x5eed; the
- * measured run uses seed 1, so the two are independent. Definitions, over
- * the linear rgb of every pixel (background included), values clamped to
- * [0, 1] as an 8-bit image would be:
- *   mse_raw(n)  = mean over pixels and channels of (img_n - ref)^2
- *   ref_var     = mean of the reference's own variance of the mean,
- *                 (sumsq/R - mean^2) / (R - 1) per pixel and channel,
- *                 from its per-frame moments (unclamped)
- *   rmse(n)     = sqrt(max(0, mse_raw(n) - ref_var)): the error against the
- *                 converged image, with the reference's own noise removed
- *   rmse_rel(n) = rmse(n) / mean(ref rgb)
- * The primary criterion is rmse <= target (RMSE of rgb in [0, 1] units);
- * rmse_rel is reported beside it. Checkpoints at n = 1, 2, ..., 16, then
- * steps of n/16; the time is the summed device time of the n frames (and wall time).
- * A 1/n fit (mse * n is constant for an unbiased estimator) gives the
- * interpolated spp and time to the target as well. */
+ * Time to equal quality (issue 14's figure). Per shadow setting, a reference
+ * of R spp (seed 0x5eed, independent frames, estimator --ref-estimator,
+ * default urm: the least noisy, and the tests prove it has the same mean as
+ * delta tracking), then for each estimator a fresh progressive run with
+ * seed 1 and the sampler under test. Definitions, over the pixels whose
+ * camera ray (through the pixel centre) enters the mesh's bounding box
+ * ("inside"; background pixels are exact and would dilute the figure), linear
+ * rgb, no clamping:
+ *   mse_raw(n) = mean over inside pixels and channels of (img_n - ref)^2
+ *   ref_var    = mean over the same of the reference's own variance of the
+ *                mean, (sumsq/R - mean^2) / (R - 1), from its per-frame
+ *                moments
+ *   rmse(n)    = sqrt(max(0, mse_raw(n) - ref_var)): the error against the
+ *                converged image, with the reference's own noise removed
+ *   rel(n)     = rmse(n) / mean of the reference's rgb over inside pixels
+ * The RMSE is taken over inside pixels too (the stricter of the two readings
+ * of "RMSE over every pixel": background pixels would lower it). The
+ * criterion is rel <= target. Checkpoints at n = 1, 2, ..., 16, then steps of
+ * n/16; the time is the summed device time of the n frames (and wall time).
+ * A 1/n fit (mse * n is constant for independent frames) gives the
+ * interpolated spp and time as well; with the ld sampler the error falls
+ * faster than 1/n and the fit is pessimistic. */
 typedef struct conv_point {
     uint32_t spp;
     double dev_s, wall_s, rmse_raw, rmse, rmse_rel;
 } conv_point;
 
 #define MAX_POINTS 128
+#define MAX_EST 8
+
+/* An estimator of a converge run: name[:urm-steps[:urm-kappa]]. */
+typedef struct est_variant {
+    uint32_t estimator, urm_steps;
+    float urm_kappa;
+} est_variant;
+
+static int parse_variant(const char *s, est_variant *v)
+{
+    char name[32];
+    size_t n = strcspn(s, ":");
+    if (n >= sizeof name) return 0;
+    memcpy(name, s, n);
+    name[n] = 0;
+    v->estimator = clvr_render_estimator_from_name(name);
+    v->urm_steps = 0;
+    v->urm_kappa = 0.0f;
+    if (s[n] == ':') {
+        char *end;
+        v->urm_steps = (uint32_t)strtoul(s + n + 1, &end, 10);
+        if (*end == ':') v->urm_kappa = strtof(end + 1, NULL);
+    }
+    return v->estimator < CLVR_ESTIMATOR_COUNT;
+}
+
+static void variant_label(const est_variant *v, char *buf, size_t cap)
+{
+    if (v->urm_steps) snprintf(buf, cap, "%s:%u:%g", clvr_render_estimator_name(v->estimator), v->urm_steps,
+                               (double)v->urm_kappa);
+    else snprintf(buf, cap, "%s", clvr_render_estimator_name(v->estimator));
+}
+
+typedef struct conv_ref {
+    int shadows;
+    float *img;                     /* reference mean image */
+    uint8_t *inside;                /* per pixel: camera ray enters the bounding box */
+    size_t ninside;
+    double ref_s, ref_mean, ref_var; /* device time, mean inside rgb, its own noise (variance of the mean) */
+} conv_ref;
 
 typedef struct conv_result {
     int shadows;
-    double ref_s, ref_mean, ref_rmse_of_ref; /* reference device time, mean rgb, its own noise (rmse) */
-    double frame_s;                          /* median device time of one frame */
+    uint32_t estimator;
+    char label[48];
+    double frame_s;                 /* mean device time of one frame */
+    double samples_per_ray, rays_per_pixel;
     uint32_t npoints;
     conv_point pts[MAX_POINTS];
-    int reached, reached_rel;
-    conv_point at, at_rel;          /* first checkpoint at or below the target */
-    double fit_spp, fit_s;          /* 1/n fit, absolute criterion */
-    double fit_spp_rel, fit_s_rel;  /* 1/n fit, relative criterion */
+    int reached;
+    conv_point at;                  /* first checkpoint at or below the target */
+    double fit_spp, fit_s;          /* 1/n fit */
     double load_before, load_after;
 } conv_result;
 
-static float clamp01(float v) { return v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v; }
+/* 1 when the ray from org along dir meets the box [lo, hi]. */
+static int ray_hits_box(const float *org, const float *dir, const float *lo, const float *hi)
+{
+    double t0 = 0.0, t1 = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+        double inv = 1.0 / dir[k], a = (lo[k] - org[k]) * inv, b = (hi[k] - org[k]) * inv;
+        if (a > b) { double t = a; a = b; b = t; }
+        if (a > t0) t0 = a;
+        if (b < t1) t1 = b;
+    }
+    return t0 <= t1;
+}
 
-static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, uint32_t sampler, int shadows, uint32_t w,
-                                uint32_t h, uint32_t ref_spp, uint32_t max_spp, double target, conv_result *out,
-                                clvr_camera *cam, clvr_error *err)
+static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *base, int shadows, uint32_t w,
+                                      uint32_t h, uint32_t ref_spp, conv_ref *out, clvr_camera *cam, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_renderer *rd = NULL;
     const size_t npix = (size_t)w * h, nf = npix * 4;
-    float *sum = malloc(nf * sizeof(float)), *sq = malloc(nf * sizeof(float)), *ref = malloc(nf * sizeof(float)),
-          *img = malloc(nf * sizeof(float));
-    /* The reference always uses independent frames: its own noise, which is
-     * subtracted below, is estimated from its per-pixel moments, and that
-     * estimate is only right for independent frames. */
-    config c = {method, 0, shadows, "", CLVR_SAMPLER_INDEPENDENT};
+    float *sum = malloc(nf * sizeof(float)), *sq = malloc(nf * sizeof(float));
     memset(out, 0, sizeof *out);
     out->shadows = shadows;
-    out->load_before = bench_load1();
-    if (!sum || !sq || !ref || !img) {
+    out->img = malloc(nf * sizeof(float));
+    out->inside = malloc(npix);
+    config c = *base;
+    c.shadows = shadows;
+    /* Independent frames: the reference's own noise, subtracted below, is
+     * estimated from its per-pixel moments, which needs them. */
+    c.sampler = CLVR_SAMPLER_INDEPENDENT;
+    if (!sum || !sq || !out->img || !out->inside) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
         goto done;
     }
-    /* Reference. */
     s = renderer_for(cl, g, &c, w, h, 0x5eed, &rd, cam, err);
     for (uint32_t i = 0; s == CLVR_OK && i < ref_spp; ++i) s = clvr_renderer_frame(rd, err);
     clvr_render_counters rc;
-    if (s == CLVR_OK) s = clvr_renderer_read(rd, ref, &rc, err);
+    if (s == CLVR_OK) s = clvr_renderer_read(rd, out->img, &rc, err);
     if (s == CLVR_OK) s = clvr_renderer_read_moments(rd, sum, sq, err);
     if (s != CLVR_OK) goto done;
     out->ref_s = rc.kernel_s;
     double var = 0.0, mean = 0.0;
-    for (size_t p = 0; p < npix; ++p)
-        for (int k = 0; k < 3; ++k) {
-            const size_t i = 4 * p + (size_t)k;
-            double mu = sum[i] / ref_spp, v = (sq[i] / ref_spp - mu * mu) / (ref_spp > 1 ? ref_spp - 1 : 1);
-            var += v > 0 ? v : 0;
-            mean += ref[i];
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t p = (size_t)y * w + x;
+            float o[3], d[3];
+            clvr_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, o, d);
+            out->inside[p] = (uint8_t)ray_hits_box(o, d, g->lo, g->hi);
+            if (!out->inside[p]) continue;
+            out->ninside++;
+            for (int k = 0; k < 3; ++k) {
+                const size_t i = 4 * p + (size_t)k;
+                double mu = sum[i] / ref_spp, v = (sq[i] / ref_spp - mu * mu) / (ref_spp - 1);
+                var += v > 0 ? v : 0;
+                mean += out->img[i];
+            }
         }
-    var /= 3.0 * (double)npix;
-    mean /= 3.0 * (double)npix;
+    if (out->ninside) {
+        var /= 3.0 * (double)out->ninside;
+        mean /= 3.0 * (double)out->ninside;
+    }
+    out->ref_var = var;
     out->ref_mean = mean;
-    out->ref_rmse_of_ref = sqrt(var);
+done:
     clvr_renderer_destroy(rd);
-    rd = NULL;
+    free(sum);
+    free(sq);
+    return s;
+}
 
-    /* Progressive run with another seed, with the sampler under test (its
-     * frames may be correlated; nothing below needs its own moments). */
-    c.sampler = sampler;
-    s = renderer_for(cl, g, &c, w, h, 1, &rd, NULL, err);
-    double wall = 0.0, fit_acc = 0.0, fit_acc_rel = 0.0;
+static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, const conv_ref *ref, uint32_t w,
+                                uint32_t h, uint32_t max_spp, double target, conv_result *out, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_renderer *rd = NULL;
+    const size_t npix = (size_t)w * h;
+    float *img = malloc(npix * 4 * sizeof(float));
+    clvr_render_counters rc;
+    memset(out, 0, sizeof *out);
+    out->shadows = c->shadows;
+    out->estimator = c->estimator;
+    out->load_before = bench_load1();
+    if (!img) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
+    s = renderer_for(cl, g, c, w, h, 1, &rd, NULL, err);
+    double wall = 0.0, fit_acc = 0.0;
     uint32_t fit_n = 0, next = 1;
     for (uint32_t n = 1; s == CLVR_OK && n <= max_spp; ++n) {
         double t0 = clvr_clock_monotonic_s();
@@ -343,46 +429,38 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, uint32_t method, uint
         s = clvr_renderer_read(rd, img, &rc, err);
         if (s != CLVR_OK) break;
         double mse = 0.0;
-        for (size_t p = 0; p < npix; ++p)
+        for (size_t p = 0; p < npix; ++p) {
+            if (!ref->inside[p]) continue;
             for (int k = 0; k < 3; ++k) {
                 const size_t i = 4 * p + (size_t)k;
-                double d = (double)clamp01(img[i]) - (double)clamp01(ref[i]);
+                double d = (double)img[i] - (double)ref->img[i];
                 mse += d * d;
             }
-        mse /= 3.0 * (double)npix;
-        conv_point pt = {n, rc.kernel_s, wall, sqrt(mse), sqrt(mse > var ? mse - var : 0.0), 0.0};
-        pt.rmse_rel = mean > 0 ? pt.rmse / mean : 0.0;
+        }
+        mse = ref->ninside ? mse / (3.0 * (double)ref->ninside) : 0.0;
+        conv_point pt = {n, rc.kernel_s, wall, sqrt(mse), sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0};
+        pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
         if (out->npoints < MAX_POINTS) out->pts[out->npoints++] = pt;
-        /* Fit mse * n over checkpoints with n >= 4 (fewer frames are dominated by
-         * the first frames' correlation with nothing; all terms are unbiased). */
+        /* Fit mse * n over checkpoints with n >= 4. */
         if (n >= 4) {
-            fit_acc += (pt.rmse * pt.rmse) * n;
-            fit_acc_rel += (pt.rmse_rel * pt.rmse_rel) * n;
+            fit_acc += (pt.rmse_rel * pt.rmse_rel) * n;
             ++fit_n;
         }
-        if (!out->reached && pt.rmse <= target) { out->reached = 1; out->at = pt; }
-        if (!out->reached_rel && pt.rmse_rel <= target) { out->reached_rel = 1; out->at_rel = pt; }
-        if (out->reached && out->reached_rel && n >= 16) break;
+        if (!out->reached && pt.rmse_rel <= target) { out->reached = 1; out->at = pt; }
+        if (out->reached && n >= 16) break;
     }
+    if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &rc, err);
     if (s != CLVR_OK) goto done;
-    {
-        clvr_render_counters last;
-        s = clvr_renderer_read(rd, NULL, &last, err);
-        if (s != CLVR_OK) goto done;
-        out->frame_s = last.frames ? last.kernel_s / (double)last.frames : 0.0;
-    }
+    out->frame_s = rc.frames ? rc.kernel_s / (double)rc.frames : 0.0;
+    out->samples_per_ray = rc.rays ? (double)rc.samples / (double)rc.rays : 0.0;
+    out->rays_per_pixel = rc.frames ? (double)rc.rays / ((double)rc.frames * (double)npix) : 0.0;
     if (fit_n) {
         out->fit_spp = fit_acc / fit_n / (target * target);
         out->fit_s = out->fit_spp * out->frame_s;
-        out->fit_spp_rel = fit_acc_rel / fit_n / (target * target);
-        out->fit_s_rel = out->fit_spp_rel * out->frame_s;
     }
     out->load_after = bench_load1();
 done:
     clvr_renderer_destroy(rd);
-    free(sum);
-    free(sq);
-    free(ref);
     free(img);
     return s;
 }
@@ -403,51 +481,66 @@ static void json_point(FILE *f, const conv_point *p)
             p->spp, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
 }
 
-static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t sampler, uint32_t w, uint32_t h,
-                        uint32_t ref_spp, uint32_t max_spp, double target, const char *json)
+static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const est_variant *est, uint32_t nest,
+                        int sh_lo, int sh_hi, uint32_t w, uint32_t h, uint32_t ref_spp, uint32_t max_spp,
+                        double target, float density, const char *json)
 {
     clvr_error err = {0};
     scene_gpu g;
-    conv_result res[2];
+    conv_ref refs[2] = {{0}, {0}};
+    conv_result res[2][MAX_EST];
     clvr_camera cam;
-    printf("# bench_render --converge: %s, %s, %ux%u, reference %u spp (independent frames), measured run: %s "
-           "sampler, target RMSE %.3g\n", base_name(mesh), clvr_method_name((clvr_method)method), w, h, ref_spp,
-           sampler == CLVR_SAMPLER_LD ? "ld" : "independent", target);
+    int rc = 1;
+    printf("# bench_render --converge: %s, %s, %ux%u, density %g, reference %u spp (%s, independent frames), "
+           "measured runs: %s sampler, target %.3g relative RMSE\n", base_name(mesh),
+           clvr_render_method_name(base->method), w, h, (double)density, ref_spp,
+           clvr_render_estimator_name(base->estimator), base->sampler == CLVR_SAMPLER_LD ? "ld" : "independent",
+           target);
     printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
            cl->driver_version);
     fflush(stdout);
-    if (scene_load(cl, mesh, 1.0f, &g, &err) != CLVR_OK) {
+    if (scene_load(cl, mesh, density, &g, &err) != CLVR_OK) {
         fprintf(stderr, "bench_render: %s\n", err.msg);
         return 1;
     }
-    for (int sh = 0; sh < 2; ++sh) {
-        if (converge_one(cl, &g, method, sampler, sh, w, h, ref_spp, max_spp, target, &res[sh], &cam, &err) !=
-            CLVR_OK) {
-            fprintf(stderr, "bench_render: %s\n", err.msg);
-            scene_release(cl, &g);
-            return 1;
+    for (int sh = sh_lo; sh <= sh_hi; ++sh) {
+        if (converge_reference(cl, &g, base, sh, w, h, ref_spp, &refs[sh], &cam, &err) != CLVR_OK) goto fail;
+        fprintf(stderr, "bench_render: reference shadows=%d done (%.1f s device)\n", sh, refs[sh].ref_s);
+        for (uint32_t e = 0; e < nest; ++e) {
+            config c = *base;
+            c.shadows = sh;
+            c.estimator = est[e].estimator;
+            if (est[e].urm_steps) c.urm_steps = est[e].urm_steps;
+            if (est[e].urm_kappa > 0.0f) c.urm_kappa = est[e].urm_kappa;
+            if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, &res[sh][e], &err) != CLVR_OK) goto fail;
+            variant_label(&est[e], res[sh][e].label, sizeof res[sh][e].label);
+            fprintf(stderr, "bench_render: %s shadows=%d done\n", res[sh][e].label, sh);
         }
-        fprintf(stderr, "bench_render: converge shadows=%d done (reference %.1f s device)\n", sh, res[sh].ref_s);
     }
-    printf("| shadows | elements | frame ms | ref mean rgb | ref own RMSE | spp to %.0f%% | s to %.0f%% (device) | "
-           "s (wall) | fit spp | fit s | spp to %.0f%% rel | s to %.0f%% rel | load |\n",
-           target * 100, target * 100, target * 100, target * 100);
-    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-    for (int sh = 0; sh < 2; ++sh) {
-        const conv_result *r = &res[sh];
-        printf("| %s | %" PRIu64 " | %.1f | %.4f | %.4f | %s%u | %.3f | %.3f | %.1f | %.3f | %s%u | %.3f | %.2f |\n",
-               sh ? "on" : "off", g.elements, r->frame_s * 1e3, r->ref_mean, r->ref_rmse_of_ref,
-               r->reached ? "" : ">", r->reached ? r->at.spp : max_spp, r->reached ? r->at.dev_s : NAN,
-               r->reached ? r->at.wall_s : NAN, r->fit_spp, r->fit_s, r->reached_rel ? "" : ">",
-               r->reached_rel ? r->at_rel.spp : max_spp, r->reached_rel ? r->at_rel.dev_s : NAN, r->load_after);
-    }
-    printf("\nRMSE: linear rgb clamped to [0,1], all pixels, reference noise subtracted; rel = RMSE / mean rgb of the reference.\n");
+    printf("| estimator | shadows | elements | frame ms | samples/ray | lookups/pixel to %.0f%% | ref mean rgb (inside) | "
+           "ref own rel RMSE | spp to %.0f%% rel | s to %.0f%% rel (device) | s (wall) | 1/n fit spp | fit s | load |\n",
+           target * 100, target * 100, target * 100);
+    printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int sh = sh_lo; sh <= sh_hi; ++sh)
+        for (uint32_t e = 0; e < nest; ++e) {
+            const conv_result *r = &res[sh][e];
+            printf("| %s | %s | %" PRIu64 " | %.1f | %.2f | %s%.0f | %.4f | %.4f | %s%u | %s%.3f | %.3f | %.1f | %.3f | %.2f |\n",
+                   r->label, sh ? "on" : "off", g.elements, r->frame_s * 1e3, r->samples_per_ray,
+                   r->reached ? "" : ">", r->samples_per_ray * r->rays_per_pixel * (r->reached ? r->at.spp : max_spp),
+                   refs[sh].ref_mean,
+                   refs[sh].ref_mean > 0 ? sqrt(refs[sh].ref_var) / refs[sh].ref_mean : 0.0, r->reached ? "" : ">",
+                   r->reached ? r->at.spp : max_spp, r->reached ? "" : ">",
+                   r->reached ? r->at.dev_s : r->pts[r->npoints ? r->npoints - 1 : 0].dev_s,
+                   r->reached ? r->at.wall_s : NAN, r->fit_spp, r->fit_s, r->load_after);
+        }
+    printf("\nrel RMSE: linear rgb, unclamped, over pixels whose camera ray enters the bounding box (%zu of %u), "
+           "reference noise subtracted, divided by the reference's mean rgb over the same pixels.\n",
+           refs[sh_lo].ninside, w * h);
     if (json) {
         FILE *f = fopen(json, "w");
         if (!f) {
             fprintf(stderr, "bench_render: cannot write %s\n", json);
-            scene_release(cl, &g);
-            return 1;
+            goto done;
         }
         fprintf(f, "{\"bench\": \"render_converge\", \"device\": ");
         json_str(f, cl->device_name);
@@ -456,9 +549,12 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
         fprintf(f, ", \"mesh\": ");
         json_str(f, mesh);
         fprintf(f, ", \"elements\": %" PRIu64 ", \"method\": \"%s\", \"width\": %u, \"height\": %u, \"ref_spp\": %u, "
-                   "\"target\": %g, \"preprocess_s\": %.6g, \"sampler\": \"%s\", \"ref_sampler\": \"independent\",\n",
-                g.elements, clvr_method_name((clvr_method)method), w, h, ref_spp, target, g.preprocess_s,
-                sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
+                   "\"target\": %g, \"criterion\": \"relative RMSE over inside pixels, unclamped\", \"density\": %g, "
+                   "\"inside_pixels\": %zu, \"preprocess_s\": %.6g, \"sampler\": \"%s\", \"ref_sampler\": \"independent\", "
+                   "\"ref_estimator\": \"%s\",\n",
+                g.elements, clvr_render_method_name(base->method), w, h, ref_spp, target, (double)density,
+                refs[sh_lo].ninside, g.preprocess_s, base->sampler == CLVR_SAMPLER_LD ? "ld" : "independent",
+                clvr_render_estimator_name(base->estimator));
         fprintf(f, " \"camera\": {\"eye\": [%.9g, %.9g, %.9g], \"target\": [%.9g, %.9g, %.9g], \"up\": [%.9g, %.9g, %.9g], "
                    "\"fovy\": %.9g},\n",
                 cam.origin[0], cam.origin[1], cam.origin[2], cam.target[0], cam.target[1], cam.target[2], cam.up[0],
@@ -469,28 +565,40 @@ static int run_converge(clvr_cl *cl, const char *mesh, uint32_t method, uint32_t
             fprintf(f, "%s[%.6g, %.6g, %.6g, %.6g]", i ? ", " : "", g.table[4 * i], g.table[4 * i + 1],
                     g.table[4 * i + 2], g.table[4 * i + 3] * g.tf.density);
         fprintf(f, "]},\n \"rows\": [");
-        for (int sh = 0; sh < 2; ++sh) {
-            const conv_result *r = &res[sh];
-            fprintf(f, "%s\n  {\"shadows\": %d, \"frame_s\": %.6g, \"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
-                       "\"ref_own_rmse\": %.6g, \"reached\": %d, \"reached_rel\": %d, \"fit_spp\": %.6g, \"fit_s\": %.6g, "
-                       "\"fit_spp_rel\": %.6g, \"fit_s_rel\": %.6g, \"load_before\": %.2f, \"load_after\": %.2f, \"at\": ",
-                    sh ? "," : "", sh, r->frame_s, r->ref_s, r->ref_mean, r->ref_rmse_of_ref, r->reached,
-                    r->reached_rel, r->fit_spp, r->fit_s, r->fit_spp_rel, r->fit_s_rel, r->load_before, r->load_after);
-            json_point(f, &r->at);
-            fprintf(f, ", \"at_rel\": ");
-            json_point(f, &r->at_rel);
-            fprintf(f, ", \"points\": [");
-            for (uint32_t i = 0; i < r->npoints; ++i) {
-                if (i) fprintf(f, ", ");
-                json_point(f, &r->pts[i]);
+        int first = 1;
+        for (int sh = sh_lo; sh <= sh_hi; ++sh)
+            for (uint32_t e = 0; e < nest; ++e) {
+                const conv_result *r = &res[sh][e];
+                fprintf(f, "%s\n  {\"estimator\": \"%s\", \"label\": \"%s\", \"shadows\": %d, \"frame_s\": %.6g, \"samples_per_ray\": %.6g, "
+                           "\"rays_per_pixel\": %.6g, \"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
+                           "\"ref_own_rmse\": %.6g, \"reached\": %d, \"fit_spp\": %.6g, \"fit_s\": %.6g, "
+                           "\"load_before\": %.2f, \"load_after\": %.2f, \"at\": ",
+                        first ? "" : ",", clvr_render_estimator_name(r->estimator), r->label, sh, r->frame_s,
+                        r->samples_per_ray, r->rays_per_pixel, refs[sh].ref_s, refs[sh].ref_mean,
+                        sqrt(refs[sh].ref_var), r->reached, r->fit_spp, r->fit_s, r->load_before, r->load_after);
+                first = 0;
+                json_point(f, &r->at);
+                fprintf(f, ", \"points\": [");
+                for (uint32_t i = 0; i < r->npoints; ++i) {
+                    if (i) fprintf(f, ", ");
+                    json_point(f, &r->pts[i]);
+                }
+                fprintf(f, "]}");
             }
-            fprintf(f, "]}");
-        }
         fprintf(f, "\n]}\n");
         fclose(f);
     }
+    rc = 0;
+    goto done;
+fail:
+    fprintf(stderr, "bench_render: %s\n", err.msg);
+done:
+    for (int sh = 0; sh < 2; ++sh) {
+        free(refs[sh].img);
+        free(refs[sh].inside);
+    }
     scene_release(cl, &g);
-    return 0;
+    return rc;
 }
 
 /* ---------------------------------------------------------------- main */
@@ -501,8 +609,10 @@ static int usage(void)
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
             "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
             "                    [--sampler ld|independent]\n"
+            "                    [--estimator urm|delta] [--urm-steps N] [--urm-kappa K]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
-            "                    [--max-spp M] [--sampler ld|independent] [--json FILE]\n");
+            "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm]\n"
+            "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n");
     return 2;
 }
 
@@ -513,6 +623,13 @@ int main(int argc, char **argv)
     uint32_t sampler = CLVR_SAMPLER_LD;
     uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024;
     uint32_t conv_method = CLVR_RENDER_DDA;
+    clvr_render_settings defaults;
+    clvr_render_settings_default(&defaults);
+    uint32_t estimator = defaults.estimator, ref_estimator = CLVR_ESTIMATOR_URM, urm_steps = 0;
+    est_variant conv_est[MAX_EST] = {{CLVR_ESTIMATOR_DELTA, 0, 0.0f}, {CLVR_ESTIMATOR_URM, 0, 0.0f}};
+    uint32_t nconv_est = 2;
+    int shadow_lo = 0, shadow_hi = 1;
+    float urm_kappa = 0.0f;
     int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0;
     double target = 0.02, budget = 30.0;
     float density = 1.0f;
@@ -534,7 +651,8 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--macrocells") && v) macro = argv[++i];
         else if (!strcmp(a, "--budget") && v) budget = atof(argv[++i]);
         else if (!strcmp(a, "--density") && v) density = (float)atof(argv[++i]);
-        else if (!strcmp(a, "--no-shadows")) shadows = 0;
+        else if (!strcmp(a, "--no-shadows")) { shadows = 0; shadow_hi = 0; }
+        else if (!strcmp(a, "--only-shadows")) shadow_lo = 1;
         else if (!strcmp(a, "--sampler") && v) {
             const char *sv = argv[++i];
             if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
@@ -548,6 +666,20 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--ref-spp") && v) ref_spp = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(a, "--max-spp") && v) max_spp = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(a, "--target") && v) target = atof(argv[++i]);
+        else if (!strcmp(a, "--estimator") && v) {
+            if ((estimator = clvr_render_estimator_from_name(argv[++i])) == CLVR_ESTIMATOR_COUNT) return usage();
+        } else if (!strcmp(a, "--ref-estimator") && v) {
+            if ((ref_estimator = clvr_render_estimator_from_name(argv[++i])) == CLVR_ESTIMATOR_COUNT) return usage();
+        } else if (!strcmp(a, "--estimators") && v) {
+            char buf[128];
+            snprintf(buf, sizeof buf, "%s", argv[++i]);
+            nconv_est = 0;
+            for (char *save = NULL, *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
+                if (nconv_est == MAX_EST || !parse_variant(t, &conv_est[nconv_est++])) return usage();
+            }
+            if (!nconv_est) return usage();
+        } else if (!strcmp(a, "--urm-steps") && v) urm_steps = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--urm-kappa") && v) urm_kappa = (float)atof(argv[++i]);
         else return usage();
     }
     if (quick) {
@@ -577,14 +709,14 @@ int main(int argc, char **argv)
                 snprintf(mb, sizeof mb, "%s", macro);
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler};
+                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
-                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler};
-                snprintf(c.label, sizeof c.label, "%s", clvr_method_name((clvr_method)m));
+                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa};
+                snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
         }
@@ -597,8 +729,9 @@ int main(int argc, char **argv)
         return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
     }
     if (converge) {
-        int rc = run_converge(&cl, meshes[0], conv_method, sampler, size_set ? w : 512, size_set ? h : 512, ref_spp,
-                              max_spp, target, json);
+        const config base = {conv_method, 0, 1, "", sampler, ref_estimator, urm_steps, urm_kappa};
+        int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
+                              ref_spp, max_spp, target, density, json);
         clvr_cl_destroy(&cl);
         return rc;
     }
@@ -689,7 +822,7 @@ int main(int argc, char **argv)
                            "\"frame_min_s\": %.6g, \"frame_max_s\": %.6g, \"wall_frame_s\": %.6g, \"rays_per_frame\": %.6g, "
                            "\"samples_per_ray\": %.6g, \"null_collisions_per_ray\": %.6g, \"image_mean\": %.6g, "
                            "\"load_before\": %.2f, \"load_after\": %.2f}",
-                        r->elements, r->preprocess_s, clvr_method_name((clvr_method)r->c.method), r->c.macrocells, r->c.label,
+                        r->elements, r->preprocess_s, clvr_render_method_name(r->c.method), r->c.macrocells, r->c.label,
                         r->c.shadows, r->frames, r->fps, r->mrays_s, r->frame_s, r->frame_min_s, r->frame_max_s, r->wall_frame_s,
                         r->rays_per_frame, r->samples_per_ray, r->nulls_per_ray, r->image_mean, r->load_before,
                         r->load_after);

@@ -9,16 +9,6 @@
 
 #include "status.h"
 
-typedef enum clvr_method {
-    CLVR_METHOD_MARCH = 0, /* alpha-composited ray marching at a fixed step, no shadows */
-    CLVR_METHOD_TRACK = 1, /* delta tracking with one global majorant */
-    CLVR_METHOD_BINS = 2,  /* sampling-cluster majorants splatted into per-ray bins */
-    CLVR_METHOD_DDA = 3,   /* sampling-cluster majorants in a macrocell grid, 3D-DDA */
-    CLVR_METHOD_COUNT
-} clvr_method;
-
-const char *clvr_method_name(clvr_method m);
-
 typedef struct clvr_options {
     /* actions */
     int help, version, list_devices, info, stats, quiet, view;
@@ -34,7 +24,9 @@ typedef struct clvr_options {
     uint32_t spp;                /* --spp N: frames of 1 sample per pixel */
     uint64_t seed;               /* --seed N */
     /* renderer */
-    clvr_method method;          /* --method */
+    uint32_t method;             /* --method: CLVR_RENDER_* (names in clvr_render_method_name) */
+    uint32_t estimator;          /* --estimator: CLVR_ESTIMATOR_* */
+    uint32_t urm_steps;          /* --urm-steps N (urm estimator) */
     int method_set;              /* nonzero when --method was given */
     float step;                  /* --step (march), world units; 0: automatic */
     uint32_t bins, segments;     /* --bins N (<= 32), --segments M */

@@ -185,8 +185,10 @@ int main(int argc, char **argv)
     rs.width = o.width;
     rs.height = o.height;
     rs.seed = o.seed;
-    rs.shadows = o.shadows && o.method != CLVR_METHOD_MARCH;
+    rs.shadows = o.shadows && o.method != CLVR_RENDER_MARCH;
     rs.sampler = o.sampler;
+    rs.estimator = o.estimator;
+    rs.urm_steps = o.urm_steps;
     rs.step = o.step;
     rs.bins = o.bins;
     rs.segments = o.segments;

@@ -23,10 +23,35 @@ struct clvr_renderer {
     size_t local[2];           /* work-group shape of the render kernel */
 };
 
+static const char *const method_names[CLVR_RENDER_COUNT] = {"march", "track", "bins", "dda"};
+static const char *const estimator_names[CLVR_ESTIMATOR_COUNT] = {"delta", "urm"};
+
+const char *clvr_render_method_name(uint32_t m) { return m < CLVR_RENDER_COUNT ? method_names[m] : "?"; }
+const char *clvr_render_estimator_name(uint32_t e) { return e < CLVR_ESTIMATOR_COUNT ? estimator_names[e] : "?"; }
+
+uint32_t clvr_render_method_from_name(const char *name)
+{
+    uint32_t m = 0;
+    while (m < CLVR_RENDER_COUNT && strcmp(name, method_names[m])) ++m;
+    return m;
+}
+
+uint32_t clvr_render_estimator_from_name(const char *name)
+{
+    uint32_t e = 0;
+    while (e < CLVR_ESTIMATOR_COUNT && strcmp(name, estimator_names[e])) ++e;
+    return e;
+}
+
 void clvr_render_settings_default(clvr_render_settings *s)
 {
     memset(s, 0, sizeof *s);
     s->method = CLVR_RENDER_DDA;
+    /* urm: the estimator that reaches a given relative error first
+     * (bench/render-vs-vtk.sh, README "Rendering"). */
+    s->estimator = CLVR_ESTIMATOR_URM;
+    s->urm_steps = CLVR_URM_DEFAULT_STEPS;
+    s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
     s->width = s->height = 512;
     s->seed = 1;
     /* Low-discrepancy frames: the progressive image reaches a given error
@@ -48,6 +73,10 @@ void clvr_render_settings_default(clvr_render_settings *s)
     s->background[0] = 0.05f;
     s->background[1] = 0.05f;
     s->background[2] = 0.07f;
+    for (int k = 0; k < 3; ++k) {
+        s->clip_lo[k] = s->grid_lo[k] = 1.0f;
+        s->clip_hi[k] = s->grid_hi[k] = -1.0f;
+    }
 }
 
 static clvr_status set_arg(cl_kernel k, cl_uint i, size_t size, const void *v, const char *kname, clvr_error *err)
@@ -186,11 +215,13 @@ cleanup:
 clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_settings *set, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    if (set->method > CLVR_RENDER_DDA || set->sampler > CLVR_SAMPLER_LD || set->width == 0 || set->height == 0 ||
-        set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS || set->segments == 0 || set->macrocells == 0)
-        return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, sampler %u, %ux%u, %u bins, "
-                              "%u segments, %u macrocells)", set->method, set->sampler, set->width, set->height,
-                              set->bins, set->segments, set->macrocells);
+    if (set->method >= CLVR_RENDER_COUNT || set->estimator >= CLVR_ESTIMATOR_COUNT || set->sampler > CLVR_SAMPLER_LD ||
+        set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
+        set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
+                              "%ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g)", set->method,
+                              set->estimator, set->sampler, set->width, set->height, set->bins, set->segments,
+                              set->macrocells, set->urm_steps, (double)set->urm_kappa);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
@@ -198,11 +229,18 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     r->set = *set;
     const clvr_clustered *m = r->mesh;
     clvr_frame *f = &r->frame;
+    const int clip = set->clip_lo[0] <= set->clip_hi[0], grid = set->grid_lo[0] <= set->grid_hi[0];
+    const float old_grid[6] = {f->grid_lo[0], f->grid_lo[1], f->grid_lo[2], f->grid_hi[0], f->grid_hi[1], f->grid_hi[2]};
     for (int k = 0; k < 3; ++k) {
-        f->vol_lo[k] = m->bounds.lo[k];
-        f->vol_hi[k] = m->bounds.hi[k];
+        f->vol_lo[k] = clip ? set->clip_lo[k] : m->bounds.lo[k];
+        f->vol_hi[k] = clip ? set->clip_hi[k] : m->bounds.hi[k];
+        f->grid_lo[k] = grid ? set->grid_lo[k] : m->bounds.lo[k];
+        f->grid_hi[k] = grid ? set->grid_hi[k] : m->bounds.hi[k];
         f->background[k] = set->background[k];
     }
+    /* A new grid domain needs the elements rasterized again. */
+    if (memcmp(old_grid, f->grid_lo, 3 * sizeof(float)) || memcmp(old_grid + 3, f->grid_hi, 3 * sizeof(float)))
+        r->grid_res = 0;
     float len = sqrtf(set->light_dir[0] * set->light_dir[0] + set->light_dir[1] * set->light_dir[1] +
                       set->light_dir[2] * set->light_dir[2]);
     if (!(len > 0.0f)) return clvr_error_set(err, CLVR_ERR_USAGE, "the light direction must not be zero");
@@ -215,6 +253,9 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->width = set->width;
     f->height = set->height;
     f->method = set->method;
+    f->estimator = set->estimator;
+    f->urm_steps = set->urm_steps;
+    f->urm_kappa = set->urm_kappa;
     f->seed_lo = (clvr_u32)set->seed;
     f->seed_hi = (clvr_u32)(set->seed >> 32);
     f->shadows = set->shadows ? 1u : 0u;
@@ -341,21 +382,21 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     const clvr_clustered *m = r->mesh;
     const clvr_accel *b = r->bvh;
     cl_kernel k = r->k_render;
+    /* The device arrays of CLVR_VOLUME_ARRAYS, in its order. */
+    const struct {
+#define CLVR_VOLUME_HOST(T, name) cl_mem name;
+        CLVR_VOLUME_ARRAYS(CLVR_VOLUME_HOST)
+#undef CLVR_VOLUME_HOST
+    } vol = {.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
+             .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = r->grid_maj,
+             .blocks = r->block_maj, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
+             .cluster_majorants = r->cluster_maj};
     cl_uint i = 0;
     ARG(k, i++, r->frame_buf);
     ARG(k, i++, r->cam_buf);
-    ARG(k, i++, r->tf_buf);
-    ARG(k, i++, m->vertices);
-    ARG(k, i++, m->idx16);
-    ARG(k, i++, m->idx32);
-    ARG(k, i++, m->instances);
-    ARG(k, i++, b->two_level.tlas);
-    ARG(k, i++, b->two_level.blas);
-    ARG(k, i++, r->grid_maj);
-    ARG(k, i++, r->block_maj);
-    ARG(k, i++, b->sampling_nodes);
-    ARG(k, i++, m->sampling);
-    ARG(k, i++, r->cluster_maj);
+#define CLVR_VOLUME_ARG(T, name) ARG(k, i++, vol.name);
+    CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
+#undef CLVR_VOLUME_ARG
     ARG(k, i++, r->accum);
     ARG(k, i++, r->accum_sq);
     ARG(k, i++, r->counters);

@@ -14,8 +14,19 @@
 #include "preprocess.h"
 #include "accel.h"
 
+/* Names of CLVR_RENDER_* and CLVR_ESTIMATOR_* ("?" when out of range), and
+ * the value of a name (CLVR_RENDER_COUNT / CLVR_ESTIMATOR_COUNT when none):
+ * the one table the CLI, the viewer, the stats and the benches use. */
+const char *clvr_render_method_name(uint32_t method);
+const char *clvr_render_estimator_name(uint32_t estimator);
+uint32_t clvr_render_method_from_name(const char *name);
+uint32_t clvr_render_estimator_from_name(const char *name);
+
 typedef struct clvr_render_settings {
     uint32_t method;           /* CLVR_RENDER_* */
+    uint32_t estimator;        /* CLVR_ESTIMATOR_* (track, bins, dda) */
+    uint32_t urm_steps;        /* urm: minimum quadrature points per ray (>= 1) */
+    float urm_kappa;           /* urm: largest majorant optical depth between two points (> 0) */
     uint32_t width, height;
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
@@ -27,6 +38,13 @@ typedef struct clvr_render_settings {
     float light_intensity;
     float ambient;
     float background[3];
+    /* Clip box of the rays and domain of the macrocell grid; lo > hi (the
+     * default) means the mesh bounds. The grid domain must cover every
+     * element that should be seen (majorants outside it are 0); the clip box
+     * may be anything. Kept apart so that a clip box does not coarsen the
+     * grid and a partition of a mesh can share one grid domain. */
+    float clip_lo[3], clip_hi[3];
+    float grid_lo[3], grid_hi[3];
 } clvr_render_settings;
 
 /* Sensible defaults (dda, 512x512, shadows on, ...). */

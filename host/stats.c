@@ -105,7 +105,7 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
     if (s->have_render) {
         fprintf(out, "\nrender: %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
                      "%.2f null collisions/ray\n",
-                clvr_method_name((clvr_method)s->method), s->width, s->height, (unsigned long long)s->frames,
+                clvr_render_method_name(s->method), s->width, s->height, (unsigned long long)s->frames,
                 s->frame_s, s->rays_per_s / 1e6, s->samples_per_ray, s->null_collisions_per_ray);
     }
 }
@@ -169,7 +169,7 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
     jnum(f, "    ", "preprocess_s", s->preprocess_s, 0);
     fprintf(f, "  },\n");
     if (s->have_render) {
-        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n", clvr_method_name((clvr_method)s->method));
+        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n", clvr_render_method_name(s->method));
         for (size_t i = 0; i < nr; ++i) jnum(f, "    ", r[i].k, r[i].v, i + 1 < nr);
         fprintf(f, "  },\n");
     }

@@ -328,7 +328,7 @@ static void print_command_line(viewer *v)
     uint64_t spp = v->img_spp > o->spp ? v->img_spp : o->spp;
     appendf(line, cap, " --size %ux%u --spp %llu --seed %llu", v->rs.width, v->rs.height, (unsigned long long)spp,
             (unsigned long long)v->rs.seed);
-    appendf(line, cap, " --method %s --shadows %s", clvr_method_name((clvr_method)v->rs.method),
+    appendf(line, cap, " --method %s --shadows %s", clvr_render_method_name(v->rs.method),
             v->shadows ? "on" : "off");
     if (v->rs.sampler != d.sampler) appendf(line, cap, " --sampler independent");
     if (v->rs.step != d.step) appendf(line, cap, " --step %.9g", (double)v->rs.step);
@@ -432,7 +432,7 @@ static void handle_key(viewer *v, int key, int mods)
         v->dirty_settings = 1;
         break;
     case GLFW_KEY_M:
-        v->rs.method = (v->rs.method + (shift ? CLVR_METHOD_COUNT - 1u : 1u)) % CLVR_METHOD_COUNT;
+        v->rs.method = (v->rs.method + (shift ? CLVR_RENDER_COUNT - 1u : 1u)) % CLVR_RENDER_COUNT;
         v->dirty_settings = 1;
         break;
     case GLFW_KEY_E: save_numbered(v, "exr"); break;
@@ -572,7 +572,7 @@ static clvr_status apply_edits(viewer *v)
     clvr_status s = CLVR_OK;
     clvr_error *err = v->err;
     if (v->dirty_settings) {
-        v->rs.shadows = v->shadows && v->rs.method != CLVR_METHOD_MARCH;
+        v->rs.shadows = v->shadows && v->rs.method != CLVR_RENDER_MARCH;
         CLVR_TRY(clvr_renderer_set_settings(v->r, &v->rs, err));
         v->dirty_settings = 0;
     }
@@ -761,10 +761,10 @@ static void update_title(viewer *v, int force)
     mesh = mesh ? mesh + 1 : v->o->mesh_path ? v->o->mesh_path : "default scene";
     snprintf(v->title, sizeof v->title,
              "clvr | %s | %s | %llu spp | %.1f fps | %.2f Mrays/s | %s [%.4g, %.4g] density %.3g | shadows %s | %s",
-             mesh, clvr_method_name((clvr_method)v->rs.method), (unsigned long long)v->img_spp, v->fps, v->mrays,
+             mesh, clvr_render_method_name(v->rs.method), (unsigned long long)v->img_spp, v->fps, v->mrays,
              v->tf->name, (double)v->tf->range_lo, (double)v->tf->range_hi,
              (double)(v->tf->density / v->density_factor),
-             v->rs.method == CLVR_METHOD_MARCH ? "n/a" : v->shadows ? "on" : "off", v->cl->device_name);
+             v->rs.method == CLVR_RENDER_MARCH ? "n/a" : v->shadows ? "on" : "off", v->cl->device_name);
     glfwSetWindowTitle(v->win, v->title);
 }
 

@@ -381,11 +381,50 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* ---------------------------------------------------------------- frame
  * (owned by the renderer: host/render.c, kernels/render.cl) */
 
-/* Methods, the values of clvr_frame.method (same order as host/cli.h). */
+/* Methods, the values of clvr_frame.method: where majorants come from.
+ * Names in clvr_render_method_name (host/render.c), in this order. */
 #define CLVR_RENDER_MARCH 0u
 #define CLVR_RENDER_TRACK 1u
 #define CLVR_RENDER_BINS 2u
 #define CLVR_RENDER_DDA 3u
+#define CLVR_RENDER_COUNT 4u
+
+/* Estimators, the values of clvr_frame.estimator (track, bins and dda; march
+ * has its own): delta: delta tracking, a 0/1 collision and a 0/1 shadow
+ * visibility; urm: unbiased ray marching, a weighted quadrature with residual
+ * ratio-tracked transmittance (kernels/render_volume.h). Same expected value;
+ * names in clvr_render_estimator_name (host/render.c), in this order. */
+#define CLVR_ESTIMATOR_DELTA 0u
+#define CLVR_ESTIMATOR_URM 1u
+#define CLVR_ESTIMATOR_COUNT 2u
+/* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
+ * at least this many quadrature points per ray, and at most this much
+ * majorant optical depth between two of them. */
+#define CLVR_URM_DEFAULT_STEPS 16u
+#define CLVR_URM_DEFAULT_KAPPA 0.25f
+
+/* Index of macrocell (x, y, z) in a grid of r cells per axis (x fastest):
+ * the one definition shared by the majorant kernels and the DDA. */
+CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y) * r + x; }
+
+/* The device arrays the renderer reads, listed once in kernel-argument
+ * order (after the frame and the camera): X(kernel type, name). This list
+ * generates the render kernel's parameters and the fields of its
+ * clvr_volume (kernels/render.cl, render_volume.h) and the host's binding
+ * (host/render.c), so the three cannot drift apart. */
+#define CLVR_VOLUME_ARRAYS(X)                                                                                          \
+    X(float4, tf)                           /* transfer function table: rgb + extinction */                             \
+    X(float4, vertices)                     /* clustered vertices: xyz + scalar */                                       \
+    X(ushort, idx16)                        /* 16-bit local indices */                                                   \
+    X(uint, idx32)                          /* 32-bit indices of large instances */                                      \
+    X(clvr_instance, instances)                                                                                        \
+    X(clvr_bvh_node, tlas)                                                                                             \
+    X(clvr_bvh_node, blas)                                                                                             \
+    X(float, grid)                          /* dda: macrocell majorants */                                              \
+    X(float, blocks)                        /* dda: block majorants, see CLVR_DDA_BLOCK */                              \
+    X(clvr_bvh_node, sampling_bvh)          /* bins: tree over sampling clusters */                                     \
+    X(clvr_sampling_cluster, sampling)                                                                                 \
+    X(float, cluster_majorants)             /* bins, track: per sampling cluster */
 
 /* Samplers, the values of clvr_frame.sampler. independent: every uniform of
  * a frame from the counter-based generator keyed by (pixel, frame, seed),
@@ -417,10 +456,12 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #endif
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 160 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 192 bytes. */
 typedef struct clvr_frame {
-    float vol_lo[4];          /* bounds of the mesh */
+    float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
+    float grid_lo[4];         /* domain of the macrocell grid (majorants: must cover the mesh) */
+    float grid_hi[4];
     float light_dir[4];       /* unit vector toward the directional light */
     float background[4];      /* linear rgb of rays that leave the volume */
     float ambient;            /* light that reaches every collision */
@@ -440,9 +481,11 @@ typedef struct clvr_frame {
     clvr_u32 leaf_size;       /* elements per leaf cluster */
     clvr_u32 tlas_root;       /* root node of the top-level tree */
     clvr_u32 sampler;         /* CLVR_SAMPLER_* */
-    clvr_u32 pad0, pad1, pad2;
+    clvr_u32 estimator;       /* CLVR_ESTIMATOR_* */
+    clvr_u32 urm_steps;       /* urm: at least this many quadrature points per ray */
+    float urm_kappa;          /* urm: at most this majorant optical depth between two points */
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 160, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 192, "clvr_frame layout");
 
 /* [frame: types] */
 

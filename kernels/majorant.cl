@@ -80,7 +80,7 @@ __kernel void clvr_grid_splat_elements(__global const clvr_instance *inst, uint 
     }
     const clvr_frame f = *fp;
     const int r = (int)f.grid_res;
-    float3 lo = vload3(0, f.vol_lo), hi = vload3(0, f.vol_hi);
+    float3 lo = vload3(0, f.grid_lo), hi = vload3(0, f.grid_hi);
     float3 cs = (hi - lo) / (float)r;
     int3 c0 = clamp(convert_int3_rtn((blo - lo) / cs - 0.01f), (int3)(0), (int3)(r - 1));
     int3 c1 = clamp(convert_int3_rtn((bhi - lo) / cs + 0.01f), (int3)(0), (int3)(r - 1));
@@ -88,7 +88,7 @@ __kernel void clvr_grid_splat_elements(__global const clvr_instance *inst, uint 
     for (int z = c0.z; z <= c1.z; ++z)
         for (int y = c0.y; y <= c1.y; ++y)
             for (int x = c0.x; x <= c1.x; ++x) {
-                uint c = ((uint)z * (uint)r + (uint)y) * (uint)r + (uint)x;
+                uint c = (uint)clvr_grid_index(x, y, z, r);
                 atomic_min(&grid[2 * c], omin);
                 atomic_max(&grid[2 * c + 1], omax);
             }
@@ -118,6 +118,6 @@ __kernel void clvr_grid_blocks(__global const float *cells, uint r, __global flo
     float m = 0.0f;
     for (uint z = bz * B; z < min(bz * B + B, r); ++z)
         for (uint y = by * B; y < min(by * B + B, r); ++y)
-            for (uint x = bx * B; x < min(bx * B + B, r); ++x) m = fmax(m, cells[(z * r + y) * r + x]);
+            for (uint x = bx * B; x < min(bx * B + B, r); ++x) m = fmax(m, cells[clvr_grid_index((int)x, (int)y, (int)z, (int)r)]);
     blocks[i] = m;
 }

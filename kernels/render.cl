@@ -1,9 +1,11 @@
 /* render.cl: progressive volume path tracing of the clustered mesh (paper
- * section 3.4). One work item per pixel traces one primary ray per frame:
- * delta tracking (Woodcock tracking) through piecewise-constant majorant
- * segments finds a collision, whose colour comes from the transfer function
+ * section 3.4). One work item per pixel traces one primary ray per frame
+ * through piecewise-constant majorant segments with the frame's estimator:
+ * delta tracking (a collision whose colour comes from the transfer function
  * and whose light comes from a delta-tracked shadow ray toward the
- * directional light. Majorant segments come from one of three sources:
+ * directional light) or unbiased ray marching (a weighted quadrature with
+ * ratio-tracked transmittance; kernels/render_volume.h). Majorant segments
+ * come from one of three sources:
  *   track: one global majorant over the whole ray,
  *   dda:   a macrocell grid walked with 3D-DDA (Amanatides & Woo 1987),
  *   bins:  sampling clusters hit by the ray, splatted into N bins per ray
@@ -14,15 +16,13 @@
 #include "locate.h"
 #include "render_volume.h"
 
+/* Parameters: the frame, the camera, the arrays of CLVR_VOLUME_ARRAYS in
+ * their order, then the outputs (host/render.c binds them in this order). */
+#define CLVR_VOLUME_PARAM(T, name) __global const T *name,
+#define CLVR_VOLUME_BIND(T, name) v.name = name;
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,
-                                __global const float4 *tf_table, __global const float4 *vertices,
-                                __global const ushort *idx16, __global const uint *idx32,
-                                __global const clvr_instance *instances, __global const clvr_bvh_node *tlas,
-                                __global const clvr_bvh_node *blas, __global const float *grid_majorants,
-                                __global const float *block_majorants,
-                                __global const clvr_bvh_node *sampling_bvh, __global const clvr_sampling_cluster *sampling,
-                                __global const float *cluster_majorants, __global float4 *accum, __global float4 *accum_sq,
-                                __global uint *counters)
+                                CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float4 *accum,
+                                __global float4 *accum_sq, __global uint *counters)
 {
     const uint x = get_global_id(0), y = get_global_id(1);
     const clvr_frame f = *fp;
@@ -31,18 +31,7 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
 
     clvr_volume v;
     v.f = &f;
-    v.tf = tf_table;
-    v.vertices = vertices;
-    v.idx16 = idx16;
-    v.idx32 = idx32;
-    v.instances = instances;
-    v.tlas = tlas;
-    v.blas = blas;
-    v.grid = grid_majorants;
-    v.blocks = block_majorants;
-    v.sampling_bvh = sampling_bvh;
-    v.sampling = sampling;
-    v.cluster_majorants = cluster_majorants;
+    CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
 
     clvr_rng rng = clvr_rng_make(pixel, f.frame_index, f.seed_lo, f.seed_hi);
     float ld[CLVR_LD_DIMS];

@@ -1,6 +1,7 @@
 /* render_volume.h: the volume seen by the renderer (extinction and colour at
- * a point), the majorant segment iterator (track / dda / bins) and the
- * delta-tracking and ray-marching integrators. OpenCL C only. */
+ * a point), the majorant iterators (track / bins / dda), the estimators that
+ * consume their segments (delta tracking, unbiased ray marching) and the
+ * alpha-compositing ray marcher. OpenCL C only. */
 #ifndef CLVR_RENDER_VOLUME_H
 #define CLVR_RENDER_VOLUME_H
 
@@ -8,21 +9,13 @@
 #include "rng.h"
 #include "locate.h"
 
+/* The frame and the device arrays of CLVR_VOLUME_ARRAYS (clvr_shared.h). */
+#define CLVR_VOLUME_FIELD(T, name) __global const T *name;
 typedef struct clvr_volume {
     const clvr_frame *f;
-    __global const float4 *tf;
-    __global const float4 *vertices;
-    __global const ushort *idx16;
-    __global const uint *idx32;
-    __global const clvr_instance *instances;
-    __global const clvr_bvh_node *tlas;
-    __global const clvr_bvh_node *blas;
-    __global const float *grid;
-    __global const float *blocks; /* dda: coarse level, see CLVR_DDA_BLOCK */
-    __global const clvr_bvh_node *sampling_bvh;
-    __global const clvr_sampling_cluster *sampling;
-    __global const float *cluster_majorants;
+    CLVR_VOLUME_ARRAYS(CLVR_VOLUME_FIELD)
 } clvr_volume;
+#undef CLVR_VOLUME_FIELD
 
 /* Transfer function at scalar s: rgb colour and extinction in w. Points
  * outside the mesh have no medium (all zero). */
@@ -54,39 +47,58 @@ inline int clvr_ray_box(float3 org, float3 dir, float3 lo, float3 hi, float *t0,
     return a <= b;
 }
 
-/* ------------------------------------------------------------ majorant segments
- * The segment iterator of the `track` and `bins` methods; `dda` walks its
- * grid in its own loop (clvr_delta_track_dda). */
+/* ------------------------------------------------------------ majorant iterators
+ * Each method is an iterator over the ray's majorant segments, in order:
+ * next(&a, &b, &m) gives [a, b) with a majorant m >= every extinction on it
+ * (m = 0: no medium there), and returns 0 past the end. The estimators below
+ * consume segments and never know where they came from (pbrt-v4's
+ * `DDAMajorantIterator` / `SampleT_maj` split). */
 
-typedef struct clvr_segments {
-    uint method;
-    float t, tend;   /* next segment starts at t; the ray ends at tend */
+/* track: one segment, the global majorant. */
+typedef struct clvr_global_iter {
+    float a, b, m;
     int done;
-    /* bins */
-    uint seg, nbins, bin;
-    float seg_t0, bin_len;
-    float bins[32];
-} clvr_segments;
+} clvr_global_iter;
 
-inline void clvr_segments_begin(const clvr_volume *v, clvr_segments *it, float t0, float t1)
+inline void clvr_global_begin(const clvr_volume *v, clvr_global_iter *it, float t0, float t1)
 {
-    const clvr_frame *f = v->f;
-    it->method = f->method;
-    it->t = t0;
-    it->tend = t1;
+    it->a = t0;
+    it->b = t1;
+    it->m = v->f->global_majorant;
     it->done = !(t0 < t1);
-    if (it->method == CLVR_RENDER_BINS) {
-        it->seg = 0;
-        it->nbins = f->bins;
-        it->bin = it->nbins; /* forces a fill of the first segment */
-        it->seg_t0 = t0;
-        it->bin_len = (t1 - t0) / (float)(f->segments * f->bins);
-    }
 }
 
-/* Splats the majorants of the sampling clusters hit over [a, b] into bins
+inline int clvr_global_next(clvr_global_iter *it, float *a, float *b, float *m)
+{
+    if (it->done) return 0;
+    it->done = 1;
+    *a = it->a;
+    *b = it->b;
+    *m = it->m;
+    return 1;
+}
+
+/* bins: the ray split into M segments of N bins each; the sampling clusters
+ * hit over a segment are splatted into its bins when the segment is reached
  * (paper 3.4.2: "rasterize" clusters into 1D segments along the ray). */
-inline void clvr_segments_fill_bins(const clvr_volume *v, clvr_segments *it, float3 org, float3 dir, float a, float b)
+typedef struct clvr_bins_iter {
+    float t0, tend, bin_len;
+    uint seg, nseg, nbins, bin;
+    float bins[CLVR_RENDER_MAX_BINS];
+} clvr_bins_iter;
+
+inline void clvr_bins_begin(const clvr_volume *v, clvr_bins_iter *it, float t0, float t1)
+{
+    it->t0 = t0;
+    it->tend = t1;
+    it->nseg = t0 < t1 ? v->f->segments : 0u;
+    it->nbins = v->f->bins;
+    it->seg = 0;
+    it->bin = it->nbins; /* forces a fill of the first segment */
+    it->bin_len = (t1 - t0) / (float)(v->f->segments * v->f->bins);
+}
+
+inline void clvr_bins_fill(const clvr_volume *v, clvr_bins_iter *it, float3 org, float3 dir, float a, float b)
 {
     for (uint k = 0; k < it->nbins; ++k) it->bins[k] = 0.0f;
     clvr_bvh_ray_iter ri;
@@ -104,243 +116,506 @@ inline void clvr_segments_fill_bins(const clvr_volume *v, clvr_segments *it, flo
     }
 }
 
-/* Next non-overlapping segment [*a, *b) with majorant *m; 0 at the end. */
-inline int clvr_segments_next(const clvr_volume *v, clvr_segments *it, float3 org, float3 dir, float *a, float *b,
-                              float *m)
+inline int clvr_bins_next(const clvr_volume *v, clvr_bins_iter *it, float3 org, float3 dir, float *a, float *b,
+                          float *m)
 {
-    if (it->done) return 0;
-    if (it->method == CLVR_RENDER_BINS) {
-        if (it->bin == it->nbins) {
-            if (it->seg == v->f->segments) { it->done = 1; return 0; }
-            float a0 = it->seg_t0 + (float)it->seg * (float)it->nbins * it->bin_len;
-            float b0 = it->seg + 1 == v->f->segments ? it->tend : a0 + (float)it->nbins * it->bin_len;
-            clvr_segments_fill_bins(v, it, org, dir, a0, b0);
-            it->seg++;
-            it->bin = 0;
-        }
-        uint k = it->bin++;
-        float base = it->seg_t0 + (float)((it->seg - 1) * it->nbins + k) * it->bin_len;
-        *a = base;
-        *b = (it->seg == v->f->segments && it->bin == it->nbins) ? it->tend : base + it->bin_len;
-        *m = it->bins[k];
-        return 1;
+    if (it->bin == it->nbins) {
+        if (it->seg == it->nseg) return 0;
+        float a0 = it->t0 + (float)it->seg * (float)it->nbins * it->bin_len;
+        float b0 = it->seg + 1 == it->nseg ? it->tend : a0 + (float)it->nbins * it->bin_len;
+        clvr_bins_fill(v, it, org, dir, a0, b0);
+        it->seg++;
+        it->bin = 0;
     }
-    /* track: one segment, the global majorant */
-    *a = it->t;
-    *b = it->tend;
-    *m = v->f->global_majorant;
-    it->done = 1;
+    uint k = it->bin++;
+    float base = it->t0 + (float)((it->seg - 1) * it->nbins + k) * it->bin_len;
+    *a = base;
+    *b = (it->seg == it->nseg && it->bin == it->nbins) ? it->tend : base + it->bin_len;
+    *m = it->bins[k];
     return 1;
 }
 
-/* ------------------------------------------------------------ integrators */
+/* One level of a 3D-DDA (Amanatides & Woo 1987) over the cells lo_c..hi_c
+ * (inclusive) of a grid of row length r, cell size cs, origin lo. The one
+ * DDA loop of the renderer: the macrocell iterator below runs one of these
+ * over blocks and, inside a dense block, a second one over its cells. */
+typedef struct clvr_dda {
+    float3 tnext, tdelta;
+    int3 left;      /* cells left before the region is left, per axis */
+    int idx;        /* clvr_grid_index of the current cell */
+    int sx, sy, sz; /* index steps */
+} clvr_dda;
 
-/* Spends the free flight's remaining optical depth *tau inside one segment
- * [a, b) of majorant m > 0: tentative collisions at tau / m, accepted with
- * probability extinction / m (Woodcock). Returns 1 with the collision, or 0
- * with *tau reduced by the segment's optical depth m * (b - a). */
-inline int clvr_track_segment(const clvr_volume *v, float3 org, float3 dir, float a, float b, float m, float *tau,
-                              clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
+inline void clvr_dda_begin(clvr_dda *d, float3 lo, float3 cs, int r, int3 lo_c, int3 hi_c, float3 org, float3 dir,
+                           float3 inv, int3 step, float t)
 {
+    const int3 c = clamp(convert_int3_rtn((org + dir * t - lo) / cs), lo_c, hi_c);
+    d->tnext = (lo + convert_float3(c + max(step, (int3)(0))) * cs - org) * inv;
+    d->tdelta = fabs(cs * inv);
+    if (dir.x == 0.0f) { d->tnext.x = INFINITY; d->tdelta.x = INFINITY; }
+    if (dir.y == 0.0f) { d->tnext.y = INFINITY; d->tdelta.y = INFINITY; }
+    if (dir.z == 0.0f) { d->tnext.z = INFINITY; d->tdelta.z = INFINITY; }
+    d->left = (int3)(step.x > 0 ? hi_c.x - c.x : c.x - lo_c.x, step.y > 0 ? hi_c.y - c.y : c.y - lo_c.y,
+                     step.z > 0 ? hi_c.z - c.z : c.z - lo_c.z);
+    d->sx = step.x;
+    d->sy = step.y * r;
+    d->sz = step.z * r * r;
+    d->idx = clvr_grid_index(c.x, c.y, c.z, r);
+}
+
+/* Where the ray leaves the current cell. */
+inline float clvr_dda_exit(const clvr_dda *d) { return fmin(fmin(d->tnext.x, d->tnext.y), d->tnext.z); }
+
+/* Steps into the next cell; 0 when that leaves the region. *moved gets the
+ * axis (0, 1, 2) so that a caller can keep cell coordinates. */
+inline int clvr_dda_step(clvr_dda *d, int *axis)
+{
+    const float tx = clvr_dda_exit(d);
+    if (d->tnext.x <= tx) {
+        *axis = 0;
+        if (d->left.x-- == 0) return 0;
+        d->idx += d->sx;
+        d->tnext.x += d->tdelta.x;
+    } else if (d->tnext.y <= tx) {
+        *axis = 1;
+        if (d->left.y-- == 0) return 0;
+        d->idx += d->sy;
+        d->tnext.y += d->tdelta.y;
+    } else {
+        *axis = 2;
+        if (d->left.z-- == 0) return 0;
+        d->idx += d->sz;
+        d->tnext.z += d->tdelta.z;
+    }
+    return 1;
+}
+
+/* dda: the two-level macrocell grid (see CLVR_DDA_BLOCK). Blocks are walked;
+ * a block whose majorant optical depth m * chord exceeds CLVR_DDA_DESCEND is
+ * walked cell by cell, any other is one segment of the block majorant. The
+ * choice depends on the ray alone, so every segmentation is a valid
+ * piecewise-constant majorant and the estimators stay unbiased. */
+typedef struct clvr_dda_iter {
+    clvr_dda blk, cel;
+    int3 c;          /* block coordinates */
+    int3 step;
+    float3 lo, cs, inv;
+    float t, t1;     /* next segment starts at t; the ray ends at t1 */
+    float blk_end;   /* in cells: where the current block's segment ends */
+    int r, rc;
+    int in_cells, blk_last, done;
+} clvr_dda_iter;
+
+inline void clvr_dda_iter_begin(const clvr_volume *v, clvr_dda_iter *it, float3 org, float3 dir, float t0, float t1)
+{
+    const clvr_frame *f = v->f;
+    it->lo = vload3(0, f->grid_lo);
+    const float3 hi = vload3(0, f->grid_hi);
+    it->r = (int)f->grid_res;
+    it->rc = (it->r + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
+    it->cs = (hi - it->lo) / (float)it->r;
+    it->step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
+    it->inv = 1.0f / dir;
+    const float3 bs = it->cs * (float)CLVR_DDA_BLOCK;
+    it->c = clamp(convert_int3_rtn((org + dir * t0 - it->lo) / bs), (int3)(0), (int3)(it->rc - 1));
+    clvr_dda_begin(&it->blk, it->lo, bs, it->rc, (int3)(0), (int3)(it->rc - 1), org, dir, it->inv, it->step, t0);
+    it->t = t0;
+    it->t1 = t1;
+    it->in_cells = 0;
+    it->done = !(t0 < t1);
+}
+
+inline int clvr_dda_iter_next(const clvr_volume *v, clvr_dda_iter *it, float3 org, float3 dir, float *a, float *b,
+                              float *m)
+{
+    int axis;
+    for (;;) {
+        if (it->in_cells) {
+            const float tx = clvr_dda_exit(&it->cel);
+            *a = it->t;
+            *b = fmin(tx, it->blk_end);
+            *m = v->grid[it->cel.idx];
+            it->t = *b;
+            if (tx >= it->blk_end || !clvr_dda_step(&it->cel, &axis)) {
+                it->in_cells = 0;
+                it->t = it->blk_end;
+                it->done = it->blk_last;
+            }
+            return 1;
+        }
+        if (it->done) return 0;
+        const float tx = clvr_dda_exit(&it->blk);
+        const float bb = fmin(tx, it->t1);
+        const float mb = v->blocks[it->blk.idx];
+        const int3 c = it->c;
+        /* Advance the block walk now; the current block is c. */
+        it->blk_last = tx >= it->t1 || !clvr_dda_step(&it->blk, &axis);
+        if (!it->blk_last) {
+            if (axis == 0) it->c.x += it->step.x;
+            else if (axis == 1) it->c.y += it->step.y;
+            else it->c.z += it->step.z;
+        }
+        if (mb > 0.0f && mb * (bb - it->t) > CLVR_DDA_DESCEND) {
+            const int3 lo_c = c * CLVR_DDA_BLOCK, hi_c = min(lo_c + CLVR_DDA_BLOCK, (int3)(it->r)) - 1;
+            clvr_dda_begin(&it->cel, it->lo, it->cs, it->r, lo_c, hi_c, org, dir, it->inv, it->step, it->t);
+            it->blk_end = bb;
+            it->in_cells = 1;
+            continue;
+        }
+        *a = it->t;
+        *b = bb;
+        *m = mb;
+        it->t = bb;
+        it->done = it->blk_last;
+        return 1;
+    }
+}
+
+/* Runs BODY for every majorant segment [a, b) of majorant m of the frame's
+ * method, in order; BODY may `break` to stop the walk. The one place where
+ * the methods are told apart. */
+#define CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, BODY)                                                     \
+    do {                                                                                                               \
+        float a, b, m;                                                                                                 \
+        if ((v)->f->method == CLVR_RENDER_DDA) {                                                                       \
+            clvr_dda_iter it_;                                                                                         \
+            clvr_dda_iter_begin((v), &it_, (org), (dir), (t0), (t1));                                                  \
+            while (clvr_dda_iter_next((v), &it_, (org), (dir), &a, &b, &m)) { BODY }                                   \
+        } else if ((v)->f->method == CLVR_RENDER_BINS) {                                                               \
+            clvr_bins_iter it_;                                                                                        \
+            clvr_bins_begin((v), &it_, (t0), (t1));                                                                    \
+            while (clvr_bins_next((v), &it_, (org), (dir), &a, &b, &m)) { BODY }                                       \
+        } else {                                                                                                       \
+            clvr_global_iter it_;                                                                                      \
+            clvr_global_begin((v), &it_, (t0), (t1));                                                                  \
+            while (clvr_global_next(&it_, &a, &b, &m)) { BODY }                                                        \
+        }                                                                                                              \
+    } while (0)
+
+/* ------------------------------------------------------------ estimators
+ * Both estimate, per camera ray, the single-scattering integral
+ *   L = int T(t) sigma(t) c(t) (ambient + I T_light(t)) dt + T(t1) background
+ * (T: transmittance, sigma: extinction, c: colour of the transfer function)
+ * and consume majorant segments in order. */
+
+/* delta: Woodcock/delta tracking. A free flight is an optical depth tau ~
+ * Exp(1) spent across the piecewise-constant majorant segments (tau / m
+ * world units in a segment of majorant m); this equals restarting the flight
+ * at every boundary (memorylessness) but needs one logarithm per tentative
+ * collision instead of one per segment. A tentative collision is real with
+ * probability sigma / m; the estimate is the colour at the first real one
+ * (0/1 outcome), the shadow ray a 0/1 visibility. */
+typedef struct clvr_delta {
+    float tau;
+    float t_hit;
+    float4 medium;
+    int hit;
+} clvr_delta;
+
+inline void clvr_delta_begin(clvr_delta *d, float u)
+{
+    d->tau = -log(1.0f - u);
+    d->hit = 0;
+}
+
+/* Spends the flight inside [a, b) of majorant m; 1 when a real collision
+ * happened (then d->t_hit, d->medium). */
+inline int clvr_delta_segment(const clvr_volume *v, clvr_delta *d, float3 org, float3 dir, float a, float b, float m,
+                              clvr_rng *rng, uint *samples, uint *nulls)
+{
+    const float depth = m * (b - a);
+    if (depth < d->tau) { /* passes the segment: no division */
+        d->tau -= depth;
+        return 0;
+    }
     float t = a;
     for (;;) {
-        const float fly = *tau / m;
+        const float fly = d->tau / m;
         if (t + fly >= b) {
-            *tau = fmax(*tau - (b - t) * m, 0.0f);
+            d->tau = fmax(d->tau - (b - t) * m, 0.0f);
             return 0;
         }
         t += fly;
         float4 med = clvr_volume_at(v, org + dir * t);
         ++*samples;
         if (clvr_rng_next(rng) * m < med.w) {
-            *t_hit = t;
-            *medium = med;
+            d->t_hit = t;
+            d->medium = med;
+            d->hit = 1;
             return 1;
         }
         ++*nulls;
-        *tau = -log(1.0f - clvr_rng_next(rng));
+        d->tau = -log(1.0f - clvr_rng_next(rng));
     }
 }
 
-/* Delta tracking (Woodcock) along [t0, t1]: returns 1 and the collision's
- * medium (rgb + extinction) when a real collision happens, 0 when the ray
- * leaves. u in [0, 1) is the uniform of the first free flight (the caller's
- * sampler decides where it comes from, see clvr_frame.sampler); later
- * decisions draw from rng. A free flight is an optical depth tau ~ Exp(1)
- * spent across the piecewise-constant majorant segments (tau / m world
- * units in a segment of majorant m); this equals restarting the flight at
- * every boundary (memorylessness) but needs one logarithm per tentative
- * collision instead of one per segment, which matters for DDA rays crossing
- * many cells. */
-inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u,
-                            clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
+/* Delta tracking along [t0, t1]: 1 and the collision, or 0 when the ray leaves. */
+inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u, clvr_rng *rng,
+                            float *t_hit, float4 *medium, uint *samples, uint *nulls)
 {
-    clvr_segments it;
-    clvr_segments_begin(v, &it, t0, t1);
-    float a, b, m;
-    float tau = -log(1.0f - u);
-    while (clvr_segments_next(v, &it, org, dir, &a, &b, &m))
-        if (m > 0.0f && clvr_track_segment(v, org, dir, a, b, m, &tau, rng, t_hit, medium, samples, nulls)) return 1;
-    return 0;
+    clvr_delta d;
+    clvr_delta_begin(&d, u);
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
+        if (m > 0.0f && clvr_delta_segment(v, &d, org, dir, a, b, m, rng, samples, nulls)) break;
+    });
+    *t_hit = d.t_hit;
+    *medium = d.medium;
+    return d.hit;
 }
 
-/* 3D-DDA (Amanatides & Woo 1987) over the cells of one axis-aligned grid
- * region, cells lo_c..hi_c (inclusive) of size cs from origin lo, along
- * [ta, tb): calls the tracker on each cell's majorant. Returns 1 with a
- * collision, 0 when the ray leaves the region (tau spent accordingly). A
- * dedicated loop with an incremental cell index: a generic segment iterator
- * would cost a call and a large private struct per cell. */
-inline int clvr_dda_cells(const clvr_volume *v, __global const float *maj, int r, float3 lo, float3 cs, int3 lo_c,
-                          int3 hi_c, float3 org, float3 dir, float3 inv, int3 step, float ta, float tb, float *tau,
-                          clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
+/* urm: unbiased ray marching (after Kettunen et al. 2021, "An unbiased
+ * ray-marching transmittance estimator", with the residual ratio tracking of
+ * Novak et al. 2014). Position along the ray is measured in a warped
+ * coordinate s with density rho(t) = max(m / kappa, rho_min) where the
+ * majorant m > 0 (and 0 where m = 0: no medium, nothing to sample), so that
+ * one unit of s holds at most kappa of majorant optical depth and a ray gets
+ * at least frame.urm_steps units.
+ *  - Emission: quadrature points at s = k + u (u: the frame's uniform, from
+ *    the low-discrepancy sampler by default) with weight T(t_k) sigma_k /
+ *    rho_k. For any fixed u the sum is a quadrature; over u it is unbiased.
+ *  - Transmittance between quadrature points: exp(-int sigma/rho ds) over
+ *    each unit interval, estimated given u by residual ratio tracking
+ *    (Novak et al. 2014): a control density linear between the two
+ *    quadrature points' sigma/rho (known given u) is integrated exactly, the
+ *    residual r by ratio tracking at the points of a Poisson process drawn
+ *    independently of u with the majorant as its rate (mu = m / rho per unit
+ *    s, at least kappa / 2): E[exp(-c) prod(1 - r_i / mu_i)] = exp(-int sigma).
+ *    The residual is small where sigma is smooth, so T is nearly exact, and
+ *    thin media cost few residual points.
+ *  - Russian roulette on the running weight below CLVR_URM_RR.
+ *  - Direct light: one quadrature point is picked by weighted reservoir
+ *    sampling (weight |T sigma / rho| luminance(c)), and its transmittance
+ *    toward the light is estimated by the same marching without emission.
+ * Every value is an unbiased estimate of the same integral as delta tracking
+ * (tests/test_render.c compares them per pixel block). */
+#ifndef CLVR_URM_RR
+#define CLVR_URM_RR 0.05f
+#endif
+/* Residual points of one interval kept until its end point is known: their
+ * count is Poisson with mean at most kappa (0.5 by default), which exceeds 8
+ * with probability below 1e-9 (the extra points are then dropped). */
+#define CLVR_URM_MAX_PTS 8
+
+typedef struct clvr_urm {
+    float rho_min, kappa, inv_kappa;
+    float to_quad;     /* warped distance to the next quadrature point */
+    float tau_pt;      /* residual-process depth to the next residual point, ~ Exp(1) */
+    float s_in;        /* warped distance travelled since the last quadrature point */
+    float len;         /* warped length of the current interval (u for the first) */
+    float sr_prev;     /* sigma / rho at the last quadrature point */
+    int first;         /* no quadrature point yet */
+    int npts;
+    float pt_s[CLVR_URM_MAX_PTS], pt_sr[CLVR_URM_MAX_PTS], pt_mu[CLVR_URM_MAX_PTS];
+    float T;           /* transmittance estimate at the last quadrature point */
+    int alive;
+    int emit;          /* 0: transmittance only (shadow ray) */
+    float3 sum;        /* sum of T sigma / rho * colour */
+    float wsum;        /* reservoir: total weight */
+    float3 pick;       /* reservoir: T sigma / rho * colour / weight of the pick */
+    float pick_t;
+    float pick_u;      /* reservoir: the one uniform that decides every pick */
+} clvr_urm;
+
+inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float t0, float t1, float u, float u_pick, int emit,
+                           clvr_rng *rng)
 {
-    const float3 p0 = org + dir * ta;
-    const int3 c = clamp(convert_int3_rtn((p0 - lo) / cs), lo_c, hi_c);
-    float3 tnext = (lo + convert_float3(c + max(step, (int3)(0))) * cs - org) * inv;
-    float3 tdelta = fabs(cs * inv);
-    if (dir.x == 0.0f) { tnext.x = INFINITY; tdelta.x = INFINITY; }
-    if (dir.y == 0.0f) { tnext.y = INFINITY; tdelta.y = INFINITY; }
-    if (dir.z == 0.0f) { tnext.z = INFINITY; tdelta.z = INFINITY; }
-    /* Cells left before the ray leaves the region along each axis. */
-    int3 left = (int3)(step.x > 0 ? hi_c.x - c.x : c.x - lo_c.x, step.y > 0 ? hi_c.y - c.y : c.y - lo_c.y,
-                       step.z > 0 ? hi_c.z - c.z : c.z - lo_c.z);
-    const int sx = step.x, sy = step.y * r, sz = step.z * r * r;
-    int idx = (c.z * r + c.y) * r + c.x;
-    float t = ta;
+    e->pick_u = u_pick;
+    e->rho_min = (float)f->urm_steps / fmax(t1 - t0, 1e-30f);
+    e->kappa = f->urm_kappa;
+    e->inv_kappa = 1.0f / f->urm_kappa;
+    e->to_quad = u;
+    e->len = u;
+    e->tau_pt = -log(1.0f - clvr_rng_next(rng));
+    e->s_in = 0.0f;
+    e->sr_prev = 0.0f;
+    e->first = 1;
+    e->npts = 0;
+    e->T = 1.0f;
+    e->alive = 1;
+    e->emit = emit;
+    e->sum = (float3)(0.0f);
+    e->wsum = 0.0f;
+    e->pick = (float3)(0.0f);
+    e->pick_t = 0.0f;
+}
+
+/* The transmittance factor of the interval just closed (warped length
+ * e->len, control density linear from sr0 to sr1 over it). */
+inline float clvr_urm_interval(clvr_urm *e, float sr0, float sr1)
+{
+    const float len = e->len, slope = len > 0.0f ? (sr1 - sr0) / len : 0.0f;
+    float F = exp(-0.5f * (sr0 + sr1) * len);
+    for (int i = 0; i < e->npts; ++i) F *= 1.0f - (e->pt_sr[i] - (sr0 + slope * e->pt_s[i])) / e->pt_mu[i];
+    e->npts = 0;
+    return F;
+}
+
+inline float clvr_urm_lum(float3 c) { return c.x + c.y + c.z; }
+
+/* Consumes [a, b) of majorant m; 0 once the walk may stop (terminated). */
+inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float3 dir, float a, float b, float m,
+                            clvr_rng *rng, uint *samples, uint *nulls)
+{
+    if (!(m > 0.0f)) return 1;
+    const float rho = fmax(m * e->inv_kappa, e->rho_min), inv_rho = 1.0f / rho;
+    /* Residual points per unit s: the majorant's rate, but at least kappa/2,
+     * because the control (interpolated from neighbouring quadrature points,
+     * perhaps in denser segments) can exceed this segment's majorant, and a
+     * residual r weighs r^2 / mu in the variance. */
+    const float mu = fmax(m, 0.5f * e->kappa * rho) * inv_rho;
+    float left = rho * (b - a);   /* warped length of the segment */
+    float t = a;
     for (;;) {
-        const float tx = fmin(fmin(tnext.x, tnext.y), tnext.z);
-        const float b = fmin(tx, tb);
-        const float m = maj[idx], depth = m * (b - t);
-        if (depth < *tau) *tau -= depth; /* passes the cell: as clvr_track_segment, without its division */
-        else if (m > 0.0f && clvr_track_segment(v, org, dir, t, b, m, tau, rng, t_hit, medium, samples, nulls))
+        const float to_pt = e->tau_pt / mu;
+        const int quad = e->to_quad <= to_pt;
+        const float d = quad ? e->to_quad : to_pt;
+        if (d >= left) {
+            e->to_quad -= left;
+            e->tau_pt = fmax(e->tau_pt - left * mu, 0.0f);
+            e->s_in += left;
             return 1;
-        if (tx >= tb) return 0;
-        t = b;
-        if (tnext.x <= tx) {
-            if (left.x-- == 0) return 0;
-            idx += sx;
-            tnext.x += tdelta.x;
-        } else if (tnext.y <= tx) {
-            if (left.y-- == 0) return 0;
-            idx += sy;
-            tnext.y += tdelta.y;
-        } else {
-            if (left.z-- == 0) return 0;
-            idx += sz;
-            tnext.z += tdelta.z;
         }
-    }
-}
-
-/* Delta tracking through the two-level macrocell grid: a DDA over the
- * blocks (see CLVR_DDA_BLOCK); a block is skipped when empty, tracked as one
- * segment of the block majorant when its expected tentative collisions
- * m * chord are at most CLVR_DDA_DESCEND, and walked cell by cell otherwise.
- * The segmentation depends on the ray alone, so every choice is a valid
- * piecewise-constant majorant. Same estimator as clvr_delta_track: one
- * optical depth, drawn from u, spent across segments. */
-inline int clvr_delta_track_dda(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u,
-                                clvr_rng *rng, float *t_hit, float4 *medium, uint *samples, uint *nulls)
-{
-    const clvr_frame *f = v->f;
-    const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
-    const int r = (int)f->grid_res, B = CLVR_DDA_BLOCK, rc = (r + B - 1) / B;
-    const float3 cs = (hi - lo) / (float)r, bs = cs * (float)B;
-    const float3 p0 = org + dir * t0;
-    int3 c = clamp(convert_int3_rtn((p0 - lo) / bs), (int3)(0), (int3)(rc - 1));
-    const int3 step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
-    const float3 inv = 1.0f / dir;
-    float3 tnext = (lo + convert_float3(c + max(step, (int3)(0))) * bs - org) * inv;
-    float3 tdelta = fabs(bs * inv);
-    if (dir.x == 0.0f) { tnext.x = INFINITY; tdelta.x = INFINITY; }
-    if (dir.y == 0.0f) { tnext.y = INFINITY; tdelta.y = INFINITY; }
-    if (dir.z == 0.0f) { tnext.z = INFINITY; tdelta.z = INFINITY; }
-    int3 left = (int3)(step.x > 0 ? rc - 1 - c.x : c.x, step.y > 0 ? rc - 1 - c.y : c.y,
-                       step.z > 0 ? rc - 1 - c.z : c.z);
-    const int sx = step.x, sy = step.y * rc, sz = step.z * rc * rc;
-    int idx = (c.z * rc + c.y) * rc + c.x;
-    float t = t0;
-    float tau = -log(1.0f - u);
-    for (;;) {
-        const float tx = fmin(fmin(tnext.x, tnext.y), tnext.z);
-        const float b = fmin(tx, t1);
-        const float m = v->blocks[idx];
-        const float depth = m * (b - t);
-        if (m > 0.0f) {
-            /* The choice between the block and its cells must not look at
-             * tau (that would bias the flight); only the block's own
-             * segment may skip the division when the flight passes it. */
-            if (depth > CLVR_DDA_DESCEND) {
-                if (clvr_dda_cells(v, v->grid, r, lo, cs, c * B, min(c * B + B, (int3)(r)) - 1, org, dir, inv, step, t,
-                                   b, &tau, rng, t_hit, medium, samples, nulls))
-                    return 1;
-            } else if (depth < tau) {
-                tau -= depth;
-            } else if (clvr_track_segment(v, org, dir, t, b, m, &tau, rng, t_hit, medium, samples, nulls)) {
-                return 1;
+        left -= d;
+        t += d * inv_rho;
+        e->to_quad -= d;
+        e->tau_pt = fmax(e->tau_pt - d * mu, 0.0f);
+        e->s_in += d;
+        const float4 med = clvr_volume_at(v, org + dir * t);
+        ++*samples;
+        const float sr = med.w * inv_rho;
+        if (!quad) { /* residual point of the current interval */
+            ++*nulls;
+            if (e->npts < CLVR_URM_MAX_PTS) {
+                e->pt_s[e->npts] = e->s_in;
+                e->pt_sr[e->npts] = sr;
+                e->pt_mu[e->npts] = mu;
+                ++e->npts;
+            }
+            e->tau_pt = -log(1.0f - clvr_rng_next(rng));
+            continue;
+        }
+        /* Quadrature point: close the interval, then emit. The first
+         * interval [entry, u) has a constant control sr (sr0 = sr1). */
+        e->T *= clvr_urm_interval(e, e->first ? sr : e->sr_prev, sr);
+        e->first = 0;
+        e->sr_prev = sr;
+        e->s_in = 0.0f;
+        e->len = 1.0f;
+        e->to_quad = 1.0f;
+        if (e->emit && sr > 0.0f) {
+            const float w = e->T * sr;
+            const float3 g = w * med.xyz;
+            e->sum += g;
+            const float ww = fabs(w) * clvr_urm_lum(med.xyz);
+            if (ww > 0.0f) {
+                /* Weighted reservoir sampling with one uniform, rescaled to
+                 * [0, 1) after each decision so that it stays uniform given
+                 * the decision: the pick can then come from the frame's
+                 * low-discrepancy sequence like the other dimensions. */
+                e->wsum += ww;
+                const float p = ww / e->wsum;
+                if (e->pick_u < p) {
+                    e->pick = g / ww;
+                    e->pick_t = t;
+                    e->pick_u = e->pick_u / p;
+                } else {
+                    e->pick_u = (e->pick_u - p) / (1.0f - p);
+                }
+                e->pick_u = fmin(e->pick_u, 0x1.fffffep-1f);
             }
         }
-        if (tx >= t1) return 0;
-        t = b;
-        if (tnext.x <= tx) {
-            if (left.x-- == 0) return 0;
-            idx += sx;
-            c.x += step.x;
-            tnext.x += tdelta.x;
-        } else if (tnext.y <= tx) {
-            if (left.y-- == 0) return 0;
-            idx += sy;
-            c.y += step.y;
-            tnext.y += tdelta.y;
-        } else {
-            if (left.z-- == 0) return 0;
-            idx += sz;
-            c.z += step.z;
-            tnext.z += tdelta.z;
+        /* Russian roulette on the running transmittance. */
+        const float aT = fabs(e->T);
+        if (aT < CLVR_URM_RR) {
+            if (clvr_rng_next(rng) * CLVR_URM_RR >= aT) {
+                e->T = 0.0f;
+                e->alive = 0;
+                return 0;
+            }
+            e->T = copysign(CLVR_URM_RR, e->T);
         }
     }
 }
 
-/* The tracker of the frame's method. */
-inline int clvr_track(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u, clvr_rng *rng,
-                      float *t_hit, float4 *medium, uint *samples, uint *nulls)
+/* Closes the last interval at the ray's exit; returns T(t1). */
+inline float clvr_urm_end(clvr_urm *e)
 {
-    if (v->f->method == CLVR_RENDER_DDA)
-        return clvr_delta_track_dda(v, org, dir, t0, t1, u, rng, t_hit, medium, samples, nulls);
-    return clvr_delta_track(v, org, dir, t0, t1, u, rng, t_hit, medium, samples, nulls);
+    if (!e->alive) return 0.0f;
+    /* The tail [last point, exit) of warped length s_in: constant control
+     * sr_prev; a ray that met no quadrature point has the control 0. */
+    e->len = e->s_in;
+    const float sr0 = e->first ? 0.0f : e->sr_prev;
+    return e->T * clvr_urm_interval(e, sr0, sr0);
 }
 
-/* One primary ray with delta tracking and, with shadows, a delta-tracked
- * shadow ray. ld: the frame's low-discrepancy uniforms (CLVR_LD_DIMS), or
- * NULL for the independent sampler; dimension 2 drives the primary ray's
- * first free flight and 3 the shadow ray's. Without ld the draws come from
- * rng in the order of the original sampler (primary flight right away,
- * shadow flight after the primary ray's draws). */
+/* Transmittance estimate along [t0, t1] (u: the first quadrature offset). */
+inline float clvr_urm_transmittance(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u,
+                                    clvr_rng *rng, uint *samples, uint *nulls)
+{
+    clvr_urm e;
+    clvr_urm_begin(v->f, &e, t0, t1, u, 0.0f, 0, rng);
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
+        if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
+    });
+    return clvr_urm_end(&e);
+}
+
+/* ------------------------------------------------------------ camera rays */
+
+/* One camera ray with the frame's estimator. ld: the frame's low-discrepancy
+ * uniforms (CLVR_LD_DIMS), or NULL for the independent sampler; dimension 2
+ * drives the camera ray's first free flight (delta) or quadrature offset
+ * (urm), 3 the shadow ray's, 4 the pick of urm's shadow point. Without ld the
+ * draws come from rng. */
 inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
-                                 uint *samples, uint *nulls, uint *rays)
+                                uint *samples, uint *nulls, uint *rays)
 {
     const clvr_frame *f = v->f;
-    float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
+    const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi), ldir = vload3(0, f->light_dir);
+    const float4 bg = (float4)(vload3(0, f->background), 0.0f);
     float t0 = 0.0f, t1 = INFINITY;
-    float4 bg = (float4)(vload3(0, f->background), 0.0f);
     if (!clvr_ray_box(org, dir, lo, hi, &t0, &t1)) return bg;
+    const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
+
+    if (f->estimator == CLVR_ESTIMATOR_URM) {
+        clvr_urm e;
+        const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
+        clvr_urm_begin(f, &e, t0, t1, u_primary, u_pick, 1, rng);
+        CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
+            if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
+        });
+        const float Tend = clvr_urm_end(&e);
+        /* Without shadows every point is fully lit: the whole sum, no pick. */
+        float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
+        if (f->shadows && e.wsum > 0.0f) {
+            const float3 p = org + dir * e.pick_t;
+            float s0 = 0.0f, s1 = INFINITY;
+            ++*rays;
+            const float u_shadow = ld ? ld[3] : clvr_rng_next(rng);
+            const float light = clvr_ray_box(p, ldir, lo, hi, &s0, &s1)
+                                    ? clvr_urm_transmittance(v, p, ldir, s0, s1, u_shadow, rng, samples, nulls)
+                                    : 1.0f;
+            c += f->light_intensity * light * e.wsum * e.pick;
+        }
+        return (float4)(c + Tend * bg.xyz, 1.0f - Tend);
+    }
+
     float t;
     float4 med;
-    const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
-    if (!clvr_track(v, org, dir, t0, t1, u_primary, rng, &t, &med, samples, nulls)) return bg;
+    if (!clvr_delta_track(v, org, dir, t0, t1, u_primary, rng, &t, &med, samples, nulls)) return bg;
     float light = 1.0f;
     if (f->shadows) {
-        float3 p = org + dir * t, ldir = vload3(0, f->light_dir);
+        const float3 p = org + dir * t;
         float s0 = 0.0f, s1 = INFINITY;
         ++*rays;
         if (clvr_ray_box(p, ldir, lo, hi, &s0, &s1)) {
             float ts;
             float4 m2;
             const float u_shadow = ld ? ld[3] : clvr_rng_next(rng);
-            if (clvr_track(v, p, ldir, s0, s1, u_shadow, rng, &ts, &m2, samples, nulls)) light = 0.0f;
+            if (clvr_delta_track(v, p, ldir, s0, s1, u_shadow, rng, &ts, &m2, samples, nulls)) light = 0.0f;
         }
     }
-    float shade = f->ambient + f->light_intensity * light;
+    const float shade = f->ambient + f->light_intensity * light;
     return (float4)(med.xyz * shade, 1.0f);
 }
 

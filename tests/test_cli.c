@@ -41,7 +41,7 @@ int main(void)
     TU_CHECK(strcmp(o.output, "clvr.png") == 0);
     TU_CHECK_EQ_U64(o.width, 512);
     TU_CHECK_EQ_U64(o.spp, 64);
-    TU_CHECK(o.method == CLVR_METHOD_DDA && o.shadows == 1 && o.leaf_size == 16);
+    TU_CHECK(o.method == CLVR_RENDER_DDA && o.shadows == 1 && o.leaf_size == 16);
     TU_CHECK(o.sampler == CLVR_SAMPLER_LD);
 
     TU_CHECK_STATUS(PARSE(&o, &err, "--device", "pocl", "--size", "640x480", "--spp", "7", "--seed", "99",
@@ -56,7 +56,7 @@ int main(void)
     TU_CHECK_EQ_U64(o.height, 480);
     TU_CHECK_EQ_U64(o.spp, 7);
     TU_CHECK_EQ_U64(o.seed, 99);
-    TU_CHECK(o.method == CLVR_METHOD_BINS && o.bins == 16 && o.segments == 3 && o.shadows == 0);
+    TU_CHECK(o.method == CLVR_RENDER_BINS && o.bins == 16 && o.segments == 3 && o.shadows == 0);
     TU_CHECK(o.sampler == CLVR_SAMPLER_INDEPENDENT);
     TU_CHECK(o.range_set && o.range_lo == -1.0f && o.range_hi == 2.5f);
     TU_CHECK(o.camera_set && o.camera[0] == 1.0f && o.camera[8] == 1.0f);

@@ -140,6 +140,38 @@ static int compare(const char *what, const float *ma, const float *va, uint32_t 
     return bad;
 }
 
+/* Compares two W x H renders per B x B block of pixels and channel: the
+ * difference of block sums against K standard errors (pixels independent).
+ * Blocks pool pixels, so a bias too small for any one pixel shows. Returns
+ * the number of violations and prints the worst. */
+static int compare_blocks(const char *what, const float *ma, const float *va, uint32_t na, const float *mb,
+                          const float *vb, uint32_t nb, uint32_t w, uint32_t h, uint32_t B)
+{
+    int bad = 0, nblocks = 0;
+    double worst = 0;
+    for (uint32_t by = 0; by < h; by += B)
+        for (uint32_t bx = 0; bx < w; bx += B)
+            for (size_t c = 0; c < 4; ++c) {
+                double d = 0, v = 0;
+                for (uint32_t y = by; y < by + B && y < h; ++y)
+                    for (uint32_t x = bx; x < bx + B && x < w; ++x) {
+                        const size_t i = 4 * ((size_t)y * w + x) + c;
+                        d += (double)ma[i] - mb[i];
+                        v += va[i] / na + vb[i] / nb;
+                    }
+                const double se = sqrt(v), z = fabs(d) / (se > 0 ? se : 1e-30);
+                ++nblocks;
+                if (fabs(d) > K_SIGMA * se + 1e-5 * B * B) {
+                    ++bad;
+                    if (z > worst) worst = z;
+                }
+            }
+    if (bad)
+        fprintf(stderr, "%s: %d of %d blocks (%ux%u, per channel) differ by more than %g SE (worst %.1f SE)\n", what,
+                bad, nblocks, B, B, K_SIGMA, worst);
+    return bad;
+}
+
 static void set_table(fixture *fx, const float *table, uint32_t n, float lo, float hi)
 {
     clvr_error err = {0};
@@ -147,6 +179,27 @@ static void set_table(fixture *fx, const float *table, uint32_t n, float lo, flo
 }
 
 /* ---- 1. homogeneous box against 1 - exp(-sigma d) */
+/* Rays through the 17 x 17 lattice of pixel (x, y) including its border
+ * (sub-pixel positions k/16) that meet the unit box [0, 1]^3. */
+static int edge_hits(const clvr_camera *cam, uint32_t x, uint32_t y)
+{
+    int hits = 0;
+    for (int sy = 0; sy <= 16; ++sy)
+        for (int sx = 0; sx <= 16; ++sx) {
+            float o[3], d[3];
+            clvr_camera_ray(cam, x + sx / 16.0f, y + sy / 16.0f, o, d);
+            double t0 = 0, t1 = 1e30;
+            for (int k = 0; k < 3; ++k) {
+                double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
+                if (a > b) { double t = a; a = b; b = t; }
+                t0 = a > t0 ? a : t0;
+                t1 = b < t1 ? b : t1;
+            }
+            hits += t1 > t0;
+        }
+    return hits;
+}
+
 static void test_homogeneous(clvr_cl *cl)
 {
     clvr_error err = {0};
@@ -179,7 +232,11 @@ static void test_homogeneous(clvr_cl *cl)
         {CLVR_RENDER_DDA, CLVR_SAMPLER_LD, 7, 1.5f},            {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 0.4f},
         {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 1.0f},
     };
-    for (size_t mi = 0; mi < sizeof cases / sizeof cases[0]; ++mi) {
+    /* Every case with each estimator: the analytic answer holds for both. */
+    for (size_t ci = 0; ci < 2 * (sizeof cases / sizeof cases[0]); ++ci) {
+        const size_t mi = ci % (sizeof cases / sizeof cases[0]);
+        const uint32_t est = ci < sizeof cases / sizeof cases[0] ? CLVR_ESTIMATOR_DELTA : CLVR_ESTIMATOR_URM;
+        fx.set.estimator = est;
         const float sigma = cases[mi].sigma;
         float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
         set_table(&fx, table, 2, 0.0f, 2.0f);
@@ -214,14 +271,19 @@ static void test_homogeneous(clvr_cl *cl)
                         acc += 1 - exp(-sigma * len);
                     }
                 if (hits != 0 && hits != 256) continue;
+                /* A pixel whose border touches the silhouette is a silhouette
+                 * pixel too: a jittered ray there may graze the box (in float)
+                 * where no midpoint above does. */
+                if (edge_hits(&cam, x, y) != hits / 256 * 289) continue;
                 double expect = acc / 256, got = mean[4 * (y * W + x) + 3];
                 double se = sqrt(expect * (1 - expect) / N);
                 ++tested;
                 covered += hits == 256;
                 if (fabs(got - expect) > K_SIGMA * se + 1e-6) {
                     if (bad < 5)
-                        fprintf(stderr, "homogeneous %s%s: pixel (%u,%u) opacity %.4f, expected %.4f +- %.4f\n",
-                                clvr_method_name((clvr_method)cases[mi].method), cases[mi].sampler ? " (ld)" : "", x,
+                        fprintf(stderr, "homogeneous %s %s%s: pixel (%u,%u) opacity %.4g, expected %.4g +- %.4g\n",
+                                clvr_render_estimator_name(est), clvr_render_method_name(cases[mi].method),
+                                cases[mi].sampler ? " (ld)" : "", x,
                                 y, got, expect, K_SIGMA * se);
                     ++bad;
                 }
@@ -257,8 +319,8 @@ static void test_homogeneous(clvr_cl *cl)
                     vsum += expect * (1 - expect) / N;
                 }
             if (fabs(dsum) > K_SIGMA * sqrt(vsum)) {
-                fprintf(stderr, "homogeneous %s%s: covered pixels' opacity off by %g on average (%.1f SE)\n",
-                        clvr_method_name((clvr_method)cases[mi].method), cases[mi].sampler ? " (ld)" : "",
+                fprintf(stderr, "homogeneous %s %s%s: covered pixels' opacity off by %g on average (%.1f SE)\n",
+                        clvr_render_estimator_name(est), clvr_render_method_name(cases[mi].method), cases[mi].sampler ? " (ld)" : "",
                         dsum / covered, fabs(dsum) / sqrt(vsum));
                 ++tu_fail_;
             }
@@ -298,26 +360,38 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
     size_t np = (size_t)W * H * 4;
     char what[160];
     for (int shadows = 1; shadows >= 0; --shadows) {
+        /* delta's track image, kept to compare urm's against. */
+        float *delta_m = NULL, *delta_v = NULL;
+        for (uint32_t est = CLVR_ESTIMATOR_DELTA; est < CLVR_ESTIMATOR_COUNT; ++est) {
         float *mt, *vt, *mb, *vb, *md, *vd;
+        const char *en = clvr_render_estimator_name(est);
+        /* Absolute slack per pixel: float rounding for delta; for urm also
+         * its rare large terms (a thin dense feature met by a quadrature
+         * point in few frames), after which 256 frames can show a sample
+         * variance of about 0 for a background pixel whose mean is off by
+         * ~1e-5 (0.02% of it). 1e-4 covers that; the 4x4 block comparison
+         * below pools pixels and is the sensitive test. */
+        const double tol = est == CLVR_ESTIMATOR_DELTA ? 1e-5 : 1e-4;
+        fx.set.estimator = est;
         fx.set.shadows = shadows;
         fx.set.method = CLVR_RENDER_TRACK;
-        fx.set.seed = 11;
+        fx.set.seed = 11 + 100 * est;
         render_stats(&fx, N, &mt, &vt);
         fx.set.method = CLVR_RENDER_BINS;
         fx.set.bins = 16;
         fx.set.segments = 3;
-        fx.set.seed = 12;
+        fx.set.seed = 12 + 100 * est;
         render_stats(&fx, N, &mb, &vb);
         fx.set.method = CLVR_RENDER_DDA;
         fx.set.macrocells = 24;
-        fx.set.seed = 13;
+        fx.set.seed = 13 + 100 * est;
         render_stats(&fx, N, &md, &vd);
-        snprintf(what, sizeof what, "%s shadows %s: track vs bins", name, shadows ? "on" : "off");
-        TU_CHECK_EQ_U64(compare(what, mt, vt, N, mb, vb, N, np, 1e-5), 0);
-        snprintf(what, sizeof what, "%s shadows %s: track vs dda", name, shadows ? "on" : "off");
-        TU_CHECK_EQ_U64(compare(what, mt, vt, N, md, vd, N, np, 1e-5), 0);
-        snprintf(what, sizeof what, "%s shadows %s: bins vs dda", name, shadows ? "on" : "off");
-        TU_CHECK_EQ_U64(compare(what, mb, vb, N, md, vd, N, np, 1e-5), 0);
+        snprintf(what, sizeof what, "%s %s shadows %s: track vs bins", name, en, shadows ? "on" : "off");
+        TU_CHECK_EQ_U64(compare(what, mt, vt, N, mb, vb, N, np, tol), 0);
+        snprintf(what, sizeof what, "%s %s shadows %s: track vs dda", name, en, shadows ? "on" : "off");
+        TU_CHECK_EQ_U64(compare(what, mt, vt, N, md, vd, N, np, tol), 0);
+        snprintf(what, sizeof what, "%s %s shadows %s: bins vs dda", name, en, shadows ? "on" : "off");
+        TU_CHECK_EQ_U64(compare(what, mb, vb, N, md, vd, N, np, tol), 0);
         {
             /* dda with the low-discrepancy sampler against track with
              * independent frames. Its frames are correlated, so its
@@ -326,11 +400,11 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
              * which only loosens the bound, never biases it. */
             float *ml, *vl;
             fx.set.sampler = CLVR_SAMPLER_LD;
-            fx.set.seed = 15;
+            fx.set.seed = 15 + 100 * est;
             render_stats(&fx, N, &ml, &vl);
             fx.set.sampler = CLVR_SAMPLER_INDEPENDENT;
-            snprintf(what, sizeof what, "%s shadows %s: track vs dda (ld sampler)", name, shadows ? "on" : "off");
-            TU_CHECK_EQ_U64(compare(what, mt, vt, N, ml, vl, N, np, 1e-5), 0);
+            snprintf(what, sizeof what, "%s %s shadows %s: track vs dda (ld sampler)", name, en, shadows ? "on" : "off");
+            TU_CHECK_EQ_U64(compare(what, mt, vt, N, ml, vl, N, np, tol), 0);
             free(ml);
             free(vl);
         }
@@ -344,14 +418,35 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
             float *mm, *vm;
             fx.set.method = CLVR_RENDER_MARCH;
             fx.set.step = 0.0f; /* default: diagonal / 512 */
-            fx.set.seed = 14;
-            render_stats(&fx, 16, &mm, &vm);
-            snprintf(what, sizeof what, "%s: march vs track (no shadows)", name);
-            TU_CHECK_EQ_U64(compare(what, mm, vm, 16, mt, vt, N, np, 0.01), 0);
+            fx.set.seed = 14 + 100 * est;
+            /* 64 frames: march's per-pixel variance from 16 was seen to be
+             * 200x too small at a pixel on a thin feature, harmless against
+             * delta's wide bounds but not against urm's narrow ones. */
+            render_stats(&fx, 64, &mm, &vm);
+            snprintf(what, sizeof what, "%s: march vs %s track (no shadows)", name, en);
+            TU_CHECK_EQ_U64(compare(what, mm, vm, 64, mt, vt, N, np, 0.01), 0);
             free(mm);
             free(vm);
         }
-        free(mt); free(vt); free(mb); free(vb); free(md); free(vd);
+        if (est == CLVR_ESTIMATOR_DELTA) {
+            delta_m = mt;
+            delta_v = vt;
+        } else {
+            /* The new estimator against the old per 4x4 block (issue 14):
+             * the same expected image. Independent frames on both sides, so
+             * the bounds are valid. Per block, not per pixel: a pixel where
+             * delta tracking met no collision in N frames has a sample
+             * variance of 0, which no bound can use; a block pools pixels. */
+            snprintf(what, sizeof what, "%s shadows %s: urm vs delta (track)", name, shadows ? "on" : "off");
+            TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, 4), 0);
+            snprintf(what, sizeof what, "%s shadows %s: urm dda vs delta track", name, shadows ? "on" : "off");
+            TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, 4), 0);
+            free(mt); free(vt);
+        }
+        free(mb); free(vb); free(md); free(vd);
+        }
+        free(delta_m);
+        free(delta_v);
     }
     free(table);
     clvr_tf_free(&tf);
@@ -484,9 +579,11 @@ static void test_seeds(clvr_cl *cl)
     clvr_camera cam;
     clvr_camera_frame_box(&cam, fx.mesh.bounds_lo, fx.mesh.bounds_hi, 40.0f, 16, 16, &err);
     clvr_renderer_set_camera(fx.r, &cam, &err);
-    for (uint32_t sampler = CLVR_SAMPLER_INDEPENDENT; sampler <= CLVR_SAMPLER_LD; ++sampler) {
+    for (uint32_t k = 0; k < 2 * CLVR_ESTIMATOR_COUNT; ++k) {
+        const uint32_t sampler = k % 2 ? CLVR_SAMPLER_LD : CLVR_SAMPLER_INDEPENDENT;
         float *a, *va, *b, *vb, *c, *vc;
         fx.set.sampler = sampler;
+        fx.set.estimator = k / 2;
         fx.set.seed = 5;
         render_stats(&fx, 3, &a, &va);
         render_stats(&fx, 3, &b, &vb);
