@@ -161,7 +161,7 @@ void clvr_clustered_host_free(clvr_clustered_host *h);
 typedef struct clvr_pp {
     clvr_cl *cl;
     cl_program prog;
-    cl_kernel bounds_tiles, keys_type[4], scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
+    cl_kernel bounds_tiles, keys_type[CLVR_CELL_TYPE_COUNT], scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
         radix_hist, radix_scatter, gather, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
         inst_write, vertices, radix_buckets, iota;
     uint32_t max_tiles;       /* tiles per tiled launch: a few per compute unit */
@@ -189,6 +189,8 @@ typedef struct clvr_pp_layout {
     uint64_t num_elements, num_slots;
 } clvr_pp_layout;
 void clvr_pp_layout_make(clvr_pp_layout *l, const uint64_t count[CLVR_CELL_TYPE_COUNT]);
+/* The part of l the element kernels take (by value): first ids and slots. */
+void clvr_pp_type_layout(const clvr_pp_layout *l, clvr_type_layout *out);
 /* The quantization scale of clvr_pp_quantize for a box. */
 float clvr_pp_scale(const clvr_box *b);
 /* keys[g], vals[g] = sort key and g for every element g; vals may be NULL

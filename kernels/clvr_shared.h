@@ -69,10 +69,38 @@ typedef int64_t clvr_i64;
 /* Largest vertex count of any element type (the hexahedron). */
 #define CLVR_CELL_MAX_VERTS 8u
 
+/* Every element type once, in CLVR_CELL_* order: X(id, name, vertex count).
+ * The per-type code is generated from this list: the vertex count below,
+ * the element dispatchers of kernels/elements.h (which call
+ * clvr_<name>_shape, _inside and _start), the preprocessing's key kernels
+ * (clvr_pp_keys_<name>) and leaf-box loops. A new type is one line here,
+ * its element functions and its loader mapping (docs/extending.md). */
+#define CLVR_CELL_TYPES(X)              \
+    X(CLVR_CELL_TET, tet, 4u)           \
+    X(CLVR_CELL_PYRAMID, pyramid, 5u)   \
+    X(CLVR_CELL_WEDGE, wedge, 6u)       \
+    X(CLVR_CELL_HEX, hex, 8u)
+
+/* Vertices per element of the type (CLVR_CELL_MAX_VERTS for an unknown
+ * one). A chain of selects, not a table: it folds to a constant wherever
+ * the type is one (the per-type kernels). */
 CLVR_INLINE clvr_u32 clvr_cell_vertex_count(clvr_u32 type)
 {
-    return type == CLVR_CELL_TET ? 4u : type == CLVR_CELL_PYRAMID ? 5u : type == CLVR_CELL_WEDGE ? 6u : 8u;
+#define CLVR_CELL_NV_(id, name, nv) type == (id) ? (nv) :
+    return CLVR_CELL_TYPES(CLVR_CELL_NV_) CLVR_CELL_MAX_VERTS;
+#undef CLVR_CELL_NV_
 }
+
+/* Where each type's elements and index slots start in the concatenated
+ * type lists (elements of type t: global ids first[t] .. first[t + 1] - 1,
+ * the last type ending at the element count; their indices from slot[t],
+ * vertex_count(t) each). Passed by value to the preprocessing kernels.
+ * 48 bytes, no padding (slot is 8-aligned at offset 16). */
+typedef struct clvr_type_layout {
+    clvr_u32 first[CLVR_CELL_TYPE_COUNT];
+    clvr_u64 slot[CLVR_CELL_TYPE_COUNT];
+} clvr_type_layout;
+CLVR_STATIC_ASSERT(sizeof(clvr_type_layout) == 12 * CLVR_CELL_TYPE_COUNT, "clvr_type_layout layout");
 
 /* An axis-aligned box; w lanes are padding (kept zero) so that the box maps
  * onto two float4 loads on the device. 32 bytes. */
@@ -84,7 +112,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
 
 /* ---------------------------------------------------------------- clustered mesh
  * The contract between preprocessing (which writes it), bvh/ (which builds
- * trees over it) and the renderer (which reads it). Decisions, see DESIGN:
+ * trees over it) and the renderer (which reads it). Decisions (README, "How
+ * it works"):
  * - Each element type is sorted along its own Hilbert curve (same
  *   quantization grid: the mesh bounds), so every cluster holds one element
  *   type and elements are addressed with a fixed stride, no per-element tag.
@@ -443,7 +472,5 @@ typedef struct clvr_frame {
     clvr_u32 pad0, pad1, pad2;
 } clvr_frame;
 CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 160, "clvr_frame layout");
-
-/* [frame: types] */
 
 #endif /* CLVR_SHARED_H */
