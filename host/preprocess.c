@@ -40,7 +40,18 @@ clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_prep
     if (out->index_bits != 16 && out->index_bits != 32)
         return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: index_bits is %u; use 16 or 32", out->index_bits);
     if (out->max_instance_elements == 0) out->max_instance_elements = out->index_bits == 16 ? 1u << 20 : 1u << 16;
+    for (int k = 0; out->quantize_box && k < 3; ++k)
+        if (!(isfinite(out->quantize_box->lo[k]) && isfinite(out->quantize_box->hi[k]) &&
+              out->quantize_box->lo[k] <= out->quantize_box->hi[k]))
+            return clvr_error_set(err, CLVR_ERR_USAGE,
+                                  "preprocess: quantize_box axis %d is [%g, %g]; give finite bounds with lo <= hi", k,
+                                  (double)out->quantize_box->lo[k], (double)out->quantize_box->hi[k]);
     return CLVR_OK;
+}
+
+const clvr_box *clvr_pp_quantize_box(const clvr_preprocess_options *o, const clvr_box *mesh_bounds)
+{
+    return o->quantize_box ? o->quantize_box : mesh_bounds;
 }
 
 const char *clvr_pp_stage_name(int stage)
@@ -678,7 +689,8 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS, N * 8, "sort keys", &keys, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS, N * 4, "sort values", &vals, err));
     /* The values (element ids) are made by the sort's first pass. */
-    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, &out->bounds, opt.morton, keys, NULL, &st[CLVR_PP_STAGE_KEYS], err));
+    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, keys, NULL,
+                          &st[CLVR_PP_STAGE_KEYS], err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS_TMP, N * 8, "sort keys (scratch)", &keys_tmp, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS_TMP, N * 4, "sort values (scratch)", &vals_tmp, err));
     {

@@ -35,6 +35,12 @@ typedef struct clvr_preprocess_options {
                                        1M of 3.2.2; the vertex limit binds first, giving the
                                        paper's 30k-60k hexes), 65536 for 32-bit */
     int keep_order;           /* nonzero: keep `order` (original element id per sorted element) */
+    const clvr_box *quantize_box; /* NULL (default): the curve keys quantize element centres on a 2^16
+                                     grid over the mesh bounds. Else over this box (xyz of lo and hi,
+                                     finite, lo <= hi; w ignored; the caller keeps it alive during the
+                                     call): partitions of one mesh preprocessed one by one with the
+                                     whole mesh's box share one Hilbert grid, so their curves are
+                                     pieces of one curve. Centres outside the box clamp to its faces. */
 } clvr_preprocess_options;
 
 /* Fills the defaults above. */
@@ -248,5 +254,7 @@ void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, con
 /* Resolved options (defaults applied, checked): CLVR_ERR_USAGE when invalid. */
 clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_preprocess_options *out,
                                     clvr_error *err);
+/* The box the curve keys quantize over: o->quantize_box, else the mesh bounds. */
+const clvr_box *clvr_pp_quantize_box(const clvr_preprocess_options *o, const clvr_box *mesh_bounds);
 
 #endif /* CLVR_PREPROCESS_H */

@@ -115,7 +115,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
  * trees over it) and the renderer (which reads it). Decisions (README, "How
  * it works"):
  * - Each element type is sorted along its own Hilbert curve (same
- *   quantization grid: the mesh bounds), so every cluster holds one element
+ *   quantization grid: the mesh bounds, or a box the caller gives so that
+ *   partitions of one mesh share it), so every cluster holds one element
  *   type and elements are addressed with a fixed stride, no per-element tag.
  * - Global sorted element ids are the concatenation of the four sorted
  *   lists: tets [0, T), pyramids [T, T+P), wedges, hexes.
