@@ -2,8 +2,9 @@
  * -> gather -> sampling clusters -> greedy instance split with local
  * re-indexing -> flagged select of the instance records -> scans of their
  * vertex and leaf counts -> instance table -> clustered vertices -> leaf
- * boxes -> instance bounds. See preprocess.h for the contracts. */
-#include "preprocess.h"
+ * boxes -> instance bounds. Contracts: preprocess.h (public API) and
+ * preprocess_stages.h (the stages). */
+#include "preprocess_stages.h"
 
 #include <math.h>
 #include <stdlib.h>

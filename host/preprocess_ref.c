@@ -3,7 +3,7 @@
  * (kernels/sfc.h, bounds.h, reindex.h) are the very code the kernels run;
  * the loops around them are written here once more, sequentially, so tests
  * compare the device's results bit for bit. */
-#include "preprocess.h"
+#include "preprocess_stages.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -17,7 +17,7 @@
 #include <time.h>
 
 #include "mesh_io.h"
-#include "preprocess.h"
+#include "preprocess_stages.h"
 #include "test_util.h"
 
 static double now_s(void)
