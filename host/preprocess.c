@@ -698,7 +698,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         /* The keys are type << 48 | 48-bit curve key: the host knows which
          * type bits can differ, so the sort need not find out (a pass over
          * the keys) unless it falls back to plain LSD. */
-        uint64_t type_and = 3, type_or = 0;
+        uint64_t type_and = ~0ull, type_or = 0; /* every type id, not only 2 bits */
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
             if (L.count[t]) { type_and &= t; type_or |= t; }
         const uint64_t hint = ((type_and ^ type_or) << 48) | ((1ull << 48) - 1);
