@@ -20,13 +20,12 @@ static double wall_now(void)
 
 void clvr_preprocess_options_default(clvr_preprocess_options *o)
 {
+    /* Zero: Hilbert order, the default instance cap, order not kept, the
+     * mesh bounds as quantization box. */
     memset(o, 0, sizeof *o);
     o->leaf_size = 16;
     o->sampling_size = 16;
-    o->morton = 0;
     o->index_bits = 16;
-    o->max_instance_elements = 0;
-    o->keep_order = 0;
 }
 
 clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_preprocess_options *out, clvr_error *err)
