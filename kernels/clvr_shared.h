@@ -272,7 +272,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_bvh_tree) == 16, "clvr_bvh_tree layout");
 /* ---------------------------------------------------------------- render
  * (owned by the renderer: camera, transfer function, light, frame params) */
 
-/* camera + transfer function (host/camera.c, host/tf.c) */
+/* camera + transfer function (host/pipeline/camera.c, host/io/tf.c) */
 #ifdef __OPENCL_VERSION__
 #define CLVR_SQRTF sqrt
 #define CLVR_FLOORF floor
@@ -409,9 +409,9 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* end camera + transfer function */
 
 /* ---------------------------------------------------------------- frame
- * (owned by the renderer: host/render.c, kernels/render.cl) */
+ * (owned by the renderer: host/pipeline/render.c, kernels/render.cl) */
 
-/* Methods, the values of clvr_frame.method (same order as host/cli.h). */
+/* Methods, the values of clvr_frame.method (same order as host/app/cli.h). */
 #define CLVR_RENDER_MARCH 0u
 #define CLVR_RENDER_TRACK 1u
 #define CLVR_RENDER_BINS 2u

@@ -15,7 +15,7 @@
 #define LIMITS_DEFAULT_SAMPLING 16u
 #define LIMITS_DEFAULT_BITS 16u
 /* Bytes per pixel of the renderer's image buffers: float4 accumulator,
- * float4 second moments, 3 uint ray counters (host/render.c). */
+ * float4 second moments, 3 uint ray counters (host/pipeline/render.c). */
 #define LIMITS_PIXEL_BYTES (16u + 16u + 12u)
 /* A BVH over L leaves has about L / 3 nodes (4-wide). */
 #define LIMITS_BVH_NODE_BYTES sizeof(clvr_bvh_node)
@@ -41,7 +41,7 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
     out->num_slots = S;
     out->num_vertices = V;
 
-    /* Preprocessing (host/preprocess.c), two moments that are certain:
+    /* Preprocessing (host/pipeline/preprocess.c), two moments that are certain:
      * during the sort, positions + scalars (16 V), the element indices (4 S)
      * and two key/value pairs (24 N); during the split, positions, scalars,
      * the input and the gathered index lists (8 S) and the local indices

@@ -1,7 +1,7 @@
 /* preprocess_stages.h: the stages of clvr_preprocess one by one (the
  * kernels of kernels/preprocess.cl, one call per stage), the element layout
  * and split plan they share, and a plain-C reference of every stage and of
- * the whole pipeline (host/preprocess_ref.c) with the same contract, so that
+ * the whole pipeline (host/pipeline/preprocess_ref.c) with the same contract, so that
  * tests compare device and reference bit for bit. Module prefix clvr_pp_.
  * Callers that only preprocess a mesh need preprocess.h alone. */
 #ifndef CLVR_PREPROCESS_STAGES_H
@@ -72,7 +72,7 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
                          int iota_vals, uint64_t varying_hint, double *sec, clvr_error *err);
 
 /* ------------------------------------------------------------ references
- * Plain C, same contracts on host arrays (host/preprocess_ref.c). */
+ * Plain C, same contracts on host arrays (host/pipeline/preprocess_ref.c). */
 void clvr_pp_ref_bounds(const float *pos, const float *scal, uint64_t n, clvr_box *out);
 void clvr_pp_ref_keys(const float *pos, const uint32_t *idx, const clvr_pp_layout *l, const clvr_box *b,
                       int morton, uint64_t *keys, uint32_t *vals);

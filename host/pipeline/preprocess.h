@@ -7,7 +7,7 @@
  * boxes and the renderer reads all of it.
  *
  * This is the public API (clvr_preprocess, clvr_clustered, the workspace).
- * The stages one by one, their plain-C references (host/preprocess_ref.c,
+ * The stages one by one, their plain-C references (host/pipeline/preprocess_ref.c,
  * bit for bit the same results) and the split plan are in
  * preprocess_stages.h, for the pipeline itself, tests and benchmarks. */
 #ifndef CLVR_PREPROCESS_H

@@ -1,6 +1,6 @@
 /* json.h: a strict JSON parser (RFC 8259: no comments, no trailing commas,
  * no NaN, UTF-16 surrogates checked) for small documents such as ParaView
- * colour maps (host/tf.c). The whole document becomes a tree of nodes in
+ * colour maps (host/io/tf.c). The whole document becomes a tree of nodes in
  * one array; every rejection is a CLVR_ERR_BAD_FIELD message
  * "NAME:LINE:COL: what was expected, what was found". Limits: nesting
  * depth 64, numbers of at most 400 characters, finite doubles. */
