@@ -30,7 +30,7 @@
 #include "clock.h"
 #include "bounds.h"
 #include "mesh_io.h"
-#include "preprocess.h"
+#include "preprocess_stages.h"
 #ifdef CLVR_HAVE_EMBREE
 #include <embree3/rtcore.h>
 #endif

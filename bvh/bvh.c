@@ -192,12 +192,8 @@ static clvr_status build_trees_device(clvr_cl *cl, const clvr_bvh_kernels *k, cl
         /* Blocking: prefix[] is rewritten for the next level. */
         CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, prefix_mem, CL_TRUE, 0, ((size_t)ntrees + 1) * sizeof *prefix,
                                            prefix, 0, NULL, NULL));
-        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 0, sizeof(cl_mem), &nodes));
-        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 1, sizeof(cl_mem), &prim_boxes));
-        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 2, sizeof(cl_mem), &trees_mem));
-        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 3, sizeof(cl_mem), &prefix_mem));
-        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 4, sizeof(cl_uint), &ntrees));
-        CLVR_CL_CHECK(clSetKernelArg(k->build_level, 5, sizeof(cl_uint), &level));
+        CLVR_TRY(CLVR_CL_ARGS(k->build_level, err, CLVR_ARG(nodes), CLVR_ARG(prim_boxes), CLVR_ARG(trees_mem),
+                              CLVR_ARG(prefix_mem), CLVR_ARG(ntrees), CLVR_ARG(level)));
         CLVR_TRY(clvr_cl_run1d(cl, k->build_level, prefix[ntrees], 64, &evt, err));
         if (evt) {
             CLVR_CL_CHECK(clWaitForEvents(1, &evt));

@@ -60,7 +60,7 @@ __kernel void clvr_pp_bounds_tiles(__global const float *pos, __global const flo
             if (with_vals) vals[first + e1] = first + e1;                                                        \
         }                                                                                                        \
     }
-CLVR_PP_KEYS_KERNEL(clvr_pp_keys_tet, 4u)
-CLVR_PP_KEYS_KERNEL(clvr_pp_keys_pyramid, 5u)
-CLVR_PP_KEYS_KERNEL(clvr_pp_keys_wedge, 6u)
-CLVR_PP_KEYS_KERNEL(clvr_pp_keys_hex, 8u)
+/* clvr_pp_keys_tet, clvr_pp_keys_pyramid, ...: one per CLVR_CELL_TYPES entry. */
+#define CLVR_PP_KEYS_OF_TYPE_(id, name, nv) CLVR_PP_KEYS_KERNEL(clvr_pp_keys_##name, nv)
+CLVR_CELL_TYPES(CLVR_PP_KEYS_OF_TYPE_)
+#undef CLVR_PP_KEYS_OF_TYPE_

@@ -71,6 +71,12 @@ CLVR_INLINE clvr_u32 clvr_pp_type_of(clvr_u64 g, clvr_u64 b1, clvr_u64 b2, clvr_
     return (clvr_u32)(g >= b1) + (clvr_u32)(g >= b2) + (clvr_u32)(g >= b3);
 }
 
+/* First global id past type t's elements in layout L of n elements. */
+CLVR_INLINE clvr_u32 clvr_pp_type_end(const clvr_type_layout *L, clvr_u32 t, clvr_u32 n)
+{
+    return t + 1u < CLVR_CELL_TYPE_COUNT ? L->first[t + 1u] : n;
+}
+
 /* Grows a box (lo, hi) by a point. */
 CLVR_FORCE_INLINE void clvr_pp_box_grow(float *lo, float *hi, float x, float y, float z)
 {

@@ -39,7 +39,8 @@ __kernel void clvr_locate_points(__global const float4 *points, uint n, __global
     const float4 p = points[i];
     float s = 0.0f;
     uint e;
-    clvr_locate(p.x, p.y, p.z, tlas, tlas_root, blas, instances, vertices, idx16, idx32, leaf_size, hints, &s, &e);
+    const clvr_mesh_view m = {tlas, blas, instances, vertices, idx16, idx32, tlas_root, leaf_size};
+    clvr_locate(&m, p.x, p.y, p.z, hints, &s, &e);
     scalars[i] = s;
     element_ids[i] = e;
 }

@@ -4,8 +4,8 @@
  * each), instance bounds (union of their leaves) and adaptive-sampling
  * clusters (sampling_size consecutive elements of one type, a box and the
  * scalar range of their vertices). Element ids are global over the four
- * concatenated type lists; eb1..eb3 are the first ids of pyramids, wedges
- * and hexes, sb1..sb3 their first index slots. */
+ * concatenated type lists; a clvr_type_layout gives where each type's
+ * elements and index slots start. */
 #include "clvr_shared.h"
 #include "bounds.h"
 
@@ -32,36 +32,34 @@ inline void clvr_pp_gather_run(__global const uint *order, __global const uint *
  * chunk)), one run per type; many independent loads in flight per core is
  * what a CPU device needs for this random read. */
 __kernel void clvr_pp_gather(__global const uint *order, __global const uint *idx_in, __global uint *idx_sorted,
-                             uint n, ulong chunk, uint ntiles, uint eb1, uint eb2, uint eb3, ulong sb1, ulong sb2,
-                             ulong sb3)
+                             uint n, ulong chunk, uint ntiles, clvr_type_layout L)
 {
     uint tile = (uint)get_global_id(0);
     if (tile >= ntiles) return;
     ulong b = (ulong)tile * chunk, e = min((ulong)n, b + chunk);
-    uint firsts[5] = {0u, eb1, eb2, eb3, n};
-    ulong slots[4] = {0ul, sb1, sb2, sb3};
-    for (uint t = 0; t < 4u; ++t) {
-        ulong r0 = max(b, (ulong)firsts[t]), r1 = min(e, (ulong)firsts[t + 1]);
+    for (uint t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint first = L.first[t];
+        ulong r0 = max(b, (ulong)first), r1 = min(e, (ulong)clvr_pp_type_end(&L, t, n));
         if (r0 >= r1) continue;
         /* Types are the sort key's top bits: sorted element i and order[i] have the same type. */
-        clvr_pp_gather_run(order + firsts[t], idx_in + slots[t], idx_sorted + slots[t], clvr_cell_vertex_count(t),
-                           (uint)r0 - firsts[t], (uint)r1 - firsts[t], firsts[t]);
+        clvr_pp_gather_run(order + first, idx_in + L.slot[t], idx_sorted + L.slot[t], clvr_cell_vertex_count(t),
+                           (uint)r0 - first, (uint)r1 - first, first);
     }
 }
 
 /* Sampling cluster c: cb1..cb3 are the first cluster ids of pyramids,
- * wedges, hexes; en = element count (end of hexes). */
+ * wedges, hexes; L the element layout, en = element count. */
 __kernel void clvr_pp_sampling(__global const float *pos, __global const float *scal, __global const uint *idx_sorted,
-                               uint nclusters, uint size, uint cb1, uint cb2, uint cb3, uint eb1, uint eb2, uint eb3,
-                               uint en, ulong sb1, ulong sb2, ulong sb3, __global clvr_sampling_cluster *out)
+                               uint nclusters, uint size, uint cb1, uint cb2, uint cb3, clvr_type_layout L, uint en,
+                               __global clvr_sampling_cluster *out)
 {
     uint c = (uint)get_global_id(0);
     if (c >= nclusters) return;
     uint t = clvr_pp_type_of(c, cb1, cb2, cb3);
     uint cfirst = t == 0u ? 0u : t == 1u ? cb1 : t == 2u ? cb2 : cb3;
-    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
-    uint end = t == 0u ? eb1 : t == 1u ? eb2 : t == 2u ? eb3 : en;
-    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    uint first = L.first[t];
+    uint end = clvr_pp_type_end(&L, t, en);
+    ulong slot0 = L.slot[t];
     uint vpe = clvr_cell_vertex_count(t);
     uint e0 = first + (c - cfirst) * size, e1 = min(end, e0 + size);
     float lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
@@ -115,12 +113,12 @@ inline uint clvr_pp_find_leaf(__global const clvr_instance *inst, uint ninst, ui
         lo = select(lo, elo, elo < lo);                                                              \
         hi = select(hi, ehi, ehi > hi);                                                              \
     }
-#define CLVR_PP_LEAF_CASES(IDX)                                \
-    switch (c.type) {                                          \
-    case CLVR_CELL_TET: CLVR_PP_LEAF_GROW(IDX, 4u) break;      \
-    case CLVR_CELL_PYRAMID: CLVR_PP_LEAF_GROW(IDX, 5u) break;  \
-    case CLVR_CELL_WEDGE: CLVR_PP_LEAF_GROW(IDX, 6u) break;    \
-    default: CLVR_PP_LEAF_GROW(IDX, 8u) break;                 \
+#define CLVR_PP_LEAF_CASE_16(id, name, nv) case id: CLVR_PP_LEAF_GROW(idx16, nv) break;
+#define CLVR_PP_LEAF_CASE_32(id, name, nv) case id: CLVR_PP_LEAF_GROW(idx32, nv) break;
+#define CLVR_PP_LEAF_CASES(BITS)                   \
+    switch (c.type) {                              \
+        CLVR_CELL_TYPES(CLVR_PP_LEAF_CASE_##BITS)  \
+    default: break;                                \
     }
 
 /* Box of leaf cluster l from the clustered arrays (local indices into the
@@ -138,9 +136,9 @@ __kernel void clvr_pp_leaf_boxes(__global const float4 *verts, __global const us
     uint e1 = min(c.first_element + c.num_elements, e0 + leaf_size);
     float4 lo = (float4)(INFINITY), hi = (float4)(-INFINITY);
     if (c.index_bits == 16u) {
-        CLVR_PP_LEAF_CASES(idx16)
+        CLVR_PP_LEAF_CASES(16)
     } else {
-        CLVR_PP_LEAF_CASES(idx32)
+        CLVR_PP_LEAF_CASES(32)
     }
     out[l].lo[0] = lo.x; out[l].lo[1] = lo.y; out[l].lo[2] = lo.z; out[l].lo[3] = 0.0f;
     out[l].hi[0] = hi.x; out[l].hi[1] = hi.y; out[l].hi[2] = hi.z; out[l].hi[3] = 0.0f;

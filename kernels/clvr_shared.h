@@ -69,10 +69,38 @@ typedef int64_t clvr_i64;
 /* Largest vertex count of any element type (the hexahedron). */
 #define CLVR_CELL_MAX_VERTS 8u
 
+/* Every element type once, in CLVR_CELL_* order: X(id, name, vertex count).
+ * The per-type code is generated from this list: the vertex count below,
+ * the element dispatchers of kernels/elements.h (which call
+ * clvr_<name>_shape, _inside and _start), the preprocessing's key kernels
+ * (clvr_pp_keys_<name>) and leaf-box loops. A new type is one line here,
+ * its element functions and its loader mapping (docs/extending.md). */
+#define CLVR_CELL_TYPES(X)              \
+    X(CLVR_CELL_TET, tet, 4u)           \
+    X(CLVR_CELL_PYRAMID, pyramid, 5u)   \
+    X(CLVR_CELL_WEDGE, wedge, 6u)       \
+    X(CLVR_CELL_HEX, hex, 8u)
+
+/* Vertices per element of the type (CLVR_CELL_MAX_VERTS for an unknown
+ * one). A chain of selects, not a table: it folds to a constant wherever
+ * the type is one (the per-type kernels). */
 CLVR_INLINE clvr_u32 clvr_cell_vertex_count(clvr_u32 type)
 {
-    return type == CLVR_CELL_TET ? 4u : type == CLVR_CELL_PYRAMID ? 5u : type == CLVR_CELL_WEDGE ? 6u : 8u;
+#define CLVR_CELL_NV_(id, name, nv) type == (id) ? (nv) :
+    return CLVR_CELL_TYPES(CLVR_CELL_NV_) CLVR_CELL_MAX_VERTS;
+#undef CLVR_CELL_NV_
 }
+
+/* Where each type's elements and index slots start in the concatenated
+ * type lists (elements of type t: global ids first[t] .. first[t + 1] - 1,
+ * the last type ending at the element count; their indices from slot[t],
+ * vertex_count(t) each). Passed by value to the preprocessing kernels.
+ * 48 bytes, no padding (slot is 8-aligned at offset 16). */
+typedef struct clvr_type_layout {
+    clvr_u32 first[CLVR_CELL_TYPE_COUNT];
+    clvr_u64 slot[CLVR_CELL_TYPE_COUNT];
+} clvr_type_layout;
+CLVR_STATIC_ASSERT(sizeof(clvr_type_layout) == 12 * CLVR_CELL_TYPE_COUNT, "clvr_type_layout layout");
 
 /* An axis-aligned box; w lanes are padding (kept zero) so that the box maps
  * onto two float4 loads on the device. 32 bytes. */
@@ -84,9 +112,11 @@ CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
 
 /* ---------------------------------------------------------------- clustered mesh
  * The contract between preprocessing (which writes it), bvh/ (which builds
- * trees over it) and the renderer (which reads it). Decisions, see DESIGN:
+ * trees over it) and the renderer (which reads it). Decisions (README, "How
+ * it works"):
  * - Each element type is sorted along its own Hilbert curve (same
- *   quantization grid: the mesh bounds), so every cluster holds one element
+ *   quantization grid: the mesh bounds, or a box the caller gives so that
+ *   partitions of one mesh share it), so every cluster holds one element
  *   type and elements are addressed with a fixed stride, no per-element tag.
  * - Global sorted element ids are the concatenation of the four sorted
  *   lists: tets [0, T), pyramids [T, T+P), wedges, hexes.
@@ -242,7 +272,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_bvh_tree) == 16, "clvr_bvh_tree layout");
 /* ---------------------------------------------------------------- render
  * (owned by the renderer: camera, transfer function, light, frame params) */
 
-/* camera + transfer function (host/camera.c, host/tf.c) */
+/* camera + transfer function (host/pipeline/camera.c, host/io/tf.c) */
 #ifdef __OPENCL_VERSION__
 #define CLVR_SQRTF sqrt
 #define CLVR_FLOORF floor
@@ -379,10 +409,10 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* end camera + transfer function */
 
 /* ---------------------------------------------------------------- frame
- * (owned by the renderer: host/render.c, kernels/render.cl) */
+ * (owned by the renderer: host/pipeline/render.c, kernels/render.cl) */
 
 /* Methods, the values of clvr_frame.method: where majorants come from.
- * Names in clvr_render_method_name (host/render.c), in this order. */
+ * Names in clvr_render_method_name (host/pipeline/render.c), in this order. */
 #define CLVR_RENDER_MARCH 0u
 #define CLVR_RENDER_TRACK 1u
 #define CLVR_RENDER_BINS 2u
@@ -393,7 +423,7 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * has its own): delta: delta tracking, a 0/1 collision and a 0/1 shadow
  * visibility; urm: unbiased ray marching, a weighted quadrature with residual
  * ratio-tracked transmittance (kernels/render_volume.h). Same expected value;
- * names in clvr_render_estimator_name (host/render.c), in this order. */
+ * names in clvr_render_estimator_name (host/pipeline/render.c), in this order. */
 #define CLVR_ESTIMATOR_DELTA 0u
 #define CLVR_ESTIMATOR_URM 1u
 #define CLVR_ESTIMATOR_COUNT 2u
@@ -411,7 +441,7 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
  * order (after the frame and the camera): X(kernel type, name). This list
  * generates the render kernel's parameters and the fields of its
  * clvr_volume (kernels/render.cl, render_volume.h) and the host's binding
- * (host/render.c), so the three cannot drift apart. */
+ * (host/pipeline/render.c), so the three cannot drift apart. */
 #define CLVR_VOLUME_ARRAYS(X)                                                                                          \
     X(float4, tf)                           /* transfer function table: rgb + extinction */                             \
     X(float4, vertices)                     /* clustered vertices: xyz + scalar */                                       \
@@ -486,7 +516,5 @@ typedef struct clvr_frame {
     float urm_kappa;          /* urm: at most this majorant optical depth between two points */
 } clvr_frame;
 CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 192, "clvr_frame layout");
-
-/* [frame: types] */
 
 #endif /* CLVR_SHARED_H */

@@ -33,78 +33,26 @@
 /* Parametric coordinates beyond this mean Newton diverged. */
 #define CLVR_NEWTON_DIVERGED 1e6f
 
-/* Shape functions N[i] of the element type at parametric (u, v, w) and their
- * derivatives. Parametric domains: tet u, v, w >= 0, u + v + w <= 1;
- * pyramid u, v, w in [0, 1] (apex at w = 1); wedge u, v >= 0, u + v <= 1,
- * w in [0, 1]; hex [0, 1]^3. Slots past the vertex count are zero. */
+/* ---------------------------------------------------------------- per type
+ * Each element type has the same three functions, and a new type adds its
+ * own three (and one line in CLVR_CELL_TYPES):
+ *   clvr_<name>_shape(u, v, w, N, Nu, Nv, Nw): shape functions N[i] at
+ *       parametric (u, v, w) and their derivatives, for its own vertex
+ *       slots only (the dispatcher zeroes the rest);
+ *   clvr_<name>_inside(u, v, w, eps): 1 when (u, v, w) lies in its
+ *       parametric domain grown by eps;
+ *   clvr_<name>_invert(vtx, px, py, pz, &u, &v, &w): parametric coordinates
+ *       of world point p (see clvr_element_invert); types whose map is not
+ *       linear call clvr_newton_invert from a start point of their own.
+ * The tet also has a faster containment test (clvr_tet_sample) that
+ * clvr_element_sample and point location use.
+ * Parametric domains: tet u, v, w >= 0, u + v + w <= 1; pyramid u, v, w in
+ * [0, 1] (apex at w = 1); wedge u, v >= 0, u + v <= 1, w in [0, 1]; hex
+ * [0, 1]^3. */
+
+/* The shape dispatcher (below, with the others): Newton calls it. */
 CLVR_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
-                                    float *Nw)
-{
-    for (int i = 0; i < 8; ++i) { N[i] = 0.0f; Nu[i] = 0.0f; Nv[i] = 0.0f; Nw[i] = 0.0f; }
-    const float iu = 1.0f - u, iv = 1.0f - v, iw = 1.0f - w;
-    if (type == CLVR_CELL_TET) {
-        N[0] = 1.0f - u - v - w; N[1] = u; N[2] = v; N[3] = w;
-        Nu[0] = -1.0f; Nu[1] = 1.0f;
-        Nv[0] = -1.0f; Nv[2] = 1.0f;
-        Nw[0] = -1.0f; Nw[3] = 1.0f;
-    } else if (type == CLVR_CELL_PYRAMID) {
-        /* base 0 (0,0) 1 (1,0) 2 (1,1) 3 (0,1) scaled by (1 - w), apex 4 */
-        N[0] = iu * iv * iw; N[1] = u * iv * iw; N[2] = u * v * iw; N[3] = iu * v * iw; N[4] = w;
-        Nu[0] = -iv * iw; Nu[1] = iv * iw; Nu[2] = v * iw; Nu[3] = -v * iw;
-        Nv[0] = -iu * iw; Nv[1] = -u * iw; Nv[2] = u * iw; Nv[3] = iu * iw;
-        Nw[0] = -iu * iv; Nw[1] = -u * iv; Nw[2] = -u * v; Nw[3] = -iu * v; Nw[4] = 1.0f;
-    } else if (type == CLVR_CELL_WEDGE) {
-        /* triangle 0 1 2 at w = 0, triangle 3 4 5 above it at w = 1 */
-        const float t = 1.0f - u - v;
-        N[0] = t * iw; N[1] = u * iw; N[2] = v * iw; N[3] = t * w; N[4] = u * w; N[5] = v * w;
-        Nu[0] = -iw; Nu[1] = iw; Nu[3] = -w; Nu[4] = w;
-        Nv[0] = -iw; Nv[2] = iw; Nv[3] = -w; Nv[5] = w;
-        Nw[0] = -t; Nw[1] = -u; Nw[2] = -v; Nw[3] = t; Nw[4] = u; Nw[5] = v;
-    } else {
-        /* hex: 0 (0,0,0) 1 (1,0,0) 2 (1,1,0) 3 (0,1,0), 4..7 the same at w = 1 */
-        N[0] = iu * iv * iw; N[1] = u * iv * iw; N[2] = u * v * iw; N[3] = iu * v * iw;
-        N[4] = iu * iv * w;  N[5] = u * iv * w;  N[6] = u * v * w;  N[7] = iu * v * w;
-        Nu[0] = -iv * iw; Nu[1] = iv * iw; Nu[2] = v * iw; Nu[3] = -v * iw;
-        Nu[4] = -iv * w;  Nu[5] = iv * w;  Nu[6] = v * w;  Nu[7] = -v * w;
-        Nv[0] = -iu * iw; Nv[1] = -u * iw; Nv[2] = u * iw; Nv[3] = iu * iw;
-        Nv[4] = -iu * w;  Nv[5] = -u * w;  Nv[6] = u * w;  Nv[7] = iu * w;
-        Nw[0] = -iu * iv; Nw[1] = -u * iv; Nw[2] = -u * v; Nw[3] = -iu * v;
-        Nw[4] = iu * iv;  Nw[5] = u * iv;  Nw[6] = u * v;  Nw[7] = iu * v;
-    }
-}
-
-/* 1 when (u, v, w) lies in the type's parametric domain grown by eps. */
-CLVR_INLINE int clvr_element_param_inside(clvr_u32 type, float u, float v, float w, float eps)
-{
-    const float lo = -eps, hi = 1.0f + eps;
-    if (type == CLVR_CELL_TET) return u >= lo && v >= lo && w >= lo && u + v + w <= hi;
-    if (type == CLVR_CELL_WEDGE) return u >= lo && v >= lo && u + v <= hi && w >= lo && w <= hi;
-    if (type == CLVR_CELL_PYRAMID) {
-        /* In the collapsed coordinates a = u (1 - w), b = v (1 - w) the
-         * domain is the pyramid itself; u and v lose their meaning at the
-         * apex (their error grows like 1 / (1 - w)), a and b do not. */
-        const float iw = 1.0f - w, a = u * iw, b = v * iw;
-        return w >= lo && w <= hi && a >= lo && a <= iw + eps && b >= lo && b <= iw + eps;
-    }
-    return u >= lo && u <= hi && v >= lo && v <= hi && w >= lo && w <= hi;
-}
-
-/* Forward map: world position of parametric (u, v, w) (tests build points on
- * faces, edges and inside elements with it). */
-CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float u, float v, float w, float *x,
-                                      float *y, float *z)
-{
-    float N[8], Nu[8], Nv[8], Nw[8];
-    clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
-    const clvr_u32 nv = clvr_cell_vertex_count(type);
-    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
-    for (clvr_u32 i = 0; i < nv; ++i) {
-        sx += N[i] * vtx[i].x;
-        sy += N[i] * vtx[i].y;
-        sz += N[i] * vtx[i].z;
-    }
-    *x = sx; *y = sy; *z = sz;
-}
+                                    float *Nw);
 
 /* Solves [a b c] x = r by Cramer's rule; returns 0 when the determinant is
  * zero, tiny relative to the columns, or not finite. */
@@ -127,29 +75,21 @@ CLVR_INLINE int clvr_solve3(float ax, float ay, float az, float bx, float by, fl
     return 1;
 }
 
-/* Parametric coordinates of world point p in the element (vertices vtx[0..n-1],
- * VTK order). Returns 1 when they were found (Newton converged, or the tet's
- * solve succeeded), 0 on divergence, singular maps or NaN; a 1 says nothing
- * about inside: use clvr_element_param_inside. */
-CLVR_INLINE int clvr_element_invert(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *pu,
-                                    float *pv, float *pw)
+/* Newton's method on the isoparametric map of an element of `type` (any
+ * type whose clvr_<name>_shape is set up), from (u, v, w), in coordinates
+ * relative to vertex 0; see clvr_element_invert for the result. */
+CLVR_INLINE int clvr_newton_invert(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float u,
+                                   float v, float w, float *pu, float *pv, float *pw)
 {
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     /* Relative to vertex 0, for precision far from the origin. */
     const float ox = vtx[0].x, oy = vtx[0].y, oz = vtx[0].z;
     px -= ox; py -= oy; pz -= oz;
-    if (type == CLVR_CELL_TET) {
-        return clvr_solve3(vtx[1].x - ox, vtx[1].y - oy, vtx[1].z - oz, vtx[2].x - ox, vtx[2].y - oy, vtx[2].z - oz,
-                           vtx[3].x - ox, vtx[3].y - oy, vtx[3].z - oz, px, py, pz, pu, pv, pw);
-    }
     float size = 0.0f;
     for (clvr_u32 i = 1; i < nv; ++i)
         size = fmax(size, fabs(vtx[i].x - ox) + fabs(vtx[i].y - oy) + fabs(vtx[i].z - oz));
     const float res_tol = CLVR_NEWTON_RESIDUAL_REL * size;
-    /* Start at the parametric centre (below the pyramid's singular apex). */
-    float u = type == CLVR_CELL_WEDGE ? 1.0f / 3.0f : 0.5f;
-    float v = u, w = type == CLVR_CELL_PYRAMID ? 0.25f : 0.5f;
-    float N[8], Nu[8], Nv[8], Nw[8];
+    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
     for (int it = 0; it < CLVR_NEWTON_MAX_ITER; ++it) {
         clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
         float fx = -px, fy = -py, fz = -pz;
@@ -181,12 +121,37 @@ CLVR_INLINE int clvr_element_invert(clvr_u32 type, const clvr_vec4 *vtx, float p
     return 0;
 }
 
+/* ------------------------------------------------ tetrahedron (VTK_TETRA) */
+
+CLVR_INLINE void clvr_tet_shape(float u, float v, float w, float *N, float *Nu, float *Nv, float *Nw)
+{
+    N[0] = 1.0f - u - v - w; N[1] = u; N[2] = v; N[3] = w;
+    Nu[0] = -1.0f; Nu[1] = 1.0f;
+    Nv[0] = -1.0f; Nv[2] = 1.0f;
+    Nw[0] = -1.0f; Nw[3] = 1.0f;
+}
+
+CLVR_INLINE int clvr_tet_inside(float u, float v, float w, float eps)
+{
+    const float lo = -eps, hi = 1.0f + eps;
+    return u >= lo && v >= lo && w >= lo && u + v + w <= hi;
+}
+
+/* The map is linear: one 3x3 solve, no iteration. */
+CLVR_INLINE int clvr_tet_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv, float *pw)
+{
+    const float ox = vtx[0].x, oy = vtx[0].y, oz = vtx[0].z;
+    px -= ox; py -= oy; pz -= oz;
+    return clvr_solve3(vtx[1].x - ox, vtx[1].y - oy, vtx[1].z - oz, vtx[2].x - ox, vtx[2].y - oy, vtx[2].z - oz,
+                       vtx[3].x - ox, vtx[3].y - oy, vtx[3].z - oz, px, py, pz, pu, pv, pw);
+}
+
 /* Tet containment and interpolation: the same arithmetic as
- * clvr_element_invert + clvr_element_param_inside + the shape-function sum
- * (bit for bit: clvr_solve3's formulas, in its order), but each barycentric
- * is computed only when the previous ones passed, so the many tets a point
- * is not in (point location tests several per query) cost about a third of
- * the full solve. */
+ * clvr_tet_invert + clvr_tet_inside + the shape-function sum (bit for bit:
+ * clvr_solve3's formulas, in its order), but each barycentric is computed
+ * only when the previous ones passed, so the many tets a point is not in
+ * (point location tests several per query) cost about a third of the full
+ * solve. */
 CLVR_INLINE int clvr_tet_sample(const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
 {
     const float ox = vtx[0].x, oy = vtx[0].y, oz = vtx[0].z;
@@ -217,18 +182,168 @@ CLVR_INLINE int clvr_tet_sample(const clvr_vec4 *vtx, float px, float py, float 
     return 1;
 }
 
+/* ------------------------------------------------ pyramid (VTK_PYRAMID) */
+
+/* base 0 (0,0) 1 (1,0) 2 (1,1) 3 (0,1) scaled by (1 - w), apex 4 */
+CLVR_INLINE void clvr_pyramid_shape(float u, float v, float w, float *N, float *Nu, float *Nv, float *Nw)
+{
+    const float iu = 1.0f - u, iv = 1.0f - v, iw = 1.0f - w;
+    N[0] = iu * iv * iw; N[1] = u * iv * iw; N[2] = u * v * iw; N[3] = iu * v * iw; N[4] = w;
+    Nu[0] = -iv * iw; Nu[1] = iv * iw; Nu[2] = v * iw; Nu[3] = -v * iw;
+    Nv[0] = -iu * iw; Nv[1] = -u * iw; Nv[2] = u * iw; Nv[3] = iu * iw;
+    Nw[0] = -iu * iv; Nw[1] = -u * iv; Nw[2] = -u * v; Nw[3] = -iu * v; Nw[4] = 1.0f;
+}
+
+CLVR_INLINE int clvr_pyramid_inside(float u, float v, float w, float eps)
+{
+    /* In the collapsed coordinates a = u (1 - w), b = v (1 - w) the domain
+     * is the pyramid itself; u and v lose their meaning at the apex (their
+     * error grows like 1 / (1 - w)), a and b do not. */
+    const float lo = -eps, hi = 1.0f + eps;
+    const float iw = 1.0f - w, a = u * iw, b = v * iw;
+    return w >= lo && w <= hi && a >= lo && a <= iw + eps && b >= lo && b <= iw + eps;
+}
+
+/* Newton from below the singular apex. */
+CLVR_INLINE int clvr_pyramid_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv,
+                                    float *pw)
+{
+    return clvr_newton_invert(CLVR_CELL_PYRAMID, vtx, px, py, pz, 0.5f, 0.5f, 0.25f, pu, pv, pw);
+}
+
+/* ------------------------------------------------ wedge (VTK_WEDGE) */
+
+/* triangle 0 1 2 at w = 0, triangle 3 4 5 above it at w = 1 */
+CLVR_INLINE void clvr_wedge_shape(float u, float v, float w, float *N, float *Nu, float *Nv, float *Nw)
+{
+    const float iw = 1.0f - w, t = 1.0f - u - v;
+    N[0] = t * iw; N[1] = u * iw; N[2] = v * iw; N[3] = t * w; N[4] = u * w; N[5] = v * w;
+    Nu[0] = -iw; Nu[1] = iw; Nu[3] = -w; Nu[4] = w;
+    Nv[0] = -iw; Nv[2] = iw; Nv[3] = -w; Nv[5] = w;
+    Nw[0] = -t; Nw[1] = -u; Nw[2] = -v; Nw[3] = t; Nw[4] = u; Nw[5] = v;
+}
+
+CLVR_INLINE int clvr_wedge_inside(float u, float v, float w, float eps)
+{
+    const float lo = -eps, hi = 1.0f + eps;
+    return u >= lo && v >= lo && u + v <= hi && w >= lo && w <= hi;
+}
+
+/* Newton from the parametric centre. */
+CLVR_INLINE int clvr_wedge_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv, float *pw)
+{
+    return clvr_newton_invert(CLVR_CELL_WEDGE, vtx, px, py, pz, 1.0f / 3.0f, 1.0f / 3.0f, 0.5f, pu, pv, pw);
+}
+
+/* ------------------------------------------------ hexahedron (VTK_HEXAHEDRON) */
+
+/* 0 (0,0,0) 1 (1,0,0) 2 (1,1,0) 3 (0,1,0), 4..7 the same at w = 1 */
+CLVR_INLINE void clvr_hex_shape(float u, float v, float w, float *N, float *Nu, float *Nv, float *Nw)
+{
+    const float iu = 1.0f - u, iv = 1.0f - v, iw = 1.0f - w;
+    N[0] = iu * iv * iw; N[1] = u * iv * iw; N[2] = u * v * iw; N[3] = iu * v * iw;
+    N[4] = iu * iv * w;  N[5] = u * iv * w;  N[6] = u * v * w;  N[7] = iu * v * w;
+    Nu[0] = -iv * iw; Nu[1] = iv * iw; Nu[2] = v * iw; Nu[3] = -v * iw;
+    Nu[4] = -iv * w;  Nu[5] = iv * w;  Nu[6] = v * w;  Nu[7] = -v * w;
+    Nv[0] = -iu * iw; Nv[1] = -u * iw; Nv[2] = u * iw; Nv[3] = iu * iw;
+    Nv[4] = -iu * w;  Nv[5] = -u * w;  Nv[6] = u * w;  Nv[7] = iu * w;
+    Nw[0] = -iu * iv; Nw[1] = -u * iv; Nw[2] = -u * v; Nw[3] = -iu * v;
+    Nw[4] = iu * iv;  Nw[5] = u * iv;  Nw[6] = u * v;  Nw[7] = iu * v;
+}
+
+CLVR_INLINE int clvr_hex_inside(float u, float v, float w, float eps)
+{
+    const float lo = -eps, hi = 1.0f + eps;
+    return u >= lo && u <= hi && v >= lo && v <= hi && w >= lo && w <= hi;
+}
+
+/* Newton from the parametric centre. */
+CLVR_INLINE int clvr_hex_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv, float *pw)
+{
+    return clvr_newton_invert(CLVR_CELL_HEX, vtx, px, py, pz, 0.5f, 0.5f, 0.5f, pu, pv, pw);
+}
+
+/* ---------------------------------------------------------------- dispatch
+ * One switch per operation, generated from CLVR_CELL_TYPES (Open VKL's
+ * shape: per-type functions, one dispatcher). The type is uniform over an
+ * instance cluster, so the branch is taken the same way by a leaf's
+ * elements. */
+
+/* Shape functions N[i] of the element type at parametric (u, v, w) and
+ * their derivatives (domains above). Slots past the vertex count are
+ * zero. */
+CLVR_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
+                                    float *Nw)
+{
+    for (clvr_u32 i = 0; i < CLVR_CELL_MAX_VERTS; ++i) { N[i] = 0.0f; Nu[i] = 0.0f; Nv[i] = 0.0f; Nw[i] = 0.0f; }
+    switch (type) {
+#define CLVR_ELEMENT_CASE_(id, name, nv) \
+    case id: clvr_##name##_shape(u, v, w, N, Nu, Nv, Nw); break;
+        CLVR_CELL_TYPES(CLVR_ELEMENT_CASE_)
+#undef CLVR_ELEMENT_CASE_
+    default: break;
+    }
+}
+
+/* 1 when (u, v, w) lies in the type's parametric domain grown by eps (0
+ * for an unknown type). */
+CLVR_INLINE int clvr_element_param_inside(clvr_u32 type, float u, float v, float w, float eps)
+{
+    switch (type) {
+#define CLVR_ELEMENT_CASE_(id, name, nv) \
+    case id: return clvr_##name##_inside(u, v, w, eps);
+        CLVR_CELL_TYPES(CLVR_ELEMENT_CASE_)
+#undef CLVR_ELEMENT_CASE_
+    default: return 0;
+    }
+}
+
+/* Parametric coordinates of world point p in the element (vertices vtx[0..n-1],
+ * VTK order). Returns 1 when they were found (Newton converged, or the tet's
+ * solve succeeded), 0 on divergence, singular maps, NaN or an unknown type;
+ * a 1 says nothing about inside: use clvr_element_param_inside. */
+CLVR_INLINE int clvr_element_invert(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *pu,
+                                    float *pv, float *pw)
+{
+    switch (type) {
+#define CLVR_ELEMENT_CASE_(id, name, nv) \
+    case id: return clvr_##name##_invert(vtx, px, py, pz, pu, pv, pw);
+        CLVR_CELL_TYPES(CLVR_ELEMENT_CASE_)
+#undef CLVR_ELEMENT_CASE_
+    default: return 0;
+    }
+}
+
+/* Forward map: world position of parametric (u, v, w) (tests build points on
+ * faces, edges and inside elements with it). */
+CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float u, float v, float w, float *x,
+                                      float *y, float *z)
+{
+    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
+    clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
+    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+    for (clvr_u32 i = 0; i < nv; ++i) {
+        sx += N[i] * vtx[i].x;
+        sy += N[i] * vtx[i].y;
+        sz += N[i] * vtx[i].z;
+    }
+    *x = sx; *y = sy; *z = sz;
+}
+
 /* Point containment and interpolation: returns 1 when (px, py, pz) lies in
  * the element (within CLVR_ELEMENT_EPS in parametric coordinates) and writes
  * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
  * for degenerate elements and NaN input). vtx holds the element's
- * clvr_cell_vertex_count(type) vertices in VTK order. */
+ * clvr_cell_vertex_count(type) vertices in VTK order. Tets take their
+ * early-out test (clvr_tet_sample); every other type inverts its map. */
 CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
 {
     if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
     float u, v, w;
     if (!clvr_element_invert(type, vtx, px, py, pz, &u, &v, &w)) return 0;
     if (!clvr_element_param_inside(type, u, v, w, CLVR_ELEMENT_EPS)) return 0;
-    float N[8], Nu[8], Nv[8], Nw[8];
+    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
     clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     float s = 0.0f;

@@ -9,13 +9,13 @@
 
 /* One work-item per segment, all types in one launch (so that the segments
  * of small types run beside those of big ones): seg[s] = (type, first
- * element, end element, 0) with elements counted within the type, eb1..eb3
- * and sb1..sb3 the first global element ids and index slots of pyramids,
- * wedges and hexes. Worker s uses map s (1 << log2cap slots, zero) and
- * writes its records at recs[s * rec_max ...] and their number at counts[s]. */
+ * element, end element, 0) with elements counted within the type; L gives
+ * the first global element id and index slot of each type. Worker s uses
+ * map s (1 << log2cap slots, zero) and writes its records at
+ * recs[s * rec_max ...] and their number at counts[s]. */
 __kernel void clvr_pp_split(__global const uint *idx_sorted, __global uint *vmap, __global ushort *idx16,
-                            __global uint *idx32, int bits32, __global const uint4 *seg, uint nseg, uint eb1,
-                            uint eb2, uint eb3, ulong sb1, ulong sb2, ulong sb3, uint vlimit, uint max_elems,
+                            __global uint *idx32, int bits32, __global const uint4 *seg, uint nseg,
+                            clvr_type_layout L, uint vlimit, uint max_elems,
                             __global ulong *tab, uint log2cap, uint rec_max, __global clvr_pp_instance_rec *recs,
                             __global uint *counts)
 {
@@ -23,8 +23,8 @@ __kernel void clvr_pp_split(__global const uint *idx_sorted, __global uint *vmap
     if (s >= nseg) return;
     uint4 g = seg[s];
     uint t = g.x;
-    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
-    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    uint first = L.first[t];
+    ulong slot0 = L.slot[t];
     counts[s] = clvr_pp_split_segment(idx_sorted, vmap, idx16, idx32, bits32, t, first, slot0, g.y, g.z, vlimit,
                                       max_elems, tab + ((ulong)s << log2cap), log2cap, recs + (ulong)s * rec_max,
                                       rec_max);
@@ -54,15 +54,14 @@ __kernel void clvr_pp_inst_counts(__global const clvr_pp_instance_rec *recs, __g
  * hold the exclusive scans of the counts. */
 __kernel void clvr_pp_inst_write(__global const clvr_pp_instance_rec *recs, __global const uint *sel, uint ninst,
                                  __global const uint *first_vertex, __global const uint *first_leaf, uint leaf_size,
-                                 int bits32, uint eb1, uint eb2, uint eb3, ulong sb1, ulong sb2, ulong sb3,
-                                 __global clvr_instance *inst, __global ulong *vsrc)
+                                 int bits32, clvr_type_layout L, __global clvr_instance *inst, __global ulong *vsrc)
 {
     uint i = (uint)get_global_id(0);
     if (i >= ninst) return;
     clvr_pp_instance_rec r = recs[sel[i]];
     uint t = r.type;
-    uint first = t == 0u ? 0u : t == 1u ? eb1 : t == 2u ? eb2 : eb3;
-    ulong slot0 = t == 0u ? 0ul : t == 1u ? sb1 : t == 2u ? sb2 : sb3;
+    uint first = L.first[t];
+    ulong slot0 = L.slot[t];
     clvr_instance c;
     for (int k = 0; k < 4; ++k) { c.bounds.lo[k] = 0.0f; c.bounds.hi[k] = 0.0f; }
     c.type = t;

@@ -56,6 +56,26 @@ CLVR_INLINE void clvr_pp_hash_clear(CLVR_GLOBAL clvr_u64 *tab, clvr_u32 log2cap,
     }
 }
 
+/* Closes the instance being grown (elements first_element ..
+ * first_element + ne - 1, nv vertices whose ids are vmap[vsrc .. vpos)):
+ * writes its record when there is room (every record is counted, so that
+ * the caller sees an overflow) and clears its entries from the map. */
+CLVR_FORCE_INLINE void clvr_pp_close_instance(CLVR_GLOBAL clvr_pp_instance_rec *recs, clvr_u32 *nrec,
+                                              clvr_u32 rec_max, clvr_u64 vsrc, clvr_u32 first_element, clvr_u32 ne,
+                                              clvr_u32 nv, clvr_u32 type, CLVR_GLOBAL clvr_u64 *tab,
+                                              clvr_u32 log2cap, CLVR_GLOBAL const clvr_u32 *vmap, clvr_u64 vpos)
+{
+    if (*nrec < rec_max) {
+        recs[*nrec].vsrc = vsrc;
+        recs[*nrec].first_element = first_element;
+        recs[*nrec].num_elements = ne;
+        recs[*nrec].num_vertices = nv;
+        recs[*nrec].type = type;
+    }
+    ++*nrec;
+    clvr_pp_hash_clear(tab, log2cap, vmap, vsrc, vpos);
+}
+
 /* Greedy split and re-index of elements [e_begin, e_end) of one type
  * (indices relative to that type: element e's global sorted indices are
  * idx_sorted[slot0 + e * vpe ...]). Writes local indices to idx16 or idx32
@@ -95,15 +115,8 @@ CLVR_INLINE clvr_u32 clvr_pp_split_segment(CLVR_GLOBAL const clvr_u32 *idx_sorte
             }
         }
         if (ne > 0u && (nv + fresh > vlimit || ne >= max_elems)) {
-            if (nrec < rec_max) {
-                recs[nrec].vsrc = vsrc;
-                recs[nrec].first_element = type_first + first;
-                recs[nrec].num_elements = ne;
-                recs[nrec].num_vertices = nv;
-                recs[nrec].type = type;
-            }
-            ++nrec;
-            clvr_pp_hash_clear(tab, log2cap, vmap, vsrc, vpos);
+            clvr_pp_close_instance(recs, &nrec, rec_max, vsrc, type_first + first, ne, nv, type, tab, log2cap, vmap,
+                                   vpos);
             nv = 0;
             ne = 0;
             first = e;
@@ -135,17 +148,8 @@ CLVR_INLINE clvr_u32 clvr_pp_split_segment(CLVR_GLOBAL const clvr_u32 *idx_sorte
         }
         ++ne;
     }
-    if (ne > 0u) {
-        if (nrec < rec_max) {
-            recs[nrec].vsrc = vsrc;
-            recs[nrec].first_element = type_first + first;
-            recs[nrec].num_elements = ne;
-            recs[nrec].num_vertices = nv;
-            recs[nrec].type = type;
-        }
-        ++nrec;
-        clvr_pp_hash_clear(tab, log2cap, vmap, vsrc, vpos);
-    }
+    if (ne > 0u)
+        clvr_pp_close_instance(recs, &nrec, rec_max, vsrc, type_first + first, ne, nv, type, tab, log2cap, vmap, vpos);
     return nrec;
 }
 

@@ -17,7 +17,7 @@
 #include "render_volume.h"
 
 /* Parameters: the frame, the camera, the arrays of CLVR_VOLUME_ARRAYS in
- * their order, then the outputs (host/render.c binds them in this order). */
+ * their order, then the outputs (host/pipeline/render.c binds them in this order). */
 #define CLVR_VOLUME_PARAM(T, name) __global const T *name,
 #define CLVR_VOLUME_BIND(T, name) v.name = name;
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,

@@ -9,7 +9,7 @@
  * Passes whose digit is equal for all keys are skipped by the host, which
  * learns them from the AND and OR of all keys (clvr_pp_radix_andor).
  *
- * Large sorts on CPU devices go hybrid (host/preprocess.c decides): one
+ * Large sorts on CPU devices go hybrid (host/pipeline/preprocess.c decides): one
  * such pass on the top varying 8 bits splits the keys into 256 buckets in
  * memory order, then clvr_pp_radix_buckets finishes each bucket with the
  * remaining LSD passes. A bucket of n/256 keys fits a core's L2 cache, so

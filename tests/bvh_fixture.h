@@ -297,14 +297,15 @@ static inline int fx_cluster(const clvr_mesh *m, uint32_t leaf_size, uint32_t in
 static inline uint32_t fx_element(const fx_clustered *c, uint32_t e, clvr_vec4 *v)
 {
     const clvr_instance *in = &c->instances[c->elem_instance[e]];
-    clvr_load_element(in, e, c->vertices, c->idx16, c->idx32, v);
+    const clvr_mesh_view mv = {NULL, NULL, c->instances, c->vertices, c->idx16, c->idx32, 0, 0};
+    clvr_load_element(&mv, in, e, v);
     return in->type;
 }
 
 /* Brute force: does element e contain p (and its scalar)? */
 static inline int fx_element_sample(const fx_clustered *c, uint32_t e, float px, float py, float pz, float *s)
 {
-    clvr_vec4 v[8];
+    clvr_vec4 v[CLVR_CELL_MAX_VERTS];
     const uint32_t t = fx_element(c, e, v);
     return clvr_element_sample(t, v, px, py, pz, s);
 }

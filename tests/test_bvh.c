@@ -346,15 +346,15 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         want_e[i] = fx_brute_locate(&c, p[0], p[1], p[2], &want_s[i]);
         float s = 0.0f;
         uint32_t e = 0;
-        const int ok = clvr_locate(p[0], p[1], p[2], hb.tlas, hb.tlas_root, hb.blas, c.instances, c.vertices, c.idx16,
-                                   c.idx32, leaf_size, CLVR_LOCATE_COHERENT, &s, &e);
+        const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
+                                   leaf_size};
+        const int ok = clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s, &e);
         found += ok;
         host_e[i] = e;
         /* the query hint changes speed only: same element, same bits */
         float s2 = 0.0f;
         uint32_t e2 = 0;
-        const int ok2 = clvr_locate(p[0], p[1], p[2], hb.tlas, hb.tlas_root, hb.blas, c.instances, c.vertices,
-                                    c.idx16, c.idx32, leaf_size, CLVR_LOCATE_INCOHERENT, &s2, &e2);
+        const int ok2 = clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_INCOHERENT, &s2, &e2);
         if (ok2 != ok || e2 != e || memcmp(&s2, &s, sizeof s) != 0) ++hint_diff;
         if (ok != (e != CLVR_BVH_NOT_FOUND) || !judge(&c, p, e, s, want_e[i], want_s[i])) {
             if (host_bad < 5)

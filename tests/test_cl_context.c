@@ -65,6 +65,7 @@ int main(void)
             LAYOUT(clvr_instance, bvh_root),
             LAYOUT(clvr_sampling_cluster, hi),
             LAYOUT(clvr_pp_instance_rec, first_element),
+            LAYOUT(clvr_type_layout, slot),
             LAYOUT(clvr_bvh_node, child),
             LAYOUT(clvr_bvh_tree, num_prims),
             LAYOUT(clvr_camera, fovy),
@@ -84,6 +85,20 @@ int main(void)
             }
         }
         TU_CHECK_EQ_U64(sizes[2 * nl], 8);
+
+        /* The argument helper sets a whole list, and a failure names the
+         * kernel, the argument and the error. */
+        cl_uint n1 = 1;
+        TU_CHECK_STATUS(CLVR_CL_ARGS(k, &err, CLVR_ARG(ba), CLVR_ARG(bb), CLVR_ARG(bc), CLVR_ARG(n1)), CLVR_OK, &err);
+        cl_ulong wide = 1; /* uint parameter given 8 bytes */
+        TU_CHECK_STATUS(CLVR_CL_ARGS(k, &err, CLVR_ARG(ba), CLVR_ARG(bb), CLVR_ARG(bc), CLVR_ARG(wide)),
+                        CLVR_ERR_OPENCL, &err);
+        TU_CHECK(strstr(err.msg, "clvr_selftest_add") != NULL && strstr(err.msg, "argument 3 of 4") != NULL &&
+                 strstr(err.msg, "CL_INVALID_ARG_SIZE") != NULL);
+        setenv("CLVR_FAIL", "clSetKernelArg", 1);
+        TU_CHECK_STATUS(CLVR_CL_ARGS(k, &err, CLVR_ARG(ba)), CLVR_ERR_OPENCL, &err);
+        TU_CHECK(strstr(err.msg, "argument 0 of 1") != NULL);
+        unsetenv("CLVR_FAIL");
         clReleaseKernel(k);
         clReleaseKernel(ks);
         clvr_cl_release(&cl, &ba);

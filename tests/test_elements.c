@@ -56,7 +56,7 @@ static void test_inside_linear(uint32_t type, float jit, float scale, float offs
     int bad_inside = 0, bad_value = 0, bad_param = 0;
     double worst = 0.0;
     for (int trial = 0; trial < 50; ++trial) {
-        clvr_vec4 v[8];
+        clvr_vec4 v[CLVR_CELL_MAX_VERTS];
         make_element(type, jit, scale, offset, &rs, v);
         for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) v[i].w = lin(v[i].x, v[i].y, v[i].z, offset);
         for (int k = 0; k < 40; ++k) {
@@ -91,7 +91,7 @@ static void test_boundary_and_outside(uint32_t type)
     uint64_t rs = 99 + type;
     int lost = 0, false_in = 0;
     for (int trial = 0; trial < 40; ++trial) {
-        clvr_vec4 v[8];
+        clvr_vec4 v[CLVR_CELL_MAX_VERTS];
         make_element(type, 0.08f, 2.0f, -1.0f, &rs, v);
         for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) v[i].w = (float)i;
         /* vertices */
@@ -237,7 +237,7 @@ static void test_degenerate(void)
 {
     uint64_t rs = 5;
     for (uint32_t t = 0; t < 4; ++t) {
-        clvr_vec4 v[8];
+        clvr_vec4 v[CLVR_CELL_MAX_VERTS];
         float s = 0;
         /* all vertices equal */
         for (int i = 0; i < 8; ++i) { v[i].x = 1.0f; v[i].y = 2.0f; v[i].z = 3.0f; v[i].w = 1.0f; }

@@ -410,7 +410,7 @@ class Runner:
             if missing:
                 if case["xfail"] == "main-patch" and not self.no_xfail:
                     self.xfails.append(name)
-                    print("  XFAIL %s: no %r on stderr yet (needs the host/main.c patch)" % (name, missing[0]))
+                    print("  XFAIL %s: no %r on stderr yet (needs the host/app/main.c patch)" % (name, missing[0]))
                 else:
                     ok = False
                     self.fail(case, "stderr lacks %r; stderr:\n%s" % (missing, err.strip()[-2000:]))

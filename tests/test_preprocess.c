@@ -17,7 +17,7 @@
 #include <time.h>
 
 #include "mesh_io.h"
-#include "preprocess.h"
+#include "preprocess_stages.h"
 #include "test_util.h"
 
 static double now_s(void)
@@ -443,6 +443,47 @@ static void run_all_options(clvr_cl *cl, const char *name, const clvr_mesh *m, i
     run_case(cl, name, m, &o, 1, 0);
 }
 
+/* A caller-given quantization box (partitions of one mesh sharing one
+ * Hilbert grid): the mesh's own bounds give exactly the default result; a
+ * larger, off-centre box still gives a valid clustering, the same on the
+ * device as in the reference; a box that is not finite is refused. */
+static void test_quantize_box(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_mesh m = {0};
+    TU_CHECK_STATUS(make_grid(&m, 24, 10, 10, 3, &err), CLVR_OK, &err);
+    clvr_preprocess_options o;
+    clvr_preprocess_options_default(&o);
+    o.keep_order = 1;
+    clvr_clustered a = {0}, b = {0};
+    clvr_clustered_host ha = {0}, hb = {0};
+    TU_CHECK_STATUS(clvr_preprocess(cl, &m, &o, &a, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_clustered_download(cl, &a, &ha, &err), CLVR_OK, &err);
+    const clvr_box own = a.bounds;
+    o.quantize_box = &own;
+    TU_CHECK_STATUS(clvr_preprocess(cl, &m, &o, &b, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_clustered_download(cl, &b, &hb, &err), CLVR_OK, &err);
+    TU_CHECK(same_arrays(&a, &ha, &b, &hb));
+    clvr_box big = own;
+    for (int k = 0; k < 3; ++k) {
+        const float ext = own.hi[k] - own.lo[k];
+        big.lo[k] = own.lo[k] - 1.7f * ext - 0.25f;
+        big.hi[k] = own.hi[k] + 0.9f * ext + 0.5f;
+    }
+    o.quantize_box = &big;
+    run_case(cl, "mixed 24x10x10, larger quantization box", &m, &o, 1, 1);
+    clvr_box bad = own;
+    bad.lo[1] = NAN;
+    o.quantize_box = &bad;
+    clvr_clustered c = {0};
+    TU_CHECK_STATUS(clvr_preprocess(cl, &m, &o, &c, &err), CLVR_ERR_USAGE, &err);
+    clvr_clustered_host_free(&ha);
+    clvr_clustered_host_free(&hb);
+    clvr_clustered_release(cl, &a);
+    clvr_clustered_release(cl, &b);
+    clvr_mesh_free(&m);
+}
+
 /* A workspace reused across calls (growing, then shrinking meshes; one
  * index list uploaded, one borrowed; results recycled into it) gives
  * exactly what fresh buffers give, and a kept result (its `order` came from
@@ -570,6 +611,7 @@ int main(int argc, char **argv)
     }
     test_errors(&cl);
     test_workspace(&cl);
+    test_quantize_box(&cl);
     struct { const char *name; uint32_t nx, ny, nz; int mode; } grids[] = {
         {"hex 1x1x1", 1, 1, 1, 0}, {"hex 2x1x1", 2, 1, 1, 0}, {"hex 17x13x11", 17, 13, 11, 0},
         {"tets 9x10x11", 9, 10, 11, 1}, {"wedges 5x7x3", 5, 7, 3, 2}, {"mixed 24x10x10", 24, 10, 10, 3},

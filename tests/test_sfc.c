@@ -6,7 +6,7 @@
  * centre -> grid -> Hilbert or Morton) as the host, bit for bit, for element
  * counts 0, 1, 2, 1031 and 65537 of all four types. */
 #include "bounds.h"
-#include "preprocess.h"
+#include "preprocess_stages.h"
 #include "sfc.h"
 #include "test_util.h"
 

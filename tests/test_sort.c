@@ -7,7 +7,7 @@
  * values, set to the input positions, reveal). The sort is checked in its
  * three shapes: the device's default, hybrid at every size (top digit, then
  * the bucket kernel) and plain LSD at every size. */
-#include "preprocess.h"
+#include "preprocess_stages.h"
 #include "test_util.h"
 
 static cl_mem upload(clvr_cl *cl, const void *p, size_t bytes)

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """test_viewer: `clvr --view` under Xvfb (Mesa software OpenGL), driven by a
-CLVR_VIEW_SCRIPT session (see host/viewer.h), proves that the window shows the
+CLVR_VIEW_SCRIPT session (see host/app/viewer.h), proves that the window shows the
 volume; that a colour-map switch changes the mean colour, a zoom the coverage and
 a middle-button pan moves the picture by the dragged pixels; that R and
 C / shift+C restore the first image bit for bit; that resize re-allocates the

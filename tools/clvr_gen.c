@@ -25,12 +25,12 @@
  *            the distance to the feature (width 4 finest cells), plus a faint
  *            background ramp, so large values live in the fine cells.
  *   mixed    The default scene's mixed tet/pyramid/wedge/hex split of a cube
- *            lattice (host/scene.h) at any resolution, same "blobs" field.
+ *            lattice (host/io/scene.h) at any resolution, same "blobs" field.
  *
  * --elements N is a target: the actual count is within a few % and printed.
  * Everything is deterministic from --seed. Memory stays well below the file
  * size (chunks are appended with clvr_bin_writer), except delaunay cellvar.
- * Exit codes as clvr (host/status.h). */
+ * Exit codes as clvr (host/cl/status.h). */
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>

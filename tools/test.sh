@@ -33,7 +33,7 @@ stage_test() {
   ctest --test-dir "$BUILD" --output-on-failure
 }
 
-# [hostile] The whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer
+# The whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (gcc, build-asan), without the `slow` label. PoCL's own leaks and its LLVM JIT
 # need a few runtime options: see tools/sanitizer.supp and tools/sanitizer.env.
 ASAN_BUILD=${CLVR_ASAN_BUILD:-build-asan}
@@ -51,7 +51,7 @@ stage_sanitize() {
   )
 }
 
-# [hostile] libFuzzer (clang, build-fuzz) on every reader and the transfer-function
+# libFuzzer (clang, build-fuzz) on every reader and the transfer-function
 # parser, CLVR_FUZZ_SECONDS each (default 45) with ASan + UBSan, seeded with
 # tests/fuzz/seeds, tests/fuzz/regressions and tests/data. The corpus grows in
 # build-fuzz/corpus between runs. A crash stops the stage with the input's path:

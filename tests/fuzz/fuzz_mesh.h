@@ -1,7 +1,7 @@
 /* fuzz_mesh.h: the body shared by the mesh-reader fuzz targets. Each input
  * is parsed twice, as `clvr MESH` does (validated) and as `clvr --info`
  * does for broken files (validation skipped), and the result must keep the
- * readers' contract (host/mesh_io.h):
+ * readers' contract (host/io/mesh_io.h):
  *   - failure: a status that is an error, the same status in err, a
  *     non-empty one-line message naming the file, and nothing allocated;
  *   - success: arrays for every count (ASan sees any short allocation when

@@ -1,4 +1,4 @@
-/* fuzz_tf.c: libFuzzer target for clvr_tf_parse (host/tf.h), both file
+/* fuzz_tf.c: libFuzzer target for clvr_tf_parse (host/io/tf.h), both file
  * formats (text and ParaView JSON; the first non-blank byte decides). The
  * contract checked:
  *   - failure: an error status in err, a one-line message naming the file

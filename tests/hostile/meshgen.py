@@ -1,7 +1,7 @@
 """meshgen.py: writers for small (and deliberately broken) meshes in the three
 formats clvr reads, for tests/test_hostile.py and the fuzz seeds
 (tests/fuzz/make_seeds.py). Standard library only, so it runs under any
-python3. Layouts: docs/bin-format.md, host/mesh_umesh.c, host/mesh_vtk.c.
+python3. Layouts: docs/bin-format.md, host/io/mesh_umesh.c, host/mesh_vtk.c.
 
 A mesh is a dict: positions (list of (x, y, z)), scalars (list), cells
 (dict: 'tets'/'pyramids'/'wedges'/'hexes' -> list of index tuples),

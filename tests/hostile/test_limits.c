@@ -1,4 +1,4 @@
-/* test_limits.c: host/limits.c. The device-memory estimate against hand
+/* test_limits.c: host/cl/limits_check.c. The device-memory estimate against hand
  * computed sums, the check's two refusals (per buffer, global) with a fake
  * device description (no OpenCL needed), and the mesh scan on hand-built
  * degenerate, inverted and duplicate elements and on the real test files

@@ -15,7 +15,7 @@
 #define LIMITS_DEFAULT_SAMPLING 16u
 #define LIMITS_DEFAULT_BITS 16u
 /* Bytes per pixel of the renderer's image buffers: float4 accumulator,
- * float4 second moments, 3 uint ray counters (host/render.c). */
+ * float4 second moments, 3 uint ray counters (host/pipeline/render.c). */
 #define LIMITS_PIXEL_BYTES (16u + 16u + 12u)
 /* A BVH over L leaves has about L / 3 nodes (4-wide). */
 #define LIMITS_BVH_NODE_BYTES sizeof(clvr_bvh_node)
@@ -41,7 +41,7 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
     out->num_slots = S;
     out->num_vertices = V;
 
-    /* Preprocessing (host/preprocess.c), two moments that are certain:
+    /* Preprocessing (host/pipeline/preprocess.c), two moments that are certain:
      * during the sort, positions + scalars (16 V), the element indices (4 S)
      * and two key/value pairs (24 N); during the split, positions, scalars,
      * the input and the gathered index lists (8 S) and the local indices
@@ -143,7 +143,7 @@ static const int k_vtk_sign[CLVR_CELL_TYPE_COUNT] = {1, 1, -1, 1};
  * points in it (in double precision, with float's resolution). */
 static int classify(uint32_t t, const float *pos, const uint32_t *idx)
 {
-    float N[8], Nu[8], Nv[8], Nw[8];
+    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
     clvr_element_shape(t, k_centre[t][0], k_centre[t][1], k_centre[t][2], N, Nu, Nv, Nw);
     const uint32_t nv = clvr_cell_vertex_count(t);
     const float *p0 = pos + 3 * (uint64_t)idx[0];
@@ -230,7 +230,7 @@ static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
     uint64_t *start = calloc(np + 1, sizeof *start);
     uint32_t *table = NULL;
     if (!hs || !ids || !start) goto done;
-    uint32_t key[8], other[8];
+    uint32_t key[CLVR_CELL_MAX_VERTS], other[CLVR_CELL_MAX_VERTS];
     /* Pass 1: partition sizes. Pass 2: scatter (hash, id) in id order. */
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         for (uint64_t e = 0; e < m->num_cells[t]; ++e) {

@@ -9,7 +9,7 @@
 #include <stdint.h>
 #include <stddef.h>
 
-#include "../kernels/clvr_shared.h"
+#include "clvr_shared.h"
 #include "status.h"
 
 #define CLVR_SCALAR_NAME_MAX 64

@@ -425,6 +425,23 @@ clvr_status clvr_cl_kernel(cl_program prog, const char *name, cl_kernel *out, cl
     return CLVR_OK;
 }
 
+clvr_status clvr_cl_set_args(cl_kernel k, const clvr_cl_arg *args, size_t n, clvr_error *err)
+{
+    for (size_t i = 0; i < n; ++i) {
+        cl_int rc = CLVR_FAULT_CODE("clSetKernelArg", CL_INVALID_ARG_VALUE);
+        if (rc == CL_SUCCESS) rc = clSetKernelArg(k, (cl_uint)i, args[i].size, args[i].value);
+        if (rc != CL_SUCCESS) {
+            /* The name is looked up only now: a failure is a bug to find. */
+            char name[128] = "?";
+            if (clGetKernelInfo(k, CL_KERNEL_FUNCTION_NAME, sizeof name, name, NULL) != CL_SUCCESS)
+                snprintf(name, sizeof name, "?");
+            return clvr_error_set(err, CLVR_ERR_OPENCL, "clSetKernelArg(%s, argument %zu of %zu, %zu bytes) failed with %s",
+                                  name, i, n, args[i].size, clvr_cl_error_name(rc));
+        }
+    }
+    return CLVR_OK;
+}
+
 /* ------------------------------------------------------------ buffers */
 
 #if defined(__linux__) && defined(MADV_HUGEPAGE)

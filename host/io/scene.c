@@ -337,7 +337,7 @@ double clvr_scene_cell_volume(uint32_t type, const float *positions, const uint3
     default: faces = hex_faces; nf = 6; break;
     }
     const uint32_t nv = clvr_cell_vertex_count(type);
-    double x[8][3], c[3] = {0, 0, 0};
+    double x[CLVR_CELL_MAX_VERTS][3], c[3] = {0, 0, 0};
     for (uint32_t v = 0; v < nv; ++v)
         for (int a = 0; a < 3; ++a) {
             x[v][a] = positions[3 * (uint64_t)idx[v] + a];

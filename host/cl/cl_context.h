@@ -56,6 +56,28 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
 /* clCreateKernel with error reporting. */
 clvr_status clvr_cl_kernel(cl_program prog, const char *name, cl_kernel *out, clvr_error *err);
 
+/* One kernel argument: its size in bytes and the address of its value (of
+ * the cl_mem handle for a buffer; NULL with a size for __local memory). */
+typedef struct clvr_cl_arg {
+    size_t size;
+    const void *value;
+} clvr_cl_arg;
+/* The argument whose value is the lvalue v: a cl_mem, a cl_uint, a struct
+ * of kernels/clvr_shared.h passed by value... Its type must be the kernel
+ * parameter's (cl_uint for uint, cl_ulong for ulong): the size is sizeof(v). */
+#define CLVR_ARG(v) ((clvr_cl_arg){sizeof(v), &(v)})
+
+/* Sets arguments 0 .. n - 1 of kernel k from args, in order. On the first
+ * failure reports the kernel's name, the argument's index and size and the
+ * error's name (CLVR_ERR_OPENCL); CLVR_FAIL=clSetKernelArg injects one. */
+clvr_status clvr_cl_set_args(cl_kernel k, const clvr_cl_arg *args, size_t n, clvr_error *err);
+/* Every argument of k in one call, the list written out in kernel order:
+ *   CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(in), CLVR_ARG(n), CLVR_ARG(out)));
+ * (the list is a compound literal; its length is counted, not written). */
+#define CLVR_CL_ARGS(k, err, ...)                                                                     \
+    clvr_cl_set_args((k), (const clvr_cl_arg[]){__VA_ARGS__},                                        \
+                     sizeof((const clvr_cl_arg[]){__VA_ARGS__}) / sizeof(clvr_cl_arg), (err))
+
 /* Creates a buffer of bytes (>= 1 byte is always allocated, so empty inputs
  * work) after checking it against CL_DEVICE_MAX_MEM_ALLOC_SIZE and global
  * memory; `what` names the buffer in messages ("vertices: 1.2 GB needed but

@@ -2,15 +2,14 @@
  * -> gather -> sampling clusters -> greedy instance split with local
  * re-indexing -> flagged select of the instance records -> scans of their
  * vertex and leaf counts -> instance table -> clustered vertices -> leaf
- * boxes -> instance bounds. See preprocess.h for the contracts. */
-#include "preprocess.h"
+ * boxes -> instance bounds. Contracts: preprocess.h (public API) and
+ * preprocess_stages.h (the stages). */
+#include "preprocess_stages.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-#define ARG(k, i, v) CLVR_CL_CHECK(clSetKernelArg((k), (i), sizeof(v), &(v)))
 
 static double wall_now(void)
 {
@@ -21,13 +20,12 @@ static double wall_now(void)
 
 void clvr_preprocess_options_default(clvr_preprocess_options *o)
 {
+    /* Zero: Hilbert order, the default instance cap, order not kept, the
+     * mesh bounds as quantization box. */
     memset(o, 0, sizeof *o);
     o->leaf_size = 16;
     o->sampling_size = 16;
-    o->morton = 0;
     o->index_bits = 16;
-    o->max_instance_elements = 0;
-    o->keep_order = 0;
 }
 
 clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_preprocess_options *out, clvr_error *err)
@@ -42,7 +40,18 @@ clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_prep
     if (out->index_bits != 16 && out->index_bits != 32)
         return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: index_bits is %u; use 16 or 32", out->index_bits);
     if (out->max_instance_elements == 0) out->max_instance_elements = out->index_bits == 16 ? 1u << 20 : 1u << 16;
+    for (int k = 0; out->quantize_box && k < 3; ++k)
+        if (!(isfinite(out->quantize_box->lo[k]) && isfinite(out->quantize_box->hi[k]) &&
+              out->quantize_box->lo[k] <= out->quantize_box->hi[k]))
+            return clvr_error_set(err, CLVR_ERR_USAGE,
+                                  "preprocess: quantize_box axis %d is [%g, %g]; give finite bounds with lo <= hi", k,
+                                  (double)out->quantize_box->lo[k], (double)out->quantize_box->hi[k]);
     return CLVR_OK;
+}
+
+const clvr_box *clvr_pp_quantize_box(const clvr_preprocess_options *o, const clvr_box *mesh_bounds)
+{
+    return o->quantize_box ? o->quantize_box : mesh_bounds;
 }
 
 const char *clvr_pp_stage_name(int stage)
@@ -64,6 +73,15 @@ void clvr_pp_layout_make(clvr_pp_layout *l, const uint64_t count[CLVR_CELL_TYPE_
     }
     l->num_elements = e;
     l->num_slots = s;
+}
+
+void clvr_pp_type_layout(const clvr_pp_layout *l, clvr_type_layout *out)
+{
+    memset(out, 0, sizeof *out);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        out->first[t] = (clvr_u32)l->first[t]; /* < 2^32: clvr_preprocess refuses bigger meshes */
+        out->slot[t] = l->slot[t];
+    }
 }
 
 float clvr_pp_scale(const clvr_box *b)
@@ -124,9 +142,10 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
     pp->sort_hybrid_min = cl->device_type & CL_DEVICE_TYPE_GPU ? UINT64_MAX : 1u << 16;
     CLVR_TRY(clvr_cl_build(cl, "preprocess.cl", NULL, &pp->prog, err));
     struct { cl_kernel *k; const char *name; } ks[] = {
-        {&pp->bounds_tiles, "clvr_pp_bounds_tiles"}, {&pp->keys_type[0], "clvr_pp_keys_tet"},
-        {&pp->keys_type[1], "clvr_pp_keys_pyramid"}, {&pp->keys_type[2], "clvr_pp_keys_wedge"},
-        {&pp->keys_type[3], "clvr_pp_keys_hex"},
+        {&pp->bounds_tiles, "clvr_pp_bounds_tiles"},
+#define CLVR_PP_KEYS_KERNEL_(id, name, nv) {&pp->keys_type[id], "clvr_pp_keys_" #name},
+        CLVR_CELL_TYPES(CLVR_PP_KEYS_KERNEL_)
+#undef CLVR_PP_KEYS_KERNEL_
         {&pp->scan_reduce, "clvr_pp_scan_reduce"},   {&pp->scan_sums, "clvr_pp_scan_sums"},
         {&pp->scan_apply, "clvr_pp_scan_apply"},     {&pp->select_scatter, "clvr_pp_select_scatter"},
         {&pp->radix_andor, "clvr_pp_radix_andor"},   {&pp->radix_hist, "clvr_pp_radix_hist"},
@@ -146,8 +165,9 @@ cleanup:
 void clvr_pp_destroy(clvr_pp *pp)
 {
     if (!pp) return;
-    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->keys_type[0], &pp->keys_type[1], &pp->keys_type[2], &pp->keys_type[3], &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply,
-                       &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+        if (pp->keys_type[t]) { clReleaseKernel(pp->keys_type[t]); pp->keys_type[t] = NULL; }
+    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply, &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
                        &pp->sampling, &pp->leaf_boxes, &pp->instance_bounds, &pp->split, &pp->rec_flags,
                        &pp->inst_counts, &pp->inst_write, &pp->vertices, &pp->radix_buckets, &pp->iota};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
@@ -188,7 +208,8 @@ clvr_status clvr_pp_bounds(clvr_pp *pp, cl_mem pos, cl_mem scal, uint64_t n, clv
     if (n == 0) return CLVR_OK;
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, tiles * sizeof(clvr_box), NULL, "bounds tiles", &part, err));
     cl_kernel k = pp->bounds_tiles;
-    ARG(k, 0, pos); ARG(k, 1, scal); ARG(k, 2, nn); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, part);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(scal), CLVR_ARG(nn), CLVR_ARG(chunk), CLVR_ARG(tiles),
+                          CLVR_ARG(part)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     host = malloc(tiles * sizeof *host);
     if (!host) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for bounds"); goto cleanup; }
@@ -210,17 +231,15 @@ clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layo
     clvr_status s = CLVR_OK;
     cl_float gx = b->lo[0], gy = b->lo[1], gz = b->lo[2], scale = clvr_pp_scale(b);
     cl_int mo = morton, with_vals = vals != NULL;
-    for (cl_uint t = 0; t < 4; ++t) {
+    for (cl_uint t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         cl_uint count = (cl_uint)l->count[t], first = (cl_uint)l->first[t];
         if (count == 0) continue;
         cl_ulong slot0 = l->slot[t];
         cl_kernel k = pp->keys_type[t];
-        int i = 0;
-        ARG(k, i++, pos); ARG(k, i++, idx); ARG(k, i++, slot0); ARG(k, i++, count); ARG(k, i++, first); ARG(k, i++, gx);
-        ARG(k, i++, gy); ARG(k, i++, gz); ARG(k, i++, scale); ARG(k, i++, mo); ARG(k, i++, t); ARG(k, i++, keys);
         cl_mem vbuf = with_vals ? vals : keys; /* a valid buffer either way; unused without values */
-        ARG(k, i++, vbuf);
-        ARG(k, i++, with_vals);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(idx), CLVR_ARG(slot0), CLVR_ARG(count), CLVR_ARG(first),
+                              CLVR_ARG(gx), CLVR_ARG(gy), CLVR_ARG(gz), CLVR_ARG(scale), CLVR_ARG(mo), CLVR_ARG(t),
+                              CLVR_ARG(keys), CLVR_ARG(vbuf), CLVR_ARG(with_vals)));
         CLVR_TRY(launch(pp, k, (count + 1u) / 2u, 64, sec, err)); /* two elements per work-item */
     }
 cleanup:
@@ -235,10 +254,11 @@ static clvr_status tile_sums(clvr_pp *pp, cl_mem in, uint64_t n, cl_uint tiles, 
     cl_ulong nn = n;
     cl_int f = flags;
     cl_kernel k = pp->scan_reduce;
-    ARG(k, 0, in); ARG(k, 1, nn); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, f); ARG(k, 5, sums);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(in), CLVR_ARG(nn), CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(f),
+                          CLVR_ARG(sums)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     k = pp->scan_sums;
-    ARG(k, 0, sums); ARG(k, 1, tiles);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(sums), CLVR_ARG(tiles)));
     CLVR_TRY(launch(pp, k, 1, 1, sec, err));
 cleanup:
     return s;
@@ -256,7 +276,8 @@ clvr_status clvr_pp_scan(clvr_pp *pp, cl_mem in, cl_mem out, uint64_t n, uint32_
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, (tiles + 1) * sizeof(cl_uint), NULL, "scan sums", &sums, err));
     CLVR_TRY(tile_sums(pp, in, n, tiles, chunk, 0, sums, sec, err));
     cl_kernel k = pp->scan_apply;
-    ARG(k, 0, in); ARG(k, 1, out); ARG(k, 2, nn); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, sums);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(in), CLVR_ARG(out), CLVR_ARG(nn), CLVR_ARG(chunk), CLVR_ARG(tiles),
+                          CLVR_ARG(sums)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     if (total)
         CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, sums, CL_TRUE, tiles * sizeof(cl_uint), sizeof(cl_uint),
@@ -280,8 +301,8 @@ clvr_status clvr_pp_select(clvr_pp *pp, cl_mem flags, cl_mem values, cl_mem out,
     CLVR_TRY(tile_sums(pp, flags, n, tiles, chunk, 1, sums, sec, err));
     cl_kernel k = pp->select_scatter;
     cl_mem vals = values ? values : flags; /* any valid buffer when ids are selected */
-    ARG(k, 0, flags); ARG(k, 1, vals); ARG(k, 2, use_ids); ARG(k, 3, nn); ARG(k, 4, chunk); ARG(k, 5, tiles);
-    ARG(k, 6, sums); ARG(k, 7, out);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(flags), CLVR_ARG(vals), CLVR_ARG(use_ids), CLVR_ARG(nn), CLVR_ARG(chunk),
+                          CLVR_ARG(tiles), CLVR_ARG(sums), CLVR_ARG(out)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, sums, CL_TRUE, tiles * sizeof(cl_uint), sizeof(cl_uint), count, 0,
                                       NULL, NULL));
@@ -300,17 +321,20 @@ static clvr_status radix_count(clvr_pp *pp, cl_mem keys, cl_ulong n, cl_ulong ch
     cl_uint one = 1;
     cl_int noflags = 0;
     cl_kernel k = pp->radix_hist;
-    ARG(k, 0, keys); ARG(k, 1, n); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, shift); ARG(k, 5, hist);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(keys), CLVR_ARG(n), CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(shift),
+                          CLVR_ARG(hist)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     /* The histogram table is scanned with scan.cl's kernels: one tile is enough for it. */
     k = pp->scan_reduce;
-    ARG(k, 0, hist); ARG(k, 1, hn); ARG(k, 2, hn); ARG(k, 3, one); ARG(k, 4, noflags); ARG(k, 5, sums);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(hist), CLVR_ARG(hn), CLVR_ARG(hn), CLVR_ARG(one), CLVR_ARG(noflags),
+                          CLVR_ARG(sums)));
     CLVR_TRY(launch(pp, k, 1, 1, sec, err));
     k = pp->scan_sums;
-    ARG(k, 0, sums); ARG(k, 1, one);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(sums), CLVR_ARG(one)));
     CLVR_TRY(launch(pp, k, 1, 1, sec, err));
     k = pp->scan_apply;
-    ARG(k, 0, hist); ARG(k, 1, hist); ARG(k, 2, hn); ARG(k, 3, hn); ARG(k, 4, one); ARG(k, 5, sums);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(hist), CLVR_ARG(hist), CLVR_ARG(hn), CLVR_ARG(hn), CLVR_ARG(one),
+                          CLVR_ARG(sums)));
     CLVR_TRY(launch(pp, k, 1, 1, sec, err));
 cleanup:
     return s;
@@ -331,8 +355,8 @@ static clvr_status radix_scatter(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem
 {
     clvr_status s = CLVR_OK;
     cl_kernel k = pp->radix_scatter;
-    ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, n); ARG(k, 3, chunk); ARG(k, 4, tiles); ARG(k, 5, shift);
-    ARG(k, 6, hist); ARG(k, 7, *keys_tmp); ARG(k, 8, *vals_tmp); ARG(k, 9, iota);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(*keys), CLVR_ARG(*vals), CLVR_ARG(n), CLVR_ARG(chunk), CLVR_ARG(tiles),
+                          CLVR_ARG(shift), CLVR_ARG(hist), CLVR_ARG(*keys_tmp), CLVR_ARG(*vals_tmp), CLVR_ARG(iota)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     swap_pairs(keys, vals, keys_tmp, vals_tmp);
 cleanup:
@@ -349,7 +373,7 @@ static clvr_status sort_varying(clvr_pp *pp, cl_mem keys, cl_ulong n, cl_ulong c
     cl_ulong *ao = NULL;
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * tiles * sizeof(cl_ulong), NULL, "sort and/or", &andor, err));
     cl_kernel k = pp->radix_andor;
-    ARG(k, 0, keys); ARG(k, 1, n); ARG(k, 2, chunk); ARG(k, 3, tiles); ARG(k, 4, andor);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(keys), CLVR_ARG(n), CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(andor)));
     CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
     ao = malloc(2 * tiles * sizeof *ao);
     if (!ao) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory in sort"); goto cleanup; }
@@ -418,8 +442,8 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
             CLVR_TRY(radix_scatter(pp, keys, vals, keys_tmp, vals_tmp, nn, chunk, tiles, msd, hist, iota, sec, err));
             iota = 0;
             cl_kernel k = pp->radix_buckets;
-            ARG(k, 0, *keys); ARG(k, 1, *vals); ARG(k, 2, *keys_tmp); ARG(k, 3, *vals_tmp); ARG(k, 4, hist);
-            ARG(k, 5, tiles); ARG(k, 6, nn); ARG(k, 7, digits);
+            CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(*keys), CLVR_ARG(*vals), CLVR_ARG(*keys_tmp), CLVR_ARG(*vals_tmp),
+                                  CLVR_ARG(hist), CLVR_ARG(tiles), CLVR_ARG(nn), CLVR_ARG(digits)));
             CLVR_TRY(launch(pp, k, CLVR_PP_RADIX, 1, sec, err));
             if (passes & 1u) swap_pairs(keys, vals, keys_tmp, vals_tmp);
             goto cleanup;
@@ -439,7 +463,7 @@ done:
     if (iota && n > 0) { /* no pass ran: the values are still to make */
         cl_uint n32 = (cl_uint)n;
         cl_kernel ki = pp->iota;
-        ARG(ki, 0, *vals); ARG(ki, 1, n32);
+        CLVR_TRY(CLVR_CL_ARGS(ki, err, CLVR_ARG(*vals), CLVR_ARG(n32)));
         CLVR_TRY(launch(pp, ki, n, 64, sec, err));
     }
 cleanup:
@@ -665,14 +689,15 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS, N * 8, "sort keys", &keys, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS, N * 4, "sort values", &vals, err));
     /* The values (element ids) are made by the sort's first pass. */
-    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, &out->bounds, opt.morton, keys, NULL, &st[CLVR_PP_STAGE_KEYS], err));
+    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, keys, NULL,
+                          &st[CLVR_PP_STAGE_KEYS], err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS_TMP, N * 8, "sort keys (scratch)", &keys_tmp, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS_TMP, N * 4, "sort values (scratch)", &vals_tmp, err));
     {
         /* The keys are type << 48 | 48-bit curve key: the host knows which
          * type bits can differ, so the sort need not find out (a pass over
          * the keys) unless it falls back to plain LSD. */
-        uint64_t type_and = 3, type_or = 0;
+        uint64_t type_and = ~0ull, type_or = 0; /* every type id, not only 2 bits */
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
             if (L.count[t]) { type_and &= t; type_or |= t; }
         const uint64_t hint = ((type_and ^ type_or) << 48) | ((1ull << 48) - 1);
@@ -683,17 +708,16 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     ws_drop(cl, ws, &vals_tmp);
 
     /* --- gather in curve order */
-    cl_uint n32 = (cl_uint)N, e1 = (cl_uint)L.first[1], e2 = (cl_uint)L.first[2], e3 = (cl_uint)L.first[3];
-    cl_ulong s1 = L.slot[1], s2 = L.slot[2], s3 = L.slot[3];
+    cl_uint n32 = (cl_uint)N;
+    clvr_type_layout tl;
+    clvr_pp_type_layout(&L, &tl);
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_IDX_SORTED, S * 4, "sorted element indices", &idx_sorted, err));
     {
         cl_kernel k = pp.gather;
-        int i = 0;
         cl_uint tiles = clvr_pp_tiles(&pp, N);
         cl_ulong chunk = (N + tiles - 1) / tiles;
-        ARG(k, i++, vals); ARG(k, i++, idx_in); ARG(k, i++, idx_sorted); ARG(k, i++, n32); ARG(k, i++, chunk);
-        ARG(k, i++, tiles); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3); ARG(k, i++, s1); ARG(k, i++, s2);
-        ARG(k, i++, s3);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(vals), CLVR_ARG(idx_in), CLVR_ARG(idx_sorted), CLVR_ARG(n32),
+                              CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(tl)));
         CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_GATHER], err));
     }
     if (opt.keep_order) {
@@ -715,10 +739,9 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         cl_uint ncl = (cl_uint)nc, size = opt.sampling_size, c1 = (cl_uint)cfirst[1], c2 = (cl_uint)cfirst[2],
                 c3 = (cl_uint)cfirst[3];
         cl_kernel k = pp.sampling;
-        int i = 0;
-        ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, idx_sorted); ARG(k, i++, ncl); ARG(k, i++, size);
-        ARG(k, i++, c1); ARG(k, i++, c2); ARG(k, i++, c3); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
-        ARG(k, i++, n32); ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, out->sampling);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(scal), CLVR_ARG(idx_sorted), CLVR_ARG(ncl),
+                              CLVR_ARG(size), CLVR_ARG(c1), CLVR_ARG(c2), CLVR_ARG(c3), CLVR_ARG(tl), CLVR_ARG(n32),
+                              CLVR_ARG(out->sampling)));
         CLVR_TRY(launch(&pp, k, nc, 64, &st[CLVR_PP_STAGE_SAMPLING], err));
     }
 
@@ -769,11 +792,10 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
             cl_kernel k = pp.split;
             cl_int b32 = bits32;
             cl_uint nseg = plan.total_segments, vl = plan.vlimit, me = plan.max_elems, lc = plan.log2cap;
-            int i = 0;
-            ARG(k, i++, idx_sorted); ARG(k, i++, vmap); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32);
-            ARG(k, i++, b32); ARG(k, i++, segbuf); ARG(k, i++, nseg); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
-            ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, vl); ARG(k, i++, me); ARG(k, i++, tk);
-            ARG(k, i++, lc); ARG(k, i++, rec_max); ARG(k, i++, recs); ARG(k, i++, rec_counts);
+            CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(idx_sorted), CLVR_ARG(vmap), CLVR_ARG(out->idx16),
+                                  CLVR_ARG(out->idx32), CLVR_ARG(b32), CLVR_ARG(segbuf), CLVR_ARG(nseg), CLVR_ARG(tl),
+                                  CLVR_ARG(vl), CLVR_ARG(me), CLVR_ARG(tk), CLVR_ARG(lc), CLVR_ARG(rec_max),
+                                  CLVR_ARG(recs), CLVR_ARG(rec_counts)));
             CLVR_TRY(launch(&pp, k, nseg, 1, &st[CLVR_PP_STAGE_SPLIT], err));
         }
         ws_drop(cl, ws, &tk);
@@ -786,7 +808,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, nslots * 4, NULL, "selected records", &sel, err));
         cl_uint ns = (cl_uint)nslots;
         cl_kernel k = pp.rec_flags;
-        ARG(k, 0, rec_counts); ARG(k, 1, ns); ARG(k, 2, rec_max); ARG(k, 3, flags);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(rec_counts), CLVR_ARG(ns), CLVR_ARG(rec_max), CLVR_ARG(flags)));
         CLVR_TRY(launch(&pp, k, nslots, 64, si, err));
         uint32_t ninst = 0;
         CLVR_TRY(clvr_pp_select(&pp, flags, NULL, sel, nslots, &ninst, si, err));
@@ -795,7 +817,8 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (uint64_t)ninst * 4, NULL, "instance leaf counts", &nleaves, err));
         cl_uint ni = ninst, leaf = opt.leaf_size;
         k = pp.inst_counts;
-        ARG(k, 0, recs); ARG(k, 1, sel); ARG(k, 2, ni); ARG(k, 3, leaf); ARG(k, 4, nverts); ARG(k, 5, nleaves);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(recs), CLVR_ARG(sel), CLVR_ARG(ni), CLVR_ARG(leaf), CLVR_ARG(nverts),
+                              CLVR_ARG(nleaves)));
         CLVR_TRY(launch(&pp, k, ninst, 64, si, err));
         uint32_t total_v = 0, total_l = 0;
         CLVR_TRY(clvr_pp_scan(&pp, nverts, nverts, ninst, &total_v, si, err));
@@ -807,10 +830,9 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
                                 &out->instances, err));
         CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (uint64_t)ninst * 8, NULL, "instance vertex sources", &vsrc, err));
         k = pp.inst_write;
-        int i = 0;
-        ARG(k, i++, recs); ARG(k, i++, sel); ARG(k, i++, ni); ARG(k, i++, nverts); ARG(k, i++, nleaves);
-        ARG(k, i++, leaf); cl_int b32 = bits32; ARG(k, i++, b32); ARG(k, i++, e1); ARG(k, i++, e2); ARG(k, i++, e3);
-        ARG(k, i++, s1); ARG(k, i++, s2); ARG(k, i++, s3); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
+        cl_int b32 = bits32;
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(recs), CLVR_ARG(sel), CLVR_ARG(ni), CLVR_ARG(nverts), CLVR_ARG(nleaves),
+                              CLVR_ARG(leaf), CLVR_ARG(b32), CLVR_ARG(tl), CLVR_ARG(out->instances), CLVR_ARG(vsrc)));
         CLVR_TRY(launch(&pp, k, ninst, 64, si, err));
     }
 
@@ -820,11 +842,11 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     {
         cl_uint ni = (cl_uint)out->num_instances, nv = (cl_uint)out->num_vertices;
         cl_kernel k = pp.vertices;
-        int i = 0;
-        ARG(k, i++, pos); ARG(k, i++, scal); ARG(k, i++, vmap); ARG(k, i++, out->instances); ARG(k, i++, vsrc);
         cl_uint tiles = clvr_pp_tiles(&pp, nv);
         cl_ulong chunk = ((cl_ulong)nv + tiles - 1) / tiles;
-        ARG(k, i++, ni); ARG(k, i++, nv); ARG(k, i++, chunk); ARG(k, i++, tiles); ARG(k, i++, out->vertices);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(scal), CLVR_ARG(vmap), CLVR_ARG(out->instances),
+                              CLVR_ARG(vsrc), CLVR_ARG(ni), CLVR_ARG(nv), CLVR_ARG(chunk), CLVR_ARG(tiles),
+                              CLVR_ARG(out->vertices)));
         CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_VERTICES], err));
     }
     ws_drop(cl, ws, &vmap);
@@ -837,12 +859,12 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     {
         cl_uint ni = (cl_uint)out->num_instances, nl = (cl_uint)out->num_leaves, leaf = opt.leaf_size;
         cl_kernel k = pp.leaf_boxes;
-        int i = 0;
-        ARG(k, i++, out->vertices); ARG(k, i++, out->idx16); ARG(k, i++, out->idx32); ARG(k, i++, out->instances);
-        ARG(k, i++, ni); ARG(k, i++, nl); ARG(k, i++, leaf); ARG(k, i++, out->leaf_boxes);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(out->vertices), CLVR_ARG(out->idx16), CLVR_ARG(out->idx32),
+                              CLVR_ARG(out->instances), CLVR_ARG(ni), CLVR_ARG(nl), CLVR_ARG(leaf),
+                              CLVR_ARG(out->leaf_boxes)));
         CLVR_TRY(launch(&pp, k, nl, 64, &st[CLVR_PP_STAGE_LEAVES], err));
         k = pp.instance_bounds;
-        ARG(k, 0, out->instances); ARG(k, 1, ni); ARG(k, 2, out->leaf_boxes);
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(out->instances), CLVR_ARG(ni), CLVR_ARG(out->leaf_boxes)));
         CLVR_TRY(launch(&pp, k, ni, 64, &st[CLVR_PP_STAGE_LEAVES], err));
     }
     out->host_instances = malloc(out->num_instances * sizeof(clvr_instance));

@@ -12,7 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "../kernels/clvr_shared.h"
+#include "clvr_shared.h"
 #include "status.h"
 
 /* Optical depth along the mesh's bounding-box diagonal of a medium with

@@ -3,7 +3,7 @@
  * (kernels/sfc.h, bounds.h, reindex.h) are the very code the kernels run;
  * the loops around them are written here once more, sequentially, so tests
  * compare the device's results bit for bit. */
-#include "preprocess.h"
+#include "preprocess_stages.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -123,7 +123,7 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     clvr_pp_ref_bounds(m->positions, m->scalars, V, &out->bounds);
     out->scalar_min = out->bounds.lo[3];
     out->scalar_max = out->bounds.hi[3];
-    clvr_pp_ref_keys(m->positions, idx_in, &L, &out->bounds, opt.morton, keys, order);
+    clvr_pp_ref_keys(m->positions, idx_in, &L, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, keys, order);
     if (clvr_pp_ref_sort(keys, order, N)) goto oom;
 
     /* gather */

@@ -7,7 +7,7 @@
 
 #include <stdint.h>
 
-#include "../kernels/clvr_shared.h"
+#include "clvr_shared.h"
 #include "status.h"
 
 /* Margin kept by clvr_camera_frame_box: the box's projection stays inside

@@ -18,6 +18,7 @@
 #include <strings.h>
 
 #include "image.h"
+#include "json.h"
 
 /* ------------------------------------------------------------ built-in maps */
 
@@ -771,377 +772,53 @@ static clvr_status parse_text(pending *p, const char *text, size_t len, const ch
     return CLVR_OK;
 }
 
-/* ---------------------------------------------- JSON (RFC 8259, strict) */
-
-enum { J_NULL, J_FALSE, J_TRUE, J_NUM, J_STR, J_ARR, J_OBJ };
-static const char *k_jtype[] = {"null", "false", "true", "a number", "a string", "an array", "an object"};
-
-#define JSON_MAX_DEPTH 64
-#define JSON_MAX_NUMBER_CHARS 400
-
-typedef struct jnode {
-    uint8_t type;
-    uint32_t line, col;
-    double num;
-    size_t str, slen;  /* J_STR: decoded text in the arena */
-    size_t key, klen;  /* member of an object: its decoded key */
-    uint32_t kline, kcol; /* and where the key starts */
-    long child, next;  /* first child, next sibling (-1: none) */
-    uint32_t count;    /* children */
-} jnode;
-
-typedef struct jparser {
-    const char *s;
-    size_t n, i;
-    uint32_t line;
-    size_t line_start;
-    jnode *nodes;
-    size_t num_nodes, cap_nodes;
-    char *arena;
-    size_t arena_len, arena_cap;
-    const char *name;
-    clvr_error *err;
-} jparser;
-
-static clvr_status jfail_at(jparser *p, uint32_t line, uint32_t col, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-static clvr_status jfail_at(jparser *p, uint32_t line, uint32_t col, const char *fmt, ...)
-{
-    char msg[512];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    return clvr_error_set(p->err, CLVR_ERR_BAD_FIELD, "%s:%u:%u: %s", p->name, line, col, msg);
-}
-
-static uint32_t jcol(const jparser *p) { return (uint32_t)(p->i - p->line_start + 1); }
-
-/* What is at the cursor, for messages. */
-static const char *jfound(const jparser *p, char *buf, size_t size)
-{
-    if (p->i >= p->n) return "end of file";
-    unsigned char c = (unsigned char)p->s[p->i];
-    if (c >= 0x20 && c < 0x7f) snprintf(buf, size, "'%c'", c);
-    else snprintf(buf, size, "byte 0x%02x", c);
-    return buf;
-}
-
-#define JFAIL(p, ...) jfail_at((p), (p)->line, jcol(p), __VA_ARGS__)
-
-static void jskip_ws(jparser *p)
-{
-    while (p->i < p->n) {
-        char c = p->s[p->i];
-        if (c == '\n') { ++p->line; p->line_start = ++p->i; }
-        else if (c == ' ' || c == '\t' || c == '\r') ++p->i;
-        else break;
-    }
-}
-
-static clvr_status jnew(jparser *p, uint8_t type, uint32_t line, uint32_t col, long *out)
-{
-    if (p->num_nodes == p->cap_nodes) {
-        size_t nc = p->cap_nodes ? p->cap_nodes * 2 : 64;
-        jnode *nn = realloc(p->nodes, nc * sizeof *nn);
-        if (!nn) return clvr_error_set(p->err, CLVR_ERR_NO_MEMORY, "%s: out of memory parsing JSON", p->name);
-        p->nodes = nn;
-        p->cap_nodes = nc;
-    }
-    jnode *n = &p->nodes[p->num_nodes];
-    memset(n, 0, sizeof *n);
-    n->type = type;
-    n->line = line;
-    n->col = col;
-    n->child = n->next = -1;
-    *out = (long)p->num_nodes++;
-    return CLVR_OK;
-}
-
-static clvr_status jarena_put(jparser *p, const char *bytes, size_t len)
-{
-    if (p->arena_len + len + 1 > p->arena_cap) {
-        size_t nc = p->arena_cap ? p->arena_cap : 256;
-        while (nc < p->arena_len + len + 1) nc *= 2;
-        char *na = realloc(p->arena, nc);
-        if (!na) return clvr_error_set(p->err, CLVR_ERR_NO_MEMORY, "%s: out of memory parsing JSON", p->name);
-        p->arena = na;
-        p->arena_cap = nc;
-    }
-    memcpy(p->arena + p->arena_len, bytes, len);
-    p->arena_len += len;
-    p->arena[p->arena_len] = '\0';
-    return CLVR_OK;
-}
-
-static int hexval(char c)
-{
-    if (c >= '0' && c <= '9') return c - '0';
-    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-    return -1;
-}
-
-static clvr_status jhex4(jparser *p, unsigned *out)
-{
-    if (p->n - p->i < 4) return JFAIL(p, "truncated \\u escape: expected 4 hexadecimal digits");
-    unsigned v = 0;
-    for (int k = 0; k < 4; ++k) {
-        int h = hexval(p->s[p->i]);
-        if (h < 0) { char b[16]; return JFAIL(p, "expected a hexadecimal digit in \\u escape, found %s", jfound(p, b, sizeof b)); }
-        v = v * 16 + (unsigned)h;
-        ++p->i;
-    }
-    *out = v;
-    return CLVR_OK;
-}
-
-/* Cursor on the opening quote. Decodes into the arena; *off and *len locate it. */
-static clvr_status jstring(jparser *p, size_t *off, size_t *len)
-{
-    clvr_status s;
-    ++p->i;
-    *off = p->arena_len;
-    for (;;) {
-        if (p->i >= p->n) return JFAIL(p, "unterminated string: expected '\"' before end of file");
-        unsigned char c = (unsigned char)p->s[p->i];
-        if (c == '"') { ++p->i; break; }
-        if (c < 0x20) return JFAIL(p, "control character 0x%02x inside a string (expected it escaped)", c);
-        if (c != '\\') {
-            size_t run = p->i;
-            while (p->i < p->n && p->s[p->i] != '"' && p->s[p->i] != '\\' && (unsigned char)p->s[p->i] >= 0x20) ++p->i;
-            if ((s = jarena_put(p, p->s + run, p->i - run)) != CLVR_OK) return s;
-            continue;
-        }
-        ++p->i;
-        if (p->i >= p->n) return JFAIL(p, "truncated escape at end of file");
-        char e = p->s[p->i++], out[4];
-        size_t olen = 1;
-        switch (e) {
-        case '"': out[0] = '"'; break;
-        case '\\': out[0] = '\\'; break;
-        case '/': out[0] = '/'; break;
-        case 'b': out[0] = '\b'; break;
-        case 'f': out[0] = '\f'; break;
-        case 'n': out[0] = '\n'; break;
-        case 'r': out[0] = '\r'; break;
-        case 't': out[0] = '\t'; break;
-        case 'u': {
-            unsigned cp;
-            if ((s = jhex4(p, &cp)) != CLVR_OK) return s;
-            if (cp >= 0xDC00 && cp <= 0xDFFF) return JFAIL(p, "unpaired low surrogate \\u%04X", cp);
-            if (cp >= 0xD800 && cp <= 0xDBFF) {
-                unsigned lo2;
-                if (p->n - p->i < 2 || p->s[p->i] != '\\' || p->s[p->i + 1] != 'u')
-                    return JFAIL(p, "high surrogate \\u%04X not followed by a \\u low surrogate", cp);
-                p->i += 2;
-                if ((s = jhex4(p, &lo2)) != CLVR_OK) return s;
-                if (lo2 < 0xDC00 || lo2 > 0xDFFF) return JFAIL(p, "expected a low surrogate, found \\u%04X", lo2);
-                cp = 0x10000 + ((cp - 0xD800) << 10) + (lo2 - 0xDC00);
-            }
-            if (cp < 0x80) { out[0] = (char)cp; }
-            else if (cp < 0x800) { out[0] = (char)(0xC0 | (cp >> 6)); out[1] = (char)(0x80 | (cp & 0x3F)); olen = 2; }
-            else if (cp < 0x10000) {
-                out[0] = (char)(0xE0 | (cp >> 12)); out[1] = (char)(0x80 | ((cp >> 6) & 0x3F));
-                out[2] = (char)(0x80 | (cp & 0x3F)); olen = 3;
-            } else {
-                out[0] = (char)(0xF0 | (cp >> 18)); out[1] = (char)(0x80 | ((cp >> 12) & 0x3F));
-                out[2] = (char)(0x80 | ((cp >> 6) & 0x3F)); out[3] = (char)(0x80 | (cp & 0x3F)); olen = 4;
-            }
-            break;
-        }
-        default:
-            p->i -= 2; /* point at the backslash */
-            return JFAIL(p, "invalid escape '\\%c' (expected one of \\\" \\\\ \\/ \\b \\f \\n \\r \\t \\uXXXX)",
-                         e >= 0x20 && e < 0x7f ? e : '?');
-        }
-        if ((s = jarena_put(p, out, olen)) != CLVR_OK) return s;
-    }
-    *len = p->arena_len - *off;
-    /* A NUL after each string keeps every decoded string terminated. */
-    return jarena_put(p, "", 1);
-}
-
-static clvr_status jnumber(jparser *p, double *out)
-{
-    size_t start = p->i;
-    uint32_t col = jcol(p);
-    char b[16];
-    if (p->i < p->n && p->s[p->i] == '-') ++p->i;
-    if (p->i >= p->n || !isdigit((unsigned char)p->s[p->i]))
-        return JFAIL(p, "expected a digit in a number, found %s", jfound(p, b, sizeof b));
-    if (p->s[p->i] == '0') ++p->i;
-    else while (p->i < p->n && isdigit((unsigned char)p->s[p->i])) ++p->i;
-    if (p->i < p->n && p->s[p->i] == '.') {
-        ++p->i;
-        if (p->i >= p->n || !isdigit((unsigned char)p->s[p->i]))
-            return JFAIL(p, "expected a digit after the decimal point, found %s", jfound(p, b, sizeof b));
-        while (p->i < p->n && isdigit((unsigned char)p->s[p->i])) ++p->i;
-    }
-    if (p->i < p->n && (p->s[p->i] == 'e' || p->s[p->i] == 'E')) {
-        ++p->i;
-        if (p->i < p->n && (p->s[p->i] == '+' || p->s[p->i] == '-')) ++p->i;
-        if (p->i >= p->n || !isdigit((unsigned char)p->s[p->i]))
-            return JFAIL(p, "expected a digit in the exponent, found %s", jfound(p, b, sizeof b));
-        while (p->i < p->n && isdigit((unsigned char)p->s[p->i])) ++p->i;
-    }
-    size_t len = p->i - start;
-    if (len > JSON_MAX_NUMBER_CHARS)
-        return jfail_at(p, p->line, col, "number longer than %d characters", JSON_MAX_NUMBER_CHARS);
-    char tmp[JSON_MAX_NUMBER_CHARS + 1];
-    memcpy(tmp, p->s + start, len);
-    tmp[len] = '\0';
-    errno = 0;
-    double v = strtod(tmp, NULL);
-    /* Overflow is an error; underflow to (almost) zero is a fine value. */
-    if (!isfinite(v) || (errno == ERANGE && fabs(v) >= 1.0))
-        return jfail_at(p, p->line, col, "number %.40s%s is out of range", tmp, len > 40 ? "..." : "");
-    *out = v;
-    return CLVR_OK;
-}
-
-static clvr_status jvalue(jparser *p, int depth, long *out);
-
-static clvr_status jliteral(jparser *p, const char *word, uint8_t type, long *out)
-{
-    size_t len = strlen(word);
-    uint32_t col = jcol(p);
-    if (p->n - p->i < len || memcmp(p->s + p->i, word, len))
-        return JFAIL(p, "invalid literal: expected a value (number, string, array, object, true, false, null)");
-    p->i += len;
-    return jnew(p, type, p->line, col, out);
-}
-
-/* Appends child c to parent (tracking the last child in *last). */
-static void jappend(jparser *p, long parent, long c, long *last)
-{
-    if (*last < 0) p->nodes[parent].child = c;
-    else p->nodes[*last].next = c;
-    *last = c;
-    ++p->nodes[parent].count;
-}
-
-static clvr_status jvalue(jparser *p, int depth, long *out)
-{
-    clvr_status s;
-    char b[16];
-    jskip_ws(p);
-    if (p->i >= p->n) return JFAIL(p, "expected a value, found end of file");
-    uint32_t line = p->line, col = jcol(p);
-    char c = p->s[p->i];
-    if (c == '[' || c == '{') {
-        if (depth >= JSON_MAX_DEPTH) return JFAIL(p, "arrays/objects nested deeper than %d levels", JSON_MAX_DEPTH);
-        int is_obj = c == '{';
-        long node, last = -1;
-        if ((s = jnew(p, is_obj ? J_OBJ : J_ARR, line, col, &node)) != CLVR_OK) return s;
-        ++p->i;
-        jskip_ws(p);
-        if (p->i < p->n && p->s[p->i] == (is_obj ? '}' : ']')) { ++p->i; *out = node; return CLVR_OK; }
-        for (;;) {
-            size_t koff = 0, klen = 0;
-            uint32_t kline = 0, kcol = 0;
-            if (is_obj) {
-                jskip_ws(p);
-                kline = p->line;
-                kcol = jcol(p);
-                if (p->i >= p->n || p->s[p->i] != '"')
-                    return JFAIL(p, "expected a member name in double quotes, found %s", jfound(p, b, sizeof b));
-                if ((s = jstring(p, &koff, &klen)) != CLVR_OK) return s;
-                jskip_ws(p);
-                if (p->i >= p->n || p->s[p->i] != ':')
-                    return JFAIL(p, "expected ':' after member name, found %s", jfound(p, b, sizeof b));
-                ++p->i;
-            }
-            long child;
-            if ((s = jvalue(p, depth + 1, &child)) != CLVR_OK) return s;
-            p->nodes[child].key = koff;
-            p->nodes[child].klen = klen;
-            p->nodes[child].kline = kline;
-            p->nodes[child].kcol = kcol;
-            jappend(p, node, child, &last);
-            jskip_ws(p);
-            if (p->i < p->n && p->s[p->i] == ',') { ++p->i; continue; }
-            if (p->i < p->n && p->s[p->i] == (is_obj ? '}' : ']')) { ++p->i; break; }
-            return JFAIL(p, "expected ',' or '%c' in %s, found %s", is_obj ? '}' : ']', is_obj ? "object" : "array",
-                         jfound(p, b, sizeof b));
-        }
-        *out = node;
-        return CLVR_OK;
-    }
-    if (c == '"') {
-        long node;
-        size_t off, len;
-        if ((s = jstring(p, &off, &len)) != CLVR_OK) return s;
-        if ((s = jnew(p, J_STR, line, col, &node)) != CLVR_OK) return s;
-        p->nodes[node].str = off;
-        p->nodes[node].slen = len;
-        *out = node;
-        return CLVR_OK;
-    }
-    if (c == '-' || (c >= '0' && c <= '9')) {
-        double v = 0.0;
-        long node;
-        if ((s = jnumber(p, &v)) != CLVR_OK) return s;
-        if ((s = jnew(p, J_NUM, line, col, &node)) != CLVR_OK) return s;
-        p->nodes[node].num = v;
-        *out = node;
-        return CLVR_OK;
-    }
-    if (c == 't') return jliteral(p, "true", J_TRUE, out);
-    if (c == 'f') return jliteral(p, "false", J_FALSE, out);
-    if (c == 'n') return jliteral(p, "null", J_NULL, out);
-    return JFAIL(p, "expected a value (number, string, array, object, true, false, null), found %s",
-                 jfound(p, b, sizeof b));
-}
-
-static int jkey_is(const jparser *p, const jnode *n, const char *key)
-{
-    return n->klen == strlen(key) && !memcmp(p->arena + n->key, key, n->klen);
-}
+/* ---------------------------------------------- JSON (ParaView colour maps; parser: json.c) */
 
 /* Reads a numeric array of groups of 4 into points (stride 4), checking
  * every value; positions are normalised to [0, 1] over their own span. */
-static clvr_status jpoints(jparser *p, const jnode *arr, const char *key, int opacity, float **out, uint32_t *num)
+static clvr_status jpoints(const clvr_json *p, clvr_error *err, const clvr_json_node *arr, const char *key,
+                           int opacity, float **out, uint32_t *num)
 {
-    if (arr->type != J_ARR)
-        return jfail_at(p, arr->line, arr->col, "\"%s\" must be an array of numbers, found %s", key, k_jtype[arr->type]);
+    if (arr->type != CLVR_JSON_ARRAY)
+        return clvr_json_fail(p, err, arr->line, arr->col, "\"%s\" must be an array of numbers, found %s", key,
+                              clvr_json_type_name(arr->type));
     if (arr->count == 0 || arr->count % 4)
-        return jfail_at(p, arr->line, arr->col, "\"%s\" has %u numbers; expected a non-empty multiple of 4 (%s)", key,
-                        arr->count, opacity ? "x, opacity, midpoint, sharpness" : "x, r, g, b");
+        return clvr_json_fail(p, err, arr->line, arr->col,
+                              "\"%s\" has %u numbers; expected a non-empty multiple of 4 (%s)", key, arr->count,
+                              opacity ? "x, opacity, midpoint, sharpness" : "x, r, g, b");
     uint32_t n = arr->count / 4;
     float *pts = malloc(sizeof(float) * arr->count);
-    if (!pts) return clvr_error_set(p->err, CLVR_ERR_NO_MEMORY, "%s: out of memory for %s", p->name, key);
+    if (!pts) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: out of memory for %s", p->name, key);
     long c = arr->child;
     for (uint32_t i = 0; i < arr->count; ++i, c = p->nodes[c].next) {
-        const jnode *v = &p->nodes[c];
+        const clvr_json_node *v = &p->nodes[c];
         int comp = (int)(i % 4);
-        if (v->type != J_NUM) {
+        if (v->type != CLVR_JSON_NUMBER) {
             free(pts);
-            return jfail_at(p, v->line, v->col, "\"%s\"[%u] must be a number, found %s", key, i, k_jtype[v->type]);
+            return clvr_json_fail(p, err, v->line, v->col, "\"%s\"[%u] must be a number, found %s", key, i,
+                                  clvr_json_type_name(v->type));
         }
         /* Position: any finite float; others (colour, opacity, midpoint,
          * sharpness) in [0, 1]. */
         int bad = comp == 0 ? !(fabs(v->num) <= FLT_MAX) : !unit_value(v->num);
         if (!bad && comp == 0 && i >= 4 && (float)v->num < pts[i - 4]) {
             free(pts);
-            return jfail_at(p, v->line, v->col, "\"%s\"[%u] = %g is smaller than the previous position; positions "
-                            "must not decrease", key, i, v->num);
+            return clvr_json_fail(p, err, v->line, v->col,
+                                  "\"%s\"[%u] = %g is smaller than the previous position; positions must not decrease",
+                                  key, i, v->num);
         }
         if (bad) {
             free(pts);
-            return jfail_at(p, v->line, v->col, "\"%s\"[%u] = %g is out of range (expected %s)", key, i, v->num,
-                            comp == 0 ? "a finite position" : "a value in [0, 1]");
+            return clvr_json_fail(p, err, v->line, v->col, "\"%s\"[%u] = %g is out of range (expected %s)", key, i,
+                                  v->num, comp == 0 ? "a finite position" : "a value in [0, 1]");
         }
         pts[i] = comp == 0 ? (float)v->num : (float)fmin(fmax(v->num, 0.0), 1.0);
     }
     float x0 = pts[0], x1 = pts[4 * (n - 1)];
     if (n > 1 && !(x1 > x0)) {
         free(pts);
-        return jfail_at(p, arr->line, arr->col, "\"%s\": all %u positions are equal (%g); expected a span", key, n,
-                        (double)x0);
+        return clvr_json_fail(p, err, arr->line, arr->col, "\"%s\": all %u positions are equal (%g); expected a span",
+                              key, n, (double)x0);
     }
     for (uint32_t i = 0; i < n; ++i) {
         double x = n > 1 ? ((double)pts[4 * i] - x0) / ((double)x1 - x0) : 0.0;
@@ -1154,80 +831,69 @@ static clvr_status jpoints(jparser *p, const jnode *arr, const char *key, int op
 
 static clvr_status parse_json(pending *pd, const char *text, size_t len, const char *name, clvr_error *err)
 {
-    jparser p = {0};
-    p.s = text;
-    p.n = len;
-    p.line = 1;
-    p.name = name;
-    p.err = err;
-    long root;
-    clvr_status s = jvalue(&p, 0, &root);
-    if (s != CLVR_OK) goto done;
-    jskip_ws(&p);
-    if (p.i < p.n) {
-        char b[16];
-        s = JFAIL(&p, "unexpected %s after the end of the JSON value", jfound(&p, b, sizeof b));
-        goto done;
-    }
-    const jnode *obj = &p.nodes[root];
-    if (obj->type == J_ARR) {
+    clvr_json p;
+    clvr_status s = clvr_json_parse(text, len, name, &p, err);
+    if (s != CLVR_OK) return s;
+    const clvr_json_node *obj = &p.nodes[p.root];
+    if (obj->type == CLVR_JSON_ARRAY) {
         if (obj->count == 0) {
-            s = jfail_at(&p, obj->line, obj->col, "empty array: expected at least one colour-map object");
+            s = clvr_json_fail(&p, err, obj->line, obj->col, "empty array: expected at least one colour-map object");
             goto done;
         }
         obj = &p.nodes[obj->child]; /* ParaView exports a list; the first map is used */
     }
-    if (obj->type != J_OBJ) {
-        s = jfail_at(&p, obj->line, obj->col,
+    if (obj->type != CLVR_JSON_OBJECT) {
+        s = clvr_json_fail(&p, err, obj->line, obj->col,
                      "expected a ParaView colour map: an array of objects with \"RGBPoints\", found %s",
-                     k_jtype[obj->type]);
+                     clvr_json_type_name(obj->type));
         goto done;
     }
-    const jnode *space = NULL, *nm = NULL, *rgb = NULL, *pts = NULL;
+    const clvr_json_node *space = NULL, *nm = NULL, *rgb = NULL, *pts = NULL;
     for (long c = obj->child; c >= 0; c = p.nodes[c].next) {
-        const jnode *m = &p.nodes[c];
-        const jnode **slot = jkey_is(&p, m, "ColorSpace") ? &space
-                           : jkey_is(&p, m, "Name")     ? &nm
-                           : jkey_is(&p, m, "RGBPoints") ? &rgb
-                           : jkey_is(&p, m, "Points")   ? &pts
+        const clvr_json_node *m = &p.nodes[c];
+        const clvr_json_node **slot = clvr_json_key_is(&p, m, "ColorSpace") ? &space
+                           : clvr_json_key_is(&p, m, "Name")     ? &nm
+                           : clvr_json_key_is(&p, m, "RGBPoints") ? &rgb
+                           : clvr_json_key_is(&p, m, "Points")   ? &pts
                                                         : NULL;
         if (!slot) continue; /* other ParaView keys (NanColor, Creator, ...) do not apply */
         if (*slot) {
-            s = jfail_at(&p, m->kline, m->kcol, "duplicate key \"%s\"", p.arena + m->key);
+            s = clvr_json_fail(&p, err, m->kline, m->kcol, "duplicate key \"%s\"", p.arena + m->key);
             goto done;
         }
         *slot = m;
     }
     if (!rgb) {
-        s = jfail_at(&p, obj->line, obj->col, "colour-map object has no \"RGBPoints\" (expected [x, r, g, b, ...])");
+        s = clvr_json_fail(&p, err, obj->line, obj->col,
+                           "colour-map object has no \"RGBPoints\" (expected [x, r, g, b, ...])");
         goto done;
     }
     pd->space = CLVR_TF_SPACE_RGB;
     if (space) {
-        if (space->type != J_STR || !parse_space(p.arena + space->str, space->slen, &pd->space)) {
-            s = jfail_at(&p, space->line, space->col,
+        if (space->type != CLVR_JSON_STRING || !parse_space(p.arena + space->str, space->slen, &pd->space)) {
+            s = clvr_json_fail(&p, err, space->line, space->col,
                          "\"ColorSpace\" must be one of \"RGB\", \"Lab\", \"Lab/CIEDE2000\", \"Diverging\", \"HSV\", "
                          "\"Step\"");
             goto done;
         }
     }
     pd->have_space = 1;
-    if (nm && nm->type != J_STR) {
-        s = jfail_at(&p, nm->line, nm->col, "\"Name\" must be a string, found %s", k_jtype[nm->type]);
+    if (nm && nm->type != CLVR_JSON_STRING) {
+        s = clvr_json_fail(&p, err, nm->line, nm->col, "\"Name\" must be a string, found %s",
+                           clvr_json_type_name(nm->type));
         goto done;
     }
     snprintf(pd->name, sizeof pd->name, "%s", nm ? p.arena + nm->str : "custom");
-    s = jpoints(&p, rgb, "RGBPoints", 0, &pd->colors, &pd->num_colors);
+    s = jpoints(&p, err, rgb, "RGBPoints", 0, &pd->colors, &pd->num_colors);
     if (s != CLVR_OK) goto done;
     pd->have_colors = 1;
     if (pts) {
-        s = jpoints(&p, pts, "Points", 1, &pd->opacity, &pd->num_opacity);
+        s = jpoints(&p, err, pts, "Points", 1, &pd->opacity, &pd->num_opacity);
         if (s != CLVR_OK) goto done;
         pd->have_opacity = 1;
     }
 done:
-    free(p.nodes);
-    free(p.arena);
+    clvr_json_free(&p);
     return s;
 }
 

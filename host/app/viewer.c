@@ -908,8 +908,8 @@ static void run_script(viewer *v)
         }
         if (!ok)
             v->status = clvr_error_set(v->err, CLVR_ERR_USAGE,
-                                       "%s:%d: unknown script command '%s' (see host/viewer.h: frames N, key K, drag "
-                                       "B DX DY, scroll D, resize W H, shot F, save F, title, quit)",
+                                       "%s:%d: unknown script command '%s' (see host/app/viewer.h: frames N, key K, "
+                                       "drag B DX DY, scroll D, resize W H, shot F, save F, title, quit)",
                                        v->script_path, v->script_line, tok[0]);
     }
 }
