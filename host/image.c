@@ -230,15 +230,75 @@ cleanup:
 
 /* ------------------------------------------------------------ PNG */
 
-static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const float *rgba, clvr_error *err)
+const char *clvr_tonemap_name(clvr_tonemap t)
+{
+    static const char *names[CLVR_TONEMAP_COUNT] = {"none", "aces", "filmic"};
+    return (unsigned)t < CLVR_TONEMAP_COUNT ? names[t] : "?";
+}
+
+clvr_tonemap clvr_tonemap_parse(const char *name)
+{
+    for (int t = 0; t < CLVR_TONEMAP_COUNT; ++t)
+        if (name && !strcmp(name, clvr_tonemap_name((clvr_tonemap)t))) return (clvr_tonemap)t;
+    return CLVR_TONEMAP_COUNT;
+}
+
+/* Hable's operator without the white-point normalisation. */
+static float hable(float x)
+{
+    const float a = 0.15f, b = 0.50f, c = 0.10f, d = 0.20f, e = 0.02f, f = 0.30f;
+    return (x * (a * x + c * b) + d * e) / (x * (a * x + b) + d * f) - e / f;
+}
+
+float clvr_image_tonemap(clvr_tonemap t, float x)
+{
+    if (!(x > 0.0f)) return 0.0f; /* NaN, negative, zero */
+    float y;
+    switch (t) {
+    case CLVR_TONEMAP_ACES:
+        x *= CLVR_TONEMAP_GAIN;
+        y = isinf(x) ? 1.0f : x * (2.51f * x + 0.03f) / (x * (2.43f * x + 0.59f) + 0.14f);
+        break;
+    case CLVR_TONEMAP_FILMIC:
+        x *= CLVR_TONEMAP_GAIN * 2.0f; /* Hable's exposure bias */
+        y = isinf(x) ? 1.0f : hable(x) / hable(11.2f);
+        break;
+    default: y = x; break;
+    }
+    return y < 1.0f ? y : 1.0f;
+}
+
+/* One 8-bit code of a display-linear value in [0, 1]. */
+static uint8_t display_to_u8(float y) { return (uint8_t)lrintf(clvr_image_srgb_encode(y) * 255.0f); }
+
+static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const float *rgba,
+                             const clvr_image_display *d, clvr_error *err)
 {
     size_t n = (size_t)w * h;
-    /* Opaque RGB: r g b already hold the background seen through the
-     * volume, so an alpha channel would make viewers composite it twice. */
-    uint8_t *px = malloc(n * 3);
+    const int alpha = d && d->transparent;
+    const int ch = alpha ? 4 : 3;
+    const clvr_tonemap tm = d ? d->tonemap : CLVR_TONEMAP_NONE;
+    const float gain = d ? exp2f(d->exposure_ev) : 1.0f;
+    /* Opaque RGB by default: r g b already hold the background seen through
+     * the volume, so an alpha channel would make viewers composite it twice.
+     * Transparent: the colour was rendered over black (premultiplied) and PNG
+     * wants it straight, so it is divided by alpha before the tone curve. */
+    uint8_t *px = malloc(n * (size_t)ch);
     if (!px) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory writing %s", path);
-    for (size_t i = 0; i < n; ++i)
-        for (int c = 0; c < 3; ++c) px[3 * i + c] = clvr_image_srgb_to_u8(rgba[4 * i + c]);
+    for (size_t i = 0; i < n; ++i) {
+        float scale = gain;
+        if (alpha) {
+            float a = rgba[4 * i + 3];
+            a = a > 0.0f ? (a < 1.0f ? a : 1.0f) : 0.0f; /* NaN -> 0 */
+            px[4 * i + 3] = (uint8_t)lrintf(a * 255.0f);
+            /* Below half a code the pixel is transparent and its colour moot. */
+            scale = a >= 0.5f / 255.0f ? gain / a : 0.0f;
+        }
+        for (int c = 0; c < 3; ++c) {
+            float x = rgba[4 * i + c] * scale;
+            px[(size_t)ch * i + c] = display_to_u8(clvr_image_tonemap(tm, x));
+        }
+    }
     char *tmp;
     FILE *f;
     clvr_status s = open_temp(path, &tmp, &f, err);
@@ -248,7 +308,7 @@ static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const flo
     img.version = PNG_IMAGE_VERSION;
     img.width = w;
     img.height = h;
-    img.format = PNG_FORMAT_RGB; /* 8-bit, sRGB-encoded, opaque */
+    img.format = alpha ? PNG_FORMAT_RGBA : PNG_FORMAT_RGB; /* 8-bit, sRGB-encoded; alpha straight */
     errno = 0;
     int ok = png_image_write_to_stdio(&img, f, 0, px, 0, NULL);
     free(px);
@@ -513,6 +573,23 @@ clvr_status clvr_image_check_output(const char *path, clvr_error *err)
 
 clvr_status clvr_image_write(const char *path, uint32_t width, uint32_t height, const float *rgba, clvr_error *err)
 {
+    return clvr_image_write_display(path, width, height, rgba, NULL, err);
+}
+
+int clvr_image_numbered_path(const char *path, uint32_t index, char *out, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(slash ? slash : path, '.');
+    /* A leading dot names a hidden file, not an extension. */
+    if (dot && (dot == path || dot[-1] == '/')) dot = NULL;
+    size_t stem = dot ? (size_t)(dot - path) : strlen(path);
+    int n = snprintf(out, size, "%.*s.%04u%s", (int)stem, path, index, dot ? dot : "");
+    return n >= 0 && (size_t)n < size;
+}
+
+clvr_status clvr_image_write_display(const char *path, uint32_t width, uint32_t height, const float *rgba,
+                                     const clvr_image_display *display, clvr_error *err)
+{
     image_format fmt = format_of(path);
     if (fmt == FMT_NONE)
         return clvr_error_set(err, CLVR_ERR_USAGE, "%s: unknown image extension; supported: .exr, .png, .pfm", path);
@@ -521,7 +598,7 @@ clvr_status clvr_image_write(const char *path, uint32_t width, uint32_t height, 
                               width, height, CLVR_IMAGE_MAX_DIM);
     switch (fmt) {
     case FMT_EXR: return write_exr(path, width, height, rgba, err);
-    case FMT_PNG: return write_png(path, width, height, rgba, err);
+    case FMT_PNG: return write_png(path, width, height, rgba, display, err);
     default: return write_pfm(path, width, height, rgba, err);
     }
 }

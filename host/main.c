@@ -170,11 +170,23 @@ int main(int argc, char **argv)
 
     /* --- transfer function and camera */
     clvr_camera cam;
-    if (o.camera_set)
+    if (o.camera_set) {
         s = clvr_camera_look_at(&cam, o.camera, o.camera + 3, o.camera + 6, o.fovy, o.width, o.height, &err);
-    else
-        s = clvr_camera_frame_box(&cam, mesh.bounds_lo, mesh.bounds_hi, o.fovy, o.width, o.height, &err);
+    } else {
+        clvr_camera_view view;
+        clvr_camera_view_default(&view);
+        memcpy(view.up, o.up, sizeof view.up);
+        view.azimuth_deg = o.azimuth;
+        view.elevation_deg = o.elevation;
+        view.zoom = o.zoom;
+        s = clvr_camera_frame_view(&cam, mesh.bounds_lo, mesh.bounds_hi, &view, o.fovy, o.width, o.height, &err);
+    }
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    /* A turntable turns the eye about the look-at point's vertical: the
+     * framing's up axis, or --camera's up vector. */
+    const float *orbit_axis = o.camera_set ? o.camera + 6 : o.up;
+    const float eye0[3] = {cam.origin[0], cam.origin[1], cam.origin[2]};
+    const float target0[3] = {cam.target[0], cam.target[1], cam.target[2]};
 
     /* The mesh's host copy is no longer needed: the device has it. */
     clvr_mesh_free(&mesh);
@@ -216,40 +228,64 @@ int main(int argc, char **argv)
     }
 #endif
 
-    /* --- progressive rendering */
+    /* --- progressive rendering: one image, or --orbit N turntable images */
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
-    double start = clvr_clock_monotonic_s(), last_report = start;
-    uint32_t frame = 0;
-    for (; frame < o.spp && !g_interrupted; ++frame) {
-        s = clvr_renderer_frame(renderer, &err);
-        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-        double t = clvr_clock_monotonic_s();
-        if (!o.quiet && (t - last_report > 1.0 || frame + 1 == o.spp)) {
-            double per = (t - start) / (frame + 1);
-            fprintf(stderr, "clvr: frame %u/%u, %.2f s/frame, %.0f s left\n", frame + 1, o.spp, per,
-                    per * (o.spp - frame - 1));
-            last_report = t;
-        }
-    }
-    stats.render_wall_s = clvr_clock_monotonic_s() - start;
-    if (frame == 0) { /* interrupted before the first frame finished */
-        fprintf(stderr, "clvr: interrupted before the first frame; no image written\n");
-        rc = 130;
-        goto cleanup;
-    }
-
     size_t npix = (size_t)o.width * o.height;
     pixels = malloc(npix * 4 * sizeof(float));
     if (!pixels) { clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the image"); rc = fail(&err); goto cleanup; }
-    clvr_render_counters counters;
-    s = clvr_renderer_read(renderer, pixels, &counters, &err);
-    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    s = clvr_image_write(o.output, o.width, o.height, pixels, &err);
-    if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
-    stats.have_render = 1;
-    clvr_stats_from_render(&stats, &counters, (uint32_t)o.method, o.width, o.height);
-    if (!o.quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp)\n", o.output, o.width, o.height, frame);
+    clvr_image_display display = {o.exposure, (clvr_tonemap)o.tonemap, o.transparent};
+    const uint32_t images = o.orbit ? o.orbit : 1;
+    uint32_t frame = 0;
+    for (uint32_t img = 0; img < images && !g_interrupted; ++img) {
+        char numbered[4096];
+        const char *path = o.output;
+        if (o.orbit) {
+            if (!clvr_image_numbered_path(o.output, img, numbered, sizeof numbered)) {
+                clvr_error_set(&err, CLVR_ERR_USAGE, "-o %s: name too long for numbered --orbit frames", o.output);
+                rc = fail(&err);
+                goto cleanup;
+            }
+            path = numbered;
+            if (img > 0) {
+                float eye[3];
+                clvr_camera_rotate_about(eye0, target0, orbit_axis, 360.0f * (float)img / (float)o.orbit, eye);
+                s = clvr_camera_look_at(&cam, eye, target0, orbit_axis, o.fovy, o.width, o.height, &err);
+                if (s == CLVR_OK) s = clvr_renderer_set_camera(renderer, &cam, &err);
+                if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+            }
+        }
+        double start = clvr_clock_monotonic_s(), last_report = start;
+        for (frame = 0; frame < o.spp && !g_interrupted; ++frame) {
+            s = clvr_renderer_frame(renderer, &err);
+            if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+            double t = clvr_clock_monotonic_s();
+            if (!o.quiet && (t - last_report > 1.0 || frame + 1 == o.spp)) {
+                double per = (t - start) / (frame + 1);
+                if (o.orbit)
+                    fprintf(stderr, "clvr: image %u/%u, frame %u/%u, %.2f s/frame\n", img + 1, images, frame + 1,
+                            o.spp, per);
+                else
+                    fprintf(stderr, "clvr: frame %u/%u, %.2f s/frame, %.0f s left\n", frame + 1, o.spp, per,
+                            per * (o.spp - frame - 1));
+                last_report = t;
+            }
+        }
+        stats.render_wall_s += clvr_clock_monotonic_s() - start;
+        if (frame == 0) { /* interrupted before the image's first frame finished */
+            fprintf(stderr, "clvr: interrupted before the first frame of %s; not written\n", path);
+            rc = 130;
+            goto cleanup;
+        }
+        clvr_render_counters counters;
+        s = clvr_renderer_read(renderer, pixels, &counters, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+        s = clvr_image_write_display(path, o.width, o.height, pixels, &display, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+        stats.have_render = 1;
+        clvr_stats_from_render(&stats, &counters, (uint32_t)o.method, o.width, o.height);
+        if (!o.quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp)\n", path, o.width, o.height, frame);
+    }
     if (o.stats) clvr_stats_print(stdout, &stats);
     if (o.stats_json) {
         s = clvr_stats_write_json(o.stats_json, &stats, &err);

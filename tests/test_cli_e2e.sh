@@ -92,5 +92,56 @@ expect 2 ".jpg" -- "$CLVR" --device pocl --size 8x8 --spp 1 --quiet -o "$tmp/x.j
 expect 5 "no-such-dir" -- "$CLVR" --device pocl --size 8x8 --spp 1 --quiet -o "$tmp/no-such-dir/x.png"
 [ "$(cat "$tmp/keep.png")" = old ] && ok || bad "older file damaged"
 
+# Display (issue 17): the default PNG of the converged built-in scene uses
+# the code range (99.9th percentile of the brightest channel >= 218, measured 227; the plain
+# clamp stops near 200 of 255) without clipping (< 0.1% of pixels at 255);
+# EXR stays linear whatever --exposure and --tonemap say.
+R=(--device pocl --size 96x96 --spp 256 --quiet)
+expect 0 "" -- "$CLVR" "${R[@]}" -o "$tmp/tm.png"
+expect 0 "" -- "$CLVR" "${R[@]}" --tonemap none -o "$tmp/plain.png"
+$PY - "$tmp/tm.png" "$tmp/plain.png" "$(dirname "$0")" <<'PYEOF' && ok || bad "default tone mapping: dim or clipped"
+import sys
+sys.path.insert(0, sys.argv[3])
+from checklib import read_png
+def stats(path):
+    w, h, ch, rows = read_png(path)
+    m = sorted(max(r[i * ch:i * ch + 3]) for r in rows for i in range(w))
+    return m[int(0.999 * (len(m) - 1))], sum(v == 255 for v in m) / len(m)
+tm, plain = stats(sys.argv[1]), stats(sys.argv[2])
+print("p99.9 code, clipped fraction: aces", tm, "none", plain)
+assert 218 <= tm[0] <= 254 and tm[1] < 0.001, tm
+assert plain[0] + 10 < tm[0], (plain, tm)
+PYEOF
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet -o "$tmp/lin.exr"
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet -o "$tmp/lin2.exr" --exposure 2 --tonemap filmic
+cmp -s "$tmp/lin.exr" "$tmp/lin2.exr" && ok || bad "--exposure/--tonemap changed an EXR"
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet -o "$tmp/ev.png" --exposure 2
+cmp -s "$tmp/ev.png" "$tmp/tm.png" && bad "--exposure 2 left the PNG unchanged" || ok
+# --background none: RGBA PNG, the corner (background) transparent, the centre not.
+expect 0 "" -- "$CLVR" --device pocl --size 48x48 --spp 16 --quiet --background none -o "$tmp/clear.png"
+$PY - "$tmp/clear.png" "$(dirname "$0")" <<'PYEOF' && ok || bad "--background none: no transparent corner / opaque centre"
+import sys
+sys.path.insert(0, sys.argv[2])
+from checklib import read_png
+w, h, ch, rows = read_png(sys.argv[1])
+assert ch == 4, ch
+assert rows[0][3] == 0 and rows[h - 1][4 * (w - 1) + 3] == 0, "corners"
+assert max(rows[h // 2][4 * i + 3] for i in range(w)) > 64, "centre row"
+PYEOF
+expect 2 "--background" -- "$CLVR" --background clear
+expect 2 "--tonemap" -- "$CLVR" --tonemap reinhard
+
+# Camera (issue 17): --orbit N writes N numbered, different images; --up and
+# the framing options render; they conflict with --camera.
+expect 0 "" -- "$CLVR" --device pocl --size 24x24 --spp 2 --quiet --orbit 3 --up z -o "$tmp/turn.png"
+[ -s "$tmp/turn.0000.png" ] && [ -s "$tmp/turn.0001.png" ] && [ -s "$tmp/turn.0002.png" ] && [ ! -e "$tmp/turn.png" ] &&
+  [ ! -e "$tmp/turn.0003.png" ] && ok || bad "--orbit 3: $(ls "$tmp" | grep turn | tr '\n' ' ')"
+cmp -s "$tmp/turn.0000.png" "$tmp/turn.0001.png" && bad "--orbit frames are identical" || ok
+expect 0 "" -- "$CLVR" --device pocl --size 24x24 --spp 2 --quiet --up z --azimuth 30 --elevation 10 --zoom 1.5 -o "$tmp/v.png"
+expect 0 "" -- "$CLVR" --device pocl --size 24x24 --spp 2 --quiet -o "$tmp/v0.png"
+cmp -s "$tmp/v.png" "$tmp/v0.png" && bad "--up z --azimuth 30 gave the default view" || ok
+expect 2 "--camera" -- "$CLVR" --camera 1,2,3,0,0,0,0,1,0 --up z
+expect 2 "--up" -- "$CLVR" --up q
+
 echo "test_cli_e2e: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -317,6 +317,95 @@ static void test_atomic_writes(void)
     free(big);
 }
 
+/* The tone curves at known values, their shape (monotonic, toe below the
+ * identity, shoulder below 1 so nothing clips), exposure as a power of two,
+ * PNG codes written with them, EXR and PFM left linear, transparent PNG's
+ * alpha and straight colour, and numbered file names for --orbit. */
+static void test_display(void)
+{
+    clvr_error err = {0};
+    char p[256];
+    /* ACES fit at 1.5 x: x = 1 -> 1.5 (2.51*1.5 + 0.03) / (1.5 (2.43*1.5 + 0.59) + 0.14) = 0.87678. */
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_ACES, 1.0f), 0.87678, 1e-4);
+    /* The fit reaches 1 where 0.08 y^2 - 0.56 y - 0.14 = 0, y = 7.2404, x = y / 1.5. */
+    TU_CHECK(clvr_image_tonemap(CLVR_TONEMAP_ACES, 4.80f) < 1.0f);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_ACES, 4.84f), 1.0, 0.0);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_ACES, 0.0f), 0.0, 0.0);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_NONE, 0.5f), 0.5, 0.0);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_NONE, 3.0f), 1.0, 0.0);
+    /* Hable at 3 x, normalised by its value at 11.2: white at x = 11.2 / 3. */
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_FILMIC, 11.2f / 3.0f), 1.0, 1e-5);
+    TU_CHECK(clvr_image_tonemap(CLVR_TONEMAP_FILMIC, 3.6f) < 1.0f);
+    for (int t = CLVR_TONEMAP_ACES; t <= CLVR_TONEMAP_FILMIC; ++t) {
+        float prev = 0.0f;
+        int monotonic = 1;
+        for (float x = 1e-4f; x < 1000.0f; x *= 1.1f) {
+            float y = clvr_image_tonemap((clvr_tonemap)t, x);
+            monotonic &= y >= prev && y <= 1.0f && (x > 3.6f || y < 1.0f);
+            prev = y;
+        }
+        TU_CHECK(monotonic);
+        TU_CHECK(clvr_image_tonemap((clvr_tonemap)t, 0.01f) < 0.01f * CLVR_TONEMAP_GAIN); /* toe */
+        TU_CHECK_NEAR(clvr_image_tonemap((clvr_tonemap)t, INFINITY), 1.0, 0.0);
+        TU_CHECK_NEAR(clvr_image_tonemap((clvr_tonemap)t, NAN), 0.0, 0.0);
+    }
+    TU_CHECK(clvr_tonemap_parse("aces") == CLVR_TONEMAP_ACES && clvr_tonemap_parse("filmic") == CLVR_TONEMAP_FILMIC);
+    TU_CHECK(clvr_tonemap_parse("none") == CLVR_TONEMAP_NONE && clvr_tonemap_parse("ACES") == CLVR_TONEMAP_COUNT);
+
+    /* PNG codes: exposure +1 under aces equals exposure 0 of twice the value. */
+    float px[8] = {0.25f, 0.5f, 1.0f, 1.0f, 0.5f, 1.0f, 2.0f, 1.0f};
+    clvr_image_display d = {1.0f, CLVR_TONEMAP_ACES, 0};
+    path_in_dir(p, sizeof p, "tm.png");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 2, 1, px, &d, &err), CLVR_OK, &err);
+    clvr_image img;
+    TU_CHECK_STATUS(clvr_image_read(p, &img, &err), CLVR_OK, &err);
+    for (int i = 0; img.rgba && i < 3; ++i) {
+        uint8_t want = clvr_image_srgb_to_u8(clvr_image_tonemap(CLVR_TONEMAP_ACES, px[4 + i]));
+        TU_CHECK_EQ_U64(clvr_image_srgb_to_u8(img.rgba[i]), want);
+        TU_CHECK(clvr_image_srgb_to_u8(img.rgba[4 + i]) < 255); /* 2^1 * 2.0 is not clipped */
+        TU_CHECK_NEAR(img.rgba[3], 1.0, 0.0);                   /* opaque */
+    }
+    clvr_image_free(&img);
+
+    /* EXR and PFM ignore the display transform. */
+    d.exposure_ev = 3.0f;
+    d.transparent = 1;
+    path_in_dir(p, sizeof p, "tm.exr");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 2, 1, px, &d, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_image_read(p, &img, &err), CLVR_OK, &err);
+    for (int i = 0; img.rgba && i < 8; ++i) TU_CHECK_NEAR(img.rgba[i], px[i], 0.0);
+    clvr_image_free(&img);
+    path_in_dir(p, sizeof p, "tm.pfm");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 2, 1, px, &d, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_image_read(p, &img, &err), CLVR_OK, &err);
+    for (int i = 0; img.rgba && i < 3; ++i) TU_CHECK_NEAR(img.rgba[4 + i], px[4 + i], 0.0);
+    clvr_image_free(&img);
+
+    /* Transparent PNG: alpha = a; colour = the premultiplied colour / a. */
+    float pre[12] = {0.1f, 0.2f, 0.3f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, 0.8f, 0.4f, 0.2f, 1.0f};
+    clvr_image_display t = {0.0f, CLVR_TONEMAP_NONE, 1};
+    path_in_dir(p, sizeof p, "alpha.png");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 3, 1, pre, &t, &err), CLVR_OK, &err);
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    unsigned char got[12] = {0};
+    TU_CHECK(png_image_begin_read_from_file(&pi, p) && (pi.format & PNG_FORMAT_FLAG_ALPHA));
+    pi.format = PNG_FORMAT_RGBA;
+    TU_CHECK(png_image_finish_read(&pi, NULL, got, 0, NULL));
+    const unsigned char want_rgba[12] = {clvr_image_srgb_to_u8(0.2f), clvr_image_srgb_to_u8(0.4f),
+                                         clvr_image_srgb_to_u8(0.6f), 128, 0, 0, 0, 0,
+                                         clvr_image_srgb_to_u8(0.8f), clvr_image_srgb_to_u8(0.4f),
+                                         clvr_image_srgb_to_u8(0.2f), 255};
+    for (int i = 0; i < 12; ++i) TU_CHECK_EQ_U64(got[i], want_rgba[i]);
+
+    char name[64];
+    TU_CHECK(clvr_image_numbered_path("out/a.png", 7, name, sizeof name) && !strcmp(name, "out/a.0007.png"));
+    TU_CHECK(clvr_image_numbered_path("a.b/noext", 12345, name, sizeof name) && !strcmp(name, "a.b/noext.12345"));
+    TU_CHECK(clvr_image_numbered_path(".hidden", 0, name, sizeof name) && !strcmp(name, ".hidden.0000"));
+    TU_CHECK(!clvr_image_numbered_path("long-name.png", 1, name, 8));
+}
+
 static void remove_dir(void)
 {
     DIR *d = opendir(g_dir);
@@ -340,6 +429,7 @@ int main(void)
     test_half_exr();
     test_bad_inputs();
     test_atomic_writes();
+    test_display();
     remove_dir();
     return tu_finish("test_image");
 }
