@@ -13,10 +13,11 @@ BUILD=${CLVR_BUILD:-build}
 JOBS=${CLVR_JOBS:-2}
 DEFAULT_STAGES=(setup configure build test sanitize fuzz)
 
-# Packages: tools/setup-debian.sh returns at once when all are installed, and uses
-# sudo itself when it must install as a user that is not root.
+# Packages: the `test` group of tools/setup-debian.sh (running, converting, tests,
+# benchmarks, fuzzing); it returns at once when all are installed, and uses sudo
+# itself when it must install as a user that is not root.
 stage_setup() {
-  tools/setup-debian.sh
+  tools/setup-debian.sh test
 }
 
 stage_configure() {
