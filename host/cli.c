@@ -47,6 +47,8 @@ void clvr_cli_print_help(FILE *out)
         "                         (default 0)\n"
         "  --tonemap T            PNG only: aces | filmic | none (clamp) (default aces); EXR and PFM\n"
         "                         always hold the linear values\n"
+        "  --legend               PNG only: draw the colour map with its range and the field's name\n"
+        "                         at the bottom-left corner\n"
         "  --size WxH             image size (default 512x512)\n"
         "  --spp N                samples per pixel = frames accumulated (default 64)\n"
         "  --seed N               random seed (default 1); same seed, same image\n"
@@ -314,6 +316,7 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
                     s = clvr_error_set(err, CLVR_ERR_USAGE, "--background expects R,G,B (3 numbers) or none, got '%s'", v);
             }
         }
+        else if (!strcmp(a, "--legend")) o->legend = 1;
         else if (!strcmp(a, "--exposure")) { const char *v = NEXT(); if (v) s = parse_float(a, v, -30.0f, 30.0f, &o->exposure, err); }
         else if (!strcmp(a, "--tonemap")) {
             const char *v = NEXT();

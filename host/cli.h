@@ -66,6 +66,7 @@ typedef struct clvr_options {
     /* display (PNG only; EXR and PFM stay linear) */
     float exposure;              /* --exposure EV */
     int tonemap;                 /* --tonemap: clvr_tonemap (image.h), default aces */
+    int legend;                  /* --legend: colour bar, range and field name drawn into the PNG */
 } clvr_options;
 
 /* Fills defaults, then parses argv. On a bad command line returns

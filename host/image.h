@@ -88,6 +88,42 @@ clvr_tonemap clvr_tonemap_parse(const char *name);
  * value in [0, 1] (NaN and negative x give 0). */
 float clvr_image_tonemap(clvr_tonemap t, float x);
 
+/* A colour legend drawn into 8-bit output: the transfer function's colours
+ * from lo (left) to hi (right) as a bar, the field's name above it and the
+ * two ends' values below it, white text (a built-in 5x7 font; lower case is
+ * drawn as upper case, characters it lacks as '?') on a panel that darkens
+ * the image by 60%, at the bottom-left corner. Everything scales by
+ * max(1, min(width, height) / 256) pixels per font pixel. The bar shows the
+ * colour map sRGB-encoded, without the image's exposure or tone curve. */
+typedef struct clvr_image_legend {
+    const float *table;   /* entries x (r, g, b, extinction), linear, as clvr_tf_bake writes */
+    uint32_t entries;     /* >= 1 */
+    float lo, hi;         /* the scalar window the table spans */
+    const char *name;     /* the field's name; NULL or "": "scalar" */
+} clvr_image_legend;
+
+/* Where clvr_image_draw_legend draws in a width x height image: rectangles
+ * as x0, y0, x1, y1 (x1, y1 exclusive; may be clipped by the image), the
+ * title's and the labels' top-left corners, the font scale. */
+typedef struct clvr_image_legend_layout {
+    uint32_t scale;
+    int32_t panel[4], bar[4];
+    int32_t title_x, title_y, labels_y;
+    uint32_t title_chars; /* characters of the name that fit */
+} clvr_image_legend_layout;
+
+void clvr_image_legend_layout_of(uint32_t width, uint32_t height, const clvr_image_legend *legend,
+                                 clvr_image_legend_layout *out);
+
+/* Draws the legend into px: width x height pixels of channels (3: RGB, 4:
+ * RGBA with straight alpha, which the panel makes at least 60% opaque) 8-bit
+ * sRGB samples, rows top to bottom. Pixels outside the image are skipped. */
+void clvr_image_draw_legend(uint8_t *px, uint32_t channels, uint32_t width, uint32_t height,
+                            const clvr_image_legend *legend);
+
+/* The 5x7 glyph of c (7 rows, bit 4 = leftmost column), or NULL for a space. */
+const uint8_t *clvr_image_glyph(char c);
+
 typedef struct clvr_image_display {
     float exposure_ev;    /* stops: scene values are scaled by 2^exposure_ev */
     clvr_tonemap tonemap;
@@ -95,6 +131,7 @@ typedef struct clvr_image_display {
      * divided by a (PNG's alpha is straight, the renderer's colour is
      * premultiplied: render over a black background for this). */
     int transparent;
+    const clvr_image_legend *legend; /* NULL: none */
 } clvr_image_display;
 
 /* As clvr_image_write, with display transforms for PNG (display may be NULL:
@@ -106,6 +143,9 @@ clvr_status clvr_image_write_display(const char *path, uint32_t width, uint32_t 
  * (or appended when it has none): "out/a.png" -> "out/a.0007.png". Returns 0
  * when out (size bytes) is too small. */
 int clvr_image_numbered_path(const char *path, uint32_t index, char *out, size_t size);
+
+/* Nonzero when path's extension is .png (case-insensitive). */
+int clvr_image_is_png(const char *path);
 
 /* Checks, before any long work, that path has a supported extension
  * (CLVR_ERR_USAGE) and that its directory exists and is writable

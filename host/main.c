@@ -105,6 +105,10 @@ int main(int argc, char **argv)
     if (!o.info && !o.view) {
         s = clvr_image_check_output(o.output, &err);
         if (s != CLVR_OK) return fail(&err);
+        if (o.legend && !clvr_image_is_png(o.output)) {
+            fprintf(stderr, "clvr: --legend draws into PNG images; -o %s is not one: use -o NAME.png\n", o.output);
+            return 2;
+        }
     }
     /* --view without a display (or without the viewer) fails now, not after preprocessing. */
     if (o.view && !o.info) {
@@ -222,6 +226,8 @@ int main(int argc, char **argv)
     const float target0[3] = {cam.target[0], cam.target[1], cam.target[2]};
 
     /* The mesh's host copy is no longer needed: the device has it. */
+    char legend_name[sizeof mesh.scalar_name];
+    memcpy(legend_name, mesh.scalar_name, sizeof legend_name);
     clvr_mesh_free(&mesh);
 
     clvr_render_settings rs;
@@ -271,7 +277,8 @@ int main(int argc, char **argv)
     size_t npix = (size_t)o.width * o.height;
     pixels = malloc(npix * 4 * sizeof(float));
     if (!pixels) { clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the image"); rc = fail(&err); goto cleanup; }
-    clvr_image_display display = {o.exposure, (clvr_tonemap)o.tonemap, o.transparent};
+    clvr_image_legend legend = {table, table ? clvr_tf_table_size(&tf) : 0, tf.range_lo, tf.range_hi, legend_name};
+    clvr_image_display display = {o.exposure, (clvr_tonemap)o.tonemap, o.transparent, o.legend ? &legend : NULL};
     const uint32_t images = o.orbit ? o.orbit : 1;
     uint32_t frame = 0;
     for (uint32_t img = 0; img < images && !g_interrupted; ++img) {

@@ -143,6 +143,23 @@ cmp -s "$tmp/v.png" "$tmp/v0.png" && bad "--up z --azimuth 30 gave the default v
 expect 2 "--camera" -- "$CLVR" --camera 1,2,3,0,0,0,0,1,0 --up z
 expect 2 "--up" -- "$CLVR" --up q
 
+# --legend (issue 17): the bottom-left corner changes, with white text there,
+# the rest of the image (same seed) does not; not for EXR.
+expect 0 "" -- "$CLVR" --device pocl --size 96x96 --spp 2 --quiet -o "$tmp/noleg.png"
+expect 0 "" -- "$CLVR" --device pocl --size 96x96 --spp 2 --quiet --legend -o "$tmp/leg.png"
+$PY - "$tmp/noleg.png" "$tmp/leg.png" "$(dirname "$0")" <<'PYEOF' && ok || bad "--legend: not drawn where expected"
+import sys
+sys.path.insert(0, sys.argv[3])
+from checklib import read_png
+w, h, ch, a = read_png(sys.argv[1])
+_, _, _, b = read_png(sys.argv[2])
+assert a[:h // 2] == b[:h // 2], "the top half changed"
+corner = [b[y][x * ch:x * ch + 3] for y in range(h - 30, h) for x in range(0, 60)]
+assert sum(p == b"\xff\xff\xff" for p in corner) > 20, "no white text in the corner"
+assert a[h - 10] != b[h - 10], "the bottom rows did not change"
+PYEOF
+expect 2 "--legend" -- "$CLVR" --legend -o "$tmp/leg.exr"
+
 # First run (issue 17), PoCL with an empty kernel cache: the compilation is
 # announced and timed apart from clustering; no line of the compiler's own
 # ("1 warning generated.") reaches the user; the second run is silent about it.
