@@ -92,6 +92,17 @@ expect 2 ".jpg" -- "$CLVR" --device pocl --size 8x8 --spp 1 --quiet -o "$tmp/x.j
 expect 5 "no-such-dir" -- "$CLVR" --device pocl --size 8x8 --spp 1 --quiet -o "$tmp/no-such-dir/x.png"
 [ "$(cat "$tmp/keep.png")" = old ] && ok || bad "older file damaged"
 
+# --help lists every option the parser accepts (issue 17), and the README's
+# option table and docs name every long option of --help.
+"$CLVR" --help >"$tmp/help.txt"
+src=$(dirname "$0")/..
+for opt in $(grep -o 'strcmp(a, "[^"]*")' "$src/host/cli.c" | sed 's/strcmp(a, "//; s/")//' | sort -u); do
+  grep -qE -- "(^|[ ,])$opt([ ,=]|$)" "$tmp/help.txt" && ok || bad "--help does not list $opt"
+done
+for opt in $(grep -oE -- '--[a-z][a-z-]+' "$tmp/help.txt" | sort -u); do
+  cat "$src/README.md" "$src"/docs/*.md | grep -qF -- "$opt" && ok || bad "README and docs do not mention $opt"
+done
+
 # Display (issue 17): the default PNG of the converged built-in scene uses
 # the code range (99.9th percentile of the brightest channel >= 218, measured 227; the plain
 # clamp stops near 200 of 255) without clipping (< 0.1% of pixels at 255);
@@ -164,8 +175,11 @@ expect 2 "--legend" -- "$CLVR" --legend -o "$tmp/leg.exr"
 # announced and timed apart from clustering; no line of the compiler's own
 # ("1 warning generated.") reaches the user; the second run is silent about it.
 mkdir -p "$tmp/pocl-cache"
+# Under ASan (tools/test.sh sanitize) leak checking is off for this run only:
+# PoCL 3.1 / LLVM 15 leak on a cold compile (an unchanged test_sfc shows the
+# same 16-byte direct leak in libpocl with an empty POCL_CACHE_DIR).
 expect 0 "compiling kernels (cached for next time)" -- env POCL_CACHE_DIR="$tmp/pocl-cache" \
-  "$CLVR" --device pocl --size 16x16 --spp 1 -o "$tmp/first.png" --stats-json "$tmp/first.json"
+  ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0" "$CLVR" --device pocl --size 16x16 --spp 1 -o "$tmp/first.png" --stats-json "$tmp/first.json"
 grep -v "^clvr: " "$tmp/err" | grep -q . && bad "lines not from clvr on a cold cache: $(grep -v '^clvr: ' "$tmp/err" | head -3)" || ok
 grep -q "generated" "$tmp/err" && bad "compiler output shown: $(grep generated "$tmp/err")" || ok
 $PY - "$tmp/first.json" <<'PYEOF' && ok || bad "time.kernel_build_s missing or zero"
