@@ -286,7 +286,8 @@ int main(int argc, char **argv)
         const char *path = o.output;
         if (o.orbit) {
             if (!clvr_image_numbered_path(o.output, img, numbered, sizeof numbered)) {
-                clvr_error_set(&err, CLVR_ERR_USAGE, "-o %s: name too long for numbered --orbit frames", o.output);
+                clvr_error_set(&err, CLVR_ERR_USAGE, "-o %s: name too long for numbered --orbit frames; choose a shorter one",
+                               o.output);
                 rc = fail(&err);
                 goto cleanup;
             }

@@ -555,6 +555,10 @@ def test_output_name_and_avs(tmp):
         check(r.returncode == 2 and len(lines) == 1 and out in lines[0] and ".bin" in lines[0]
               and not os.path.exists(out), f"output name {bad}: exit 2, one line naming it, no file",
               (r.returncode, r.stderr), (2, f"clvr-convert: {out}: ... *.bin ..."))
+    for label, args in (("no output", [src]), ("unknown option", [src, "x.bin", "--frobnicate"])):
+        r = convert(args, tmp)
+        check(r.returncode == 2 and len(r.stderr.splitlines()) == 1 and "clvr-convert" in r.stderr,
+              f"{label}: exit 2, one line", (r.returncode, r.stderr), (2, "clvr-convert: ..."))
     r = convert([src, os.path.join(tmp, "upper.BIN"), "--quiet"], tmp)
     check(r.returncode == 0, "output name upper.BIN accepted", r.stderr, "")
 
