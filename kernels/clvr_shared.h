@@ -21,8 +21,11 @@ typedef long clvr_i64;
 #define CLVR_CONSTANT __constant
 #define CLVR_INLINE inline
 /* For small hot helpers of per-element kernels: inlined, no call is left
- * in the work-item loop a CPU device compiles the kernel into. */
-#define CLVR_FORCE_INLINE inline __attribute__((always_inline))
+ * in the work-item loop a CPU device compiles the kernel into. static: no
+ * out-of-line copy is emitted, whose loops (with a runtime count, e.g.
+ * clvr_pp_element_box's vpe) could not honour CLVR_UNROLL and made PoCL's
+ * compiler warn "loop not unrolled" on every cold-cache build. */
+#define CLVR_FORCE_INLINE static inline __attribute__((always_inline))
 /* Full unrolling of a short fixed-count loop in such kernels. */
 #define CLVR_UNROLL _Pragma("unroll")
 #define CLVR_STATIC_ASSERT(cond, msg)

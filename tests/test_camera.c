@@ -1,7 +1,8 @@
 /* Proves the camera: the shared ray generator's conventions (centre ray hits
  * the look-at point, top-left is up-left, unit directions, field of view),
  * projection as its inverse, automatic framing that keeps every box corner
- * inside the image, and the --camera parser's errors. */
+ * inside the image, the view options (up axis, azimuth, elevation, zoom) and
+ * turntable rotation, and the --camera parser's errors. */
 #include "camera.h"
 #include "test_util.h"
 
@@ -154,6 +155,127 @@ static void test_frame_box(void)
     TU_CHECK_STATUS(clvr_camera_frame_box(&cam, unit_lo, nan_hi, 40.0f, 16, 16, &err), CLVR_ERR_BAD_VALUE, &err);
 }
 
+/* The framing's view options: the default view is the documented oblique
+ * direction; for every up axis the image's up is that axis, the view is
+ * front-right-above in that axis's frame with the documented elevation;
+ * azimuth turns about up; elevation adds and clamps; zoom divides the
+ * distance; random views still keep the box inside the image; a turntable of
+ * N steps returns to its start and keeps the distance and height. */
+static void test_views(void)
+{
+    clvr_error err = {0};
+    clvr_camera cam, base;
+    clvr_camera_view v;
+    const float lo[3] = {-1, -2, -3}, hi[3] = {2, 1, 0}, c[3] = {0.5f, -0.5f, -1.5f};
+    float dir[3], def[3] = {CLVR_CAMERA_VIEW_X, CLVR_CAMERA_VIEW_Y, CLVR_CAMERA_VIEW_Z};
+    float dl = len3(def);
+    clvr_camera_view_default(&v);
+    TU_CHECK(clvr_camera_view_direction(&v, dir) == 0);
+    for (int k = 0; k < 3; ++k) TU_CHECK_NEAR(dir[k], def[k] / dl, 1e-6);
+    const double el0 = atan2(CLVR_CAMERA_VIEW_Y, hypot(CLVR_CAMERA_VIEW_X, CLVR_CAMERA_VIEW_Z)) * 180.0 / M_PI;
+
+    const char *axes[6] = {"x", "y", "z", "-x", "-y", "-z"};
+    for (int a = 0; a < 6; ++a) {
+        clvr_camera_view_default(&v);
+        TU_CHECK(clvr_camera_parse_axis(axes[a], v.up) == 0);
+        TU_CHECK_STATUS(clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_OK, &err);
+        /* The camera's up is the axis (the view is not along it), and the
+         * eye is el0 degrees above the horizon of that axis. */
+        TU_CHECK(dot3(cam.up, v.up) > 0.9f);
+        float e[3] = {cam.origin[0] - c[0], cam.origin[1] - c[1], cam.origin[2] - c[2]};
+        TU_CHECK_NEAR(asin(dot3(e, v.up) / len3(e)) * 180.0 / M_PI, el0, 1e-3);
+        /* The up axis projects to an upward vertical line in the image. */
+        float top[3] = {c[0] + v.up[0], c[1] + v.up[1], c[2] + v.up[2]}, px, py, cx, cy;
+        clvr_camera_project(&cam, c, &cx, &cy);
+        clvr_camera_project(&cam, top, &px, &py);
+        TU_CHECK(py < cy);
+        TU_CHECK_NEAR(px, cx, 1e-3);
+    }
+    /* +z up (Exodus, OpenFOAM): seen from -y, x to the right. */
+    clvr_camera_view_default(&v);
+    clvr_camera_parse_axis("z", v.up);
+    clvr_camera_view_direction(&v, dir);
+    TU_CHECK(dir[1] < 0.0f && dir[2] > 0.0f);
+    TU_CHECK_STATUS(clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_OK, &err);
+    TU_CHECK(cam.right[0] > 0.5f);
+    float bad_axis[3] = {0, 0, 0};
+    TU_CHECK(clvr_camera_parse_axis("w", bad_axis) != 0 && clvr_camera_parse_axis("xy", bad_axis) != 0 &&
+             clvr_camera_parse_axis("", bad_axis) != 0 && clvr_camera_parse_axis("--x", bad_axis) != 0);
+
+    /* Azimuth: the eye turns about up by that angle, same height and distance. */
+    clvr_camera_view_default(&v);
+    TU_CHECK_STATUS(clvr_camera_frame_view(&base, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_OK, &err);
+    v.azimuth_deg = 90.0f;
+    clvr_camera_view_direction(&v, dir);
+    TU_CHECK_NEAR(dir[1], def[1] / dl, 1e-6);
+    /* Counterclockwise seen from +y: (x, z) -> (z, -x). */
+    TU_CHECK_NEAR(dir[0], def[2] / dl, 1e-6);
+    TU_CHECK_NEAR(dir[2], -def[0] / dl, 1e-6);
+    /* Elevation adds, and is clamped at 89 degrees. */
+    clvr_camera_view_default(&v);
+    v.elevation_deg = 30.0f;
+    clvr_camera_view_direction(&v, dir);
+    TU_CHECK_NEAR(asin(dir[1]) * 180.0 / M_PI, el0 + 30.0, 1e-3);
+    v.elevation_deg = 150.0f;
+    clvr_camera_view_direction(&v, dir);
+    TU_CHECK_NEAR(asin(dir[1]) * 180.0 / M_PI, 89.0, 1e-3);
+    TU_CHECK_STATUS(clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_OK, &err);
+    /* Zoom 2: half the distance to the centre, same direction. */
+    clvr_camera_view_default(&v);
+    v.zoom = 2.0f;
+    TU_CHECK_STATUS(clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_OK, &err);
+    float e0[3], e1[3];
+    for (int k = 0; k < 3; ++k) {
+        e0[k] = base.origin[k] - c[k];
+        e1[k] = cam.origin[k] - c[k];
+    }
+    TU_CHECK_NEAR(len3(e1) / len3(e0), 0.5, 1e-5);
+    TU_CHECK_NEAR(dot3(e0, e1) / (len3(e0) * len3(e1)), 1.0, 1e-6);
+    v.zoom = 0.0f;
+    TU_CHECK_STATUS(clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_ERR_USAGE, &err);
+    clvr_camera_view_default(&v);
+    v.up[1] = 0.0f;
+    TU_CHECK_STATUS(clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, 64, 64, &err), CLVR_ERR_USAGE, &err);
+
+    /* Random views (any axis, azimuth, elevation) at zoom 1 keep every corner inside. */
+    uint64_t rng = 5;
+    int outside = 0;
+    for (int t = 0; t < 200; ++t) {
+        clvr_camera_view_default(&v);
+        clvr_camera_parse_axis(axes[tu_rand(&rng) % 6], v.up);
+        v.azimuth_deg = 720.0f * tu_randf(&rng) - 360.0f;
+        v.elevation_deg = 200.0f * tu_randf(&rng) - 100.0f;
+        uint32_t w = 1 + (uint32_t)(tu_rand(&rng) % 1000), h = 1 + (uint32_t)(tu_rand(&rng) % 1000);
+        if (clvr_camera_frame_view(&cam, lo, hi, &v, 30.0f, w, h, &err) != CLVR_OK) { ++outside; continue; }
+        for (int i = 0; i < 8; ++i) {
+            float p[3], px, py;
+            for (int k = 0; k < 3; ++k) p[k] = (i >> k) & 1 ? hi[k] : lo[k];
+            float depth = clvr_camera_project(&cam, p, &px, &py);
+            outside += !(depth > 0.0f && px >= -1e-3f * w && px <= 1.001f * w && py >= -1e-3f * h && py <= 1.001f * h);
+        }
+    }
+    TU_CHECK_EQ_U64(outside, 0);
+
+    /* Turntable: N steps of 360/N about up come back to the start; each
+     * keeps the distance to the centre and the height along the axis. */
+    const float axis[3] = {0, 0, 1}, eye[3] = {3, -4, 2};
+    float p[3] = {eye[0], eye[1], eye[2]};
+    for (int i = 0; i < 7; ++i) {
+        float q[3];
+        clvr_camera_rotate_about(p, c, axis, 360.0f / 7.0f, q);
+        float d0[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]}, d1[3] = {q[0] - c[0], q[1] - c[1], q[2] - c[2]};
+        TU_CHECK_NEAR(len3(d1), len3(d0), 1e-4);
+        TU_CHECK_NEAR(q[2], p[2], 1e-5);
+        memcpy(p, q, sizeof p);
+    }
+    for (int k = 0; k < 3; ++k) TU_CHECK_NEAR(p[k], eye[k], 1e-4);
+    /* A quarter turn about +z is counterclockwise seen from above: x -> y. */
+    const float ex[3] = {1, 0, 0}, zero[3] = {0, 0, 0};
+    clvr_camera_rotate_about(ex, zero, axis, 90.0f, p);
+    TU_CHECK_NEAR(p[0], 0.0, 1e-6);
+    TU_CHECK_NEAR(p[1], 1.0, 1e-6);
+}
+
 static void test_errors(void)
 {
     clvr_error err = {0};
@@ -209,6 +331,7 @@ int main(void)
     test_look_at_axes();
     test_random_cameras();
     test_frame_box();
+    test_views();
     test_errors();
     test_parse();
     return tu_finish("test_camera");

@@ -1,6 +1,7 @@
 /* Proves the command-line contract: defaults, every option's parsing, and a
  * clear usage error (naming the option) for each kind of bad value. */
 #include "cli.h"
+#include "image.h"
 #include "clvr_shared.h"
 #include "test_util.h"
 
@@ -62,6 +63,34 @@ int main(void)
     TU_CHECK(o.camera_set && o.camera[0] == 1.0f && o.camera[8] == 1.0f);
     TU_CHECK(o.leaf_size == 8 && o.macrocells == 32 && o.fovy == 30.0f && o.density == 2.5f);
     TU_CHECK(o.light_dir[2] == 1.0f && o.background[0] == 1.0f);
+
+    /* Defaults of the view and display options: ParaView's 30 degrees, +y up,
+     * the automatic framing unchanged, PNG through the aces curve, opaque. */
+    TU_CHECK_STATUS(PARSE(&o, &err, "m.bin"), CLVR_OK, &err);
+    TU_CHECK(o.fovy == 30.0f && o.up[0] == 0.0f && o.up[1] == 1.0f && o.up[2] == 0.0f);
+    TU_CHECK(o.azimuth == 0.0f && o.elevation == 0.0f && o.zoom == 1.0f && o.orbit == 0 && !o.view_set);
+    TU_CHECK(o.exposure == 0.0f && o.tonemap == CLVR_TONEMAP_ACES && !o.transparent);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--up", "-z", "--azimuth", "45", "--elevation", "-10", "--zoom", "2",
+                          "--orbit", "36", "--exposure", "-1.5", "--tonemap", "none", "--background", "none"),
+                    CLVR_OK, &err);
+    TU_CHECK(o.up[2] == -1.0f && o.up[1] == 0.0f && o.view_set);
+    TU_CHECK(o.azimuth == 45.0f && o.elevation == -10.0f && o.zoom == 2.0f && o.orbit == 36);
+    TU_CHECK(o.exposure == -1.5f && o.tonemap == CLVR_TONEMAP_NONE && o.transparent);
+    TU_CHECK(o.background[0] == 0.0f && o.background[1] == 0.0f && o.background[2] == 0.0f);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--tonemap", "filmic", "--background", "1,0,0"), CLVR_OK, &err);
+    TU_CHECK(o.tonemap == CLVR_TONEMAP_FILMIC && !o.transparent && o.background[0] == 1.0f);
+    /* The view options move the automatic framing: not with --camera. */
+    TU_CHECK_STATUS(PARSE(&o, &err, "--camera", "1,2,3,0,0,0,0,1,0", "--azimuth", "10"), CLVR_ERR_USAGE, &err);
+    TU_CHECK(strstr(err.msg, "--camera") != NULL);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--camera", "1,2,3,0,0,0,0,1,0", "--orbit", "4"), CLVR_OK, &err);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--orbit", "4", "--view"), CLVR_ERR_USAGE, &err);
+    expect_usage("--up", "w");
+    expect_usage("--up", "xy");
+    expect_usage("--zoom", "0");
+    expect_usage("--orbit", "0");
+    expect_usage("--exposure", "nan");
+    expect_usage("--tonemap", "reinhard");
+    expect_usage("--background", "transparent");
 
     TU_CHECK_STATUS(PARSE(&o, &err, "--info", "--list-devices", "--help", "--stats"), CLVR_OK, &err);
     TU_CHECK(o.info && o.list_devices && o.help && o.stats && !o.mesh_path);

@@ -10,6 +10,8 @@ Exit: 0 all passed, 1 a check failed, 77 when /usr/bin/python3 has no VTK (skipp
 """
 
 import glob
+import importlib.machinery
+import importlib.util
 import math
 import os
 import shutil
@@ -541,6 +543,67 @@ def test_list(tmp):
           "postxyz --list: q file found by name", r.stdout[:200], "Density, VelocityMagnitude")
 
 
+def test_output_name_and_avs(tmp):
+    """An output not named .bin is refused before reading (exit 2, one line, nothing
+    written); AVS UCD .inp reads through vtkAVSucdReader with its node data; and
+    clvr names this converter for every extension the converter reads."""
+    src = os.path.join(DATA, "vtk/post.vtk")
+    for bad in ("out.png", "out.vtu", "out", "out.bin.tmp"):
+        out = os.path.join(tmp, bad)
+        r = convert([src, out], tmp)
+        lines = r.stderr.splitlines()
+        check(r.returncode == 2 and len(lines) == 1 and out in lines[0] and ".bin" in lines[0]
+              and not os.path.exists(out), f"output name {bad}: exit 2, one line naming it, no file",
+              (r.returncode, r.stderr), (2, f"clvr-convert: {out}: ... *.bin ..."))
+    for label, args in (("no output", [src]), ("unknown option", [src, "x.bin", "--frobnicate"])):
+        r = convert(args, tmp)
+        check(r.returncode == 2 and len(r.stderr.splitlines()) == 1 and "clvr-convert" in r.stderr,
+              f"{label}: exit 2, one line", (r.returncode, r.stderr), (2, "clvr-convert: ..."))
+    r = convert([src, os.path.join(tmp, "upper.BIN"), "--quiet"], tmp)
+    check(r.returncode == 0, "output name upper.BIN accepted", r.stderr, "")
+
+    # AVS UCD: a hexahedron (bottom face, then top) and a pyramid (apex first,
+    # AVS's order) sharing the hex's top face; one node data component.
+    inp = os.path.join(tmp, "two.inp")
+    with open(inp, "w") as f:
+        f.write("# AVS UCD written by test_convert.py\n9 2 1 0 0\n")
+        pts = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1),
+               (0.5, 0.5, 2)]
+        for i, p in enumerate(pts):
+            f.write(f"{i + 1} {p[0]} {p[1]} {p[2]}\n")
+        f.write("1 1 hex 1 2 3 4 5 6 7 8\n2 1 pyr 9 5 6 7 8\n1 1\ntemp, K\n")
+        for i in range(9):
+            f.write(f"{i + 1} {i * 0.5}\n")
+    out = os.path.join(tmp, "two.bin")
+    r = convert([inp, out], tmp)
+    m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+    check(m is not None and not problems and (m.T, m.P, m.W, m.H) == (0, 1, 0, 1)
+          and m.name == "temp" and abs(float(m.scalars.max()) - 4.0) < 1e-6
+          and "reoriented" not in r.stdout,
+          "AVS UCD .inp: 1 hex + 1 pyramid, scalar 'temp' 0..4, none inside out",
+          (r.stdout.strip(), problems), "(0, 1, 0, 1) temp")
+
+    # Every extension the converter reads gets clvr's pointer to the converter.
+    if not os.access(CLVR, os.X_OK):
+        check(False, f"clvr binary at {CLVR} for the format messages")
+        return
+    spec = importlib.util.spec_from_loader("clvr_convert",
+                                           importlib.machinery.SourceFileLoader("clvr_convert", CONVERT))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    missing = []
+    for ext in sorted(mod.CONVERTER_EXT - {".vtk"}):  # legacy .vtk clvr reads itself
+        path = os.path.join(tmp, "data" + ext)
+        with open(path, "wb") as f:
+            f.write(b"not a mesh\n")
+        r = subprocess.run([CLVR, "--info", path], capture_output=True, text=True, timeout=60)
+        lines = r.stderr.splitlines()
+        if not (r.returncode == 3 and len(lines) == 1 and "tools/clvr-convert" in lines[0] and path in lines[0]):
+            missing.append((ext, r.returncode, r.stderr.strip()[:160]))
+    check(not missing, f"clvr names tools/clvr-convert for all {len(mod.CONVERTER_EXT) - 1} converter "
+          "extensions", missing, [])
+
+
 def main():
     if not os.path.isfile(CONVERT):
         print(f"FAIL no converter at {CONVERT}")
@@ -559,6 +622,7 @@ def main():
         test_exodus(tmp)
         test_errors(tmp)
         test_list(tmp)
+        test_output_name_and_avs(tmp)
         skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
                          if p.endswith(".umesh"))
         print(f"not VTK-readable, skipped: {', '.join(skipped)}")

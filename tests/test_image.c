@@ -317,6 +317,163 @@ static void test_atomic_writes(void)
     free(big);
 }
 
+/* The tone curves at known values, their shape (monotonic, toe below the
+ * identity, shoulder below 1 so nothing clips), exposure as a power of two,
+ * PNG codes written with them, EXR and PFM left linear, transparent PNG's
+ * alpha and straight colour, and numbered file names for --orbit. */
+static void test_display(void)
+{
+    clvr_error err = {0};
+    char p[256];
+    /* ACES fit at 1.5 x: x = 1 -> 1.5 (2.51*1.5 + 0.03) / (1.5 (2.43*1.5 + 0.59) + 0.14) = 0.87678. */
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_ACES, 1.0f), 0.87678, 1e-4);
+    /* The fit reaches 1 where 0.08 y^2 - 0.56 y - 0.14 = 0, y = 7.2404, x = y / 1.5. */
+    TU_CHECK(clvr_image_tonemap(CLVR_TONEMAP_ACES, 4.80f) < 1.0f);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_ACES, 4.84f), 1.0, 0.0);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_ACES, 0.0f), 0.0, 0.0);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_NONE, 0.5f), 0.5, 0.0);
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_NONE, 3.0f), 1.0, 0.0);
+    /* Hable at 3 x, normalised by its value at 11.2: white at x = 11.2 / 3. */
+    TU_CHECK_NEAR(clvr_image_tonemap(CLVR_TONEMAP_FILMIC, 11.2f / 3.0f), 1.0, 1e-5);
+    TU_CHECK(clvr_image_tonemap(CLVR_TONEMAP_FILMIC, 3.6f) < 1.0f);
+    for (int t = CLVR_TONEMAP_ACES; t <= CLVR_TONEMAP_FILMIC; ++t) {
+        float prev = 0.0f;
+        int monotonic = 1;
+        for (float x = 1e-4f; x < 1000.0f; x *= 1.1f) {
+            float y = clvr_image_tonemap((clvr_tonemap)t, x);
+            monotonic &= y >= prev && y <= 1.0f && (x > 3.6f || y < 1.0f);
+            prev = y;
+        }
+        TU_CHECK(monotonic);
+        TU_CHECK(clvr_image_tonemap((clvr_tonemap)t, 0.01f) < 0.01f * CLVR_TONEMAP_GAIN); /* toe */
+        TU_CHECK_NEAR(clvr_image_tonemap((clvr_tonemap)t, INFINITY), 1.0, 0.0);
+        TU_CHECK_NEAR(clvr_image_tonemap((clvr_tonemap)t, NAN), 0.0, 0.0);
+    }
+    TU_CHECK(clvr_tonemap_parse("aces") == CLVR_TONEMAP_ACES && clvr_tonemap_parse("filmic") == CLVR_TONEMAP_FILMIC);
+    TU_CHECK(clvr_tonemap_parse("none") == CLVR_TONEMAP_NONE && clvr_tonemap_parse("ACES") == CLVR_TONEMAP_COUNT);
+
+    /* PNG codes: exposure +1 under aces equals exposure 0 of twice the value. */
+    float px[8] = {0.25f, 0.5f, 1.0f, 1.0f, 0.5f, 1.0f, 2.0f, 1.0f};
+    clvr_image_display d = {1.0f, CLVR_TONEMAP_ACES, 0, NULL};
+    path_in_dir(p, sizeof p, "tm.png");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 2, 1, px, &d, &err), CLVR_OK, &err);
+    clvr_image img;
+    TU_CHECK_STATUS(clvr_image_read(p, &img, &err), CLVR_OK, &err);
+    for (int i = 0; img.rgba && i < 3; ++i) {
+        uint8_t want = clvr_image_srgb_to_u8(clvr_image_tonemap(CLVR_TONEMAP_ACES, px[4 + i]));
+        TU_CHECK_EQ_U64(clvr_image_srgb_to_u8(img.rgba[i]), want);
+        TU_CHECK(clvr_image_srgb_to_u8(img.rgba[4 + i]) < 255); /* 2^1 * 2.0 is not clipped */
+        TU_CHECK_NEAR(img.rgba[3], 1.0, 0.0);                   /* opaque */
+    }
+    clvr_image_free(&img);
+
+    /* EXR and PFM ignore the display transform. */
+    d.exposure_ev = 3.0f;
+    d.transparent = 1;
+    path_in_dir(p, sizeof p, "tm.exr");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 2, 1, px, &d, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_image_read(p, &img, &err), CLVR_OK, &err);
+    for (int i = 0; img.rgba && i < 8; ++i) TU_CHECK_NEAR(img.rgba[i], px[i], 0.0);
+    clvr_image_free(&img);
+    path_in_dir(p, sizeof p, "tm.pfm");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 2, 1, px, &d, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_image_read(p, &img, &err), CLVR_OK, &err);
+    for (int i = 0; img.rgba && i < 3; ++i) TU_CHECK_NEAR(img.rgba[4 + i], px[4 + i], 0.0);
+    clvr_image_free(&img);
+
+    /* Transparent PNG: alpha = a; colour = the premultiplied colour / a. */
+    float pre[12] = {0.1f, 0.2f, 0.3f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, 0.8f, 0.4f, 0.2f, 1.0f};
+    clvr_image_display t = {0.0f, CLVR_TONEMAP_NONE, 1, NULL};
+    path_in_dir(p, sizeof p, "alpha.png");
+    TU_CHECK_STATUS(clvr_image_write_display(p, 3, 1, pre, &t, &err), CLVR_OK, &err);
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    unsigned char got[12] = {0};
+    TU_CHECK(png_image_begin_read_from_file(&pi, p) && (pi.format & PNG_FORMAT_FLAG_ALPHA));
+    pi.format = PNG_FORMAT_RGBA;
+    TU_CHECK(png_image_finish_read(&pi, NULL, got, 0, NULL));
+    const unsigned char want_rgba[12] = {clvr_image_srgb_to_u8(0.2f), clvr_image_srgb_to_u8(0.4f),
+                                         clvr_image_srgb_to_u8(0.6f), 128, 0, 0, 0, 0,
+                                         clvr_image_srgb_to_u8(0.8f), clvr_image_srgb_to_u8(0.4f),
+                                         clvr_image_srgb_to_u8(0.2f), 255};
+    for (int i = 0; i < 12; ++i) TU_CHECK_EQ_U64(got[i], want_rgba[i]);
+
+    char name[64];
+    TU_CHECK(clvr_image_numbered_path("out/a.png", 7, name, sizeof name) && !strcmp(name, "out/a.0007.png"));
+    TU_CHECK(clvr_image_numbered_path("a.b/noext", 12345, name, sizeof name) && !strcmp(name, "a.b/noext.12345"));
+    TU_CHECK(clvr_image_numbered_path(".hidden", 0, name, sizeof name) && !strcmp(name, ".hidden.0000"));
+    TU_CHECK(!clvr_image_numbered_path("long-name.png", 1, name, 8));
+}
+
+static int popcount_glyph(char c)
+{
+    const uint8_t *g = clvr_image_glyph(c);
+    int n = 0;
+    for (int r = 0; g && r < 7; ++r)
+        for (int b = 0; b < 5; ++b) n += g[r] >> b & 1;
+    return n;
+}
+
+/* White pixels (255, 255, 255) in [x0, x1) x [y0, y1). */
+static int white_in(const uint8_t *px, uint32_t ch, uint32_t w, int x0, int y0, int x1, int y1)
+{
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            const uint8_t *p = px + ((size_t)y * w + (size_t)x) * ch;
+            n += p[0] == 255 && p[1] == 255 && p[2] == 255;
+        }
+    return n;
+}
+
+/* The legend: the font's lookups, a layout inside the image's bottom-left
+ * corner, the bar's ends in the table's first and last colours, exactly the
+ * glyphs' pixels of the name and of both range labels in white, the panel's
+ * darkening and alpha, nothing drawn above the panel. */
+static void test_legend(void)
+{
+    TU_CHECK(clvr_image_glyph('a') == clvr_image_glyph('A') && clvr_image_glyph(' ') == NULL);
+    TU_CHECK(clvr_image_glyph('~') == clvr_image_glyph('?') && clvr_image_glyph('?') != NULL);
+    TU_CHECK_EQ_U64(popcount_glyph('1'), 10);
+    const float table[8] = {1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 1.0f, 1.0f}; /* red -> blue */
+    clvr_image_legend l = {table, 2, 0.0f, 1.0f, "Ab"};
+    const uint32_t w = 200, h = 100;
+    clvr_image_legend_layout o;
+    clvr_image_legend_layout_of(w, h, &l, &o);
+    TU_CHECK_EQ_U64(o.scale, 1);
+    TU_CHECK(o.panel[0] >= 0 && o.panel[1] > (int32_t)h / 2 && o.panel[2] <= (int32_t)w && o.panel[3] <= (int32_t)h);
+    TU_CHECK(o.bar[0] >= o.panel[0] && o.bar[2] <= o.panel[2] && o.bar[1] > o.title_y && o.labels_y > o.bar[3]);
+    TU_CHECK(o.labels_y + 7 <= o.panel[3] && o.title_chars == 2);
+    for (uint32_t ch = 3; ch <= 4; ++ch) {
+        uint8_t *px = calloc((size_t)w * h * ch, 1);
+        for (size_t i = 0; i < (size_t)w * h * ch; ++i) px[i] = ch == 4 && i % 4 == 3 ? 0 : 100;
+        clvr_image_draw_legend(px, ch, w, h, &l);
+        const uint8_t *left = px + ((size_t)o.bar[1] * w + (size_t)o.bar[0]) * ch;
+        const uint8_t *right = px + ((size_t)o.bar[1] * w + (size_t)o.bar[2] - 1) * ch;
+        TU_CHECK(left[0] == 255 && left[1] == 0 && left[2] == 0);
+        TU_CHECK(right[0] == 0 && right[1] == 0 && right[2] == 255);
+        TU_CHECK_EQ_U64(white_in(px, ch, w, o.title_x, o.title_y, o.title_x + 12, o.title_y + 7),
+                        popcount_glyph('A') + popcount_glyph('B'));
+        TU_CHECK_EQ_U64(white_in(px, ch, w, o.bar[0], o.labels_y, o.bar[0] + 6, o.labels_y + 7), popcount_glyph('0'));
+        TU_CHECK_EQ_U64(white_in(px, ch, w, o.bar[2] - 5, o.labels_y, o.bar[2], o.labels_y + 7), popcount_glyph('1'));
+        /* The panel's corner is darkened (RGB: 100 -> 40) or made 60% opaque (RGBA). */
+        const uint8_t *corner = px + ((size_t)o.panel[1] * w + (size_t)o.panel[0]) * ch;
+        if (ch == 3) TU_CHECK_EQ_U64(corner[0], 40);
+        else TU_CHECK_EQ_U64(corner[3], 153);
+        int touched = 0;
+        for (size_t i = 0; i < (size_t)o.panel[1] * w * ch; ++i) touched += px[i] != (ch == 4 && i % 4 == 3 ? 0 : 100);
+        TU_CHECK_EQ_U64(touched, 0);
+        free(px);
+    }
+    /* A big image scales the font; a long name is cut to the room there is. */
+    clvr_image_legend_layout_of(1024, 768, &l, &o);
+    TU_CHECK_EQ_U64(o.scale, 3);
+    l.name = "a-very-long-field-name-that-cannot-fit-into-a-small-image";
+    clvr_image_legend_layout_of(64, 64, &l, &o);
+    TU_CHECK(o.title_chars < strlen(l.name) && o.panel[2] <= 64);
+}
+
 static void remove_dir(void)
 {
     DIR *d = opendir(g_dir);
@@ -340,6 +497,8 @@ int main(void)
     test_half_exr();
     test_bad_inputs();
     test_atomic_writes();
+    test_display();
+    test_legend();
     remove_dir();
     return tu_finish("test_image");
 }

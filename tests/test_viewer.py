@@ -351,6 +351,19 @@ def main():
                 d = max_diff(a, b)
                 check(d <= 1e-6, f"offline render of the K line at {spp} spp equals the viewer's image", d, 0.0)
 
+        # --up z: the viewer orbits about z, and its K line carries that up vector.
+        up_dir = os.path.join(tmp, "up")
+        os.makedirs(up_dir)
+        script = os.path.join(up_dir, "up.txt")
+        with open(script, "w") as f:
+            f.write("frames 1\ndrag left 30 10\nframes 1\nkey K\nquit\n")
+        r = run(xvfb + [CLVR, "--view", "--quiet", "--size", "64x48", "--up", "z", MESH],
+                env={"CLVR_VIEW_SCRIPT": script}, cwd=up_dir)
+        m = re.search(r"--camera (\S+)", r.stdout)
+        up = [float(x) for x in m.group(1).split(",")[6:]] if m else None
+        check(r.returncode == 0 and up == [0.0, 0.0, 1.0], "--view --up z: the K line's up vector is 0,0,1",
+              (r.returncode, up, r.stderr[-200:]), [0.0, 0.0, 1.0])
+
         # Real input through the GLFW callbacks, when xdotool is installed.
         if shutil.which("xdotool"):
             script = os.path.join(tmp, "xdotool.txt")

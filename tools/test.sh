@@ -13,10 +13,11 @@ BUILD=${CLVR_BUILD:-build}
 JOBS=${CLVR_JOBS:-2}
 DEFAULT_STAGES=(setup configure build test sanitize fuzz)
 
-# Packages: tools/setup-debian.sh returns at once when all are installed, and uses
-# sudo itself when it must install as a user that is not root.
+# Packages: the `test` group of tools/setup-debian.sh (running, converting, tests,
+# benchmarks, fuzzing); it returns at once when all are installed, and uses sudo
+# itself when it must install as a user that is not root.
 stage_setup() {
-  tools/setup-debian.sh
+  tools/setup-debian.sh test
 }
 
 stage_configure() {
@@ -41,13 +42,15 @@ stage_sanitize() {
   mkdir -p "$ASAN_BUILD"
   cmake -S . -B "$ASAN_BUILD" -DCLVR_SANITIZE=ON -DCLVR_WERROR=ON -DCLVR_BIG_TESTS=OFF \
     >"$ASAN_BUILD/configure.log" 2>&1 || { cat "$ASAN_BUILD/configure.log" >&2; return 1; }
-  cmake --build "$ASAN_BUILD" -j"$JOBS"
+  cmake --build "$ASAN_BUILD" -j"$JOBS" || return 1
   (
     # shellcheck source=tools/sanitizer.env
     . tools/sanitizer.env
-    ctest --test-dir "$ASAN_BUILD" -LE "slow|$CLVR_SANITIZE_NO_LEAK_LABELS" --output-on-failure
-    ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" \
-      ctest --test-dir "$ASAN_BUILD" -L "$CLVR_SANITIZE_NO_LEAK_LABELS" -LE slow --output-on-failure
+    # Chained with &&: stages run where `set -e` is off (`stage_X || rc=$?`), so a
+    # failure of the first pass must not be hidden by the second's status.
+    ctest --test-dir "$ASAN_BUILD" -LE "slow|$CLVR_SANITIZE_NO_LEAK_LABELS" --output-on-failure &&
+      ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" \
+        ctest --test-dir "$ASAN_BUILD" -L "$CLVR_SANITIZE_NO_LEAK_LABELS" -LE slow --output-on-failure
   )
 }
 
@@ -63,7 +66,7 @@ stage_fuzz() {
   mkdir -p "$FUZZ_BUILD"
   CC=clang cmake -S . -B "$FUZZ_BUILD" -DCLVR_FUZZ=ON -DCLVR_WERROR=ON -DCLVR_BIG_TESTS=OFF -DCLVR_VIEWER=OFF \
     >"$FUZZ_BUILD/configure.log" 2>&1 || { cat "$FUZZ_BUILD/configure.log" >&2; return 1; }
-  cmake --build "$FUZZ_BUILD" -j"$JOBS" --target fuzz_bin fuzz_umesh fuzz_vtk fuzz_tf
+  cmake --build "$FUZZ_BUILD" -j"$JOBS" --target fuzz_bin fuzz_umesh fuzz_vtk fuzz_tf || return 1
   local t
   for t in bin umesh vtk tf; do
     local corpus="$FUZZ_BUILD/corpus/$t" artifacts="$FUZZ_BUILD/artifacts/$t" log="$FUZZ_BUILD/fuzz_$t.log"

@@ -1,4 +1,6 @@
 #include "cli.h"
+#include "camera.h"
+#include "image.h"
 #include "render.h"
 
 #include <errno.h>
@@ -17,7 +19,7 @@ void clvr_cli_print_help(FILE *out)
         "convert anything else VTK reads with tools/clvr-convert.\n"
         "\n"
         "Actions:\n"
-        "  --help                 this text\n"
+        "  --help, -h             this text\n"
         "  --version              print the version\n"
         "  --list-devices         list OpenCL platforms and devices\n"
         "  --info                 print counts per element type, bounds, scalar range, bytes; no render\n"
@@ -32,12 +34,18 @@ void clvr_cli_print_help(FILE *out)
         "  --kernel-dir DIR       load OpenCL sources from DIR instead of the embedded copies\n"
         "\n"
         "Output:\n"
-        "  -o FILE                image file: .png (sRGB), .exr (linear float RGBA), .pfm (float RGB)\n"
-        "                         (default clvr.png)\n"
+        "  -o FILE, --output FILE  image file: .png (sRGB, tone-mapped), .exr (linear float RGBA),\n"
+        "                         .pfm (linear float RGB) (default clvr.png)\n"
+        "  --exposure EV          PNG only: scale the linear image by 2^EV before the tone curve\n"
+        "                         (default 0)\n"
+        "  --tonemap T            PNG only: aces | filmic | none (clamp) (default aces); EXR and PFM\n"
+        "                         always hold the linear values\n"
+        "  --legend               PNG only: draw the colour map with its range and the field's name\n"
+        "                         at the bottom-left corner\n"
         "  --size WxH             image size (default 512x512)\n"
         "  --spp N                samples per pixel = frames accumulated (default 64)\n"
         "  --seed N               random seed (default 1); same seed, same image\n"
-        "  --quiet                no progress on stderr\n"
+        "  --quiet, -q            no progress on stderr\n"
         "\n"
         "Rendering:\n"
         "  --method M             march | track | bins | dda (default dda)\n"
@@ -61,7 +69,17 @@ void clvr_cli_print_help(FILE *out)
         "Scene:\n"
         "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"
         "                         (default: automatic framing of the mesh)\n"
-        "  --fovy DEG             vertical field of view (default 40)\n"
+        "  --fovy DEG             vertical field of view (default 30, as ParaView)\n"
+        "  --up AXIS              x | y | z | -x | -y | -z: the world axis shown upwards by the\n"
+        "                         automatic framing (default y; no format clvr reads records one)\n"
+        "  --azimuth DEG          turn the automatic framing about the up axis (counterclockwise\n"
+        "                         seen from above; default 0)\n"
+        "  --elevation DEG        raise the automatic framing's camera (default 0; the total stays\n"
+        "                         within +-89 degrees of the horizon)\n"
+        "  --zoom F               move the automatic framing's camera F times closer (default 1)\n"
+        "  --orbit N              render N turntable frames about the up axis (the look-at point's\n"
+        "                         vertical), written as -o's name with .0000, .0001, ... before\n"
+        "                         the extension\n"
         "  --colormap NAME        cool-warm | viridis | inferno | grayscale | jet (default cool-warm)\n"
         "  --tf FILE              transfer function file (clvr text format or ParaView JSON)\n"
         "  --range LO HI          scalar window mapped by the transfer function (default: data range)\n"
@@ -70,6 +88,8 @@ void clvr_cli_print_help(FILE *out)
         "  --light-intensity I    (default 1)\n"
         "  --ambient A            ambient light level (default 0.3)\n"
         "  --background R,G,B     linear background colour (default 0.05,0.05,0.07)\n"
+        "  --background none      transparent background: PNG gets an alpha channel (the volume's\n"
+        "                         opacity), EXR premultiplied colour over black\n"
         "\n"
         "Viewer controls (--view; the window starts at --size, the title shows fps, Mrays/s, spp):\n"
         "  left drag              orbit around the look-at point (arrow keys: 10 degree steps)\n"
@@ -117,7 +137,10 @@ static void defaults(clvr_options *o)
     o->shadows = rs.shadows;
     o->sampler = rs.sampler;
     o->leaf_size = 16;
-    o->fovy = 40.0f;
+    o->fovy = 30.0f; /* ParaView's default view angle */
+    o->up[1] = 1.0f;
+    o->zoom = 1.0f;
+    o->tonemap = CLVR_TONEMAP_ACES;
     o->colormap = "cool-warm";
     o->density = 1.0f;
     memcpy(o->light_dir, rs.light_dir, sizeof o->light_dir);
@@ -288,11 +311,53 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
         }
         else if (!strcmp(a, "--light-intensity")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->light_intensity, err); }
         else if (!strcmp(a, "--ambient")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->ambient, err); }
-        else if (!strcmp(a, "--background")) { const char *v = NEXT(); if (v) s = parse_floats(a, v, 3, o->background, err); }
+        else if (!strcmp(a, "--background")) {
+            const char *v = NEXT();
+            if (v && !strcmp(v, "none")) {
+                /* Rendered over black, the colour is premultiplied by the opacity. */
+                o->transparent = 1;
+                memset(o->background, 0, sizeof o->background);
+            } else if (v) {
+                o->transparent = 0;
+                s = parse_floats(a, v, 3, o->background, err);
+                if (s != CLVR_OK)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--background expects R,G,B (3 numbers) or none, got '%s'", v);
+            }
+        }
+        else if (!strcmp(a, "--legend")) o->legend = 1;
+        else if (!strcmp(a, "--exposure")) { const char *v = NEXT(); if (v) s = parse_float(a, v, -30.0f, 30.0f, &o->exposure, err); }
+        else if (!strcmp(a, "--tonemap")) {
+            const char *v = NEXT();
+            if (v) {
+                clvr_tonemap t = clvr_tonemap_parse(v);
+                if (t == CLVR_TONEMAP_COUNT) s = clvr_error_set(err, CLVR_ERR_USAGE, "--tonemap expects aces, filmic or none, got '%s'", v);
+                else o->tonemap = (int)t;
+            }
+        }
+        else if (!strcmp(a, "--up")) {
+            const char *v = NEXT();
+            if (v) {
+                if (clvr_camera_parse_axis(v, o->up) != 0)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--up expects x, y, z, -x, -y or -z, got '%s'", v);
+                o->view_set = 1;
+            }
+        }
+        else if (!strcmp(a, "--azimuth")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, -3600.0f, 3600.0f, &o->azimuth, err); o->view_set = 1; } }
+        else if (!strcmp(a, "--elevation")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, -180.0f, 180.0f, &o->elevation, err); o->view_set = 1; } }
+        else if (!strcmp(a, "--zoom")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, 1e-3f, 1e3f, &o->zoom, err); o->view_set = 1; } }
+        else if (!strcmp(a, "--orbit")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 100000, &o->orbit, err); }
         else if (a[0] == '-' && a[1] != 0) s = clvr_error_set(err, CLVR_ERR_USAGE, "unknown option '%s' (see clvr --help)", a);
         else if (o->mesh_path) s = clvr_error_set(err, CLVR_ERR_USAGE, "more than one mesh given: '%s' and '%s'", o->mesh_path, a);
         else o->mesh_path = a;
 #undef NEXT
     }
+    /* The view options move the automatic framing; an explicit --camera has
+     * its own eye and up, and silently ignoring them would surprise. */
+    if (s == CLVR_OK && o->camera_set && o->view_set)
+        s = clvr_error_set(err, CLVR_ERR_USAGE,
+                           "--up, --azimuth, --elevation and --zoom adjust the automatic framing; drop them or drop "
+                           "--camera");
+    if (s == CLVR_OK && o->orbit && o->view)
+        s = clvr_error_set(err, CLVR_ERR_USAGE, "--orbit renders numbered files; it does not apply to --view");
     return s;
 }

@@ -39,7 +39,12 @@ typedef struct clvr_options {
     /* scene */
     int camera_set;
     float camera[9];             /* --camera px,py,pz,lx,ly,lz,ux,uy,uz */
-    float fovy;                  /* --fovy degrees */
+    float fovy;                  /* --fovy degrees (default 30, as ParaView) */
+    float up[3];                 /* --up: axis of the automatic framing (default +y) */
+    int view_set;                /* nonzero when --up, --azimuth, --elevation or --zoom was given */
+    float azimuth, elevation;    /* --azimuth, --elevation: degrees added to the automatic framing's */
+    float zoom;                  /* --zoom F: the framing distance divided by F (default 1) */
+    uint32_t orbit;              /* --orbit N: N turntable frames to numbered files; 0: one image */
     const char *colormap;        /* --colormap NAME */
     const char *tf_file;         /* --tf FILE */
     int range_set;
@@ -49,6 +54,11 @@ typedef struct clvr_options {
     float light_intensity;       /* --light-intensity I */
     float ambient;               /* --ambient A */
     float background[3];         /* --background r,g,b */
+    int transparent;             /* --background none: PNG alpha from the volume, background black */
+    /* display (PNG only; EXR and PFM stay linear) */
+    float exposure;              /* --exposure EV */
+    int tonemap;                 /* --tonemap: clvr_tonemap (image.h), default aces */
+    int legend;                  /* --legend: colour bar, range and field name drawn into the PNG */
 } clvr_options;
 
 /* Fills defaults, then parses argv. On a bad command line returns

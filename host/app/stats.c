@@ -101,6 +101,7 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                     s->stage_s[i] > 0 ? (double)s->elements / s->stage_s[i] : 0.0);
         fprintf(out, "| total (wall) | %.4f | %.3g |\n", s->preprocess_s,
                 s->preprocess_s > 0 ? (double)s->elements / s->preprocess_s : 0.0);
+        fprintf(out, "\nkernel compilation (not in the total): %.3f s\n", s->kernel_build_s);
     }
     if (s->have_render) {
         fprintf(out, "\nrender: %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
@@ -166,6 +167,7 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
         snprintf(key, sizeof key, "%s_s", s->stage_name[i]);
         jnum(f, "    ", key, s->stage_s[i], 1);
     }
+    jnum(f, "    ", "kernel_build_s", s->kernel_build_s, 1);
     jnum(f, "    ", "preprocess_s", s->preprocess_s, 0);
     fprintf(f, "  },\n");
     if (s->have_render) {
@@ -185,6 +187,7 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
             snprintf(key, sizeof key, "render.%s", r[i].k);
             jnum(f, "  ", key, r[i].v, 1);
         }
+    jnum(f, "  ", "time.kernel_build_s", s->kernel_build_s, 1);
     jnum(f, "  ", "time.preprocess_s", s->preprocess_s, 0);
     fprintf(f, "}\n");
     int bad = ferror(f);

@@ -34,7 +34,8 @@ typedef struct clvr_stats {
     uint64_t num_instances, num_instances16, num_leaves, num_sampling;
     uint32_t leaf_size, sampling_size;
     /* times, seconds */
-    double preprocess_s;            /* wall time: upload + clustering + BVH */
+    double preprocess_s;            /* wall time: upload + clustering + BVH, kernel compilation excluded */
+    double kernel_build_s;          /* wall time in the driver's compiler (all programs; ms when cached) */
     int num_stages;
     const char *stage_name[CLVR_STATS_MAX_STAGES];
     double stage_s[CLVR_STATS_MAX_STAGES];

@@ -953,7 +953,7 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
     for (int k = 0; k < 3; ++k) {
         v->eye[k] = v->eye0[k] = cam->origin[k];
         v->target[k] = v->target0[k] = cam->target[k];
-        v->pole[k] = o->camera_set ? o->camera[6 + k] : (k == 1 ? 1.0f : 0.0f);
+        v->pole[k] = o->camera_set ? o->camera[6 + k] : o->up[k]; /* --up: the framing's axis */
     }
     if (!normalize3(v->pole)) v->pole[1] = 1.0f;
     float ext[3] = {mesh->bounds.hi[0] - mesh->bounds.lo[0], mesh->bounds.hi[1] - mesh->bounds.lo[1],

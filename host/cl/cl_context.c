@@ -3,9 +3,16 @@
 #include "kernel_sources.h"
 
 #include <ctype.h>
+#include <errno.h>
+#include <pthread.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "clock.h"
 #ifdef __linux__
 #include <sys/mman.h>
 #endif
@@ -374,6 +381,76 @@ static clvr_status expand(const clvr_cl *cl, const char *name, strbuf *out, strb
     return s;
 }
 
+/* The driver's compiler may write to the process's stderr (PoCL's clang
+ * prints "N warnings generated." there, outside the build log). A build
+ * runs with fd 2 pointed at a temporary file, so nothing of it reaches the
+ * user; the text is kept for the error message and CLVR_BUILD_LOG. */
+typedef struct stderr_capture {
+    int saved;  /* dup of the real stderr, -1 when not capturing */
+    FILE *file; /* where fd 2 points meanwhile */
+} stderr_capture;
+
+static void capture_begin(stderr_capture *c)
+{
+    c->saved = -1;
+    c->file = tmpfile();
+    if (!c->file) return; /* cannot capture: the compiler may speak */
+    fflush(stderr);
+    c->saved = dup(2);
+    if (c->saved < 0 || dup2(fileno(c->file), 2) < 0) {
+        if (c->saved >= 0) close(c->saved);
+        c->saved = -1;
+        fclose(c->file);
+        c->file = NULL;
+    }
+}
+
+/* Restores stderr; returns what was written meanwhile (caller frees), or NULL. */
+static char *capture_end(stderr_capture *c)
+{
+    char *text = NULL;
+    if (c->saved < 0) return NULL;
+    fflush(stderr);
+    dup2(c->saved, 2);
+    close(c->saved);
+    c->saved = -1;
+    long n = ftell(c->file);
+    if (n > 0 && fseek(c->file, 0, SEEK_SET) == 0 && (text = malloc((size_t)n + 1))) {
+        size_t got = fread(text, 1, (size_t)n, c->file);
+        text[got] = 0;
+    }
+    fclose(c->file);
+    c->file = NULL;
+    return text;
+}
+
+/* Prints the compiling notice from a helper thread when the build outlasts
+ * CLVR_BUILD_NOTICE_S: only then is it a compilation the user waits for.
+ * It writes to the real stderr (fd 2 is captured meanwhile). */
+typedef struct build_notice {
+    pthread_mutex_t lock;
+    pthread_cond_t done_cv;
+    int done, shown, fd;
+} build_notice;
+
+static void *notice_main(void *arg)
+{
+    build_notice *n = arg;
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    long ns = until.tv_nsec + (long)(CLVR_BUILD_NOTICE_S * 1e9);
+    until.tv_sec += ns / 1000000000L;
+    until.tv_nsec = ns % 1000000000L;
+    pthread_mutex_lock(&n->lock);
+    while (!n->done && pthread_cond_timedwait(&n->done_cv, &n->lock, &until) != ETIMEDOUT) {}
+    if (!n->done) {
+        static const char msg[] = "clvr: compiling kernels (cached for next time)\n";
+        n->shown = write(n->fd, msg, sizeof msg - 1) > 0;
+    }
+    pthread_mutex_unlock(&n->lock);
+    return NULL;
+}
+
 clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, cl_program *out, clvr_error *err)
 {
     strbuf src = {0}, seen = {0}, opts = {0};
@@ -388,7 +465,45 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
     sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
               options ? options : "");
     rc = CLVR_FAULT_CODE("clBuildProgram", CL_BUILD_PROGRAM_FAILURE);
-    if (rc == CL_SUCCESS) rc = clBuildProgram(prog, 1, &cl->device, opts.p, NULL, NULL);
+    char *compiler_said = NULL;
+    if (rc == CL_SUCCESS) {
+        const int debug = getenv("CLVR_BUILD_LOG") && strcmp(getenv("CLVR_BUILD_LOG"), "0") != 0;
+        stderr_capture cap;
+        build_notice notice = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, 0, 0, 2};
+        pthread_t notice_thread;
+        int notice_running = 0;
+        double t0 = clvr_clock_monotonic_s();
+        capture_begin(&cap);
+        if (cl->build_notice && !cl->build_notice_shown) {
+            notice.fd = cap.saved >= 0 ? cap.saved : 2;
+            notice_running = pthread_create(&notice_thread, NULL, notice_main, &notice) == 0;
+        }
+        rc = clBuildProgram(prog, 1, &cl->device, opts.p, NULL, NULL);
+        if (notice_running) {
+            pthread_mutex_lock(&notice.lock);
+            notice.done = 1;
+            pthread_cond_signal(&notice.done_cv);
+            pthread_mutex_unlock(&notice.lock);
+            pthread_join(notice_thread, NULL);
+            cl->build_notice_shown |= notice.shown;
+        }
+        compiler_said = capture_end(&cap);
+        cl->build_s += clvr_clock_monotonic_s() - t0;
+        if (debug && rc == CL_SUCCESS) {
+            size_t ls = 0;
+            clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &ls);
+            char *blog = malloc(ls + 1);
+            if (blog) {
+                blog[0] = 0;
+                clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, ls, blog, NULL);
+                blog[ls] = 0;
+            }
+            fprintf(stderr, "clvr: CLVR_BUILD_LOG: kernels/%s built in %.2f s; build log:\n%s\n%s%s", entry,
+                    clvr_clock_monotonic_s() - t0, blog ? blog : "", compiler_said ? "compiler stderr:\n" : "",
+                    compiler_said ? compiler_said : "");
+            free(blog);
+        }
+    }
     if (rc != CL_SUCCESS) {
         size_t logsize = 0;
         clGetProgramBuildInfo(prog, cl->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &logsize);
@@ -399,11 +514,14 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
             log[logsize] = 0;
         }
         if (clvr_cl_fault("clBuildProgram") && log) snprintf(log, logsize + 64, "%s", "(injected by CLVR_FAIL)");
-        s = clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "building kernels/%s for %s failed (%s):\n%s", entry,
-                           cl->device_name, clvr_cl_error_name(rc), log && *log ? log : "(empty build log)");
+        s = clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "building kernels/%s for %s failed (%s):\n%s%s", entry,
+                           cl->device_name, clvr_cl_error_name(rc), log && *log ? log : "(empty build log)",
+                           compiler_said && !(log && *log) ? compiler_said : "");
         free(log);
+        free(compiler_said);
         goto cleanup;
     }
+    free(compiler_said);
     *out = prog;
     prog = NULL;
 cleanup:

@@ -28,7 +28,17 @@ typedef struct clvr_cl {
     cl_uint compute_units;
     const char *kernel_dir;      /* NULL: embedded sources; else read kernels from this directory */
     cl_ulong allocated_bytes;    /* sum of live buffers made by clvr_cl_buffer (bookkeeping for --stats) */
+    double build_s;              /* seconds spent in clBuildProgram so far (kernel compilation) */
+    /* Set by the caller: print "compiling kernels (cached for next time)" to
+     * stderr when a build takes longer than CLVR_BUILD_NOTICE_S (a cold
+     * driver cache), at most once per context. */
+    int build_notice;
+    int build_notice_shown;      /* the notice was printed */
 } clvr_cl;
+
+/* A build slower than this is a compilation, not a cache hit (PoCL: 1-12 s
+ * per program with an empty cache, a few ms from its cache). */
+#define CLVR_BUILD_NOTICE_S 0.4
 
 /* Name of an OpenCL error code, e.g. "CL_OUT_OF_RESOURCES". */
 const char *clvr_cl_error_name(cl_int code);
@@ -50,7 +60,11 @@ void clvr_cl_destroy(clvr_cl *cl);
  * Local #include "x.h" directives are expanded from the same source set, with
  * #line markers so compiler messages name the right file and line. options
  * are appended to clvr's defaults (-cl-std=CL1.2 -I...). On failure the build
- * log goes into the message (CLVR_ERR_KERNEL_BUILD). */
+ * log goes into the message (CLVR_ERR_KERNEL_BUILD). The compiler's own
+ * output to stderr (PoCL's "1 warning generated.") is captured, never shown
+ * to a user: it joins the message on failure, and CLVR_BUILD_LOG=1 in the
+ * environment prints it and the build log of every program (developers).
+ * Adds the build's wall time to cl->build_s. */
 clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, cl_program *out, clvr_error *err);
 
 /* clCreateKernel with error reporting. */

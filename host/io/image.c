@@ -230,15 +230,234 @@ cleanup:
 
 /* ------------------------------------------------------------ PNG */
 
-static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const float *rgba, clvr_error *err)
+const char *clvr_tonemap_name(clvr_tonemap t)
+{
+    static const char *names[CLVR_TONEMAP_COUNT] = {"none", "aces", "filmic"};
+    return (unsigned)t < CLVR_TONEMAP_COUNT ? names[t] : "?";
+}
+
+clvr_tonemap clvr_tonemap_parse(const char *name)
+{
+    for (int t = 0; t < CLVR_TONEMAP_COUNT; ++t)
+        if (name && !strcmp(name, clvr_tonemap_name((clvr_tonemap)t))) return (clvr_tonemap)t;
+    return CLVR_TONEMAP_COUNT;
+}
+
+/* Hable's operator without the white-point normalisation. */
+static float hable(float x)
+{
+    const float a = 0.15f, b = 0.50f, c = 0.10f, d = 0.20f, e = 0.02f, f = 0.30f;
+    return (x * (a * x + c * b) + d * e) / (x * (a * x + b) + d * f) - e / f;
+}
+
+float clvr_image_tonemap(clvr_tonemap t, float x)
+{
+    if (!(x > 0.0f)) return 0.0f; /* NaN, negative, zero */
+    float y;
+    switch (t) {
+    case CLVR_TONEMAP_ACES:
+        x *= CLVR_TONEMAP_GAIN;
+        y = isinf(x) ? 1.0f : x * (2.51f * x + 0.03f) / (x * (2.43f * x + 0.59f) + 0.14f);
+        break;
+    case CLVR_TONEMAP_FILMIC:
+        x *= CLVR_TONEMAP_GAIN * 2.0f; /* Hable's exposure bias */
+        y = isinf(x) ? 1.0f : hable(x) / hable(11.2f);
+        break;
+    default: y = x; break;
+    }
+    return y < 1.0f ? y : 1.0f;
+}
+
+/* ------------------------------------------------------------ legend */
+
+/* A 5x7 font of the characters a field name and a number need (digits,
+ * upper case, punctuation); rows top to bottom, bit 4 the leftmost column.
+ * Drawn after the classic 5x7 LCD character sets. */
+static const struct {
+    char c;
+    uint8_t rows[7];
+} font5x7[] = {
+    {'0', {0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e}},
+    {'1', {0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e}},
+    {'2', {0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f}},
+    {'3', {0x1f, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0e}},
+    {'4', {0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02}},
+    {'5', {0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e}},
+    {'6', {0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e}},
+    {'7', {0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e}},
+    {'9', {0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c}},
+    {'A', {0x0e, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x11}},
+    {'B', {0x1e, 0x11, 0x11, 0x1e, 0x11, 0x11, 0x1e}},
+    {'C', {0x0e, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0e}},
+    {'D', {0x1c, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1c}},
+    {'E', {0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x1f}},
+    {'F', {0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x10}},
+    {'G', {0x0e, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0f}},
+    {'H', {0x11, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x11}},
+    {'I', {0x0e, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e}},
+    {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0c}},
+    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}},
+    {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1f}},
+    {'M', {0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11}},
+    {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
+    {'O', {0x0e, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e}},
+    {'P', {0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10, 0x10}},
+    {'Q', {0x0e, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0d}},
+    {'R', {0x1e, 0x11, 0x11, 0x1e, 0x14, 0x12, 0x11}},
+    {'S', {0x0f, 0x10, 0x10, 0x0e, 0x01, 0x01, 0x1e}},
+    {'T', {0x1f, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
+    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e}},
+    {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0a, 0x04}},
+    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0a}},
+    {'X', {0x11, 0x11, 0x0a, 0x04, 0x0a, 0x11, 0x11}},
+    {'Y', {0x11, 0x11, 0x0a, 0x04, 0x04, 0x04, 0x04}},
+    {'Z', {0x1f, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1f}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c}},
+    {'-', {0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00}},
+    {'+', {0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00}},
+    {':', {0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x00}},
+    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1f}},
+    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}},
+    {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
+    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
+    {',', {0x00, 0x00, 0x00, 0x00, 0x0c, 0x04, 0x08}},
+    {'=', {0x00, 0x00, 0x1f, 0x00, 0x1f, 0x00, 0x00}},
+    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
+    {'[', {0x0e, 0x08, 0x08, 0x08, 0x08, 0x08, 0x0e}},
+    {']', {0x0e, 0x02, 0x02, 0x02, 0x02, 0x02, 0x0e}},
+    {'?', {0x0e, 0x11, 0x01, 0x02, 0x04, 0x00, 0x04}},
+};
+
+const uint8_t *clvr_image_glyph(char c)
+{
+    if (c == ' ') return NULL;
+    if (c >= 'a' && c <= 'z') c = (char)(c - 'a' + 'A');
+    for (size_t i = 0; i < sizeof font5x7 / sizeof font5x7[0]; ++i)
+        if (font5x7[i].c == c) return font5x7[i].rows;
+    return clvr_image_glyph('?');
+}
+
+static const char *legend_name(const clvr_image_legend *l) { return l->name && *l->name ? l->name : "scalar"; }
+
+void clvr_image_legend_layout_of(uint32_t w, uint32_t h, const clvr_image_legend *l, clvr_image_legend_layout *o)
+{
+    memset(o, 0, sizeof *o);
+    uint32_t m = w < h ? w : h;
+    const int32_t s = (int32_t)(m / 256 > 1 ? m / 256 : 1);
+    const int32_t pad = 3 * s, margin = 4 * s, cell = 6 * s;
+    int32_t room = (int32_t)w - 2 * margin - 2 * pad; /* panel contents' widest */
+    if (room < cell) room = cell;
+    int32_t bar_w = 160 * s < room ? 160 * s : room;
+    size_t n = strlen(legend_name(l));
+    uint32_t fit = (uint32_t)(room / cell);
+    o->title_chars = n < fit ? (uint32_t)n : fit;
+    int32_t title_w = (int32_t)o->title_chars * cell - s;
+    int32_t inner_w = bar_w > title_w ? bar_w : title_w;
+    int32_t panel_h = 2 * pad + 7 * s + 3 * s + 8 * s + 3 * s + 7 * s;
+    o->scale = (uint32_t)s;
+    o->panel[0] = margin;
+    o->panel[3] = (int32_t)h - margin;
+    o->panel[1] = o->panel[3] - panel_h;
+    o->panel[2] = margin + 2 * pad + inner_w;
+    o->title_x = margin + pad;
+    o->title_y = o->panel[1] + pad;
+    o->bar[0] = margin + pad;
+    o->bar[1] = o->title_y + 7 * s + 3 * s;
+    o->bar[2] = o->bar[0] + bar_w;
+    o->bar[3] = o->bar[1] + 8 * s;
+    o->labels_y = o->bar[3] + 3 * s;
+}
+
+static void put_px(uint8_t *px, uint32_t ch, uint32_t w, uint32_t h, int32_t x, int32_t y, const uint8_t rgb[3])
+{
+    if (x < 0 || y < 0 || (uint32_t)x >= w || (uint32_t)y >= h) return;
+    uint8_t *p = px + ((size_t)y * w + (size_t)x) * ch;
+    memcpy(p, rgb, 3);
+    if (ch == 4) p[3] = 255;
+}
+
+static void draw_text(uint8_t *px, uint32_t ch, uint32_t w, uint32_t h, int32_t x, int32_t y, int32_t s,
+                      const char *text, size_t n)
+{
+    static const uint8_t white[3] = {255, 255, 255};
+    for (size_t i = 0; i < n; ++i, x += 6 * s) {
+        const uint8_t *g = clvr_image_glyph(text[i]);
+        for (int32_t r = 0; g && r < 7; ++r)
+            for (int32_t c = 0; c < 5; ++c)
+                if (g[r] >> (4 - c) & 1)
+                    for (int32_t dy = 0; dy < s; ++dy)
+                        for (int32_t dx = 0; dx < s; ++dx) put_px(px, ch, w, h, x + c * s + dx, y + r * s + dy, white);
+    }
+}
+
+void clvr_image_draw_legend(uint8_t *px, uint32_t ch, uint32_t w, uint32_t h, const clvr_image_legend *l)
+{
+    clvr_image_legend_layout o;
+    clvr_image_legend_layout_of(w, h, l, &o);
+    const int32_t s = (int32_t)o.scale;
+    /* The panel: 60% black over the image (in sRGB codes, as UI blending is). */
+    for (int32_t y = o.panel[1] > 0 ? o.panel[1] : 0; y < o.panel[3] && y < (int32_t)h; ++y)
+        for (int32_t x = o.panel[0]; x < o.panel[2] && x < (int32_t)w; ++x) {
+            uint8_t *p = px + ((size_t)y * w + (size_t)x) * ch;
+            if (ch == 4) {
+                /* Black at 0.6 over a straight-alpha pixel: a' = 0.6 + 0.4 a, c' = 0.4 a c / a'. */
+                float a = p[3] / 255.0f, a2 = 0.6f + 0.4f * a;
+                for (int c = 0; c < 3; ++c) p[c] = (uint8_t)lrintf(0.4f * a * p[c] / a2);
+                p[3] = (uint8_t)lrintf(a2 * 255.0f);
+            } else {
+                for (int c = 0; c < 3; ++c) p[c] = (uint8_t)lrintf(0.4f * p[c]);
+            }
+        }
+    /* The bar: entry i of the table at column i * (entries - 1) / (width - 1). */
+    int32_t bw = o.bar[2] - o.bar[0];
+    for (int32_t x = 0; x < bw && l->entries; ++x) {
+        uint32_t e = bw > 1 ? (uint32_t)lrintf((float)x * (float)(l->entries - 1) / (float)(bw - 1)) : 0;
+        uint8_t rgb[3];
+        for (int c = 0; c < 3; ++c) rgb[c] = clvr_image_srgb_to_u8(l->table[4 * (size_t)e + c]);
+        for (int32_t y = o.bar[1]; y < o.bar[3]; ++y) put_px(px, ch, w, h, o.bar[0] + x, y, rgb);
+    }
+    draw_text(px, ch, w, h, o.title_x, o.title_y, s, legend_name(l), o.title_chars);
+    char lo[32], hi[32];
+    snprintf(lo, sizeof lo, "%.4g", (double)l->lo);
+    snprintf(hi, sizeof hi, "%.4g", (double)l->hi);
+    draw_text(px, ch, w, h, o.bar[0], o.labels_y, s, lo, strlen(lo));
+    int32_t hi_w = (int32_t)strlen(hi) * 6 * s - s;
+    draw_text(px, ch, w, h, o.bar[2] - hi_w, o.labels_y, s, hi, strlen(hi));
+}
+
+/* One 8-bit code of a display-linear value in [0, 1]. */
+static uint8_t display_to_u8(float y) { return (uint8_t)lrintf(clvr_image_srgb_encode(y) * 255.0f); }
+
+static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const float *rgba,
+                             const clvr_image_display *d, clvr_error *err)
 {
     size_t n = (size_t)w * h;
-    /* Opaque RGB: r g b already hold the background seen through the
-     * volume, so an alpha channel would make viewers composite it twice. */
-    uint8_t *px = malloc(n * 3);
+    const int alpha = d && d->transparent;
+    const int ch = alpha ? 4 : 3;
+    const clvr_tonemap tm = d ? d->tonemap : CLVR_TONEMAP_NONE;
+    const float gain = d ? exp2f(d->exposure_ev) : 1.0f;
+    /* Opaque RGB by default: r g b already hold the background seen through
+     * the volume, so an alpha channel would make viewers composite it twice.
+     * Transparent: the colour was rendered over black (premultiplied) and PNG
+     * wants it straight, so it is divided by alpha before the tone curve. */
+    uint8_t *px = malloc(n * (size_t)ch);
     if (!px) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory writing %s", path);
-    for (size_t i = 0; i < n; ++i)
-        for (int c = 0; c < 3; ++c) px[3 * i + c] = clvr_image_srgb_to_u8(rgba[4 * i + c]);
+    for (size_t i = 0; i < n; ++i) {
+        float scale = gain;
+        if (alpha) {
+            float a = rgba[4 * i + 3];
+            a = a > 0.0f ? (a < 1.0f ? a : 1.0f) : 0.0f; /* NaN -> 0 */
+            px[4 * i + 3] = (uint8_t)lrintf(a * 255.0f);
+            /* Below half a code the pixel is transparent and its colour moot. */
+            scale = a >= 0.5f / 255.0f ? gain / a : 0.0f;
+        }
+        for (int c = 0; c < 3; ++c) {
+            float x = rgba[4 * i + c] * scale;
+            px[(size_t)ch * i + c] = display_to_u8(clvr_image_tonemap(tm, x));
+        }
+    }
+    if (d && d->legend) clvr_image_draw_legend(px, (uint32_t)ch, w, h, d->legend);
     char *tmp;
     FILE *f;
     clvr_status s = open_temp(path, &tmp, &f, err);
@@ -248,7 +467,7 @@ static clvr_status write_png(const char *path, uint32_t w, uint32_t h, const flo
     img.version = PNG_IMAGE_VERSION;
     img.width = w;
     img.height = h;
-    img.format = PNG_FORMAT_RGB; /* 8-bit, sRGB-encoded, opaque */
+    img.format = alpha ? PNG_FORMAT_RGBA : PNG_FORMAT_RGB; /* 8-bit, sRGB-encoded; alpha straight */
     errno = 0;
     int ok = png_image_write_to_stdio(&img, f, 0, px, 0, NULL);
     free(px);
@@ -497,6 +716,8 @@ cleanup:
 
 /* ------------------------------------------------------------ dispatch */
 
+int clvr_image_is_png(const char *path) { return format_of(path) == FMT_PNG; }
+
 clvr_status clvr_image_check_output(const char *path, clvr_error *err)
 {
     if (format_of(path) == FMT_NONE)
@@ -513,6 +734,23 @@ clvr_status clvr_image_check_output(const char *path, clvr_error *err)
 
 clvr_status clvr_image_write(const char *path, uint32_t width, uint32_t height, const float *rgba, clvr_error *err)
 {
+    return clvr_image_write_display(path, width, height, rgba, NULL, err);
+}
+
+int clvr_image_numbered_path(const char *path, uint32_t index, char *out, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(slash ? slash : path, '.');
+    /* A leading dot names a hidden file, not an extension. */
+    if (dot && (dot == path || dot[-1] == '/')) dot = NULL;
+    size_t stem = dot ? (size_t)(dot - path) : strlen(path);
+    int n = snprintf(out, size, "%.*s.%04u%s", (int)stem, path, index, dot ? dot : "");
+    return n >= 0 && (size_t)n < size;
+}
+
+clvr_status clvr_image_write_display(const char *path, uint32_t width, uint32_t height, const float *rgba,
+                                     const clvr_image_display *display, clvr_error *err)
+{
     image_format fmt = format_of(path);
     if (fmt == FMT_NONE)
         return clvr_error_set(err, CLVR_ERR_USAGE, "%s: unknown image extension; supported: .exr, .png, .pfm", path);
@@ -521,7 +759,7 @@ clvr_status clvr_image_write(const char *path, uint32_t width, uint32_t height, 
                               width, height, CLVR_IMAGE_MAX_DIM);
     switch (fmt) {
     case FMT_EXR: return write_exr(path, width, height, rgba, err);
-    case FMT_PNG: return write_png(path, width, height, rgba, err);
+    case FMT_PNG: return write_png(path, width, height, rgba, display, err);
     default: return write_pfm(path, width, height, rgba, err);
     }
 }

@@ -85,6 +85,24 @@ static int has_ext(const char *path, const char *ext)
     return n > e && strcasecmp(path + n - e, ext) == 0;
 }
 
+/* Formats tools/clvr-convert reads and clvr does not: each gets a message
+ * with the command that converts it. Keep in step with CONVERTER_EXT in
+ * tools/clvr-convert (tests/test_convert.py checks every one). */
+static const struct {
+    const char *ext, *what;
+} converted_formats[] = {
+    {".vts", "VTK XML (.vts)"},        {".vtr", "VTK XML (.vtr)"},
+    {".vti", "VTK XML (.vti)"},         {".vtm", "VTK XML (.vtm)"},        {".vtmb", "VTK XML (.vtmb)"},
+    {".vtp", "VTK XML (.vtp)"},         {".vthb", "VTK XML (.vthb)"},      {".vtpc", "VTK XML (.vtpc)"},
+    {".pvtu", "parallel VTK XML (.pvtu)"}, {".pvts", "parallel VTK XML (.pvts)"},
+    {".pvtr", "parallel VTK XML (.pvtr)"}, {".pvti", "parallel VTK XML (.pvti)"},
+    {".ex2", "Exodus II (.ex2)"},       {".exo", "Exodus II (.exo)"},      {".e", "Exodus II (.e)"},
+    {".exii", "Exodus II (.exii)"},     {".gen", "Exodus II (.gen)"},
+    {".g", "Exodus II or PLOT3D (.g)"}, {".cgns", "CGNS (.cgns)"},         {".inp", "AVS UCD (.inp)"},
+    {".xyz", "PLOT3D (.xyz)"},          {".x", "PLOT3D (.x)"},             {".p3d", "PLOT3D (.p3d)"},
+    {".grd", "PLOT3D (.grd)"},
+};
+
 clvr_status clvr_mesh_load(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err)
 {
     int fd;
@@ -124,8 +142,15 @@ clvr_status clvr_mesh_load(const char *path, const clvr_load_options *opt, clvr_
                               "%s: VTK XML (.vtu) is not read directly; convert it with "
                               "tools/clvr-convert %s OUT.bin (or save it as legacy .vtk) and load that",
                               path, path);
+    for (size_t i = 0; i < sizeof converted_formats / sizeof converted_formats[0]; ++i)
+        if (has_ext(path, converted_formats[i].ext))
+            return clvr_error_set(err, CLVR_ERR_FORMAT,
+                                  "%s: unknown mesh format (%llu bytes): clvr reads .bin, .umesh and legacy .vtk; "
+                                  "convert this %s file with tools/clvr-convert %s OUT.bin and load that",
+                                  path, (unsigned long long)size, converted_formats[i].what, path);
     return clvr_error_set(err, CLVR_ERR_FORMAT,
                           "%s: unknown mesh format (%llu bytes); clvr reads clvr .bin, .umesh and legacy VTK .vtk "
-                          "unstructured grids",
+                          "unstructured grids; tools/clvr-convert converts what VTK reads (.vtu, Exodus, CGNS, "
+                          "PLOT3D, AVS .inp, ...)",
                           path, (unsigned long long)size);
 }

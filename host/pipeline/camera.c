@@ -88,8 +88,80 @@ float clvr_camera_project(const clvr_camera *cam, const float p[3], float *px, f
     return depth;
 }
 
+void clvr_camera_view_default(clvr_camera_view *v)
+{
+    memset(v, 0, sizeof *v);
+    v->up[1] = 1.0f;
+    v->zoom = 1.0f;
+}
+
+int clvr_camera_parse_axis(const char *text, float out[3])
+{
+    if (!text) return 1;
+    float sign = 1.0f;
+    if (*text == '-' || *text == '+') sign = *text++ == '-' ? -1.0f : 1.0f;
+    if (!text[0] || text[1] || text[0] < 'x' || text[0] > 'z') return 1;
+    out[0] = out[1] = out[2] = 0.0f;
+    out[text[0] - 'x'] = sign;
+    return 0;
+}
+
+void clvr_camera_rotate_about(const float p[3], const float centre[3], const float axis[3], float deg, float out[3])
+{
+    /* Rodrigues: v' = v cos + (k x v) sin + k (k.v)(1 - cos), in double so
+     * that N turntable steps land back on the start to float precision. */
+    double k[3] = {axis[0], axis[1], axis[2]};
+    double kl = sqrt(k[0] * k[0] + k[1] * k[1] + k[2] * k[2]);
+    double v[3], a = deg * M_PI / 180.0, c = cos(a), sn = sin(a);
+    for (int i = 0; i < 3; ++i) {
+        k[i] /= kl;
+        v[i] = (double)p[i] - (double)centre[i];
+    }
+    double kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+    double kx[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
+    for (int i = 0; i < 3; ++i) out[i] = (float)((double)centre[i] + v[i] * c + kx[i] * sn + k[i] * kv * (1.0 - c));
+}
+
+int clvr_camera_view_direction(const clvr_camera_view *v, float dir[3])
+{
+    if (!finite3(v->up) || !(norm3(v->up) > 0.0f)) return 1;
+    double u[3], s[3] = {0, 0, 0}, f[3];
+    double ul = norm3(v->up);
+    for (int k = 0; k < 3; ++k) u[k] = v->up[k] / ul;
+    /* Side: +x unless up is closest to the x axis, then +y; made
+     * orthogonal to up. Front = side x up, so (side, up, front) is the
+     * right-handed frame that is (x, y, z) for +y up. */
+    int ax = fabs(u[0]) >= fabs(u[1]) && fabs(u[0]) >= fabs(u[2]);
+    s[ax ? 1 : 0] = 1.0;
+    double su = s[0] * u[0] + s[1] * u[1] + s[2] * u[2];
+    for (int k = 0; k < 3; ++k) s[k] -= su * u[k];
+    double sl = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    for (int k = 0; k < 3; ++k) s[k] /= sl;
+    f[0] = s[1] * u[2] - s[2] * u[1];
+    f[1] = s[2] * u[0] - s[0] * u[2];
+    f[2] = s[0] * u[1] - s[1] * u[0];
+    /* The default view in that frame, as azimuth and elevation angles. */
+    double h_side = CLVR_CAMERA_VIEW_X, h_front = CLVR_CAMERA_VIEW_Z, vert = CLVR_CAMERA_VIEW_Y;
+    double az = atan2(h_side, h_front) + (double)v->azimuth_deg * M_PI / 180.0;
+    double el = atan2(vert, sqrt(h_side * h_side + h_front * h_front)) + (double)v->elevation_deg * M_PI / 180.0;
+    const double lim = 89.0 * M_PI / 180.0;
+    el = el > lim ? lim : el < -lim ? -lim : el;
+    for (int k = 0; k < 3; ++k)
+        dir[k] = (float)(cos(el) * (sin(az) * s[k] + cos(az) * f[k]) + sin(el) * u[k]);
+    return 0;
+}
+
 clvr_status clvr_camera_frame_box(clvr_camera *cam, const float lo[3], const float hi[3], float fovy_deg,
                                   uint32_t width, uint32_t height, clvr_error *err)
+{
+    clvr_camera_view v;
+    clvr_camera_view_default(&v);
+    return clvr_camera_frame_view(cam, lo, hi, &v, fovy_deg, width, height, err);
+}
+
+clvr_status clvr_camera_frame_view(clvr_camera *cam, const float lo[3], const float hi[3],
+                                   const clvr_camera_view *view, float fovy_deg, uint32_t width, uint32_t height,
+                                   clvr_error *err)
 {
     if (!finite3(lo) || !finite3(hi) || lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2])
         return clvr_error_set(err, CLVR_ERR_BAD_VALUE,
@@ -100,13 +172,17 @@ clvr_status clvr_camera_frame_box(clvr_camera *cam, const float lo[3], const flo
                               (double)fovy_deg);
     if (width == 0 || height == 0)
         return clvr_error_set(err, CLVR_ERR_USAGE, "camera: image size %ux%u is empty", width, height);
-    const float world_up[3] = {0.0f, 1.0f, 0.0f};
-    float d[3] = {CLVR_CAMERA_VIEW_X, CLVR_CAMERA_VIEW_Y, CLVR_CAMERA_VIEW_Z};
+    if (!(view->zoom > 0.0f) || !isfinite(view->zoom))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: zoom %g must be a positive number", (double)view->zoom);
+    float d[3];
+    if (clvr_camera_view_direction(view, d) != 0)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "camera: the up axis (%g, %g, %g) must be a non-zero vector",
+                              (double)view->up[0], (double)view->up[1], (double)view->up[2]);
     float dl = norm3(d);
     for (int k = 0; k < 3; ++k) d[k] /= dl;
     float c[3], f[3] = {-d[0], -d[1], -d[2]}, r[3], u[3];
     for (int k = 0; k < 3; ++k) c[k] = 0.5f * lo[k] + 0.5f * hi[k];
-    cross3(f, world_up, r);
+    cross3(f, view->up, r);
     float rl = norm3(r);
     for (int k = 0; k < 3; ++k) r[k] /= rl;
     cross3(r, f, u);
@@ -130,9 +206,12 @@ clvr_status clvr_camera_frame_box(clvr_camera *cam, const float lo[3], const flo
     /* Leave room for the rounding of the float camera: 0.1% farther. */
     t *= 1.001;
     if (!(t > 0.0)) t = 1.0; /* a point: any distance shows it */
+    /* Zoom as a dolly toward the centre: the centre's plane grows by zoom,
+     * and zooming far enough flies into the volume. */
+    t /= (double)view->zoom;
     float eye[3];
     for (int k = 0; k < 3; ++k) eye[k] = (float)((double)c[k] + t * (double)d[k]);
-    return clvr_camera_look_at(cam, eye, c, world_up, fovy_deg, width, height, err);
+    return clvr_camera_look_at(cam, eye, c, view->up, fovy_deg, width, height, err);
 }
 
 clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err)

@@ -38,6 +38,44 @@ clvr_status clvr_camera_look_at(clvr_camera *cam, const float eye[3], const floa
 clvr_status clvr_camera_frame_box(clvr_camera *cam, const float lo[3], const float hi[3], float fovy_deg,
                                   uint32_t width, uint32_t height, clvr_error *err);
 
+/* How the automatic framing looks at a box: relative to the default oblique
+ * view (CLVR_CAMERA_VIEW_*), re-expressed about an up axis. */
+typedef struct clvr_camera_view {
+    float up[3];         /* world up axis; need not be unit, must be non-zero */
+    float azimuth_deg;   /* turn about up, counterclockwise seen from +up (right-hand rule) */
+    float elevation_deg; /* added to the default elevation (about 23 degrees); the sum is
+                          * clamped to [-89, 89] so that up stays across the line of sight */
+    float zoom;          /* > 0: the fitted distance from the box centre is divided by zoom */
+} clvr_camera_view;
+
+/* +y up, no turn, zoom 1: clvr_camera_frame_box's view. */
+void clvr_camera_view_default(clvr_camera_view *v);
+
+/* Unit direction from the box centre toward the eye for view v (the
+ * "forward" of the camera is its negative), and the orthonormal basis it is
+ * built from: side x up = front. For up = +y the basis is x, y, z, so the
+ * default view is CLVR_CAMERA_VIEW_* exactly; for +z (Exodus, OpenFOAM) it is
+ * x, z, -y: the camera looks from -y and front-right-above as for +y. For
+ * an up along x the side is y. Returns nonzero for a zero or non-finite up. */
+int clvr_camera_view_direction(const clvr_camera_view *v, float dir[3]);
+
+/* As clvr_camera_frame_box, seen from view v: the eye lies on the centre +
+ * t * clvr_camera_view_direction line at the smallest t that fits the box
+ * (then divided by v->zoom), the camera's up is v->up. Errors as
+ * clvr_camera_frame_box, and CLVR_ERR_USAGE for a zero up or zoom <= 0. */
+clvr_status clvr_camera_frame_view(clvr_camera *cam, const float lo[3], const float hi[3],
+                                   const clvr_camera_view *v, float fovy_deg, uint32_t width, uint32_t height,
+                                   clvr_error *err);
+
+/* Rotates point p about the line through centre along axis (non-zero) by
+ * deg degrees, counterclockwise seen from the tip of axis (Rodrigues). For
+ * turntables: the eye about the look-at point. */
+void clvr_camera_rotate_about(const float p[3], const float centre[3], const float axis[3], float deg, float out[3]);
+
+/* Parses "x", "y", "z", "-x", "-y", "-z" (also "+x", ...) into a unit axis;
+ * returns nonzero for anything else (out untouched). */
+int clvr_camera_parse_axis(const char *text, float out[3]);
+
 /* Parses "px,py,pz,lx,ly,lz,ux,uy,uz" (eye, look-at point, up; 9 finite
  * decimal numbers separated by commas, spaces around them allowed) into
  * out[9]. Errors name the position and the text: CLVR_ERR_USAGE. */
