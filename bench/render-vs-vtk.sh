@@ -2,32 +2,40 @@
 # bench/render-vs-vtk.sh: clvr against the CPU volume mappers a user would pick
 # instead (VTK/ParaView: vtkUnstructuredGridVolumeRayCastMapper,
 # vtkProjectedTetrahedraMapper, vtkUnstructuredGridVolumeZSweepMapper) on the same
-# 1M-tet mesh, same camera and transfer function, at 512x512.
+# tet mesh, same camera and transfer function.
 #
 # VTK's images are deterministic; clvr's converge. So clvr is measured by time to
-# equal quality: `bench_render --converge` renders a reference at REF spp (seed A),
-# then a fresh run (seed B) until its RMSE against the reference is <= 2%; RMSE is
-# over linear rgb clamped to [0,1], every pixel, with the reference's own noise
-# (from its per-pixel moments) subtracted; "rel" divides by the reference's mean
-# rgb. Both with and without shadows (VTK's mappers have none). The reference
-# always uses independent frames (its noise estimate needs them); the measured
-# run uses --sampler (default ld, the renderer's default: low-discrepancy
-# frames, each unbiased, see kernels/rng.h).
+# equal quality (issue 14's figure): `bench_render --converge` renders a reference
+# (REF spp, independent frames, the urm estimator, seed A), then for each clvr
+# estimator a fresh run (seed B, --sampler) until its relative RMSE against the
+# reference is <= 2%: RMSE of linear rgb, unclamped, over the pixels whose camera
+# ray enters the mesh's bounding box, with the reference's own noise (from its
+# per-pixel moments) subtracted, divided by the reference's mean rgb over the same
+# pixels. Both with and without shadows (VTK's mappers have none). Goals: no
+# shadows within 1x the fastest VTK frame, shadows within 2x.
 #
-# Usage: bench/render-vs-vtk.sh [--build DIR] [--data DIR] [--elements N] [--size WxH]
-#                               [--ref-spp R] [--max-spp M] [--vtk-frames N] [--mappers LIST]
-#                               [--sampler ld|independent]
-#   defaults: build, /tmp/clvr-bench, 1M, 512x512, 256, 256, 3, raycast,pt,zsweep, ld
+# Usage: bench/render-vs-vtk.sh [--build DIR] [--data DIR] [--elements N] [--mesh FILE.bin]
+#                               [--size WxH] [--ref-spp R] [--max-spp M] [--vtk-frames N]
+#                               [--mappers LIST] [--sampler ld|independent] [--density D]
+#                               [--estimators LIST] [--tag NAME]
+#   defaults: build, /tmp/clvr-bench, 1M (tets of clvr-gen cellvar), 512x512, 128, 256, 3,
+#             raycast,pt,zsweep, ld, 1, delta,urm
+#   --mesh: any clvr .bin instead (VTK draws its tets only: cut other cells into tets
+#           first, e.g. tools/clvr-convert grid.vts grid.bin --tets).
 # Output: a Markdown table with the ratios on stdout; bench/results/render-vs-vtk/
-# <date>-<slug>.md and .json (clvr's and VTK's raw JSON side by side).
+# <date>-<slug>[-TAG].md and .json (clvr's and VTK's raw JSON side by side).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=$ROOT/build
 DATA=/tmp/clvr-bench
 N=1M
 SIZE=512x512
-REF=256
+REF=128
 MAXSPP=256
+MESH=
+DENSITY=1
+ESTIMATORS=delta,urm
+TAG=
 VFRAMES=3
 MAPPERS=raycast,pt,zsweep
 SAMPLER=ld
@@ -42,6 +50,10 @@ while [ $# -gt 0 ]; do
     --vtk-frames) VFRAMES=$2; shift 2 ;;
     --mappers) MAPPERS=$2; shift 2 ;;
     --sampler) SAMPLER=$2; shift 2 ;;
+    --mesh) MESH=$2; shift 2 ;;
+    --density) DENSITY=$2; shift 2 ;;
+    --estimators) ESTIMATORS=$2; shift 2 ;;
+    --tag) TAG=-$2; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "render-vs-vtk.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
   esac
@@ -56,8 +68,10 @@ for t in bench_render clvr-gen; do
   [ -x "$BUILD/$t" ] || { echo "$(basename "$0"): $BUILD/$t missing; build it first" >&2; exit 1; }
 done
 mkdir -p "$DATA"
-MESH=$DATA/tets-$N.bin
-[ -f "$MESH" ] || "$BUILD/clvr-gen" cellvar "$MESH" --elements "$N" --variance 0 --quiet
+if [ -z "$MESH" ]; then
+  MESH=$DATA/tets-$N.bin
+  [ -f "$MESH" ] || "$BUILD/clvr-gen" cellvar "$MESH" --elements "$N" --variance 0 --quiet
+fi
 OUT=$ROOT/bench/results/render-vs-vtk
 mkdir -p "$OUT"
 WORK=$(mktemp -d)
@@ -65,7 +79,7 @@ trap 'rm -rf "$WORK"' EXIT
 
 echo "render-vs-vtk.sh: clvr converge on $MESH ($SIZE, reference $REF spp); $(uptime)" >&2
 "$BUILD/bench_render" --converge --mesh "$MESH" --size "$SIZE" --ref-spp "$REF" --max-spp "$MAXSPP" \
-  --sampler "$SAMPLER" --json "$WORK/clvr.json" >"$WORK/clvr.md"
+  --sampler "$SAMPLER" --density "$DENSITY" --estimators "$ESTIMATORS" --json "$WORK/clvr.json" >"$WORK/clvr.md"
 echo "render-vs-vtk.sh: VTK mappers ($MAPPERS); $(uptime)" >&2
 # xvfb-run -a can lose a race for a display number with another xvfb-run on a
 # shared machine ("bad X server connection"): try a few times.
@@ -81,17 +95,18 @@ done
 
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ "$COMMIT" != unknown ] && ! git -C "$ROOT" diff --quiet HEAD 2>/dev/null; then COMMIT=$COMMIT-dirty; fi
-/usr/bin/python3 - "$WORK/clvr.json" "$WORK/vtk.json" "$WORK/clvr.md" "$WORK/vtk.md" "$OUT" "$COMMIT" <<'EOF'
+/usr/bin/python3 - "$WORK/clvr.json" "$WORK/vtk.json" "$WORK/clvr.md" "$WORK/vtk.md" "$OUT" "$COMMIT" "$TAG" <<'EOF'
 import json, os, re, sys, time, socket
 clvr, vtkr = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
-out, commit = sys.argv[5], sys.argv[6]
+out, commit, tag = sys.argv[5], sys.argv[6], sys.argv[7]
 fast = min(vtkr["rows"], key=lambda r: r["frame_s"])
 lines = []
 p = lines.append
 p(f"# clvr vs VTK unstructured volume mappers")
 p("")
-p(f"mesh `{os.path.basename(clvr['mesh'])}` ({clvr['elements']} tets), {clvr['width']}x{clvr['height']}, "
-  f"clvr `{clvr['method']}` ({clvr.get('sampler', 'independent')} frames) on {clvr['device']} (driver {clvr['driver']}), VTK {vtkr['vtk']}, commit {commit}, "
+p(f"mesh `{os.path.basename(clvr['mesh'])}` ({clvr['elements']} elements, {vtkr['tets']} tets drawn by VTK), "
+  f"{clvr['width']}x{clvr['height']}, density {clvr['density']}, clvr `{clvr['method']}` ({clvr['sampler']} frames) "
+  f"on {clvr['device']} (driver {clvr['driver']}), VTK {vtkr['vtk']}, commit {commit}, "
   f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}, host {socket.gethostname()}, {os.cpu_count()} cores")
 p("")
 p("| renderer | shadows | time (s) | what | vs fastest VTK mapper | load |")
@@ -102,35 +117,33 @@ for r in sorted(vtkr["rows"], key=lambda r: r["frame_s"]):
 t = clvr["target"]
 for r in clvr["rows"]:
     sh = "yes" if r["shadows"] else "no"
+    name = f"clvr {clvr['method']} {r['label']}"
+    cost = f"{r['samples_per_ray']:.1f} samples/ray, {r['frame_s'] * 1e3:.0f} ms/frame"
     if r["reached"]:
         a = r["at"]
-        p(f"| clvr {clvr['method']} | {sh} | {a['device_s']:.2f} | to {t:.0%} RMSE: {a['spp']} spp "
-          f"(wall {a['wall_s']:.2f} s; 1/n fit {r['fit_spp']:.0f} spp = {r['fit_s']:.2f} s) | "
-          f"**{a['device_s'] / fast['frame_s']:.2f}x** | {r['load_after']:.2f} |")
+        p(f"| {name} | {sh} | {a['device_s']:.2f} | to {t:.0%} relative RMSE: {a['spp']} spp ({cost}; 1/n fit "
+          f"{r['fit_spp']:.0f} spp) | **{a['device_s'] / fast['frame_s']:.2f}x** | {r['load_after']:.2f} |")
     else:
-        p(f"| clvr {clvr['method']} | {sh} | > {r['points'][-1]['device_s']:.2f} | {t:.0%} RMSE not reached in "
-          f"{r['points'][-1]['spp']} spp (1/n fit {r['fit_spp']:.0f} spp = {r['fit_s']:.2f} s) | | {r['load_after']:.2f} |")
-    if r["reached_rel"]:
-        a = r["at_rel"]
-        p(f"| clvr {clvr['method']} | {sh} | {a['device_s']:.2f} | to {t:.0%} relative RMSE (/ mean {r['ref_mean']:.3f}): "
-          f"{a['spp']} spp (1/n fit {r['fit_spp_rel']:.0f} spp = {r['fit_s_rel']:.2f} s) | "
-          f"{a['device_s'] / fast['frame_s']:.2f}x | |")
-    else:
-        p(f"| clvr {clvr['method']} | {sh} | > {r['points'][-1]['device_s']:.2f} | {t:.0%} relative RMSE not reached in "
-          f"{r['points'][-1]['spp']} spp (1/n fit {r['fit_spp_rel']:.0f} spp = {r['fit_s_rel']:.2f} s) | "
-          f"{r['fit_s_rel'] / fast['frame_s']:.2f}x (fit) | |")
+        last = r["points"][-1]
+        p(f"| {name} | {sh} | > {last['device_s']:.2f} | {t:.0%} relative RMSE not reached in {last['spp']} spp "
+          f"({cost}; 1/n fit {r['fit_spp']:.0f} spp = {r['fit_s']:.1f} s) | {r['fit_s'] / fast['frame_s']:.1f}x (fit) | "
+          f"{r['load_after']:.2f} |")
 p("")
-g = {r["shadows"]: r for r in clvr["rows"]}
 def verdict(r, limit):
-    if not r["reached"]: return "not reached"
+    if not r["reached"]: return f"not reached (fit {r['fit_s'] / fast['frame_s']:.1f}x)"
     x = r["at"]["device_s"] / fast["frame_s"]
     return f"{x:.2f}x ({'met' if x <= limit else 'missed'})"
-p(f"Goals against the fastest exact mapper ({fast['mapper']}, {fast['frame_s']:.2f} s/frame): "
-  f"no shadows below 1x: {verdict(g[0], 1.0)}; shadows within 2x: {verdict(g[1], 2.0)}.")
-ref_s = ", ".join("%.0f s" % r["reference_device_s"] for r in clvr["rows"])
-ref_e = ", ".join("%.4f" % r["ref_own_rmse"] for r in clvr["rows"])
-p(f"Reference: {clvr['ref_spp']} spp per configuration (no shadows, shadows): {ref_s} device time; "
-  f"its own RMSE {ref_e} (subtracted).")
+for lab in sorted({r["label"] for r in clvr["rows"]}):
+    g = {r["shadows"]: r for r in clvr["rows"] if r["label"] == lab}
+    parts = []
+    if 0 in g: parts.append(f"no shadows within 1x: {verdict(g[0], 1.0)}")
+    if 1 in g: parts.append(f"shadows within 2x: {verdict(g[1], 2.0)}")
+    p(f"Goals for `{lab}` against the fastest exact mapper ({fast['mapper']}, {fast['frame_s']:.2f} s/frame): "
+      + "; ".join(parts) + ".")
+refs = {r["shadows"]: r for r in clvr["rows"]}
+p(f"Reference: {clvr['ref_spp']} spp, {clvr['ref_estimator']}, independent frames, per shadow setting: "
+  + ", ".join(f"{'shadows' if k else 'no shadows'} {refs[k]['reference_device_s']:.0f} s device, own rel RMSE "
+              f"{refs[k]['ref_own_rmse'] / refs[k]['ref_mean']:.4f} (subtracted)" for k in sorted(refs)) + ".")
 p("")
 p("## clvr convergence")
 p("")
@@ -142,7 +155,7 @@ p(open(sys.argv[4]).read().strip())
 text = "\n".join(lines) + "\n"
 print(text)
 slug = re.sub(r"[^a-z0-9]+", "-", clvr["device"].lower()).strip("-")[:60]
-base = os.path.join(out, time.strftime("%Y-%m-%d", time.gmtime()) + "-" + slug)
+base = os.path.join(out, time.strftime("%Y-%m-%d", time.gmtime()) + "-" + slug + tag)
 open(base + ".md.tmp", "w").write(text); os.replace(base + ".md.tmp", base + ".md")
 json.dump({"bench": "render_vs_vtk", "commit": commit, "clvr": clvr, "vtk": vtkr}, open(base + ".json.tmp", "w"), indent=1)
 os.replace(base + ".json.tmp", base + ".json")

@@ -431,7 +431,12 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float t0, float t1,
     e->pick_a_u = u_a;
     e->pick_u = u_b;
     e->pick_a_t = 0.0f;
-    e->rho_min = (float)f->urm_steps / fmax(t1 - t0, 1e-30f);
+    /* A shadow ray needs transmittance only, which the control makes nearly
+     * exact between points: half the camera ray's points measured better
+     * (tets-1M, 128^2, shadows: 2% in 51 instead of 46 frames, at 74% of the
+     * lookups). */
+    const float steps = emit ? (float)f->urm_steps : fmax(0.5f * (float)f->urm_steps, 1.0f);
+    e->rho_min = steps / fmax(t1 - t0, 1e-30f);
     e->kappa = f->urm_kappa;
     e->inv_kappa = 1.0f / f->urm_kappa;
     e->to_quad = u;
@@ -595,8 +600,9 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
 /* One camera ray with the frame's estimator. ld: the frame's low-discrepancy
  * uniforms (CLVR_LD_DIMS), or NULL for the independent sampler; dimension 2
  * drives the camera ray's first free flight (delta) or quadrature offset
- * (urm), 3 the shadow ray's (urm: of point a), 4 the pick of urm's point a.
- * Without ld the draws come from rng. */
+ * (urm), 3 the shadow ray's (urm: of point a), 4 and 5 the picks of urm's
+ * points a and b, 6 the offset of b's shadow ray. Without ld the draws come
+ * from rng. */
 inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
                                 uint *samples, uint *nulls, uint *rays)
 {
@@ -609,7 +615,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_urm e;
-        const float u_a = ld ? ld[4] : clvr_rng_next(rng), u_b = clvr_rng_next(rng);
+        const float u_a = ld ? ld[4] : clvr_rng_next(rng), u_b = ld ? ld[5] : clvr_rng_next(rng);
         clvr_urm_begin(f, &e, t0, t1, u_primary, u_a, u_b, 1, rng);
         CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
             if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
@@ -619,7 +625,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
         if (f->shadows && e.wsum > 0.0f) {
             /* Control variate: see the estimator's comment. */
-            const float u_sa = ld ? ld[3] : clvr_rng_next(rng), u_sb = clvr_rng_next(rng);
+            const float u_sa = ld ? ld[3] : clvr_rng_next(rng), u_sb = ld ? ld[6] : clvr_rng_next(rng);
             const float la = clvr_urm_light(v, org + dir * e.pick_a_t, ldir, lo, hi, u_sa, rng, samples, nulls, rays);
             const float lb = clvr_urm_light(v, org + dir * e.pick_t, ldir, lo, hi, u_sb, rng, samples, nulls, rays);
             c += f->light_intensity * (la * e.sum + (lb - la) * e.wsum * e.pick);
