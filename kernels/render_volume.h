@@ -166,11 +166,11 @@ inline void clvr_dda_begin(clvr_dda *d, float3 lo, float3 cs, int r, int3 lo_c, 
 /* Where the ray leaves the current cell. */
 inline float clvr_dda_exit(const clvr_dda *d) { return fmin(fmin(d->tnext.x, d->tnext.y), d->tnext.z); }
 
-/* Steps into the next cell; 0 when that leaves the region. *moved gets the
- * axis (0, 1, 2) so that a caller can keep cell coordinates. */
-inline int clvr_dda_step(clvr_dda *d, int *axis)
+/* Steps into the next cell (tx: clvr_dda_exit, which the caller has); 0
+ * when that leaves the region. *axis gets the axis (0, 1, 2) so that a
+ * caller can keep cell coordinates. */
+inline int clvr_dda_step(clvr_dda *d, float tx, int *axis)
 {
-    const float tx = clvr_dda_exit(d);
     if (d->tnext.x <= tx) {
         *axis = 0;
         if (d->left.x-- == 0) return 0;
@@ -236,7 +236,7 @@ inline int clvr_dda_iter_next(const clvr_volume *v, clvr_dda_iter *it, float3 or
             *b = fmin(tx, it->blk_end);
             *m = v->grid[it->cel.idx];
             it->t = *b;
-            if (tx >= it->blk_end || !clvr_dda_step(&it->cel, &axis)) {
+            if (tx >= it->blk_end || !clvr_dda_step(&it->cel, tx, &axis)) {
                 it->in_cells = 0;
                 it->t = it->blk_end;
                 it->done = it->blk_last;
@@ -249,7 +249,7 @@ inline int clvr_dda_iter_next(const clvr_volume *v, clvr_dda_iter *it, float3 or
         const float mb = v->blocks[it->blk.idx];
         const int3 c = it->c;
         /* Advance the block walk now; the current block is c. */
-        it->blk_last = tx >= it->t1 || !clvr_dda_step(&it->blk, &axis);
+        it->blk_last = tx >= it->t1 || !clvr_dda_step(&it->blk, tx, &axis);
         if (!it->blk_last) {
             if (axis == 0) it->c.x += it->step.x;
             else if (axis == 1) it->c.y += it->step.y;
