@@ -232,10 +232,11 @@ static void test_homogeneous(clvr_cl *cl)
         {CLVR_RENDER_DDA, CLVR_SAMPLER_LD, 7, 1.5f},            {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 0.4f},
         {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 1.0f},
     };
-    /* Every case with each estimator: the analytic answer holds for both. */
-    for (size_t ci = 0; ci < 2 * (sizeof cases / sizeof cases[0]); ++ci) {
-        const size_t mi = ci % (sizeof cases / sizeof cases[0]);
-        const uint32_t est = ci < sizeof cases / sizeof cases[0] ? CLVR_ESTIMATOR_DELTA : CLVR_ESTIMATOR_URM;
+    /* Every case with each estimator: the analytic answer holds for all. */
+    const size_t ncases = sizeof cases / sizeof cases[0];
+    for (size_t ci = 0; ci < CLVR_ESTIMATOR_COUNT * ncases; ++ci) {
+        const size_t mi = ci % ncases;
+        const uint32_t est = (uint32_t)(ci / ncases);
         fx.set.estimator = est;
         const float sigma = cases[mi].sigma;
         float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};

@@ -1,5 +1,7 @@
 #include "render.h"
 
+#include "majorant.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,11 +14,11 @@ struct clvr_renderer {
     clvr_render_settings set;
     clvr_frame frame;
     clvr_camera cam;
-    cl_program prog_render, prog_majorant;
-    cl_kernel k_render, k_cluster_maj, k_grid_clear, k_grid_splat_el, k_grid_maj, k_grid_blocks;
-    cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters, cluster_maj, grid_range, grid_maj, block_maj;
+    clvr_majorants *maj;       /* cluster majorants and the macrocell grid */
+    cl_program prog_render;
+    cl_kernel k_render;
+    cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
-    uint32_t grid_res;         /* resolution of grid_range/grid_maj */
     uint32_t accum_w, accum_h; /* size of accum buffers */
     uint64_t frames;
     double kernel_s, last_frame_s;
@@ -79,17 +81,6 @@ void clvr_render_settings_default(clvr_render_settings *s)
     }
 }
 
-static clvr_status set_arg(cl_kernel k, cl_uint i, size_t size, const void *v, const char *kname, clvr_error *err)
-{
-    cl_int rc = clSetKernelArg(k, i, size, v);
-    if (rc != CL_SUCCESS)
-        return clvr_error_set(err, CLVR_ERR_OPENCL, "clSetKernelArg(%s, %u) failed with %s", kname, i,
-                              clvr_cl_error_name(rc));
-    return CLVR_OK;
-}
-
-#define ARG(k, i, v) CLVR_TRY(set_arg(k, i, sizeof(v), &(v), #k, err))
-
 /* Writes the frame parameters to the device (blocking: the host copy may
  * change right after). */
 static clvr_status upload_frame(clvr_renderer *r, clvr_error *err)
@@ -101,93 +92,19 @@ cleanup:
     return s;
 }
 
-/* Rasterizes the elements' scalar ranges into an R^3 grid and allocates its
- * coarse level of blocks (once per mesh and resolution; majorants follow in
- * update_majorants). */
-static clvr_status build_grid(clvr_renderer *r, clvr_error *err)
+/* Brings the majorants up to date with the frame (host/pipeline/majorant.h):
+ * the macrocell grid for its resolution and domain, then, once there is a
+ * transfer function, every majorant when it changed (tf_changed) or the grid
+ * was rebuilt. Keeps frame.global_majorant. */
+static clvr_status update_majorants(clvr_renderer *r, int tf_changed, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    clvr_cl *cl = r->cl;
-    uint32_t res = r->set.macrocells;
-    uint64_t cells = (uint64_t)res * res * res;
-    cl_uint ncells = (cl_uint)cells;
-    if (r->grid_res == res) return CLVR_OK;
-    clvr_cl_release(cl, &r->grid_range);
-    clvr_cl_release(cl, &r->grid_maj);
-    clvr_cl_release(cl, &r->block_maj);
-    r->grid_res = 0;
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)cells * 2 * sizeof(cl_uint), NULL, "macrocell ranges",
-                            &r->grid_range, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)cells * sizeof(cl_float), NULL, "macrocell majorants",
-                            &r->grid_maj, err));
-    {
-        uint64_t rc = (res + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)(rc * rc * rc) * sizeof(cl_float), NULL,
-                                "macrocell block majorants", &r->block_maj, err));
-    }
+    int rebuilt = 0;
     CLVR_TRY(upload_frame(r, err));
-    ARG(r->k_grid_clear, 0, r->grid_range);
-    ARG(r->k_grid_clear, 1, ncells);
-    CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_clear, cells, 64, NULL, err));
-    /* Per element, not per sampling cluster: tighter cells (majorant.cl). */
-    const clvr_clustered *m = r->mesh;
-    cl_uint ninst = (cl_uint)m->num_instances, nelem = (cl_uint)m->num_elements;
-    ARG(r->k_grid_splat_el, 0, m->instances);
-    ARG(r->k_grid_splat_el, 1, ninst);
-    ARG(r->k_grid_splat_el, 2, m->vertices);
-    ARG(r->k_grid_splat_el, 3, m->idx16);
-    ARG(r->k_grid_splat_el, 4, m->idx32);
-    ARG(r->k_grid_splat_el, 5, nelem);
-    ARG(r->k_grid_splat_el, 6, r->frame_buf);
-    ARG(r->k_grid_splat_el, 7, r->grid_range);
-    if (nelem) CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_splat_el, nelem, 64, NULL, err));
-    r->grid_res = res;
+    CLVR_TRY(clvr_majorants_build_grid(r->maj, &r->frame, r->frame_buf, &rebuilt, err));
+    if (r->tf_n && (tf_changed || rebuilt))
+        CLVR_TRY(clvr_majorants_set_tf(r->maj, r->tf_buf, r->frame_buf, &r->frame.global_majorant, err));
 cleanup:
-    return s;
-}
-
-/* Recomputes cluster, cell and global majorants for the current transfer
- * function (paper 3.4.1: whenever the transfer function changes). */
-static clvr_status update_majorants(clvr_renderer *r, clvr_error *err)
-{
-    clvr_status s = CLVR_OK;
-    clvr_cl *cl = r->cl;
-    float *maj = NULL;
-    cl_uint nclusters = (cl_uint)r->mesh->num_sampling;
-    cl_uint ncells = r->grid_res * r->grid_res * r->grid_res;
-    if (!r->tf_n) return CLVR_OK;
-    CLVR_TRY(upload_frame(r, err));
-    ARG(r->k_cluster_maj, 0, r->mesh->sampling);
-    ARG(r->k_cluster_maj, 1, nclusters);
-    ARG(r->k_cluster_maj, 2, r->tf_buf);
-    ARG(r->k_cluster_maj, 3, r->frame_buf);
-    ARG(r->k_cluster_maj, 4, r->cluster_maj);
-    CLVR_TRY(clvr_cl_run1d(cl, r->k_cluster_maj, nclusters, 64, NULL, err));
-    ARG(r->k_grid_maj, 0, r->grid_range);
-    ARG(r->k_grid_maj, 1, ncells);
-    ARG(r->k_grid_maj, 2, r->tf_buf);
-    ARG(r->k_grid_maj, 3, r->frame_buf);
-    ARG(r->k_grid_maj, 4, r->grid_maj);
-    CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_maj, ncells, 64, NULL, err));
-    {
-        cl_uint res = r->grid_res, rc = (res + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
-        ARG(r->k_grid_blocks, 0, r->grid_maj);
-        ARG(r->k_grid_blocks, 1, res);
-        ARG(r->k_grid_blocks, 2, r->block_maj);
-        ARG(r->k_grid_blocks, 3, rc);
-        CLVR_TRY(clvr_cl_run1d(cl, r->k_grid_blocks, (size_t)rc * rc * rc, 64, NULL, err));
-    }
-    /* The global majorant of `track` is the largest cluster majorant. */
-    maj = malloc((size_t)(nclusters ? nclusters : 1) * sizeof(float));
-    if (!maj) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading majorants"); goto cleanup; }
-    if (nclusters)
-        CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, r->cluster_maj, CL_TRUE, 0, nclusters * sizeof(float), maj, 0,
-                                          NULL, NULL));
-    float g = 0.0f;
-    for (cl_uint i = 0; i < nclusters; ++i) g = maj[i] > g ? maj[i] : g;
-    r->frame.global_majorant = g;
-cleanup:
-    free(maj);
     return s;
 }
 
@@ -230,7 +147,6 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     const clvr_clustered *m = r->mesh;
     clvr_frame *f = &r->frame;
     const int clip = set->clip_lo[0] <= set->clip_hi[0], grid = set->grid_lo[0] <= set->grid_hi[0];
-    const float old_grid[6] = {f->grid_lo[0], f->grid_lo[1], f->grid_lo[2], f->grid_hi[0], f->grid_hi[1], f->grid_hi[2]};
     for (int k = 0; k < 3; ++k) {
         f->vol_lo[k] = clip ? set->clip_lo[k] : m->bounds.lo[k];
         f->vol_hi[k] = clip ? set->clip_hi[k] : m->bounds.hi[k];
@@ -238,9 +154,6 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         f->grid_hi[k] = grid ? set->grid_hi[k] : m->bounds.hi[k];
         f->background[k] = set->background[k];
     }
-    /* A new grid domain needs the elements rasterized again. */
-    if (memcmp(old_grid, f->grid_lo, 3 * sizeof(float)) || memcmp(old_grid + 3, f->grid_hi, 3 * sizeof(float)))
-        r->grid_res = 0;
     float len = sqrtf(set->light_dir[0] * set->light_dir[0] + set->light_dir[1] * set->light_dir[1] +
                       set->light_dir[2] * set->light_dir[2]);
     if (!(len > 0.0f)) return clvr_error_set(err, CLVR_ERR_USAGE, "the light direction must not be zero");
@@ -266,10 +179,8 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
     CLVR_TRY(alloc_image(r, err));
-    if (r->grid_res != set->macrocells) {
-        CLVR_TRY(build_grid(r, err));
-        CLVR_TRY(update_majorants(r, err));
-    }
+    /* A new grid resolution or domain needs the elements rasterized again. */
+    CLVR_TRY(update_majorants(r, 0, err));
     r->frames = 0;
     r->kernel_s = 0.0;
 cleanup:
@@ -299,17 +210,10 @@ clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const 
     }
     r->bvh = bvh;
     CLVR_TRY(clvr_cl_build(cl, "render.cl", NULL, &r->prog_render, err));
-    CLVR_TRY(clvr_cl_build(cl, "majorant.cl", NULL, &r->prog_majorant, err));
+    CLVR_TRY(clvr_majorants_create(cl, mesh, &r->maj, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_frame", &r->k_render, err));
-    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_cluster_majorants", &r->k_cluster_maj, err));
-    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_clear", &r->k_grid_clear, err));
-    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_splat_elements", &r->k_grid_splat_el, err));
-    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_majorants", &r->k_grid_maj, err));
-    CLVR_TRY(clvr_cl_kernel(r->prog_majorant, "clvr_grid_blocks", &r->k_grid_blocks, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_frame), NULL, "frame parameters", &r->frame_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_camera), NULL, "camera", &r->cam_buf, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)(mesh->num_sampling ? mesh->num_sampling : 1) * sizeof(float),
-                            NULL, "cluster majorants", &r->cluster_maj, err));
     CLVR_TRY(clvr_renderer_set_settings(r, settings, err));
     *out = r;
     r = NULL;
@@ -321,14 +225,10 @@ cleanup:
 void clvr_renderer_destroy(clvr_renderer *r)
 {
     if (!r) return;
-    cl_kernel ks[] = {r->k_render, r->k_cluster_maj, r->k_grid_clear, r->k_grid_splat_el, r->k_grid_maj,
-                      r->k_grid_blocks};
-    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
-        if (ks[i]) clReleaseKernel(ks[i]);
+    if (r->k_render) clReleaseKernel(r->k_render);
     if (r->prog_render) clReleaseProgram(r->prog_render);
-    if (r->prog_majorant) clReleaseProgram(r->prog_majorant);
-    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters,
-                      &r->cluster_maj, &r->grid_range, &r->grid_maj, &r->block_maj};
+    clvr_majorants_destroy(r->maj);
+    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -364,7 +264,7 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
     r->frame.tf_lo = lo;
     r->frame.tf_hi = hi;
     r->frame.density = density;
-    CLVR_TRY(update_majorants(r, err));
+    CLVR_TRY(update_majorants(r, 1, err));
     r->frames = 0;
     r->kernel_s = 0.0;
 cleanup:
@@ -381,6 +281,7 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     CLVR_TRY(upload_frame(r, err));
     const clvr_clustered *m = r->mesh;
     const clvr_accel *b = r->bvh;
+    const clvr_majorant_arrays maj = clvr_majorants_arrays(r->maj);
     cl_kernel k = r->k_render;
     /* The device arrays of CLVR_VOLUME_ARRAYS, in its order. */
     const struct {
@@ -388,18 +289,14 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
         CLVR_VOLUME_ARRAYS(CLVR_VOLUME_HOST)
 #undef CLVR_VOLUME_HOST
     } vol = {.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
-             .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = r->grid_maj,
-             .blocks = r->block_maj, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
-             .cluster_majorants = r->cluster_maj};
-    cl_uint i = 0;
-    ARG(k, i++, r->frame_buf);
-    ARG(k, i++, r->cam_buf);
-#define CLVR_VOLUME_ARG(T, name) ARG(k, i++, vol.name);
-    CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
+             .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = maj.cells,
+             .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
+             .cluster_majorants = maj.clusters};
+    /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
+#define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
+                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters)));
 #undef CLVR_VOLUME_ARG
-    ARG(k, i++, r->accum);
-    ARG(k, i++, r->accum_sq);
-    ARG(k, i++, r->counters);
     size_t local[2] = {r->local[0], r->local[1]};
     size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
                         (r->set.height + local[1] - 1) / local[1] * local[1]};
@@ -466,19 +363,6 @@ cleanup:
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
                                          float *global_majorant, clvr_error *err)
 {
-    clvr_status s = CLVR_OK;
-    const size_t rc = (r->grid_res + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
-    if (blocks)
-        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->block_maj, CL_TRUE, 0, rc * rc * rc * sizeof(float), blocks,
-                                          0, NULL, NULL));
-    if (clusters && r->mesh->num_sampling)
-        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->cluster_maj, CL_TRUE, 0,
-                                          (size_t)r->mesh->num_sampling * sizeof(float), clusters, 0, NULL, NULL));
-    if (cells)
-        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->grid_maj, CL_TRUE, 0,
-                                          (size_t)r->grid_res * r->grid_res * r->grid_res * sizeof(float), cells, 0,
-                                          NULL, NULL));
     if (global_majorant) *global_majorant = r->frame.global_majorant;
-cleanup:
-    return s;
+    return clvr_majorants_read(r->maj, clusters, cells, blocks, err);
 }

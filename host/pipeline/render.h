@@ -1,7 +1,7 @@
 /* render.h: the progressive renderer. Owns the device buffers of one frame
- * (accumulator, counters, transfer-function table, majorants, macrocell
- * grid) and dispatches kernels/render.cl and kernels/majorant.cl over a
- * clustered mesh and its trees. One call of clvr_renderer_frame adds one
+ * (accumulator, counters, transfer-function table) and its majorants
+ * (majorant.h: cluster majorants and the macrocell grid, kernels/majorant.cl)
+ * and dispatches kernels/render.cl over a clustered mesh and its trees. One call of clvr_renderer_frame adds one
  * sample per pixel; any change of settings, camera or transfer function
  * restarts the accumulation. */
 #ifndef CLVR_RENDER_H
