@@ -435,6 +435,9 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * majorant optical depth between two of them. */
 #define CLVR_URM_DEFAULT_STEPS 16u
 #define CLVR_URM_DEFAULT_KAPPA 0.25f
+/* urm with shadows: cells per axis of the light grid (a control variate for
+ * the shadow rays, kernels/render_volume.h). */
+#define CLVR_URM_LIGHT_RES 32u
 
 /* Index of macrocell (x, y, z) in a grid of r cells per axis (x fastest):
  * the one definition shared by the majorant kernels and the DDA. */
@@ -457,7 +460,8 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
     X(float, blocks)                        /* dda: block majorants, see CLVR_DDA_BLOCK */                              \
     X(clvr_bvh_node, sampling_bvh)          /* bins: tree over sampling clusters */                                     \
     X(clvr_sampling_cluster, sampling)                                                                                 \
-    X(float, cluster_majorants)             /* bins, track: per sampling cluster */
+    X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
+    X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */
 
 /* Samplers, the values of clvr_frame.sampler. independent: every uniform of
  * a frame from the counter-based generator keyed by (pixel, frame, seed),
@@ -489,7 +493,7 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
 #endif
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 192 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 208 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -517,7 +521,9 @@ typedef struct clvr_frame {
     clvr_u32 estimator;       /* CLVR_ESTIMATOR_* */
     clvr_u32 urm_steps;       /* urm: at least this many quadrature points per ray */
     float urm_kappa;          /* urm: at most this majorant optical depth between two points */
+    clvr_u32 light_res;       /* urm with shadows: light grid cells per axis over the grid domain */
+    clvr_u32 pad0, pad1, pad2;
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 192, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 208, "clvr_frame layout");
 
 #endif /* CLVR_SHARED_H */

@@ -20,6 +20,23 @@
  * their order, then the outputs (host/pipeline/render.c binds them in this order). */
 #define CLVR_VOLUME_PARAM(T, name) __global const T *name,
 #define CLVR_VOLUME_BIND(T, name) v.name = name;
+
+/* The light grid (urm with shadows): one work item per cell, same parameters
+ * as clvr_render_frame then the output (the host passes the grid's buffer as
+ * both; this kernel never reads the input). */
+__kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr_camera *cam,
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out)
+{
+    const clvr_frame f = *fp;
+    const int r = (int)f.light_res, x = (int)get_global_id(0), y = (int)get_global_id(1), z = (int)get_global_id(2);
+    if (x >= r || y >= r || z >= r) return;
+    clvr_volume v;
+    v.f = &f;
+    CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
+    uint samples = 0, nulls = 0;
+    out[clvr_grid_index(x, y, z, r)] = clvr_light_cell(&v, x, y, z, &samples, &nulls);
+    (void)cam;
+}
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,
                                 CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float4 *accum,
                                 __global float4 *accum_sq, __global uint *counters)

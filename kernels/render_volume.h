@@ -384,15 +384,17 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
  *    thin media cost few residual points.
  *  - Russian roulette on the running weight below CLVR_URM_RR.
  *  - Direct light, I sum_k g_k T_l(x_k) (g_k: the quadrature terms, T_l:
- *    transmittance toward the light), with a control variate: two points a
- *    and b are picked independently by weighted reservoir sampling (weight
- *    |T sigma / rho| luminance(c)), the transmittance toward the light of
- *    each is estimated by the same marching without emission, and
- *      I [T_l(a) sum_k g_k + W g_b / w_b (T_l(b) - T_l(a))]
- *    is unbiased for any a (the bracket's second term corrects the first).
- *    One pick alone (I W g_b / w_b T_l(b)) carries the colour of one point
- *    for the whole ray: on tets-1M it needed 236 spp to 2% with the light
- *    fixed at 1, where this needs none; a second shadow ray costs less.
+ *    transmittance toward the light), with a control variate: a light grid
+ *    G (transmittance toward the light at the cell centres of a coarse grid,
+ *    computed on the device whenever the transfer function, the light or the
+ *    grid changes, clvr_light_grid) interpolated at every quadrature point,
+ *    plus one shadow ray from a point b picked by weighted reservoir
+ *    sampling (weight |T sigma / rho| luminance(c)):
+ *      I [sum_k g_k G(x_k) + W g_b / w_b (T_l(b) - G(b))]
+ *    is unbiased for any G (the second term corrects the first) and has
+ *    little variance where G is close to T_l. One pick alone (I W g_b / w_b
+ *    T_l(b)) carries the colour of one point for the whole ray: on tets-1M
+ *    it needed 236 spp to 2% with the light fixed at 1, where this needs none.
  * Every value is an unbiased estimate of the same integral as delta tracking
  * (tests/test_render.c compares them per pixel block). */
 #ifndef CLVR_URM_RR
@@ -418,19 +420,19 @@ typedef struct clvr_urm {
     int emit;          /* 0: transmittance only (shadow ray) */
     float3 sum;        /* sum of T sigma / rho * colour */
     float wsum;        /* reservoir: total weight */
-    float3 pick;       /* reservoir b: T sigma / rho * colour / weight of the pick */
-    float pick_t;      /* reservoir b: where */
-    float pick_u;      /* reservoir b: the one uniform that decides every pick */
-    float pick_a_t;    /* reservoir a: where (its weights are b's) */
-    float pick_a_u;
+    float3 lit;        /* sum of T sigma / rho * colour * G (light grid) */
+    float3 pick;       /* reservoir: T sigma / rho * colour / weight of the pick */
+    float pick_t;      /* reservoir: where */
+    float pick_g;      /* reservoir: G there */
+    float pick_u;      /* reservoir: the one uniform that decides every pick */
 } clvr_urm;
 
-inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float t0, float t1, float u, float u_a, float u_b,
-                           int emit, clvr_rng *rng)
+inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float t0, float t1, float u, float u_pick, int emit,
+                           clvr_rng *rng)
 {
-    e->pick_a_u = u_a;
-    e->pick_u = u_b;
-    e->pick_a_t = 0.0f;
+    e->pick_u = u_pick;
+    e->pick_g = 0.0f;
+    e->lit = (float3)(0.0f);
     /* A shadow ray needs transmittance only, which the control makes nearly
      * exact between points: half the camera ray's points measured better
      * (tets-1M, 128^2, shadows: 2% in 51 instead of 46 frames, at 74% of the
@@ -480,7 +482,26 @@ inline int clvr_urm_reservoir(float *u, float p)
     return take;
 }
 
-/* Consumes [a, b) of majorant m; 0 once the walk may stop (terminated). */
+/* The light grid G at p: trilinear between cell centres, clamped at the
+ * faces (any G keeps the estimate unbiased; a close one lowers its variance). */
+inline float clvr_light_at(const clvr_volume *v, float3 p)
+{
+    const clvr_frame *f = v->f;
+    const int r = (int)f->light_res;
+    const float3 lo = vload3(0, f->grid_lo), hi = vload3(0, f->grid_hi);
+    const float3 q = clamp((p - lo) / (hi - lo) * (float)r - 0.5f, (float3)(0.0f), (float3)((float)(r - 1)));
+    const int3 c0 = min(convert_int3_rtz(q), (int3)(r - 2 > 0 ? r - 2 : 0)), c1 = min(c0 + 1, (int3)(r - 1));
+    const float3 w = q - convert_float3(c0);
+    __global const float *g = v->light;
+    const float x00 = mix(g[clvr_grid_index(c0.x, c0.y, c0.z, r)], g[clvr_grid_index(c1.x, c0.y, c0.z, r)], w.x);
+    const float x10 = mix(g[clvr_grid_index(c0.x, c1.y, c0.z, r)], g[clvr_grid_index(c1.x, c1.y, c0.z, r)], w.x);
+    const float x01 = mix(g[clvr_grid_index(c0.x, c0.y, c1.z, r)], g[clvr_grid_index(c1.x, c0.y, c1.z, r)], w.x);
+    const float x11 = mix(g[clvr_grid_index(c0.x, c1.y, c1.z, r)], g[clvr_grid_index(c1.x, c1.y, c1.z, r)], w.x);
+    return mix(mix(x00, x10, w.y), mix(x01, x11, w.y), w.z);
+}
+
+/* Consumes [a, b) of majorant m; 0 once the walk may stop (terminated).
+ * emit 2: also the light grid terms (urm with shadows). */
 inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float3 dir, float a, float b, float m,
                             clvr_rng *rng, uint *samples, uint *nulls)
 {
@@ -540,13 +561,14 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
                  * [0, 1) after each decision so that it stays uniform given
                  * the decision: the pick can then come from the frame's
                  * low-discrepancy sequence like the other dimensions. */
+                const float G = e->emit == 2 ? clvr_light_at(v, org + dir * t) : 1.0f;
+                e->lit += G * g;
                 e->wsum += ww;
-                const float p = ww / e->wsum;
-                if (clvr_urm_reservoir(&e->pick_u, p)) {
+                if (clvr_urm_reservoir(&e->pick_u, ww / e->wsum)) {
                     e->pick = g / ww;
                     e->pick_t = t;
+                    e->pick_g = G;
                 }
-                if (clvr_urm_reservoir(&e->pick_a_u, p)) e->pick_a_t = t;
             }
         }
         /* Russian roulette on the running transmittance. */
@@ -578,7 +600,7 @@ inline float clvr_urm_transmittance(const clvr_volume *v, float3 org, float3 dir
                                     clvr_rng *rng, uint *samples, uint *nulls)
 {
     clvr_urm e;
-    clvr_urm_begin(v->f, &e, t0, t1, u, 0.0f, 0.0f, 0, rng);
+    clvr_urm_begin(v->f, &e, t0, t1, u, 0.0f, 0, rng);
     CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
         if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
     });
@@ -595,14 +617,33 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
                                                    : 1.0f;
 }
 
+/* The light grid's value at cell (x, y, z): the mean of 4 urm transmittance
+ * estimates toward the light from the cell centre (offsets stratified, twice
+ * the camera's quadrature points). Its noise is frozen into G and costs
+ * variance, never bias. */
+inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *samples, uint *nulls)
+{
+    const clvr_frame *f = v->f;
+    const int r = (int)f->light_res;
+    const float3 lo = vload3(0, f->grid_lo), hi = vload3(0, f->grid_hi), ldir = vload3(0, f->light_dir);
+    const float3 vlo = vload3(0, f->vol_lo), vhi = vload3(0, f->vol_hi);
+    const float3 p = lo + ((float3)((float)x, (float)y, (float)z) + 0.5f) * (hi - lo) / (float)r;
+    clvr_rng rng = clvr_rng_make((uint)clvr_grid_index(x, y, z, r), 0x11647u, f->seed_lo, f->seed_hi);
+    float s0 = 0.0f, s1 = INFINITY, sum = 0.0f;
+    if (!clvr_ray_box(p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
+    for (int k = 0; k < 4; ++k)
+        sum += clvr_urm_transmittance(v, p, ldir, s0, s1, ((float)k + clvr_rng_next(&rng)) * 0.25f, &rng, samples,
+                                      nulls);
+    return 0.25f * sum;
+}
+
 /* ------------------------------------------------------------ camera rays */
 
 /* One camera ray with the frame's estimator. ld: the frame's low-discrepancy
  * uniforms (CLVR_LD_DIMS), or NULL for the independent sampler; dimension 2
  * drives the camera ray's first free flight (delta) or quadrature offset
- * (urm), 3 the shadow ray's (urm: of point a), 4 and 5 the picks of urm's
- * points a and b, 6 the offset of b's shadow ray. Without ld the draws come
- * from rng. */
+ * (urm), 3 the shadow ray's, 4 the pick of urm's shadow-ray origin. Without
+ * ld the draws come from rng. */
 inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
                                 uint *samples, uint *nulls, uint *rays)
 {
@@ -615,8 +656,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_urm e;
-        const float u_a = ld ? ld[4] : clvr_rng_next(rng), u_b = ld ? ld[5] : clvr_rng_next(rng);
-        clvr_urm_begin(f, &e, t0, t1, u_primary, u_a, u_b, 1, rng);
+        const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
+        clvr_urm_begin(f, &e, t0, t1, u_primary, u_pick, f->shadows ? 2 : 1, rng);
         CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
             if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
         });
@@ -625,10 +666,9 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
         if (f->shadows && e.wsum > 0.0f) {
             /* Control variate: see the estimator's comment. */
-            const float u_sa = ld ? ld[3] : clvr_rng_next(rng), u_sb = ld ? ld[6] : clvr_rng_next(rng);
-            const float la = clvr_urm_light(v, org + dir * e.pick_a_t, ldir, lo, hi, u_sa, rng, samples, nulls, rays);
-            const float lb = clvr_urm_light(v, org + dir * e.pick_t, ldir, lo, hi, u_sb, rng, samples, nulls, rays);
-            c += f->light_intensity * (la * e.sum + (lb - la) * e.wsum * e.pick);
+            const float u_s = ld ? ld[3] : clvr_rng_next(rng);
+            const float lb = clvr_urm_light(v, org + dir * e.pick_t, ldir, lo, hi, u_s, rng, samples, nulls, rays);
+            c += f->light_intensity * (e.lit + (lb - e.pick_g) * e.wsum * e.pick);
         }
         return (float4)(c + Tend * bg.xyz, 1.0f - Tend);
     }

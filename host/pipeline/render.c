@@ -16,8 +16,10 @@ struct clvr_renderer {
     clvr_camera cam;
     clvr_majorants *maj;       /* cluster majorants and the macrocell grid */
     cl_program prog_render;
-    cl_kernel k_render;
+    cl_kernel k_render, k_light;
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
+    cl_mem light_buf;          /* urm with shadows: the light grid (frame.light_res^3) */
+    int light_valid;           /* light_buf matches the frame and transfer function */
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
     uint32_t accum_w, accum_h; /* size of accum buffers */
     uint64_t frames;
@@ -178,6 +180,8 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->grid_res = set->macrocells;
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
+    f->light_res = CLVR_URM_LIGHT_RES;
+    r->light_valid = 0;
     CLVR_TRY(alloc_image(r, err));
     /* A new grid resolution or domain needs the elements rasterized again. */
     CLVR_TRY(update_majorants(r, 0, err));
@@ -212,6 +216,10 @@ clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const 
     CLVR_TRY(clvr_cl_build(cl, "render.cl", NULL, &r->prog_render, err));
     CLVR_TRY(clvr_majorants_create(cl, mesh, &r->maj, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_frame", &r->k_render, err));
+    CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_light_grid", &r->k_light, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE,
+                            (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * sizeof(float), NULL,
+                            "light grid", &r->light_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_frame), NULL, "frame parameters", &r->frame_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_camera), NULL, "camera", &r->cam_buf, err));
     CLVR_TRY(clvr_renderer_set_settings(r, settings, err));
@@ -226,6 +234,8 @@ void clvr_renderer_destroy(clvr_renderer *r)
 {
     if (!r) return;
     if (r->k_render) clReleaseKernel(r->k_render);
+    if (r->k_light) clReleaseKernel(r->k_light);
+    clvr_cl_release(r->cl, &r->light_buf);
     if (r->prog_render) clReleaseProgram(r->prog_render);
     clvr_majorants_destroy(r->maj);
     cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters};
@@ -265,6 +275,7 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
     r->frame.tf_hi = hi;
     r->frame.density = density;
     CLVR_TRY(update_majorants(r, 1, err));
+    r->light_valid = 0;
     r->frames = 0;
     r->kernel_s = 0.0;
 cleanup:
@@ -291,9 +302,28 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     } vol = {.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
              .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = maj.cells,
              .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
-             .cluster_majorants = maj.clusters};
-    /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
+             .cluster_majorants = maj.clusters, .light = r->light_buf};
 #define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
+    if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
+        r->frame.method != CLVR_RENDER_MARCH) {
+        /* The light grid, once per transfer function, light and settings; its
+         * time counts as render time (it is part of the first frame's cost). */
+        const size_t n = r->frame.light_res, gl[3] = {n, n, n};
+        CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf)));
+        cl_int lrc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
+        if (lrc == CL_SUCCESS) lrc = clEnqueueNDRangeKernel(cl->queue, r->k_light, 3, NULL, gl, NULL, 0, NULL, &evt);
+        if (lrc != CL_SUCCESS) {
+            s = clvr_cl_fail(err, "clEnqueueNDRangeKernel(clvr_light_grid)", lrc, __FILE__, __LINE__);
+            goto cleanup;
+        }
+        CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+        r->kernel_s += clvr_cl_event_seconds(evt);
+        clReleaseEvent(evt);
+        evt = NULL;
+        r->light_valid = 1;
+    }
+    /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
                           CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters)));
 #undef CLVR_VOLUME_ARG
