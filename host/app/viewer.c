@@ -348,6 +348,7 @@ static void print_command_line(viewer *v)
     if (o->tf_file) { appendf(line, cap, " --tf "); append_quoted(line, cap, o->tf_file); }
     appendf(line, cap, " --colormap ");
     append_quoted(line, cap, v->map_changed ? v->maps[v->map_index] : o->colormap);
+    if (o->opacity_ramp) appendf(line, cap, " --opacity ramp");
     appendf(line, cap, " --range %.9g %.9g --density %.9g", (double)v->tf->range_lo, (double)v->tf->range_hi,
             (double)(v->tf->density / v->density_factor));
     appendf(line, cap, " --light %.9g,%.9g,%.9g", (double)v->rs.light_dir[0], (double)v->rs.light_dir[1],
