@@ -62,7 +62,21 @@ int main(void)
     TU_CHECK(o.range_set && o.range_lo == -1.0f && o.range_hi == 2.5f);
     TU_CHECK(o.camera_set && o.camera[0] == 1.0f && o.camera[8] == 1.0f);
     TU_CHECK(o.leaf_size == 8 && o.macrocells == 32 && o.fovy == 30.0f && o.density == 2.5f);
+    TU_CHECK(!o.density_auto && !o.opacity_ramp); /* --density D: that density, not the automatic one */
     TU_CHECK(o.light_dir[2] == 1.0f && o.background[0] == 1.0f);
+
+    /* The transfer function's defaults (issue 17): automatic opacity and
+     * density; the old linear ramp by name. */
+    TU_CHECK_STATUS(PARSE(&o, &err, "m.bin"), CLVR_OK, &err);
+    TU_CHECK(o.density_auto && !o.opacity_ramp);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--opacity", "ramp", "--density", "auto"), CLVR_OK, &err);
+    TU_CHECK(o.density_auto && o.opacity_ramp);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--opacity", "auto", "--density", "0.5"), CLVR_OK, &err);
+    TU_CHECK(!o.density_auto && !o.opacity_ramp && o.density == 0.5f);
+    expect_usage("--opacity", "linear");
+    expect_usage("--density", "lots");
+    TU_CHECK_STATUS(PARSE(&o, &err, "--density", "lots"), CLVR_ERR_USAGE, &err);
+    TU_CHECK(strstr(err.msg, "auto") != NULL); /* the fix names the other choice */
 
     /* Defaults of the view and display options: ParaView's 30 degrees, +y up,
      * the automatic framing unchanged, PNG through the aces curve, opaque. */

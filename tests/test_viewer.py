@@ -4,9 +4,12 @@ CLVR_VIEW_SCRIPT session (see host/app/viewer.h), proves that the window shows t
 volume; that a colour-map switch changes the mean colour, a zoom the coverage and
 a middle-button pan moves the picture by the dragged pixels; that R and
 C / shift+C restore the first image bit for bit; that resize re-allocates the
-image; that the title reports spp, rates, method and device; that E, P and K
+image; that the title reports spp, rates, method and device; that X, P and K
 write files; and that K's command line, rendered offline at the same spp,
-reproduces the viewer's accumulated image. Also: without a display --view fails
+reproduces the viewer's accumulated image. The estimator: --estimator and
+--urm-steps start the viewer, E / shift+E cycle it, the title and the K line
+carry it. The window and the P key's PNG use the exposure and tone curve of
+`clvr -o x.png` (the PNG equals the offline one byte for byte). Also: without a display --view fails
 with one line naming the fix, a bad script command fails with its line number,
 and --help lists the controls.
 
@@ -24,14 +27,25 @@ import subprocess
 import sys
 import tempfile
 
-from checklib import Checks
+from checklib import Checks, read_png
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
 BUILD = os.environ.get("CLVR_BUILD_DIR", os.path.join(HERE, "..", "build"))
 CLVR = os.path.abspath(os.path.join(BUILD, "clvr"))
 MESH = os.path.join(DATA, "vtk", "post.vtk")
-BACKGROUND = (0.05, 0.05, 0.07)  # clvr's default, linear
+BACKGROUND_LINEAR = (0.05, 0.05, 0.07)  # clvr's default, linear
+
+
+def aces(x):
+    """host/io/image.c's default tone curve (clvr_image_tonemap, CLVR_TONEMAP_ACES)."""
+    x *= 1.5
+    return min(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 1.0)
+
+
+# What the window shows of the background: the default tone curve of PNG output
+# (screenshots decode the window's sRGB back to display-linear values).
+BACKGROUND = tuple(aces(c) for c in BACKGROUND_LINEAR)
 
 check = Checks()
 
@@ -182,7 +196,7 @@ resize 160 120
 frames 3
 shot s5.pfm
 title
-key E
+key X
 key P
 key K
 key H
@@ -224,6 +238,102 @@ quit
 """
 
 
+ESTIMATOR_SESSION = """\
+frames 2
+save d.pfm
+title
+key E
+frames 1
+title
+key E shift
+key E
+frames 3
+save acc.pfm
+key P
+key K
+shot e.pfm
+title
+quit
+"""
+
+
+def estimator_session(xvfb, tmp):
+    """--estimator, --urm-steps, E / shift+E, and the display curve of PNG output."""
+    d = os.path.join(tmp, "estimator")
+    os.makedirs(d)
+    script = os.path.join(d, "e.txt")
+    with open(script, "w") as f:
+        f.write(ESTIMATOR_SESSION)
+    args = ["--view", "--quiet", "--size", "64x48", "--estimator", "delta", "--urm-steps", "5", "--exposure", "0.5",
+            "--tonemap", "filmic", MESH]
+    r = run(xvfb + [CLVR] + args, env={"CLVR_VIEW_SCRIPT": script}, cwd=d)
+    if not check(r.returncode == 0, "the estimator session exits 0", (r.returncode, r.stderr.strip())):
+        return
+    out = r.stdout
+    titles = re.findall(r"^title: (.*)$", out, re.M)
+    if check(len(titles) == 3, "three title lines printed", len(titles), 3):
+        check(" dda delta " in titles[0], "--estimator delta starts the viewer with delta (title)", titles[0])
+        check(" dda urm " in titles[1], "E switches to urm (title)", titles[1])
+        check(" dda urm " in titles[2], "shift+E then E come back to urm (title)", titles[2])
+    view_txt = os.path.join(d, "clvr-view.txt")
+    if not check(os.path.exists(view_txt), "K wrote clvr-view.txt"):
+        return
+    with open(view_txt) as f:
+        line = f.read().strip()
+    for opt in ["--estimator urm", "--urm-steps 5", "--exposure 0.5", "--tonemap filmic"]:
+        check(opt in line, f"the K line has {opt}", line)
+    base = shlex.split(line)[1:]
+
+    def offline(extra, out_name):
+        path = os.path.join(d, out_name)
+        r = run([CLVR] + base + extra + ["--quiet", "-o", path], cwd=d)
+        return path if check(r.returncode == 0, f"the K line runs offline ({out_name})", (r.returncode, r.stderr)) \
+            else None
+
+    # The first frames were delta with 5 urm steps: the K line with --estimator delta
+    # at 2 spp renders them exactly; the accumulated urm image at its spp likewise
+    # (urm with 16 steps would differ, so --urm-steps reached the renderer).
+    m = re.search(r"saved acc\.pfm \((\d+)x(\d+), (\d+) spp\)", out)
+    if not check(m is not None, "save acc.pfm reports its spp", out):
+        return
+    spp = m.group(3)
+    p = offline(["--spp", "2", "--estimator", "delta"], "off_d.pfm")
+    if p:
+        dd = max_diff(read_pfm(os.path.join(d, "d.pfm")), read_pfm(p))
+        check(dd <= 1e-6, "the viewer's first frames are --estimator delta's, offline", dd, 0.0)
+    p = offline(["--spp", spp], "off_acc.pfm")
+    if p:
+        a = read_pfm(os.path.join(d, "acc.pfm"))
+        dd = max_diff(a, read_pfm(p))
+        check(dd <= 1e-6, f"after E the viewer renders urm with --urm-steps 5 (offline equal at {spp} spp)", dd, 0.0)
+        p16 = offline(["--spp", spp, "--urm-steps", "16"], "off_16.pfm")
+        if p16:
+            check(max_diff(a, read_pfm(p16)) > 1e-4, "--urm-steps 16 gives another image (the check can fail)",
+                  max_diff(a, read_pfm(p16)))
+    # The P key's PNG is the offline PNG of the same view, byte for byte in its
+    # pixels (same exposure, tone curve, sRGB), and the window shows it within one
+    # code (the window's sRGB encoding is a table).
+    png = os.path.join(d, "clvr-view-001.png")
+    p = offline(["--spp", spp], "off.png")
+    if check(os.path.exists(png), "P saved clvr-view-001.png") and p:
+        a, b = read_png(png), read_png(p)
+        check(a == b, "the P key's PNG equals `clvr -o x.png` of the K line (exposure, filmic curve)",
+              (a[:3], b[:3]))
+        w, h, ch, rows = a
+        shot = read_pfm(os.path.join(d, "e.pfm"))
+        worst = 0
+        for y in range(h - strip_rows(h)):
+            for x in range(w):
+                for k in range(3):
+                    code = round(255.0 * srgb_encode(shot[2][y][x][k]))
+                    worst = max(worst, abs(code - rows[y][ch * x + k]))
+        check(worst <= 1, "the window shows the PNG's codes (within 1)", worst, "<= 1")
+
+
+def srgb_encode(c):
+    return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1.0 / 2.4) - 0.055
+
+
 def main():
     if not shutil.which("Xvfb"):
         print("skipped: Xvfb is not installed (apt-get install xvfb; see tools/setup-debian.sh)")
@@ -235,7 +345,7 @@ def main():
     # --help lists every control.
     r = run([CLVR, "--help"])
     for control in ["Viewer controls", "left drag", "middle drag", "wheel", "R ", "C / shift+C", "[ / ]", "{ / }",
-                    "+ / -", "S ", "M / shift+M", "L+left drag", "E / P", "K ", "H ", "Escape"]:
+                    "+ / -", "S ", "M / shift+M", "E / shift+E", "L+left drag", "X / P", "K ", "H ", "Escape"]:
         check(control in r.stdout, f"--help mentions the viewer control '{control}'")
 
     tmp = tempfile.mkdtemp(prefix="clvr-viewer-")
@@ -289,6 +399,9 @@ def main():
                   f"({mean[0]:.3f}, {mean[1]:.3f}, {mean[2]:.3f}), centroid x {cx:.1f}")
 
         check(shots["s0"][0:2] == (128, 128), "the window is --size", shots["s0"][0:2], (128, 128))
+        corner = shots["s0"][2][0][0]
+        check(max(abs(corner[k] - BACKGROUND[k]) for k in range(3)) < 0.004,
+              "the window shows the background through the default (aces) tone curve", corner, BACKGROUND)
         check(st["s0"][0] > 0.10, "the first image shows the volume (> 10% non-background pixels)", st["s0"][0])
         dcol = sum(abs(a - b) for a, b in zip(st["s0"][1], st["s1"][1]))
         check(dcol > 0.03, "C (next colour map) changes the mean colour of the volume", dcol, "> 0.03")
@@ -320,12 +433,12 @@ def main():
 
         exr = os.path.join(tmp, "clvr-view-001.exr")
         png = os.path.join(tmp, "clvr-view-001.png")
-        if check(os.path.exists(exr), "E saved clvr-view-001.exr", out):
+        if check(os.path.exists(exr), "X saved clvr-view-001.exr", out):
             with open(exr, "rb") as f:
                 check(f.read(4) == b"\x76\x2f\x31\x01", "clvr-view-001.exr is an OpenEXR file")
         if check(os.path.exists(png), "P saved clvr-view-001.png"):
             check(png_size(png) == (160, 120), "the PNG has the window size", png_size(png), (160, 120))
-        check("saved clvr-view-001.exr" in out and "saved clvr-view-001.png" in out, "E and P print the file names")
+        check("saved clvr-view-001.exr" in out and "saved clvr-view-001.png" in out, "X and P print the file names")
         check("Viewer controls" in out and "rotate the light" in out, "H prints the controls")
 
         view_txt = os.path.join(tmp, "clvr-view.txt")
@@ -350,6 +463,8 @@ def main():
                 a, b = read_pfm(os.path.join(tmp, "acc.pfm")), read_pfm(off)
                 d = max_diff(a, b)
                 check(d <= 1e-6, f"offline render of the K line at {spp} spp equals the viewer's image", d, 0.0)
+
+        estimator_session(xvfb, tmp)
 
         # --up z: the viewer orbits about z, and its K line carries that up vector.
         up_dir = os.path.join(tmp, "up")

@@ -83,7 +83,13 @@ void clvr_cli_print_help(FILE *out)
         "  --colormap NAME        cool-warm | viridis | inferno | grayscale | jet (default cool-warm)\n"
         "  --tf FILE              transfer function file (clvr text format or ParaView JSON)\n"
         "  --range LO HI          scalar window mapped by the transfer function (default: data range)\n"
-        "  --density D            extinction scale (default 1)\n"
+        "  --opacity auto|ramp    opacity curve: auto (from the scalar's volume histogram: values\n"
+        "                         that fill most of the volume clear, rare ones opaque) or ramp\n"
+        "                         (linear, 0 at the window's low end to 1 at its high end)\n"
+        "                         (default auto; a --tf file's opacity points win over both)\n"
+        "  --density D|auto       extinction scale, 1: optical depth 8 along the mesh diagonal at\n"
+        "                         opacity 1; auto (default): the median ray that meets the visible\n"
+        "                         medium gets optical depth 1.5\n"
         "  --light X,Y,Z          direction toward the directional light (default 1,2,1.5)\n"
         "  --light-intensity I    (default 1)\n"
         "  --ambient A            ambient light level (default 0.3)\n"
@@ -103,8 +109,10 @@ void clvr_cli_print_help(FILE *out)
         "  + / -                  density x1.25 / /1.25\n"
         "  S                      toggle shadows (not with march)\n"
         "  M / shift+M            next / previous method: march, track, bins, dda\n"
+        "  E / shift+E            next / previous estimator: urm, delta (not with march)\n"
         "  L+left drag, ctrl+left drag, ctrl+arrows   rotate the light\n"
-        "  E / P                  save the accumulated image as clvr-view-NNN.exr / .png\n"
+        "  X / P                  save the accumulated image as clvr-view-NNN.exr / .png (the PNG\n"
+        "                         and the window use --exposure and --tonemap, as -o x.png does)\n"
         "  K                      print this view as a clvr command line, also written to clvr-view.txt\n"
         "  H                      print these controls\n"
         "  Q, Escape              quit\n"
@@ -143,6 +151,7 @@ static void defaults(clvr_options *o)
     o->tonemap = CLVR_TONEMAP_ACES;
     o->colormap = "cool-warm";
     o->density = 1.0f;
+    o->density_auto = 1;
     memcpy(o->light_dir, rs.light_dir, sizeof o->light_dir);
     o->light_intensity = rs.light_intensity;
     o->ambient = rs.ambient;
@@ -300,7 +309,24 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
                 o->range_set = 1;
             }
         }
-        else if (!strcmp(a, "--density")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->density, err); }
+        else if (!strcmp(a, "--density")) {
+            const char *v = NEXT();
+            if (v && !strcmp(v, "auto")) o->density_auto = 1;
+            else if (v) {
+                s = parse_float(a, v, 0.0f, 1e30f, &o->density, err);
+                if (s != CLVR_OK)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--density expects auto or a number in [0, 1e+30], got '%s'", v);
+                o->density_auto = 0;
+            }
+        }
+        else if (!strcmp(a, "--opacity")) {
+            const char *v = NEXT();
+            if (v) {
+                if (!strcmp(v, "auto")) o->opacity_ramp = 0;
+                else if (!strcmp(v, "ramp")) o->opacity_ramp = 1;
+                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--opacity expects auto or ramp, got '%s'", v);
+            }
+        }
         else if (!strcmp(a, "--light")) {
             const char *v = NEXT();
             if (v) {

@@ -49,7 +49,9 @@ typedef struct clvr_options {
     const char *tf_file;         /* --tf FILE */
     int range_set;
     float range_lo, range_hi;    /* --range lo hi */
-    float density;               /* --density D */
+    float density;               /* --density D (after clvr's main: the automatic one when density_auto) */
+    int density_auto;            /* --density auto (the default): from the mesh's optical depth (tf_auto.h) */
+    int opacity_ramp;            /* --opacity ramp: the linear ramp; auto (default): from the histogram */
     float light_dir[3];          /* --light x,y,z (direction towards the light) */
     float light_intensity;       /* --light-intensity I */
     float ambient;               /* --ambient A */

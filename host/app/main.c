@@ -23,6 +23,7 @@
 #include "scene.h"
 #include "stats.h"
 #include "tf.h"
+#include "tf_auto.h"
 #ifdef CLVR_HAVE_VIEWER
 #include "viewer.h"
 #endif
@@ -154,10 +155,25 @@ int main(int argc, char **argv)
 
     /* The transfer function needs only the scalar range: load it now, so a
      * typo in --tf FILE fails before minutes of preprocessing. */
-    s = clvr_tf_from_options(&tf, o.colormap, o.tf_file, o.range_set, o.range_lo, o.range_hi, o.density,
-                             mesh.scalar_min, mesh.scalar_max, &err);
+    s = clvr_tf_from_options(&tf, o.colormap, o.tf_file, o.range_set, o.range_lo, o.range_hi,
+                             o.density_auto ? 1.0f : o.density, mesh.scalar_min, mesh.scalar_max, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     clvr_tf_set_extent(&tf, mesh.bounds_lo, mesh.bounds_hi);
+    /* The automatic transfer function (tf_auto.h): opacity from the scalar's
+     * volume histogram over the window, unless --opacity ramp or a file's
+     * points; density from the optical depth of probe rays. */
+    if (!o.opacity_ramp && !tf.opacity_set) {
+        double hist[CLVR_TF_AUTO_BINS];
+        clvr_tf_auto_histogram(&mesh, tf.range_lo, tf.range_hi, hist, CLVR_TF_AUTO_BINS);
+        s = clvr_tf_auto_opacity(&tf, hist, CLVR_TF_AUTO_BINS, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    }
+    if (o.density_auto) {
+        s = clvr_tf_auto_density(&mesh, &tf, &o.density, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+        tf.density *= o.density;
+        if (!o.quiet) fprintf(stderr, "clvr: automatic density %.3g (--density auto)\n", (double)o.density);
+    }
 
     /* --- device */
     s = clvr_cl_create(o.device, &cl, &err);

@@ -1,8 +1,9 @@
 /* viewer.c: the interactive viewer. One GLFW window with a legacy OpenGL
  * context; each loop turn applies the pending edits through the renderer's
  * set_* calls (which restart the accumulation), renders one more sample per
- * pixel, copies the running mean through the host, encodes it to sRGB with a
- * table and draws it as a texture, with the transfer function as a strip
+ * pixel, copies the running mean through the host, maps it with the
+ * exposure and tone curve of PNG output (--exposure, --tonemap), encodes it
+ * to sRGB with a table and draws it as a texture, with the transfer function as a strip
  * along the bottom. Input is turned into edits by handlers that the GLFW
  * callbacks and the CLVR_VIEW_SCRIPT test hook share, so scripted tests
  * drive the same code as a person does. See viewer.h and docs/viewer.md. */
@@ -76,7 +77,9 @@ typedef struct viewer {
     size_t img_cap;              /* pixels allocated */
     GLuint tex, strip_tex;
     uint32_t tex_w, tex_h;
-    uint8_t lut[SRGB_LUT];
+    clvr_image_display display;  /* what `clvr -o x.png` applies: exposure, tone curve, alpha */
+    float gain;                  /* 2^exposure */
+    uint8_t lut[SRGB_LUT];       /* display-linear [0, 1] -> 8-bit sRGB */
 
     /* Mouse. */
     int button;                  /* GLFW_MOUSE_BUTTON_* held, -1: none */
@@ -256,7 +259,7 @@ static void save_image(viewer *v, const char *path)
         fprintf(stderr, "clvr: no image to save yet\n");
         return;
     }
-    if (clvr_image_write(path, v->img_w, v->img_h, v->rgba, &e) != CLVR_OK) {
+    if (clvr_image_write_display(path, v->img_w, v->img_h, v->rgba, &v->display, &e) != CLVR_OK) {
         fprintf(stderr, "clvr: %s\n", e.msg);
         return;
     }
@@ -264,7 +267,7 @@ static void save_image(viewer *v, const char *path)
     fflush(stdout);
 }
 
-/* E and P: the first free clvr-view-NNN.<ext> in the working directory. */
+/* X and P: the first free clvr-view-NNN.<ext> in the working directory. */
 static void save_numbered(viewer *v, const char *ext)
 {
     char path[64];
@@ -328,8 +331,9 @@ static void print_command_line(viewer *v)
     uint64_t spp = v->img_spp > o->spp ? v->img_spp : o->spp;
     appendf(line, cap, " --size %ux%u --spp %llu --seed %llu", v->rs.width, v->rs.height, (unsigned long long)spp,
             (unsigned long long)v->rs.seed);
-    appendf(line, cap, " --method %s --shadows %s", clvr_render_method_name(v->rs.method),
-            v->shadows ? "on" : "off");
+    appendf(line, cap, " --method %s --shadows %s --estimator %s", clvr_render_method_name(v->rs.method),
+            v->shadows ? "on" : "off", clvr_render_estimator_name(v->rs.estimator));
+    if (v->rs.urm_steps != d.urm_steps) appendf(line, cap, " --urm-steps %u", v->rs.urm_steps);
     if (v->rs.sampler != d.sampler) appendf(line, cap, " --sampler independent");
     if (v->rs.step != d.step) appendf(line, cap, " --step %.9g", (double)v->rs.step);
     if (v->rs.bins != d.bins) appendf(line, cap, " --bins %u", v->rs.bins);
@@ -344,6 +348,7 @@ static void print_command_line(viewer *v)
     if (o->tf_file) { appendf(line, cap, " --tf "); append_quoted(line, cap, o->tf_file); }
     appendf(line, cap, " --colormap ");
     append_quoted(line, cap, v->map_changed ? v->maps[v->map_index] : o->colormap);
+    if (o->opacity_ramp) appendf(line, cap, " --opacity ramp");
     appendf(line, cap, " --range %.9g %.9g --density %.9g", (double)v->tf->range_lo, (double)v->tf->range_hi,
             (double)(v->tf->density / v->density_factor));
     appendf(line, cap, " --light %.9g,%.9g,%.9g", (double)v->rs.light_dir[0], (double)v->rs.light_dir[1],
@@ -351,9 +356,12 @@ static void print_command_line(viewer *v)
     if (v->rs.light_intensity != d.light_intensity)
         appendf(line, cap, " --light-intensity %.9g", (double)v->rs.light_intensity);
     if (v->rs.ambient != d.ambient) appendf(line, cap, " --ambient %.9g", (double)v->rs.ambient);
-    if (memcmp(v->rs.background, d.background, sizeof d.background))
+    if (o->transparent) appendf(line, cap, " --background none");
+    else if (memcmp(v->rs.background, d.background, sizeof d.background))
         appendf(line, cap, " --background %.9g,%.9g,%.9g", (double)v->rs.background[0], (double)v->rs.background[1],
                 (double)v->rs.background[2]);
+    if (o->exposure != d.exposure) appendf(line, cap, " --exposure %.9g", (double)o->exposure);
+    if (o->tonemap != d.tonemap) appendf(line, cap, " --tonemap %s", clvr_tonemap_name((clvr_tonemap)o->tonemap));
     printf("%s\n", line);
     fflush(stdout);
     if (o->tf_file && v->map_changed)
@@ -435,7 +443,11 @@ static void handle_key(viewer *v, int key, int mods)
         v->rs.method = (v->rs.method + (shift ? CLVR_RENDER_COUNT - 1u : 1u)) % CLVR_RENDER_COUNT;
         v->dirty_settings = 1;
         break;
-    case GLFW_KEY_E: save_numbered(v, "exr"); break;
+    case GLFW_KEY_E:
+        v->rs.estimator = (v->rs.estimator + (shift ? CLVR_ESTIMATOR_COUNT - 1u : 1u)) % CLVR_ESTIMATOR_COUNT;
+        v->dirty_settings = 1;
+        break;
+    case GLFW_KEY_X: save_numbered(v, "exr"); break;
     case GLFW_KEY_P: save_numbered(v, "png"); break;
     case GLFW_KEY_K: print_command_line(v); break;
     default: break;
@@ -472,7 +484,7 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
     viewer *v = glfwGetWindowUserPointer(w);
     if (action == GLFW_RELEASE || key == GLFW_KEY_L) return;
     /* Saving and printing once per press, not per auto-repeat. */
-    if (action == GLFW_REPEAT && (key == GLFW_KEY_E || key == GLFW_KEY_P || key == GLFW_KEY_K || key == GLFW_KEY_H))
+    if (action == GLFW_REPEAT && (key == GLFW_KEY_X || key == GLFW_KEY_P || key == GLFW_KEY_K || key == GLFW_KEY_H))
         return;
     handle_key(v, key, mods | (held_mods(w) & VIEW_MOD_LIGHT));
 }
@@ -621,12 +633,14 @@ static clvr_status render_frame(viewer *v)
     v->rays_last = c.rays;
     v->rays_since_title += rays;
     v->frames_since_title++;
+    /* As write_png (image.c) maps an opaque image: scale by 2^exposure, tone
+     * curve, sRGB (the last by table, within one code of the PNG's). */
     size_t n = (size_t)v->img_w * v->img_h * 4;
+    const clvr_tonemap tm = v->display.tonemap;
     for (size_t i = 0; i < n; i += 4) {
         for (int k = 0; k < 3; ++k) {
-            float x = v->rgba[i + k];
-            int j = x > 0.0f ? (x < 1.0f ? (int)(x * (SRGB_LUT - 1) + 0.5f) : SRGB_LUT - 1) : 0;
-            v->rgba8[i + k] = v->lut[j];
+            float y = clvr_image_tonemap(tm, v->rgba[i + k] * v->gain); /* in [0, 1], NaN -> 0 */
+            v->rgba8[i + k] = v->lut[(int)(y * (SRGB_LUT - 1) + 0.5f)];
         }
         v->rgba8[i + 3] = 255;
     }
@@ -759,9 +773,13 @@ static void update_title(viewer *v, int force)
     v->rays_since_title = 0;
     const char *mesh = v->o->mesh_path ? strrchr(v->o->mesh_path, '/') : NULL;
     mesh = mesh ? mesh + 1 : v->o->mesh_path ? v->o->mesh_path : "default scene";
+    char method[48];
+    if (v->rs.method == CLVR_RENDER_MARCH) snprintf(method, sizeof method, "march");
+    else snprintf(method, sizeof method, "%s %s", clvr_render_method_name(v->rs.method),
+                  clvr_render_estimator_name(v->rs.estimator));
     snprintf(v->title, sizeof v->title,
              "clvr | %s | %s | %llu spp | %.1f fps | %.2f Mrays/s | %s [%.4g, %.4g] density %.3g | shadows %s | %s",
-             mesh, clvr_render_method_name(v->rs.method), (unsigned long long)v->img_spp, v->fps, v->mrays,
+             mesh, method, (unsigned long long)v->img_spp, v->fps, v->mrays,
              v->tf->name, (double)v->tf->range_lo, (double)v->tf->range_hi,
              (double)(v->tf->density / v->density_factor),
              v->rs.method == CLVR_RENDER_MARCH ? "n/a" : v->shadows ? "on" : "off", v->cl->device_name);
@@ -962,6 +980,10 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
     v->range0_lo = tf->range_lo;
     v->range0_hi = tf->range_hi;
     v->density_factor = o->density > 0.0f && tf->density > 0.0f ? tf->density / o->density : 1.0f;
+    v->display.exposure_ev = o->exposure;
+    v->display.tonemap = (clvr_tonemap)o->tonemap;
+    v->display.transparent = o->transparent;
+    v->gain = exp2f(o->exposure);
     for (int i = 0; i < SRGB_LUT; ++i) v->lut[i] = clvr_image_srgb_to_u8((float)i / (SRGB_LUT - 1));
 
     /* The colour maps to cycle through, from tf.h's list. */

@@ -22,7 +22,8 @@
  *   resize W H            resize the window (framebuffer) to W x H
  *   shot FILE             write what the window shows (glReadPixels) to FILE
  *                         with clvr_image_write (.png, .pfm, .exr)
- *   save FILE             write the accumulated image to FILE
+ *   save FILE             write the accumulated image to FILE (a .png as the
+ *                         P key writes it: exposure, tone curve)
  *   title                 print the window title (status line) to stdout
  *   run CMD...            run a shell command (e.g. xdotool sending real X
  *                         input), then handle the window events it caused

@@ -505,6 +505,7 @@ clvr_status clvr_tf_init(clvr_tf *tf, const char *colormap, clvr_error *err)
     const float ramp[8] = {0.0f, 0.0f, 0.5f, 0.0f, 1.0f, 1.0f, 0.5f, 0.0f};
     memcpy(tf->opacity, ramp, sizeof ramp);
     tf->num_opacity = 2;
+    tf->opacity_set = 0;
     tf->range_lo = 0.0f;
     tf->range_hi = 1.0f;
     tf->range_set = 0;
@@ -591,6 +592,7 @@ static void commit(clvr_tf *tf, pending *p)
         free(tf->opacity);
         tf->opacity = p->opacity;
         tf->num_opacity = p->num_opacity;
+        tf->opacity_set = 1;
         p->opacity = NULL;
     }
     if (p->have_range) {

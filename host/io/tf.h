@@ -43,6 +43,7 @@ typedef struct clvr_tf {
     float *colors;            /* 4 per point: x, r, g, b; x non-decreasing */
     uint32_t num_opacity;     /* >= 1 */
     float *opacity;           /* 4 per point: x, opacity, midpoint, sharpness (ParaView) */
+    int opacity_set;          /* nonzero when a file gave the opacity points */
     float range_lo, range_hi; /* scalar window, range_lo < range_hi */
     int range_set;            /* nonzero when a file or the caller chose the window */
     float density;            /* dimensionless scale, >= 0 (1: see CLVR_TF_DIAGONAL_DEPTH) */
