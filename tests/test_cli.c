@@ -41,7 +41,7 @@ int main(void)
     TU_CHECK(o.mesh_path && strcmp(o.mesh_path, "mesh.bin") == 0);
     TU_CHECK(strcmp(o.output, "clvr.png") == 0);
     TU_CHECK_EQ_U64(o.width, 512);
-    TU_CHECK_EQ_U64(o.spp, 64);
+    TU_CHECK_EQ_U64(o.spp, 16);
     TU_CHECK(o.method == CLVR_RENDER_DDA && o.shadows == 1 && o.leaf_size == 16);
     TU_CHECK(o.sampler == CLVR_SAMPLER_LD);
 

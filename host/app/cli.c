@@ -43,7 +43,7 @@ void clvr_cli_print_help(FILE *out)
         "  --legend               PNG only: draw the colour map with its range and the field's name\n"
         "                         at the bottom-left corner\n"
         "  --size WxH             image size (default 512x512)\n"
-        "  --spp N                samples per pixel = frames accumulated (default 64)\n"
+        "  --spp N                samples per pixel = frames accumulated (default 16)\n"
         "  --seed N               random seed (default 1); same seed, same image\n"
         "  --quiet, -q            no progress on stderr\n"
         "\n"
@@ -134,7 +134,9 @@ static void defaults(clvr_options *o)
     o->output = "clvr.png";
     o->width = rs.width;
     o->height = rs.height;
-    o->spp = 64;
+    /* urm reaches about 2% relative RMSE in 8-12 frames on the built-in scene
+     * and the 1M-tet bench mesh (bench/converge-all.sh): 16 is a clean image. */
+    o->spp = 16;
     o->seed = rs.seed;
     o->method = rs.method;
     o->estimator = rs.estimator;
