@@ -194,101 +194,73 @@ inline int clvr_dda_step(clvr_dda *d, float tx, int *axis)
  * a block whose majorant optical depth m * chord exceeds CLVR_DDA_DESCEND is
  * walked cell by cell, any other is one segment of the block majorant. The
  * choice depends on the ray alone, so every segmentation is a valid
- * piecewise-constant majorant and the estimators stay unbiased. */
-typedef struct clvr_dda_iter {
-    clvr_dda blk, cel;
-    int3 c;          /* block coordinates */
-    int3 step;
-    float3 lo, cs, inv;
-    float t, t1;     /* next segment starts at t; the ray ends at t1 */
-    float blk_end;   /* in cells: where the current block's segment ends */
-    int r, rc;
-    int in_cells, blk_last, done;
-} clvr_dda_iter;
+ * piecewise-constant majorant and the estimators stay unbiased. One clvr_dda
+ * stepper serves both levels; the walk is a macro with the consumer inline
+ * at the two places a segment is made, rather than an iterator struct with a
+ * next(): measured on the built-in scene, 512^2, delta, quiet machine, an
+ * iterator was 12% slower (7.4 against 8.4 Mrays/s), its state going through
+ * memory per segment. STOP is an expression of (a, b, m), true to end the walk. */
+#define CLVR_DDA_WALK(v, org, dir, t0, t1, a, b, m, STOP)                                                              \
+    do {                                                                                                               \
+        const clvr_frame *f_ = (v)->f;                                                                                 \
+        const float3 lo_ = vload3(0, f_->grid_lo), hi_ = vload3(0, f_->grid_hi);                                       \
+        const int r_ = (int)f_->grid_res, rc_ = (r_ + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;                            \
+        const float3 cs_ = (hi_ - lo_) / (float)r_, bs_ = cs_ * (float)CLVR_DDA_BLOCK, inv_ = 1.0f / (dir);            \
+        const int3 step_ = (int3)((dir).x >= 0.0f ? 1 : -1, (dir).y >= 0.0f ? 1 : -1, (dir).z >= 0.0f ? 1 : -1);      \
+        int3 c_ = clamp(convert_int3_rtn(((org) + (dir) * (t0) - lo_) / bs_), (int3)(0), (int3)(rc_ - 1));            \
+        clvr_dda blk_;                                                                                                 \
+        clvr_dda_begin(&blk_, lo_, bs_, rc_, (int3)(0), (int3)(rc_ - 1), (org), (dir), inv_, step_, (t0));            \
+        float t_ = (t0);                                                                                               \
+        int axis_;                                                                                                     \
+        for (int more_ = (t0) < (t1); more_;) {                                                                        \
+            const float tx_ = clvr_dda_exit(&blk_), bb_ = fmin(tx_, (t1));                                             \
+            const float mb_ = (v)->blocks[blk_.idx];                                                                   \
+            if (mb_ > 0.0f && mb_ * (bb_ - t_) > CLVR_DDA_DESCEND) {                                                   \
+                const int3 clo_ = c_ * CLVR_DDA_BLOCK, chi_ = min(clo_ + CLVR_DDA_BLOCK, (int3)(r_)) - 1;              \
+                clvr_dda cel_;                                                                                         \
+                clvr_dda_begin(&cel_, lo_, cs_, r_, clo_, chi_, (org), (dir), inv_, step_, t_);                       \
+                for (;;) {                                                                                             \
+                    const float cx_ = clvr_dda_exit(&cel_);                                                            \
+                    a = t_;                                                                                            \
+                    b = fmin(cx_, bb_);                                                                                \
+                    m = (v)->grid[cel_.idx];                                                                           \
+                    if (STOP) { more_ = 0; break; }                                                                    \
+                    t_ = b;                                                                                            \
+                    if (cx_ >= bb_ || !clvr_dda_step(&cel_, cx_, &axis_)) break;                                       \
+                }                                                                                                      \
+                if (!more_) break;                                                                                     \
+            } else {                                                                                                   \
+                a = t_;                                                                                                \
+                b = bb_;                                                                                               \
+                m = mb_;                                                                                               \
+                if (STOP) break;                                                                                       \
+            }                                                                                                          \
+            t_ = bb_;                                                                                                  \
+            if (tx_ >= (t1) || !clvr_dda_step(&blk_, tx_, &axis_)) break;                                              \
+            if (axis_ == 0) c_.x += step_.x;                                                                           \
+            else if (axis_ == 1) c_.y += step_.y;                                                                      \
+            else c_.z += step_.z;                                                                                      \
+        }                                                                                                              \
+    } while (0)
 
-inline void clvr_dda_iter_begin(const clvr_volume *v, clvr_dda_iter *it, float3 org, float3 dir, float t0, float t1)
-{
-    const clvr_frame *f = v->f;
-    it->lo = vload3(0, f->grid_lo);
-    const float3 hi = vload3(0, f->grid_hi);
-    it->r = (int)f->grid_res;
-    it->rc = (it->r + CLVR_DDA_BLOCK - 1) / CLVR_DDA_BLOCK;
-    it->cs = (hi - it->lo) / (float)it->r;
-    it->step = (int3)(dir.x >= 0.0f ? 1 : -1, dir.y >= 0.0f ? 1 : -1, dir.z >= 0.0f ? 1 : -1);
-    it->inv = 1.0f / dir;
-    const float3 bs = it->cs * (float)CLVR_DDA_BLOCK;
-    it->c = clamp(convert_int3_rtn((org + dir * t0 - it->lo) / bs), (int3)(0), (int3)(it->rc - 1));
-    clvr_dda_begin(&it->blk, it->lo, bs, it->rc, (int3)(0), (int3)(it->rc - 1), org, dir, it->inv, it->step, t0);
-    it->t = t0;
-    it->t1 = t1;
-    it->in_cells = 0;
-    it->done = !(t0 < t1);
-}
-
-inline int clvr_dda_iter_next(const clvr_volume *v, clvr_dda_iter *it, float3 org, float3 dir, float *a, float *b,
-                              float *m)
-{
-    int axis;
-    for (;;) {
-        if (it->in_cells) {
-            const float tx = clvr_dda_exit(&it->cel);
-            *a = it->t;
-            *b = fmin(tx, it->blk_end);
-            *m = v->grid[it->cel.idx];
-            it->t = *b;
-            if (tx >= it->blk_end || !clvr_dda_step(&it->cel, tx, &axis)) {
-                it->in_cells = 0;
-                it->t = it->blk_end;
-                it->done = it->blk_last;
-            }
-            return 1;
-        }
-        if (it->done) return 0;
-        const float tx = clvr_dda_exit(&it->blk);
-        const float bb = fmin(tx, it->t1);
-        const float mb = v->blocks[it->blk.idx];
-        const int3 c = it->c;
-        /* Advance the block walk now; the current block is c. */
-        it->blk_last = tx >= it->t1 || !clvr_dda_step(&it->blk, tx, &axis);
-        if (!it->blk_last) {
-            if (axis == 0) it->c.x += it->step.x;
-            else if (axis == 1) it->c.y += it->step.y;
-            else it->c.z += it->step.z;
-        }
-        if (mb > 0.0f && mb * (bb - it->t) > CLVR_DDA_DESCEND) {
-            const int3 lo_c = c * CLVR_DDA_BLOCK, hi_c = min(lo_c + CLVR_DDA_BLOCK, (int3)(it->r)) - 1;
-            clvr_dda_begin(&it->cel, it->lo, it->cs, it->r, lo_c, hi_c, org, dir, it->inv, it->step, it->t);
-            it->blk_end = bb;
-            it->in_cells = 1;
-            continue;
-        }
-        *a = it->t;
-        *b = bb;
-        *m = mb;
-        it->t = bb;
-        it->done = it->blk_last;
-        return 1;
-    }
-}
-
-/* Runs BODY for every majorant segment [a, b) of majorant m of the frame's
- * method, in order; BODY may `break` to stop the walk. The one place where
- * the methods are told apart. */
-#define CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, BODY)                                                     \
+/* Evaluates STOP, an expression of (a, b, m), for every majorant segment
+ * [a, b) of majorant m of the frame's method, in order, until it is true.
+ * The one place where the methods are told apart. */
+#define CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, STOP)                                                     \
     do {                                                                                                               \
         float a, b, m;                                                                                                 \
         if ((v)->f->method == CLVR_RENDER_DDA) {                                                                       \
-            clvr_dda_iter it_;                                                                                         \
-            clvr_dda_iter_begin((v), &it_, (org), (dir), (t0), (t1));                                                  \
-            while (clvr_dda_iter_next((v), &it_, (org), (dir), &a, &b, &m)) { BODY }                                   \
+            CLVR_DDA_WALK(v, org, dir, t0, t1, a, b, m, STOP);                                                         \
         } else if ((v)->f->method == CLVR_RENDER_BINS) {                                                               \
             clvr_bins_iter it_;                                                                                        \
             clvr_bins_begin((v), &it_, (t0), (t1));                                                                    \
-            while (clvr_bins_next((v), &it_, (org), (dir), &a, &b, &m)) { BODY }                                       \
+            while (clvr_bins_next((v), &it_, (org), (dir), &a, &b, &m))                                                \
+                if (STOP) break;                                                                                       \
         } else {                                                                                                       \
             clvr_global_iter it_;                                                                                      \
             clvr_global_begin((v), &it_, (t0), (t1));                                                                  \
-            while (clvr_global_next(&it_, &a, &b, &m)) { BODY }                                                        \
+            while (clvr_global_next(&it_, &a, &b, &m))                                                                 \
+                if (STOP) break;                                                                                       \
         }                                                                                                              \
     } while (0)
 
@@ -355,9 +327,8 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 {
     clvr_delta d;
     clvr_delta_begin(&d, u);
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
-        if (m > 0.0f && clvr_delta_segment(v, &d, org, dir, a, b, m, rng, samples, nulls)) break;
-    });
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
+                          m > 0.0f && clvr_delta_segment(v, &d, org, dir, a, b, m, rng, samples, nulls));
     *t_hit = d.t_hit;
     *medium = d.medium;
     return d.hit;
@@ -601,9 +572,7 @@ inline float clvr_urm_transmittance(const clvr_volume *v, float3 org, float3 dir
 {
     clvr_urm e;
     clvr_urm_begin(v->f, &e, t0, t1, u, 0.0f, 0, rng);
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
-        if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
-    });
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
     return clvr_urm_end(&e);
 }
 
@@ -658,9 +627,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
         clvr_urm_begin(f, &e, t0, t1, u_primary, u_pick, f->shadows ? 2 : 1, rng);
-        CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, {
-            if (!clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls)) break;
-        });
+        CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
+                              !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
         const float Tend = clvr_urm_end(&e);
         /* Without shadows every point is fully lit: the whole sum, no pick. */
         float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
