@@ -460,7 +460,9 @@ inline float clvr_light_at(const clvr_volume *v, float3 p)
     const clvr_frame *f = v->f;
     const int r = (int)f->light_res;
     const float3 lo = vload3(0, f->grid_lo), hi = vload3(0, f->grid_hi);
-    const float3 q = clamp((p - lo) / (hi - lo) * (float)r - 0.5f, (float3)(0.0f), (float3)((float)(r - 1)));
+    /* fmax: a flat mesh (zero extent on an axis) must not divide by 0. */
+    const float3 q = clamp((p - lo) / fmax(hi - lo, (float3)(1e-30f)) * (float)r - 0.5f, (float3)(0.0f),
+                           (float3)((float)(r - 1)));
     const int3 c0 = min(convert_int3_rtz(q), (int3)(r - 2 > 0 ? r - 2 : 0)), c1 = min(c0 + 1, (int3)(r - 1));
     const float3 w = q - convert_float3(c0);
     __global const float *g = v->light;
