@@ -179,24 +179,29 @@ static void set_table(fixture *fx, const float *table, uint32_t n, float lo, flo
 }
 
 /* ---- 1. homogeneous box against 1 - exp(-sigma d) */
+/* Length of the camera ray through image point (px, py) inside the unit box
+ * [0, 1]^3 (slab test in double), 0 when it misses. */
+static double unit_box_chord(const clvr_camera *cam, float px, float py)
+{
+    float o[3], d[3];
+    clvr_camera_ray(cam, px, py, o, d);
+    double t0 = 0, t1 = 1e30;
+    for (int k = 0; k < 3; ++k) {
+        double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
+        if (a > b) { double t = a; a = b; b = t; }
+        t0 = a > t0 ? a : t0;
+        t1 = b < t1 ? b : t1;
+    }
+    return t1 > t0 ? t1 - t0 : 0;
+}
+
 /* Rays through the 17 x 17 lattice of pixel (x, y) including its border
  * (sub-pixel positions k/16) that meet the unit box [0, 1]^3. */
 static int edge_hits(const clvr_camera *cam, uint32_t x, uint32_t y)
 {
     int hits = 0;
     for (int sy = 0; sy <= 16; ++sy)
-        for (int sx = 0; sx <= 16; ++sx) {
-            float o[3], d[3];
-            clvr_camera_ray(cam, x + sx / 16.0f, y + sy / 16.0f, o, d);
-            double t0 = 0, t1 = 1e30;
-            for (int k = 0; k < 3; ++k) {
-                double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
-                if (a > b) { double t = a; a = b; b = t; }
-                t0 = a > t0 ? a : t0;
-                t1 = b < t1 ? b : t1;
-            }
-            hits += t1 > t0;
-        }
+        for (int sx = 0; sx <= 16; ++sx) hits += unit_box_chord(cam, x + sx / 16.0f, y + sy / 16.0f) > 0;
     return hits;
 }
 
@@ -258,16 +263,7 @@ static void test_homogeneous(clvr_cl *cl)
                 int hits = 0;
                 for (int sy = 0; sy < 16; ++sy)
                     for (int sx = 0; sx < 16; ++sx) {
-                        float o[3], d[3];
-                        clvr_camera_ray(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16, o, d);
-                        double t0 = 0, t1 = 1e30;
-                        for (int k = 0; k < 3; ++k) {
-                            double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
-                            if (a > b) { double t = a; a = b; b = t; }
-                            t0 = a > t0 ? a : t0;
-                            t1 = b < t1 ? b : t1;
-                        }
-                        double len = t1 > t0 ? t1 - t0 : 0;
+                        double len = unit_box_chord(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16);
                         hits += len > 0;
                         acc += 1 - exp(-sigma * len);
                     }
@@ -301,16 +297,7 @@ static void test_homogeneous(clvr_cl *cl)
                     int hits = 0;
                     for (int sy = 0; sy < 16; ++sy)
                         for (int sx = 0; sx < 16; ++sx) {
-                            float o[3], d[3];
-                            clvr_camera_ray(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16, o, d);
-                            double t0 = 0, t1 = 1e30;
-                            for (int k = 0; k < 3; ++k) {
-                                double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
-                                if (a > b) { double t = a; a = b; b = t; }
-                                t0 = a > t0 ? a : t0;
-                                t1 = b < t1 ? b : t1;
-                            }
-                            double len = t1 > t0 ? t1 - t0 : 0;
+                            double len = unit_box_chord(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16);
                             hits += len > 0;
                             acc += 1 - exp(-sigma * len);
                         }
