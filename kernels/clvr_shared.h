@@ -461,7 +461,8 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
     X(clvr_bvh_node, sampling_bvh)          /* bins: tree over sampling clusters */                                     \
     X(clvr_sampling_cluster, sampling)                                                                                 \
     X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
-    X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */
+    X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
+    X(uchar, ebox)                          /* quantized element boxes (locate.h) */
 
 /* Samplers, the values of clvr_frame.sampler. independent: every uniform of
  * a frame from the counter-based generator keyed by (pixel, frame, seed),

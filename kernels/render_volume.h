@@ -29,7 +29,7 @@ inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
 {
     float s;
     if (!clvr_locate_point((clvr_mesh_view){v->tlas, v->blas, v->instances, v->vertices, v->idx16, v->idx32,
-                                            v->f->tlas_root, v->f->leaf_size}, p.x, p.y, p.z, &s))
+                                            v->f->tlas_root, v->f->leaf_size, v->ebox}, p.x, p.y, p.z, &s))
         return (float4)(0.0f);
     return clvr_volume_tf(v, s);
 }

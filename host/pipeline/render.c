@@ -302,7 +302,8 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     } vol = {.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
              .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = maj.cells,
              .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
-             .cluster_majorants = maj.clusters, .light = r->light_buf};
+             .cluster_majorants = maj.clusters, .light = r->light_buf,
+             .ebox = b->two_level.ebox};
 #define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
     if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
         r->frame.method != CLVR_RENDER_MARCH) {
