@@ -12,6 +12,7 @@
 #include "clvr_shared.h"
 #include "elements.h"
 #include "bvh_traverse.h"
+#include "bvh_build.h"
 
 /* The arrays of a clustered mesh and its two-level tree that point location
  * reads, bundled so that the walk takes one argument instead of eight
@@ -310,12 +311,13 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
  * searched) lost about 10% on coherent queries and gained nothing clear on
  * random ones, so leaves are searched in traversal order. hints: see
  * CLVR_LOCATE_INCOHERENT; results do not depend on them. */
-CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_instance *inst, float px, float py,
-                                        float pz, clvr_u32 hints, float *scalar, clvr_u32 *element_id)
+CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 root,
+                                        float px, float py, float pz, clvr_u32 hints, float *scalar,
+                                        clvr_u32 *element_id, clvr_u32 *leaf_found)
 {
     CLVR_GLOBAL const clvr_bvh_node *blas = m->blas;
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
-    clvr_u32 sp = 0, ref = inst->bvh_root;
+    clvr_u32 sp = 0, ref = root;
     const int prefetch = (hints & CLVR_LOCATE_INCOHERENT) != 0u;
     const clvr_u32 level0 = prefetch ? clvr_locate_level0(inst) : 0u;
     for (;;) {
@@ -327,8 +329,10 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
             if (!((mask >> c) & 1u)) continue;
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
-                if (clvr_locate_in_leaf(m, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, scalar, element_id))
+                if (clvr_locate_in_leaf(m, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, scalar, element_id)) {
+                    *leaf_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
+                }
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
             }
@@ -342,9 +346,10 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  * (px, py, pz) and writes its interpolated scalar and global sorted element
  * id; 0 (and element id CLVR_BVH_NOT_FOUND) otherwise. hints:
  * CLVR_LOCATE_COHERENT or CLVR_LOCATE_INCOHERENT (a speed hint only: the
- * result is the same bit for bit). */
-CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints, float *scalar,
-                            clvr_u32 *element_id)
+ * result is the same bit for bit). inst_found, leaf_found: the instance
+ * index and leaf cluster of the element found. */
+CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints, float *scalar,
+                               clvr_u32 *element_id, clvr_u32 *inst_found, clvr_u32 *leaf_found)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
@@ -357,8 +362,11 @@ CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float p
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
                 const clvr_instance inst = m->instances[ch & CLVR_BVH_MAX_PRIMS];
-                if (clvr_locate_in_instance(m, &inst, px, py, pz, hints, scalar, element_id))
+                if (clvr_locate_in_instance(m, &inst, inst.bvh_root, px, py, pz, hints, scalar, element_id,
+                                            leaf_found)) {
+                    *inst_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
+                }
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
             }
@@ -366,6 +374,60 @@ CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float p
         if (sp == 0) return 0;
         ref = stack[--sp];
     }
+}
+
+CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints, float *scalar,
+                            clvr_u32 *element_id)
+{
+    clvr_u32 inst, leaf;
+    return clvr_locate_ex(m, px, py, pz, hints, scalar, element_id, &inst, &leaf);
+}
+
+/* A ray's next sample is usually near its last one (urm's quadrature
+ * points are a few elements apart), so a ray keeps where its last lookup
+ * ended: the instance and the node two levels above that leaf (16 leaf
+ * clusters). The next lookup searches that subtree first and walks the
+ * whole tree only when it finds nothing there. inst CLVR_BVH_NOT_FOUND: no
+ * hint yet. The element found may differ from clvr_locate's only where
+ * two elements share the point (a shared face), with the same value. */
+typedef struct clvr_locate_hint {
+    clvr_u32 inst, node;
+} clvr_locate_hint;
+
+CLVR_INLINE clvr_locate_hint clvr_locate_hint_none(void)
+{
+    clvr_locate_hint h;
+    h.inst = CLVR_BVH_NOT_FOUND;
+    h.node = 0u;
+    return h;
+}
+
+/* The node two levels above leaf cluster `leaf` of inst (its root when the
+ * tree is lower). Levels are stored root first, so level 1 sits just before
+ * level 0. */
+CLVR_INLINE clvr_u32 clvr_locate_hint_node(const clvr_instance *inst, clvr_u32 leaf)
+{
+    const clvr_u32 level0 = clvr_locate_level0(inst);
+    const clvr_u32 s1 = clvr_bvh_level_size(inst->num_leaves, 1u);
+    return s1 == 0u ? level0 : level0 - s1 + (leaf - inst->first_leaf) / 16u;
+}
+
+CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, float pz, clvr_locate_hint *h,
+                                   float *scalar, clvr_u32 *element_id)
+{
+    clvr_u32 leaf, inst_id;
+    if (h->inst != CLVR_BVH_NOT_FOUND) {
+        const clvr_instance inst = m->instances[h->inst];
+        if (clvr_locate_in_instance(m, &inst, h->node, px, py, pz, CLVR_LOCATE_COHERENT, scalar, element_id, &leaf)) {
+            h->node = clvr_locate_hint_node(&inst, leaf);
+            return 1;
+        }
+    }
+    if (!clvr_locate_ex(m, px, py, pz, CLVR_LOCATE_COHERENT, scalar, element_id, &inst_id, &leaf)) return 0;
+    const clvr_instance inst = m->instances[inst_id];
+    h->inst = inst_id;
+    h->node = clvr_locate_hint_node(&inst, leaf);
+    return 1;
 }
 
 /* The renderer's entry point: clvr_locate without the element id. The
@@ -377,6 +439,14 @@ CLVR_INLINE int clvr_locate_point(clvr_mesh_view m, float px, float py, float pz
 {
     clvr_u32 e;
     return clvr_locate(&m, px, py, pz, CLVR_LOCATE_COHERENT, scalar, &e);
+}
+
+/* clvr_locate_point with a ray's hint (clvr_locate_hinted). */
+CLVR_INLINE int clvr_locate_point_hinted(clvr_mesh_view m, float px, float py, float pz, clvr_locate_hint *h,
+                                         float *scalar)
+{
+    clvr_u32 e;
+    return clvr_locate_hinted(&m, px, py, pz, h, scalar, &e);
 }
 
 #endif /* CLVR_LOCATE_H */

@@ -34,6 +34,17 @@ inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
     return clvr_volume_tf(v, s);
 }
 
+/* clvr_volume_at with the ray's point-location hint (locate.h). */
+inline float4 clvr_volume_at_hinted(const clvr_volume *v, float3 p, clvr_locate_hint *h)
+{
+    float s;
+    if (!clvr_locate_point_hinted((clvr_mesh_view){v->tlas, v->blas, v->instances, v->vertices, v->idx16, v->idx32,
+                                                   v->f->tlas_root, v->f->leaf_size, v->ebox},
+                                  p.x, p.y, p.z, h, &s))
+        return (float4)(0.0f);
+    return clvr_volume_tf(v, s);
+}
+
 /* Ray vs axis-aligned box, slab test; returns 0 when missed. */
 inline int clvr_ray_box(float3 org, float3 dir, float3 lo, float3 hi, float *t0, float *t1)
 {
@@ -282,12 +293,14 @@ typedef struct clvr_delta {
     float t_hit;
     float4 medium;
     int hit;
+    clvr_locate_hint hint;
 } clvr_delta;
 
 inline void clvr_delta_begin(clvr_delta *d, float u)
 {
     d->tau = -log(1.0f - u);
     d->hit = 0;
+    d->hint = clvr_locate_hint_none();
 }
 
 /* Spends the flight inside [a, b) of majorant m; 1 when a real collision
@@ -308,7 +321,7 @@ inline int clvr_delta_segment(const clvr_volume *v, clvr_delta *d, float3 org, f
             return 0;
         }
         t += fly;
-        float4 med = clvr_volume_at(v, org + dir * t);
+        float4 med = clvr_volume_at_hinted(v, org + dir * t, &d->hint);
         ++*samples;
         if (clvr_rng_next(rng) * m < med.w) {
             d->t_hit = t;
@@ -396,6 +409,7 @@ typedef struct clvr_urm {
     float pick_t;      /* reservoir: where */
     float pick_g;      /* reservoir: G there */
     float pick_u;      /* reservoir: the one uniform that decides every pick */
+    clvr_locate_hint hint;
 } clvr_urm;
 
 inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float t0, float t1, float u, float u_pick, int emit,
@@ -403,6 +417,7 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float t0, float t1,
 {
     e->pick_u = u_pick;
     e->pick_g = 0.0f;
+    e->hint = clvr_locate_hint_none();
     e->lit = (float3)(0.0f);
     /* A shadow ray needs transmittance only, which the control makes nearly
      * exact between points: half the camera ray's points measured better
@@ -502,7 +517,7 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
         e->to_quad -= d;
         e->tau_pt = fmax(e->tau_pt - d * mu, 0.0f);
         e->s_in += d;
-        const float4 med = clvr_volume_at(v, org + dir * t);
+        const float4 med = clvr_volume_at_hinted(v, org + dir * t, &e->hint);
         ++*samples;
         const float sr = med.w * inv_rho;
         if (!quad) { /* residual point of the current interval */

@@ -397,6 +397,35 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         }
         TU_CHECK(rejected > 0);
         free(zero);
+
+        /* A ray's hint (clvr_locate_hinted): walks of 24 points from one
+         * query point to the next, as a renderer's samples go; same found
+         * flag as the full walk, and an element that contains the point
+         * with its value (judge(): where elements overlap, as curved faces
+         * of mixed meshes do, either one). */
+        mve.ebox = ebox;
+        int hint_bad = 0, walked = 0;
+        for (uint32_t i = 0; i + 1 < nq; i += 2) {
+            clvr_locate_hint h = clvr_locate_hint_none();
+            for (int step = 0; step <= 24; ++step) {
+                const float w = (float)step / 24.0f;
+                float p[3];
+                for (int a = 0; a < 3; ++a) p[a] = q.p[i][a] + w * (q.p[i + 1][a] - q.p[i][a]);
+                float s1 = 0.0f, s2 = 0.0f;
+                uint32_t e1 = 0, e2 = 0;
+                const int ok1 = clvr_locate(&mve, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s1, &e1);
+                const int ok2 = clvr_locate_hinted(&mve, p[0], p[1], p[2], &h, &s2, &e2);
+                walked += ok2;
+                if (ok1 != ok2 || (ok1 && !judge(&c, p, e2, s2, e1, s1))) {
+                    if (hint_bad < 5)
+                        fprintf(stderr, "%s N=%u: hinted (%.9g %.9g %.9g): %d %g, full walk %d %g\n", name, leaf_size,
+                                p[0], p[1], p[2], ok2, s2, ok1, s1);
+                    ++hint_bad;
+                }
+            }
+        }
+        TU_CHECK_EQ_U64(hint_bad, 0);
+        TU_CHECK(walked > 0 || nq < 2);
     }
 
     /* device build and device point location */
