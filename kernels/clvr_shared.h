@@ -433,7 +433,7 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
  * at least this many quadrature points per ray, and at most this much
  * majorant optical depth between two of them. */
-#define CLVR_URM_DEFAULT_STEPS 16u
+#define CLVR_URM_DEFAULT_STEPS 24u
 #define CLVR_URM_DEFAULT_KAPPA 0.25f
 /* urm with shadows: cells per axis of the light grid (a control variate for
  * the shadow rays, kernels/render_volume.h). */

@@ -53,7 +53,7 @@ void clvr_cli_print_help(FILE *out)
         "                         marching) weighs jittered quadrature points by ratio-tracked\n"
         "                         transmittance and converges fastest; delta is plain delta\n"
         "                         tracking (0/1 collision and shadow); same expected image\n"
-        "  --urm-steps N          urm: at least N quadrature points per ray (default 16)\n"
+        "  --urm-steps N          urm: at least N quadrature points per ray (default 24)\n"
         "  --shadows on|off       volumetric shadow ray toward the light (default on)\n"
         "  --sampler ld|independent  random numbers across frames: ld (default) draws the sub-pixel\n"
         "                         position and first free flights from a per-pixel shifted\n"
