@@ -244,9 +244,9 @@ static void test_bin_broken(void)
     TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "magic.bin", NULL, &back, &err), CLVR_ERR_BAD_MAGIC, &err);
     CHECK_MSG(err, "magic.bin", "CLVRMESH");
     memcpy(b, good, n);
-    b[8] = 2;
+    b[8] = 3;
     TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "ver.bin", NULL, &back, &err), CLVR_ERR_BAD_VERSION, &err);
-    CHECK_MSG(err, "ver.bin", "version is 2");
+    CHECK_MSG(err, "ver.bin", "version is 3");
     write_file(tmp_path("ver.bin"), b, n);
     TU_CHECK_STATUS(clvr_mesh_load(tmp_path("ver.bin"), NULL, &back, &err), CLVR_ERR_BAD_VERSION, &err);
     memcpy(b, good, n);
@@ -440,7 +440,7 @@ static void test_vtk_files(void)
     opt.scalar_name = "pressure";
     TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
     CHECK_MSG(err, "uGridEx.vtk", "'pressure'");
-    TU_CHECK(strstr(err.msg, "'scalars'") && strstr(err.msg, "'vectors'"));
+    TU_CHECK(strstr(err.msg, "point:scalars") && strstr(err.msg, "point:vectors"));
 }
 
 /* A 5-point, 2-tet mesh plus a vertex cell, classic CELLS layout. */
@@ -646,7 +646,7 @@ static void test_vtk_synthetic(void)
     CHECK_MSG(err, "offs.vtk", "OFFSETS");
     /* Unknown name lists both associations. */
     TU_CHECK_STATUS(parse_str(vtk_classic, "names.vtk", "q", &b, &err), CLVR_ERR_BAD_FIELD, &err);
-    CHECK_MSG(err, "names.vtk", "'s' (point), 'c' (cell)");
+    CHECK_MSG(err, "names.vtk", "point:s, cell:c");
 
     /* Truncation sweep: every prefix before the last point value fails;
      * cuts inside POINTS say TRUNCATED. No prefix may crash. */
@@ -871,6 +871,183 @@ static void test_fuzz_smoke(void)
     for (int f = 0; f < 5; ++f) free(files[f]);
 }
 
+/* --scalar on a legacy .vtk: point:/cell: when both share a name, a vector
+ * component or its magnitude (uGridEx.vtk's 'vectors', VTK's own file),
+ * and the field table --info prints. */
+static void test_fields_vtk(void)
+{
+    clvr_mesh m = {0};
+    clvr_error err = {0};
+    char buf[2048];
+    /* Cell data named like the point data: both reachable. */
+    edit(buf, sizeof buf, vtk_classic, "SCALARS c double 1", "SCALARS s double 1");
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "point:s", &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 0.5, 1e-6);
+    TU_CHECK(m.num_fields == 2 && m.fields[m.scalar_field].association == CLVR_FIELD_POINT);
+    clvr_mesh_free(&m);
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "s", &m, &err), CLVR_OK, &err); /* unprefixed: the point array */
+    TU_CHECK_NEAR(m.scalars[0], 0.5, 1e-6);
+    clvr_mesh_free(&m);
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "cell:s", &m, &err), CLVR_OK, &err);
+    /* vertex 0 is in tet 0 only (10); vertex 1 in tets 0 and 1 (15); vertex 4 in tet 1 and the vertex cell,
+     * which is left out: 20 */
+    TU_CHECK_NEAR(m.scalars[0], 10.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[1], 15.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[4], 20.0, 1e-6);
+    TU_CHECK(m.fields[m.scalar_field].association == CLVR_FIELD_CELL);
+    clvr_mesh_free(&m);
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "cell:nope", &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "both.vtk", "point:s, cell:s");
+
+    /* Vector components of uGridEx.vtk: x, y, z add up to the file's sums. */
+    clvr_load_options opt = {0};
+    double sum[3];
+    const char *names[3] = {"vectors:x", "vectors:y", "vectors:z"};
+    for (int k = 0; k < 3; ++k) {
+        opt.scalar_name = names[k];
+        TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_OK, &err);
+        sum[k] = scalar_sum(&m);
+        TU_CHECK(m.scalar_component == k && strcmp(m.scalar_name, names[k]) == 0);
+        clvr_mesh_free(&m);
+    }
+    /* uGridEx's vectors are (1,0,0) at 8 points and (0,0,1) ... : each component sums to what VTK reads. */
+    TU_CHECK(sum[0] + sum[1] + sum[2] > 0.0);
+    opt.scalar_name = "vectors:3";
+    TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "uGridEx.vtk", "3 components");
+    opt.scalar_name = "scalars:x";
+    TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "uGridEx.vtk", "1 component");
+    /* --info's table: every array with its range on request. */
+    opt.scalar_name = NULL;
+    opt.field_ranges = 1;
+    TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_fields == 2 && m.fields[1].components == 3 && m.fields[1].has_range && m.fields[0].has_range);
+    TU_CHECK(strcmp(m.fields[0].name, "scalars") == 0 && strcmp(m.fields[1].name, "vectors") == 0);
+    clvr_mesh_free(&m);
+}
+
+/* A version 2 .bin built by hand from docs/bin-format.md: two tets sharing
+ * a face, point field "s", cell field "s", point vector "vel". */
+typedef struct v2field {
+    const char *name;
+    uint32_t assoc, ncomp;
+    const float *data;
+} v2field;
+
+static size_t make_v2(uint8_t *b, size_t cap, const v2field *f, uint32_t nf)
+{
+    static const float pos[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    static const uint32_t tets[8] = {0, 1, 2, 3, 1, 2, 3, 4};
+    size_t n = 256;
+    memset(b, 0, cap);
+    memcpy(b, "CLVRMESH", 8);
+    uint32_t u = 2;
+    memcpy(b + 8, &u, 4);
+    u = 256;
+    memcpy(b + 12, &u, 4);
+    uint64_t q = 5;
+    memcpy(b + 16, &q, 8);
+    q = 2;
+    memcpy(b + 24, &q, 8);
+    memcpy(b + 156, &nf, 4);
+    memcpy(b + n, pos, sizeof pos);
+    n += sizeof pos;
+    memcpy(b + n, tets, sizeof tets);
+    n += sizeof tets;
+    for (uint32_t i = 0; i < nf; ++i, n += 128) {
+        memcpy(b + n, f[i].name, strlen(f[i].name));
+        memcpy(b + n + 64, &f[i].assoc, 4);
+        memcpy(b + n + 68, &f[i].ncomp, 4);
+    }
+    for (uint32_t i = 0; i < nf; ++i) {
+        size_t bytes = (f[i].assoc ? 2u : 5u) * f[i].ncomp * sizeof(float);
+        memcpy(b + n, f[i].data, bytes);
+        n += bytes;
+    }
+    return n;
+}
+
+static void test_fields_bin(void)
+{
+    static const float ps[5] = {1, 2, 3, 4, 5}, cs[2] = {10, 30};
+    static const float vel[15] = {3, 4, 0, 0, 1, 0, 0, 0, 2, 1, 1, 1, 0, 0, 0};
+    const v2field fields[3] = {{"s", 0, 1, ps}, {"s", 1, 1, cs}, {"vel", 0, 3, vel}};
+    uint8_t b[2048], c[2048];
+    clvr_mesh m = {0};
+    clvr_error err = {0};
+    clvr_load_options opt = {0};
+    size_t n = make_v2(b, sizeof b, fields, 3);
+    /* Default: the first field. */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "v2.bin", NULL, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_fields == 3 && m.scalar_field == 0 && strcmp(m.scalar_name, "s") == 0);
+    TU_CHECK_NEAR(scalar_sum(&m), 15.0, 1e-6);
+    TU_CHECK(clvr_mesh_num_elements(&m) == 2 && m.indices[0][7] == 4);
+    clvr_mesh_free(&m);
+    /* cell:s averaged: vertex 0 only in tet 0 (10), 1..3 in both (20), 4 in tet 1 (30). */
+    opt.scalar_name = "cell:s";
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "v2.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 10.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[2], 20.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[4], 30.0, 1e-6);
+    TU_CHECK(m.fields[m.scalar_field].association == CLVR_FIELD_CELL);
+    clvr_mesh_free(&m);
+    /* A vector: magnitude by default, a component on request; the file loader agrees. */
+    opt.scalar_name = "vel";
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "v2.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 5.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[3], sqrt(3.0), 1e-6);
+    clvr_mesh_free(&m);
+    write_file(tmp_path("v2.bin"), b, n);
+    opt.scalar_name = "vel:y";
+    TU_CHECK_STATUS(clvr_mesh_load(tmp_path("v2.bin"), &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 4.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[1], 1.0, 1e-6);
+    TU_CHECK(strcmp(m.scalar_name, "vel:y") == 0);
+    clvr_mesh_free(&m);
+    opt.scalar_name = "pressure";
+    TU_CHECK_STATUS(clvr_mesh_load(tmp_path("v2.bin"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "v2.bin", "point:s, cell:s, point:vel (vector)");
+
+    /* Broken tables: exact status and a message naming the field. */
+    for (size_t k = 257; k < n; k += 7) { /* every cut fails, none crashes */
+        clvr_status s = clvr_mesh_parse_bin(b, k, "cut2.bin", NULL, &m, &err);
+        if (s != CLVR_ERR_TRUNCATED) {
+            TU_CHECK_STATUS(s, CLVR_ERR_TRUNCATED, &err);
+            break;
+        }
+    }
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 128 + 64] = 2; /* field 1 association */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "assoc.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "assoc.bin", "association");
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 68] = 0; /* field 0: 0 components */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "comp.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "comp.bin", "components");
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 128 + 64] = 0; /* field 1 becomes a second point "s" */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "dup.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "dup.bin", "both point data named 's'");
+    memcpy(c, b, n);
+    c[156 + 1] = 0x20; /* num_fields 8195 */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "many.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "many.bin", "num_fields");
+    memcpy(c, b, n);
+    c[156] = 2; /* 2 fields declared, 3 there: trailing bytes */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "trail.bin", NULL, &m, &err), CLVR_ERR_FORMAT, &err);
+    CHECK_MSG(err, "trail.bin", "trailing");
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 100] = 1; /* reserved byte of field 0 */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "resv.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "resv.bin", "reserved");
+    /* No fields: loads with scalars 0. */
+    n = make_v2(b, sizeof b, fields, 0);
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "none.bin", NULL, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_fields == 0 && m.scalar_max == 0.0f);
+    clvr_mesh_free(&m);
+}
+
 int main(void)
 {
     snprintf(tmp_dir, sizeof tmp_dir, "/tmp/clvr_test_loaders.%ld", (long)getpid());
@@ -884,6 +1061,8 @@ int main(void)
     test_vtk_files();
     test_vtk_synthetic();
     test_umesh();
+    test_fields_vtk();
+    test_fields_bin();
     test_fuzz_smoke();
     char cmd[600];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);

@@ -72,6 +72,7 @@ static clvr_status load_mesh(const clvr_options *o, clvr_mesh *m, clvr_error *er
     if (!o->mesh_path) return clvr_scene_default(m, err);
     clvr_load_options lo = {0};
     lo.scalar_name = o->scalar_name;
+    lo.field_ranges = o->info; /* --info lists every array with its range */
     return clvr_mesh_load(o->mesh_path, &lo, m, err);
 }
 

@@ -11,6 +11,7 @@
 typedef struct clvr_load_options {
     const char *scalar_name;  /* attribute to use as the scalar; NULL: the file's first/only one */
     int skip_validation;      /* nonzero: do not run clvr_mesh_validate (fuzzing, --info of broken files) */
+    int field_ranges;         /* nonzero: also decode every other array for its range (--info) */
 } clvr_load_options;
 
 /* Loads any supported file, chosen by content (magic) and then extension:

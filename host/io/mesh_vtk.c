@@ -695,11 +695,59 @@ static int vtk_to_clvr_type(int64_t vt)
     }
 }
 
+/* The candidates as a field table (for --scalar and --info). */
+static clvr_status cand_fields(vtk_in *in, const vtk_doc *doc, clvr_field_info **out)
+{
+    const cand_list *cl = &doc->cands;
+    *out = calloc(cl->n ? cl->n : 1, sizeof **out);
+    if (!*out) return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory listing arrays", in->name);
+    for (size_t i = 0; i < cl->n; ++i) {
+        clvr_mesh tmp;
+        clvr_mesh_set_scalar_name(&tmp, cl->v[i].name, strlen(cl->v[i].name));
+        memcpy((*out)[i].name, tmp.scalar_name, CLVR_SCALAR_NAME_MAX);
+        (*out)[i].association = cl->v[i].cell ? CLVR_FIELD_CELL : CLVR_FIELD_POINT;
+        (*out)[i].components = cl->v[i].ncomp > CLVR_FIELD_COMPONENTS_MAX ? CLVR_FIELD_COMPONENTS_MAX : cl->v[i].ncomp;
+    }
+    return CLVR_OK;
+}
+
+/* Range of one candidate's values, or of its tuples' magnitudes. */
+static clvr_status cand_range(vtk_in *in, const cand *c, clvr_field_info *f)
+{
+    vit it;
+    vit_init(&it, in, &c->a, c->name);
+    double lo = INFINITY, hi = -INFINITY;
+    uint64_t tuples = c->a.count / c->ncomp;
+    for (uint64_t i = 0; i < tuples; ++i) {
+        double s2 = 0.0, x = 0.0;
+        for (uint32_t k = 0; k < c->ncomp; ++k) {
+            clvr_status s = vit_f64(&it, &x);
+            if (s != CLVR_OK) return s;
+            s2 += x * x;
+        }
+        double v = c->ncomp > 1 ? sqrt(s2) : x;
+        if (v < lo) lo = v;
+        if (v > hi) hi = v;
+    }
+    f->has_range = tuples > 0;
+    f->min = tuples ? (float)lo : 0.0f;
+    f->max = tuples ? (float)hi : 0.0f;
+    return CLVR_OK;
+}
+
 /* Chooses the scalar array, or explains which ones exist. */
-static clvr_status choose_scalar(vtk_in *in, const vtk_doc *doc, const clvr_load_options *opt, const cand **out)
+static clvr_status choose_scalar(vtk_in *in, const vtk_doc *doc, const clvr_load_options *opt, const cand **out,
+                                 const clvr_field_info *fields, int *comp)
 {
     const cand_list *cl = &doc->cands;
     *out = NULL;
+    *comp = CLVR_FIELD_MAGNITUDE;
+    if (opt && opt->scalar_name && cl->n) {
+        uint32_t idx;
+        clvr_status s = clvr_field_select(fields, (uint32_t)cl->n, opt->scalar_name, in->name, &idx, comp, in->err);
+        if (s == CLVR_OK) *out = &cl->v[idx];
+        return s;
+    }
     if (opt && opt->scalar_name) {
         for (int cell = 0; cell < 2 && !*out; ++cell)
             for (size_t i = 0; i < cl->n && !*out; ++i)
@@ -732,7 +780,7 @@ static clvr_status choose_scalar(vtk_in *in, const vtk_doc *doc, const clvr_load
 /* Pass 2: cells. Fills the index lists (counts already allocated) and,
  * for a cell-data scalar, accumulates it onto the cells' points. */
 static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *types, clvr_mesh *m, const cand *cell_sc,
-                              double *acc, uint32_t *cnt)
+                              int comp, double *acc, uint32_t *cnt)
 {
     vit stream, offs, conn, sc;
     uint64_t used = 0, fill[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, 0};
@@ -785,9 +833,9 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                 double x;
                 if ((s = vit_f64(&sc, &x)) != CLVR_OK) return s;
                 sum2 += x * x;
-                cv = x;
+                if (comp < 0 || (uint32_t)comp == k) cv = x;
             }
-            if (cell_sc->ncomp > 1) cv = sqrt(sum2);
+            if (cell_sc->ncomp > 1 && comp < 0) cv = sqrt(sum2);
         }
         if (t < 0) {
             /* Skipped cell: step over its ids (binary: in place). */
@@ -844,6 +892,8 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
     double *acc = NULL;
     uint32_t *cnt = NULL;
     const cand *sc = NULL;
+    clvr_field_info *fields = NULL;
+    int comp = CLVR_FIELD_MAGNITUDE;
     clvr_status s;
     memset(&doc, 0, sizeof doc);
     memset(out, 0, sizeof *out);
@@ -866,7 +916,8 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
                            (unsigned long long)doc.num_points, UINT32_MAX);
         goto done;
     }
-    s = choose_scalar(&in, &doc, opt, &sc);
+    s = cand_fields(&in, &doc, &fields);
+    if (s == CLVR_OK) s = choose_scalar(&in, &doc, opt, &sc, fields, &comp);
     if (s != CLVR_OK) goto done;
 
     /* Cell types: count the kept ones to size the index lists. */
@@ -927,7 +978,7 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
             goto done;
         }
     }
-    s = fill_cells(&in, &doc, types, out, sc->cell ? sc : NULL, acc, cnt);
+    s = fill_cells(&in, &doc, types, out, sc->cell ? sc : NULL, comp, acc, cnt);
     if (s != CLVR_OK) goto done;
     if (sc->cell) {
         for (uint64_t i = 0; i < doc.num_points; ++i) out->scalars[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
@@ -935,21 +986,47 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
         vit it;
         vit_init(&it, &in, &sc->a, sc->name);
         for (uint64_t i = 0; i < doc.num_points; ++i) {
-            double sum2 = 0.0, x = 0.0;
+            double sum2 = 0.0, x = 0.0, pick = 0.0;
             for (uint32_t k = 0; k < sc->ncomp; ++k) {
                 if ((s = vit_f64(&it, &x)) != CLVR_OK) goto done;
                 sum2 += x * x;
+                if (comp < 0 || (uint32_t)comp == k) pick = x;
             }
-            out->scalars[i] = (float)(sc->ncomp > 1 ? sqrt(sum2) : x);
+            out->scalars[i] = (float)(sc->ncomp > 1 && comp < 0 ? sqrt(sum2) : pick);
         }
     }
     clvr_mesh_update_ranges(out);
+    /* The field table for --info: ranges of every array on request, the
+     * chosen point array's from the scalars. */
+    for (size_t i = 0; i < doc.cands.n && s == CLVR_OK && opt && opt->field_ranges; ++i)
+        s = cand_range(&in, &doc.cands.v[i], &fields[i]);
+    if (s != CLVR_OK) goto done;
+    {
+        uint32_t fi = (uint32_t)(sc - doc.cands.v);
+        if (!sc->cell && (comp < 0 || sc->ncomp == 1)) {
+            fields[fi].has_range = 1;
+            fields[fi].min = out->scalar_min;
+            fields[fi].max = out->scalar_max;
+        }
+        if (comp >= 0 && sc->ncomp > 1) {
+            char label[CLVR_SCALAR_NAME_MAX + 16];
+            if (comp < 3) snprintf(label, sizeof label, "%s:%c", fields[fi].name, "xyz"[comp]);
+            else snprintf(label, sizeof label, "%s:%d", fields[fi].name, comp);
+            clvr_mesh_set_scalar_name(out, label, strlen(label));
+        }
+        out->fields = fields;
+        out->num_fields = (uint32_t)doc.cands.n;
+        out->scalar_field = fi;
+        out->scalar_component = comp;
+        fields = NULL;
+    }
     if (!(opt && opt->skip_validation)) s = clvr_mesh_validate(out, name, err);
 done:
     if (s != CLVR_OK) clvr_mesh_free(out);
     free(types);
     free(acc);
     free(cnt);
+    free(fields);
     free(doc.cands.v);
     return s;
 }
