@@ -46,7 +46,10 @@ class BinMesh:
 
 
 def read_bin(path):
-    """Reads and validates a .bin per docs/bin-format.md. Returns (mesh, problems)."""
+    """Reads and validates a .bin per docs/bin-format.md (version 1 or 2). Returns
+    (mesh, problems). For version 2, m.fields is a list of (name, association,
+    components, min, max, values[count, components]) and m.scalars the first field per
+    vertex (cell data averaged over the elements using each vertex)."""
     problems = []
     with open(path, "rb") as f:
         data = f.read()
@@ -56,7 +59,8 @@ def read_bin(path):
     if data[0:8] != b"CLVRMESH":
         problems.append(f"magic {data[0:8]!r}")
     version, header_size = struct.unpack_from("<II", data, 8)
-    if version != 1:
+    m.version = version
+    if version not in (1, 2):
         problems.append(f"version {version}")
     if header_size != 256:
         problems.append(f"header_size {header_size}")
@@ -70,21 +74,51 @@ def read_bin(path):
     flags = struct.unpack_from("<I", data, 152)[0]
     if flags != 0:
         problems.append(f"flags {flags}")
-    if any(data[156:256]):
+    nfields = struct.unpack_from("<I", data, 156)[0] if version == 2 else 0
+    if any(data[160 if version == 2 else 156:256]):
         problems.append("reserved bytes not zero")
-    want = 256 + 4 * (4 * m.V + 4 * m.T + 5 * m.P + 6 * m.W + 8 * m.H)
-    if len(data) != want:
-        problems.append(f"file size {len(data)}, header says {want}")
-        return m, problems
+    E = m.T + m.P + m.W + m.H
     off = 256
-    m.pos = np.frombuffer(data, "<f4", 3 * m.V, off).reshape(-1, 3)
+    m.pos = np.frombuffer(data, "<f4", 3 * m.V, off).reshape(-1, 3) \
+        if len(data) >= off + 12 * m.V else np.zeros((0, 3), np.float32)
     off += 12 * m.V
-    m.scalars = np.frombuffer(data, "<f4", m.V, off)
-    off += 4 * m.V
+    if version == 1:
+        want = 256 + 4 * (4 * m.V + 4 * m.T + 5 * m.P + 6 * m.W + 8 * m.H)
+        if len(data) != want:
+            problems.append(f"file size {len(data)}, header says {want}")
+            return m, problems
+        m.scalars = np.frombuffer(data, "<f4", m.V, off)
+        off += 4 * m.V
     m.cells = []
     for n, k in ((m.T, 4), (m.P, 5), (m.W, 6), (m.H, 8)):
+        if len(data) < off + 4 * n * k:
+            return m, problems + ["file shorter than its index lists"]
         m.cells.append(np.frombuffer(data, "<u4", n * k, off).reshape(-1, k).astype(np.int64))
         off += 4 * n * k
+    m.fields = []
+    if version == 2:
+        table = off
+        off += 128 * nfields
+        for i in range(nfields):
+            raw, assoc, nc, lo, hi = struct.unpack_from("<64sIIff", data, table + 128 * i)
+            if any(data[table + 128 * i + 80:table + 128 * (i + 1)]):
+                problems.append(f"field {i}: reserved bytes not zero")
+            if assoc not in (0, 1) or not 1 <= nc <= 16:
+                problems.append(f"field {i}: association {assoc}, components {nc}")
+                return m, problems
+            count = m.V if assoc == 0 else E
+            vals = np.frombuffer(data, "<f4", count * nc, off).reshape(count, nc) \
+                if len(data) >= off + 4 * count * nc else None
+            if vals is None:
+                return m, problems + [f"field {i} cut short"]
+            off += 4 * count * nc
+            m.fields.append((raw.rstrip(b"\0").decode("utf-8", "replace"), assoc, nc, lo, hi, vals))
+        if len(data) != off:
+            problems.append(f"file size {len(data)}, header and table say {off}")
+        if m.fields and m.fields[0][0] != m.name:
+            problems.append(f"header scalar_name {m.name!r} is not the first field "
+                            f"{m.fields[0][0]!r}")
+        m.scalars = field_per_vertex(m, 0) if m.fields else np.zeros(m.V, np.float32)
     for lst in m.cells:
         if lst.size and lst.max() >= m.V:
             problems.append(f"index {lst.max()} >= V {m.V}")
@@ -94,10 +128,29 @@ def read_bin(path):
         if tuple(m.pos.min(axis=0)) != m.lo or tuple(m.pos.max(axis=0)) != m.hi:
             problems.append(f"bounds {m.lo}..{m.hi} differ from the vertices' "
                             f"{tuple(m.pos.min(axis=0))}..{tuple(m.pos.max(axis=0))}")
-        if (float(m.scalars.min()), float(m.scalars.max())) != (m.smin, m.smax):
+        if version == 1 and (float(m.scalars.min()), float(m.scalars.max())) != (m.smin, m.smax):
             problems.append(f"scalar range {m.smin}..{m.smax} differs from the values' "
                             f"{m.scalars.min()}..{m.scalars.max()}")
     return m, problems
+
+
+def field_per_vertex(m, i):
+    """Field i of a version 2 mesh as one float32 per vertex: magnitude of vectors, cell
+    data averaged over the elements that use each vertex (docs/bin-format.md)."""
+    _, assoc, nc, _, _, vals = m.fields[i]
+    v = vals[:, 0].astype(np.float64) if nc == 1 else np.sqrt((vals.astype(np.float64) ** 2).sum(1))
+    if assoc == 0:
+        return v.astype(np.float32)
+    acc = np.zeros(m.V)
+    cnt = np.zeros(m.V)
+    e = 0
+    for lst in m.cells:
+        ev = v[e:e + lst.shape[0]]
+        for k in range(lst.shape[1]):
+            np.add.at(acc, lst[:, k], ev)
+            np.add.at(cnt, lst[:, k], 1)
+        e += lst.shape[0]
+    return np.where(cnt > 0, acc / np.maximum(cnt, 1), 0).astype(np.float32)
 
 
 def tet_volumes(pos, tets):
@@ -604,6 +657,104 @@ def test_output_name_and_avs(tmp):
           "extensions", missing, [])
 
 
+def clvr_info(path, *extra):
+    r = subprocess.run([CLVR, "--info", path, *extra], capture_output=True, text=True, timeout=120)
+    return r
+
+
+def info_scalar_range(stdout):
+    """(name, lo, hi) from clvr --info's "scalar NAME, range [lo, hi]" line."""
+    for line in stdout.splitlines():
+        if line.startswith("scalar "):
+            body = line[len("scalar"):].strip()
+            name, rest = body.rsplit(", range [", 1)
+            lo, hi = rest.split("]")[0].split(", ")
+            return name, float(lo), float(hi)
+    return None, None, None
+
+
+def test_fields(tmp):
+    """Every point and cell array survives conversion with VTK's values (version 2
+    field table), clvr --info lists each one, and --scalar reaches any of them: a vector
+    by magnitude or one component, and point:/cell: where both share a name."""
+    src = os.path.join(DATA, "vtk/fire_ug.vtu")
+    out = os.path.join(tmp, "fire_fields.bin")
+    r = convert([src, out, "--quiet"], tmp)
+    m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+    check(m is not None and not problems and m.version == 2, "fire_ug.vtu: a valid version 2 .bin",
+          problems, [])
+    if m is None:
+        return
+    rd = vtk.vtkXMLUnstructuredGridReader()
+    rd.SetFileName(src)
+    rd.Update()
+    pd = rd.GetOutput().GetPointData()
+    names = [pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays())]
+    got = [(f[0], f[1], f[2]) for f in m.fields]
+    want = [(n, 0, pd.GetArray(n).GetNumberOfComponents()) for n in names]
+    check(got == want, "fire_ug.vtu: every point array kept, in file order", got, want)
+    worst = 0.0
+    for f in m.fields:
+        ref = ns.vtk_to_numpy(pd.GetArray(f[0])).reshape(m.V, -1)  # no vertex is unused here
+        worst = max(worst, float(np.abs(f[5] - ref).max()))
+    check(worst < 1e-5, "fire_ug.vtu: every field's values equal VTK's", worst, "< 1e-5")
+    if not os.access(CLVR, os.X_OK):
+        return
+    r = clvr_info(out)
+    listed = [ln.split()[1] for ln in r.stdout.splitlines() if ln.startswith("  point ")
+              or ln.startswith("  cell ")]
+    check(r.returncode == 0 and listed == names, "clvr --info lists every field", listed, names)
+    uvw = ns.vtk_to_numpy(pd.GetArray("uvw")).astype(np.float32)
+    for spec, ref in (("uvw", np.sqrt((uvw.astype(np.float64) ** 2).sum(1))), ("uvw:y", uvw[:, 1]),
+                      ("point:mfrac", ns.vtk_to_numpy(pd.GetArray("mfrac")))):
+        r = clvr_info(out, "--scalar", spec)
+        name, lo, hi = info_scalar_range(r.stdout)
+        check(r.returncode == 0 and name == spec.replace("point:", "") and abs(lo - ref.min()) < 1e-4 * max(1, abs(ref.min()))
+              and abs(hi - ref.max()) < 1e-4 * max(1, abs(ref.max())),
+              f"clvr --scalar {spec}: the field's range", (r.returncode, name, lo, hi, r.stderr.strip()),
+              (spec, float(ref.min()), float(ref.max())))
+    r = clvr_info(out, "--scalar", "nope")
+    check(r.returncode != 0 and "uvw" in r.stderr and "nope" in r.stderr and out in r.stderr,
+          "clvr --scalar nope: names the file, the spec and the fields there are", r.stderr.strip(), "...")
+
+    # A point and a cell array with one name (post.vtk's Pressure, and its cell
+    # average as cell data), converted from a .vtu VTK writes at test time.
+    rd = vtk.vtkUnstructuredGridReader()
+    rd.SetFileName(os.path.join(DATA, "vtk/post.vtk"))
+    rd.Update()
+    ug = rd.GetOutput()
+    p2c = vtk.vtkPointDataToCellData()
+    p2c.SetInputData(ug)
+    p2c.Update()
+    cellp = ns.vtk_to_numpy(p2c.GetOutput().GetCellData().GetArray("Pressure")) * 10.0
+    both = vtk.vtkUnstructuredGrid()
+    both.DeepCopy(ug)
+    arr = ns.numpy_to_vtk(cellp, deep=1)
+    arr.SetName("Pressure")
+    both.GetCellData().AddArray(arr)
+    vtu = os.path.join(tmp, "both.vtu")
+    w = vtk.vtkXMLUnstructuredGridWriter()
+    w.SetFileName(vtu)
+    w.SetInputData(both)
+    w.Write()
+    out = os.path.join(tmp, "both.bin")
+    r = convert([vtu, out, "--quiet"], tmp)
+    m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+    got = [(f[0], f[1]) for f in m.fields] if m else None
+    check(m is not None and not problems and got == [("Pressure", 0), ("Pressure", 1)],
+          "point and cell 'Pressure' both kept", (got, problems), [("Pressure", 0), ("Pressure", 1)])
+    if m is None:
+        return
+    check(np.allclose(m.fields[1][5][:, 0], cellp.astype(np.float32)), "cell 'Pressure' in element order")
+    r1, r2 = clvr_info(out, "--scalar", "point:Pressure"), clvr_info(out, "--scalar", "cell:Pressure")
+    (n1, lo1, hi1), (n2, lo2, hi2) = info_scalar_range(r1.stdout), info_scalar_range(r2.stdout)
+    avg = field_per_vertex(m, 1)
+    check(r1.returncode == 0 and r2.returncode == 0 and hi2 > 5 * hi1
+          and abs(hi2 - float(avg.max())) < 1e-3 * float(avg.max()) and "cell data averaged" in r2.stdout,
+          "point:Pressure and cell:Pressure both reachable, cell data averaged to the vertices",
+          (lo1, hi1, lo2, hi2, r1.stderr.strip(), r2.stderr.strip()), f"cell max {avg.max()}")
+
+
 def main():
     if not os.path.isfile(CONVERT):
         print(f"FAIL no converter at {CONVERT}")
@@ -623,6 +774,7 @@ def main():
         test_errors(tmp)
         test_list(tmp)
         test_output_name_and_avs(tmp)
+        test_fields(tmp)
         skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
                          if p.endswith(".umesh"))
         print(f"not VTK-readable, skipped: {', '.join(skipped)}")
