@@ -755,6 +755,59 @@ def test_fields(tmp):
           (lo1, hi1, lo2, hi2, r1.stderr.strip(), r2.stderr.strip()), f"cell max {avg.max()}")
 
 
+def test_warnings_once(tmp):
+    """Flawed real meshes (post.vtk appended to itself: 8750 duplicate tets; fire_ug.vtu,
+    whose hexes are all inside out, saved as legacy .vtk by VTK): clvr-convert says so
+    once, on one line; clvr warns on a render and --quiet silences it."""
+    rd = vtk.vtkUnstructuredGridReader()
+    rd.SetFileName(os.path.join(DATA, "vtk/post.vtk"))
+    rd.Update()
+    a = vtk.vtkAppendFilter()
+    a.AddInputData(rd.GetOutput())
+    a.AddInputData(rd.GetOutput())
+    a.SetMergePoints(1)
+    a.Update()
+    dup = os.path.join(tmp, "post_twice.vtk")
+    w = vtk.vtkUnstructuredGridWriter()
+    w.SetFileName(dup)
+    w.SetInputData(a.GetOutput())
+    w.SetFileTypeToBinary()
+    w.Write()
+    out = os.path.join(tmp, "post_twice.bin")
+    r = convert([dup, out], tmp)
+    warn = [ln for ln in r.stderr.splitlines() if "warning" in ln]
+    check(r.returncode == 0 and len(warn) == 1 and "8750 duplicate elements" in warn[0] and dup in warn[0],
+          "clvr-convert: duplicates said once, on one line", r.stderr.strip(), "... 8750 duplicate elements ...")
+    r = convert([dup, os.path.join(tmp, "q.bin"), "--quiet"], tmp)
+    check(r.returncode == 0 and r.stderr == "" and r.stdout == "", "clvr-convert --quiet prints nothing",
+          (r.stdout, r.stderr), ("", ""))
+    if not os.access(CLVR, os.X_OK):
+        return
+    png = os.path.join(tmp, "w.png")
+    base = ["--size", "16x16", "--spp", "1", "-o", png]
+    for mesh, what in ((out, "8750 duplicate elements"), (None, "10462 inverted elements")):
+        if mesh is None:
+            x = vtk.vtkXMLUnstructuredGridReader()
+            x.SetFileName(os.path.join(DATA, "vtk/fire_ug.vtu"))
+            x.Update()
+            mesh = os.path.join(tmp, "fire_legacy.vtk")
+            w = vtk.vtkUnstructuredGridWriter()
+            w.SetFileName(mesh)
+            w.SetInputData(x.GetOutput())
+            w.SetFileTypeToBinary()
+            w.Write()
+        r = subprocess.run([CLVR, mesh] + base, capture_output=True, text=True, timeout=300)
+        if r.returncode != 0 and "device" in r.stderr.lower():
+            print(f"note: no OpenCL device for the render warnings: {r.stderr.strip()[:120]}")
+            return
+        warn = [ln for ln in r.stderr.splitlines() if "warning" in ln and what in ln]
+        check(r.returncode == 0 and len(warn) == 1, f"clvr {os.path.basename(mesh)}: '{what}' warned once",
+              r.stderr.strip()[:300], what)
+        r = subprocess.run([CLVR, mesh, "--quiet"] + base, capture_output=True, text=True, timeout=300)
+        check(r.returncode == 0 and r.stderr == "", f"clvr --quiet {os.path.basename(mesh)}: no warning",
+              r.stderr.strip()[:300], "")
+
+
 def main():
     if not os.path.isfile(CONVERT):
         print(f"FAIL no converter at {CONVERT}")
@@ -775,6 +828,7 @@ def main():
         test_list(tmp)
         test_output_name_and_avs(tmp)
         test_fields(tmp)
+        test_warnings_once(tmp)
         skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
                          if p.endswith(".umesh"))
         print(f"not VTK-readable, skipped: {', '.join(skipped)}")

@@ -142,8 +142,9 @@ int main(int argc, char **argv)
     }
 
     /* Flaws that render anyway (degenerate, inverted, duplicate elements, a
-     * constant field) get one warning line each, --quiet or not. */
-    {
+     * constant field) get one warning line each; clvr-convert already said
+     * them once per file, so --quiet silences them on every render. */
+    if (!o.quiet) {
         clvr_limits_report lr;
         clvr_limits_scan(&mesh, &lr);
         clvr_limits_print_warnings(stderr, mesh_name, &lr);
