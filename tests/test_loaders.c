@@ -871,6 +871,104 @@ static void test_fuzz_smoke(void)
     for (int f = 0; f < 5; ++f) free(files[f]);
 }
 
+/* A hexagonal prism as a VTK polyhedron (type 42, the face stream OpenFOAM's
+ * foamToVTK -legacy writes) beside a tet. */
+static const char vtk_poly[] =
+    "# vtk DataFile Version 4.2\n"
+    "polyhedra\n"
+    "ASCII\n"
+    "DATASET UNSTRUCTURED_GRID\n"
+    "POINTS 13 float\n"
+    "1.0 0.0 0\n"
+    "0.5 0.866025 0\n"
+    "-0.5 0.866025 0\n"
+    "-1.0 0.0 0\n"
+    "-0.5 -0.866025 0\n"
+    "0.5 -0.866025 0\n"
+    "1.0 0.0 1\n"
+    "0.5 0.866025 1\n"
+    "-0.5 0.866025 1\n"
+    "-1.0 0.0 1\n"
+    "-0.5 -0.866025 1\n"
+    "0.5 -0.866025 1\n"
+    "0 0 2\n"
+    "CELLS 2 51\n"
+    "45 8 6 5 4 3 2 1 0 6 6 7 8 9 10 11 4 0 1 7 6 4 1 2 8 7 4 2 3 9 8 4 3 4 10 9 4 4 5 11 10 4 5 0 6 11\n"
+    "4 6 7 8 12\n"
+    "CELL_TYPES 2\n"
+    "42 10\n"
+    "POINT_DATA 13\n"
+    "SCALARS s float\n"
+    "LOOKUP_TABLE default\n"
+    "0 1 2 3 4 5 6 7 8 9 10 11 12\n"
+    "CELL_DATA 2\n"
+    "SCALARS c float\n"
+    "LOOKUP_TABLE default\n"
+    "10 20\n";
+
+static double tet_vol(const clvr_mesh *m, const uint32_t *t)
+{
+    const float *a = m->positions + 3 * t[0], *b = m->positions + 3 * t[1], *c = m->positions + 3 * t[2],
+                *d = m->positions + 3 * t[3];
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+        w[k] = d[k] - a[k];
+    }
+    return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])) /
+           6.0;
+}
+
+/* Polyhedra are decomposed on load into positively oriented tets and
+ * pyramids that fill exactly the cell's volume; broken face streams fail. */
+static void test_vtk_polyhedra(void)
+{
+    clvr_mesh m = {0};
+    clvr_error err = {0};
+    char buf[2048];
+    TU_CHECK_STATUS(parse_str(vtk_poly, "poly.vtk", NULL, &m, &err), CLVR_OK, &err);
+    TU_CHECK_EQ_U64(m.decomposed_cells, 1);
+    TU_CHECK_EQ_U64(m.skipped_cells, 0);
+    TU_CHECK_EQ_U64(m.num_cells[CLVR_CELL_TET], 5);     /* the file's tet, then the top hexagon's fan of 4 */
+    TU_CHECK_EQ_U64(m.num_cells[CLVR_CELL_PYRAMID], 4); /* the 4 side quads away from the apex */
+    double vol = 0.0, worst = 1.0;
+    for (uint64_t e = 1; e < m.num_cells[0]; ++e) {
+        double v = tet_vol(&m, m.indices[0] + 4 * e);
+        vol += v;
+        worst = v < worst ? v : worst;
+    }
+    for (uint64_t e = 0; e < m.num_cells[1]; ++e) {
+        const uint32_t *q = m.indices[1] + 5 * e;
+        /* VTK's pyramid: base (0,1,2,3) counterclockwise seen from the apex, so the
+         * tets (0,1,2,4) and (0,2,3,4) are positive. */
+        const uint32_t t1[4] = {q[0], q[1], q[2], q[4]}, t2[4] = {q[0], q[2], q[3], q[4]};
+        double v1 = tet_vol(&m, t1), v2 = tet_vol(&m, t2);
+        vol += v1 + v2;
+        worst = v1 < worst ? v1 : worst;
+        worst = v2 < worst ? v2 : worst;
+    }
+    TU_CHECK_NEAR(vol, 1.5 * sqrt(3.0), 1e-5); /* hexagon area 3*sqrt(3)/2, height 1 */
+    TU_CHECK(worst > 0.0);
+    clvr_mesh_free(&m);
+    /* Cell data: the polyhedron's value counts once per distinct vertex. */
+    TU_CHECK_STATUS(parse_str(vtk_poly, "poly.vtk", "cell:c", &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 10.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[6], 15.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[12], 20.0, 1e-6);
+    clvr_mesh_free(&m);
+    /* Broken streams. */
+    edit(buf, sizeof buf, vtk_poly, "45 8 6 5", "45 3 6 5");
+    TU_CHECK_STATUS(parse_str(buf, "few.vtk", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "few.vtk", "faces");
+    edit(buf, sizeof buf, vtk_poly, "45 8 6 5", "45 8 60 5");
+    TU_CHECK_STATUS(parse_str(buf, "past.vtk", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "past.vtk", "runs past");
+    edit(buf, sizeof buf, vtk_poly, "4 5 0 6 11", "4 5 0 6 99");
+    TU_CHECK_STATUS(parse_str(buf, "idx.vtk", NULL, &m, &err), CLVR_ERR_BAD_INDEX, &err);
+    CHECK_MSG(err, "idx.vtk", "99");
+}
+
 /* --scalar on a legacy .vtk: point:/cell: when both share a name, a vector
  * component or its magnitude (uGridEx.vtk's 'vectors', VTK's own file),
  * and the field table --info prints. */
@@ -1062,6 +1160,7 @@ int main(void)
     test_vtk_synthetic();
     test_umesh();
     test_fields_vtk();
+    test_vtk_polyhedra();
     test_fields_bin();
     test_fuzz_smoke();
     char cmd[600];

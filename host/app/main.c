@@ -153,6 +153,9 @@ int main(int argc, char **argv)
                     "clvr: warning: %s: %llu cell%s of other types (surface, line or polyhedron cells) left out; "
                     "clvr renders tetrahedra, pyramids, wedges and hexahedra\n",
                     mesh_name, (unsigned long long)mesh.skipped_cells, mesh.skipped_cells == 1 ? "" : "s");
+        if (mesh.decomposed_cells)
+            fprintf(stderr, "clvr: %s: %llu polyhedr%s decomposed into tets and pyramids\n", mesh_name,
+                    (unsigned long long)mesh.decomposed_cells, mesh.decomposed_cells == 1 ? "on" : "a");
     }
 
     /* The transfer function needs only the scalar range: load it now, so a

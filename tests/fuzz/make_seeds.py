@@ -105,6 +105,16 @@ def main():
              b"FIELD attrs 2\nrho 1 10 float\n0 1 2 3 4 5 6 7 8 9\nuvw 3 10 double\n" + b"0 1 2 " * 10 + b"\n"
              b"CELL_DATA 1\nSCALARS id int\nLOOKUP_TABLE default\n7\n")
     write("vtk", "quadratic_field.vtk", field)
+    # a polyhedron (type 42: a hexagonal prism's face stream) beside a tet, classic and 5.1 cells
+    poly = ("\n".join(['# vtk DataFile Version 4.2', 'polyhedra', 'ASCII', 'DATASET UNSTRUCTURED_GRID', 'POINTS 13 float', '1.0 0.0 0', '0.5 0.866025 0', '-0.5 0.866025 0', '-1.0 0.0 0', '-0.5 -0.866025 0', '0.5 -0.866025 0', '1.0 0.0 1', '0.5 0.866025 1', '-0.5 0.866025 1', '-1.0 0.0 1', '-0.5 -0.866025 1', '0.5 -0.866025 1', '0 0 2', 'CELLS 2 51', '45 8 6 5 4 3 2 1 0 6 6 7 8 9 10 11 4 0 1 7 6 4 1 2 8 7 4 2 3 9 8 4 3 4 10 9 4 4 5 11 10 4 5 0 6 11', '4 6 7 8 12', 'CELL_TYPES 2', '42 10', 'POINT_DATA 13', 'SCALARS s float', 'LOOKUP_TABLE default', '0 1 2 3 4 5 6 7 8 9 10 11 12', 'CELL_DATA 2', 'SCALARS c float', 'LOOKUP_TABLE default', '10 20']) + "\n").encode()
+    write("vtk", "polyhedron_ascii.vtk", poly)
+    stream = "8 6 5 4 3 2 1 0 6 6 7 8 9 10 11 4 0 1 7 6 4 1 2 8 7 4 2 3 9 8 4 3 4 10 9 4 4 5 11 10 4 5 0 6 11"
+    poly51 = poly.replace(b"4.2", b"5.1").replace(
+        b"CELLS 2 51\n45 " + stream.encode() + b"\n4 6 7 8 12\n",
+        b"CELLS 3 49\nOFFSETS vtktypeint64\n0 45 49\nCONNECTIVITY vtktypeint64\n" + stream.encode() +
+        b" 6 7 8 12\n")
+    assert poly51 != poly
+    write("vtk", "polyhedron_51_ascii.vtk", poly51)
     # transfer functions: the text format and ParaView JSON
     write("tf", "ramp.tf", b"# soft ramp\ncolormap viridis\nopacity 0 0\nopacity 0.3 0 0.5 0.2\nopacity 1 0.8\n"
                            b"range -1.5 2.5\ndensity 2\ntable 512\n")
