@@ -886,6 +886,92 @@ def test_polyhedra(tmp):
                   diff, "< 2")
 
 
+def test_series(tmp):
+    """A time series of real data (post.vtk's Pressure times 1, 2, 3 at times 0, 0.5, 1,
+    written by VTK as .vtu files with a ParaView .pvd and a .vtu.series) converts to one
+    .bin per step plus OUT.bin.series; clvr renders it to numbered frames with one range
+    over all steps (--range auto-all) and one camera; a missing step leaves nothing."""
+    import json
+    rd = vtk.vtkUnstructuredGridReader()
+    rd.SetFileName(os.path.join(DATA, "vtk/post.vtk"))
+    rd.Update()
+    base = rd.GetOutput()
+    pres = ns.vtk_to_numpy(base.GetPointData().GetArray("Pressure")).astype(np.float64)
+    sdir = os.path.join(tmp, "series")
+    os.makedirs(sdir)
+    names = []
+    for i in range(3):
+        g = vtk.vtkUnstructuredGrid()
+        g.DeepCopy(base)
+        a = ns.numpy_to_vtk(pres * (i + 1), deep=1)
+        a.SetName("Pressure")
+        g.GetPointData().RemoveArray("Pressure")
+        g.GetPointData().AddArray(a)
+        names.append(f"post_{i}.vtu")
+        w = vtk.vtkXMLUnstructuredGridWriter()
+        w.SetFileName(os.path.join(sdir, names[-1]))
+        w.SetInputData(g)
+        w.Write()
+    pvd = os.path.join(sdir, "post.pvd")
+    with open(pvd, "w") as f:
+        f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n')
+        for i, n in enumerate(names):
+            f.write(f'<DataSet timestep="{i * 0.5}" part="0" file="{n}"/>\n')
+        f.write("</Collection></VTKFile>\n")
+    jser = os.path.join(sdir, "post.vtu.series")
+    with open(jser, "w") as f:
+        json.dump({"file-series-version": "1.0",
+                   "files": [{"name": n, "time": i * 0.5} for i, n in enumerate(names)]}, f)
+    outs = {}
+    for src, stem in ((pvd, "pvd"), (jser, "json")):
+        out = os.path.join(tmp, f"{stem}.bin")
+        r = convert([src, out, "--quiet"], tmp)
+        series = out + ".series"
+        steps = [os.path.join(tmp, f"{stem}.{i:04d}.bin") for i in range(3)]
+        ok = r.returncode == 0 and os.path.isfile(series) and all(os.path.isfile(p) for p in steps)
+        check(ok, f"{os.path.basename(src)}: 3 steps and a .series written", (r.returncode, r.stderr.strip()), "0")
+        if not ok:
+            return
+        with open(series) as f:
+            doc = json.load(f)
+        check([e["name"] for e in doc["files"]] == [os.path.basename(p) for p in steps]
+              and [e["time"] for e in doc["files"]] == [0.0, 0.5, 1.0],
+              f"{os.path.basename(series)}: names and times", doc, "0000..0002 at 0, 0.5, 1")
+        maxes = [float(read_bin(p)[0].scalars.max()) for p in steps]
+        check(np.allclose(maxes, [pres.max() * k for k in (1, 2, 3)], rtol=1e-6),
+              f"{os.path.basename(src)}: each step holds its own values", maxes, "x1, x2, x3")
+        outs[stem] = series
+    # A step that cannot be read: exit 1, one line, nothing written.
+    bad = os.path.join(sdir, "bad.pvd")
+    with open(bad, "w") as f:
+        f.write('<VTKFile type="Collection"><Collection><DataSet timestep="0" file="post_0.vtu"/>'
+                '<DataSet timestep="1" file="missing.vtu"/></Collection></VTKFile>\n')
+    r = convert([bad, os.path.join(tmp, "bad.bin")], tmp)
+    left = [f for f in os.listdir(tmp) if f.startswith("bad.")]
+    check(r.returncode == 1 and "missing.vtu" in r.stderr and not left,
+          "a series with a missing step: exit 1, names it, writes nothing", (r.returncode, r.stderr, left),
+          (1, "missing.vtu", []))
+    if not os.access(CLVR, os.X_OK):
+        return
+    frame = os.path.join(tmp, "frame.png")
+    r = subprocess.run([CLVR, outs["pvd"], "-o", frame, "--size", "32x32", "--spp", "2"],
+                       capture_output=True, text=True, timeout=300)
+    if r.returncode != 0 and "device" in r.stderr.lower():
+        print(f"note: no OpenCL device for the series render: {r.stderr.strip()[:120]}")
+        return
+    frames = [os.path.join(tmp, f"frame.{i:04d}.png") for i in range(3)]
+    want = f"one range [{np.float32(pres.min()):g}, {np.float32(pres.max() * 3):g}]"
+    check(r.returncode == 0 and all(os.path.isfile(p) for p in frames) and want in r.stderr,
+          "clvr renders the series to frame.0000..0002.png with one range over all steps",
+          (r.returncode, r.stderr.strip()[-600:]), want)
+    if all(os.path.isfile(p) for p in frames):
+        a, c = png_pixels(frames[0]), png_pixels(frames[2])
+        check(float(np.abs(a - c).mean()) > 1.0, "the fixed range shows the field growing: frames differ",
+              float(np.abs(a - c).mean()), "> 1")
+    r = subprocess.run([CLVR, outs["json"], "--orbit", "3"], capture_output=True, text=True, timeout=60)
+    check(r.returncode == 2 and "--orbit" in r.stderr, "a series with --orbit: usage error", r.stderr.strip(), 2)
+
+
 def main():
     if not os.path.isfile(CONVERT):
         print(f"FAIL no converter at {CONVERT}")
@@ -908,6 +994,7 @@ def main():
         test_fields(tmp)
         test_warnings_once(tmp)
         test_polyhedra(tmp)
+        test_series(tmp)
         skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
                          if p.endswith(".umesh"))
         print(f"not VTK-readable, skipped: {', '.join(skipped)}")

@@ -16,7 +16,9 @@ void clvr_cli_print_help(FILE *out)
         "Renders an unstructured volumetric mesh (tets, pyramids, wedges, hexes; one scalar per\n"
         "vertex) with Monte Carlo delta tracking and volumetric shadows, on any OpenCL device.\n"
         "Without MESH, renders the built-in procedural scene. MESH: .bin (clvr), .umesh, legacy .vtk;\n"
-        "convert anything else VTK reads with tools/clvr-convert.\n"
+        "convert anything else VTK reads with tools/clvr-convert; a .series file (clvr-convert\n"
+        "writes one for .pvd, .vtu.series and Exodus time steps) renders every step to -o's name\n"
+        "with .0000, .0001, ... before the extension, with one range and one camera.\n"
         "\n"
         "Actions:\n"
         "  --help, -h             this text\n"
@@ -86,6 +88,8 @@ void clvr_cli_print_help(FILE *out)
         "  --colormap NAME        cool-warm | viridis | inferno | grayscale | jet (default cool-warm)\n"
         "  --tf FILE              transfer function file (clvr text format or ParaView JSON)\n"
         "  --range LO HI          scalar window mapped by the transfer function (default: data range)\n"
+        "  --range auto-all       a series: one window over every step's range (the default for a\n"
+        "                         series; one mesh: its own range)\n"
         "  --opacity auto|ramp    opacity curve: auto (from the scalar's volume histogram: values\n"
         "                         that fill most of the volume clear, rare ones opaque) or ramp\n"
         "                         (linear, 0 at the window's low end to 1 at its high end)\n"
@@ -305,8 +309,11 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
         else if (!strcmp(a, "--tf")) { const char *v = NEXT(); if (v) o->tf_file = v; }
         else if (!strcmp(a, "--range")) {
             const char *lo = NEXT();
-            const char *hi = lo ? NEXT() : NULL;
-            if (lo && hi) {
+            const char *hi = lo && strcmp(lo, "auto-all") != 0 ? NEXT() : NULL;
+            if (lo && !strcmp(lo, "auto-all")) {
+                o->range_auto_all = 1; /* a series' range over all steps; one mesh: its own range */
+                o->range_set = 0;
+            } else if (lo && hi) {
                 s = parse_float("--range LO", lo, -3e38f, 3e38f, &o->range_lo, err);
                 if (s == CLVR_OK) s = parse_float("--range HI", hi, -3e38f, 3e38f, &o->range_hi, err);
                 if (s == CLVR_OK && !(o->range_hi > o->range_lo))

@@ -49,6 +49,7 @@ typedef struct clvr_options {
     const char *tf_file;         /* --tf FILE */
     int range_set;
     float range_lo, range_hi;    /* --range lo hi */
+    int range_auto_all;          /* --range auto-all: one range over every step of a series */
     float density;               /* --density D (after clvr's main: the automatic one when density_auto) */
     int density_auto;            /* --density auto (the default): from the mesh's optical depth (tf_auto.h) */
     int opacity_ramp;            /* --opacity ramp: the linear ramp; auto (default): from the histogram */

@@ -21,6 +21,7 @@
 #include "preprocess.h"
 #include "render.h"
 #include "scene.h"
+#include "series.h"
 #include "stats.h"
 #include "tf.h"
 #include "tf_auto.h"
@@ -102,6 +103,8 @@ int main(int argc, char **argv)
         s = clvr_cl_list_devices(stdout, &err);
         return s == CLVR_OK ? 0 : fail(&err);
     }
+    /* A time series: every step through this main, one range and camera. */
+    if (o.mesh_path && clvr_series_is(o.mesh_path)) return clvr_series_run(argc, argv, &o, main);
     if (o.kernel_dir) setenv("CLVR_KERNEL_DIR", o.kernel_dir, 1);
     /* Fail on an unwritable output before minutes of work, not after. */
     if (!o.info && !o.view) {
