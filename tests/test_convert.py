@@ -886,6 +886,60 @@ def test_polyhedra(tmp):
                   diff, "< 2")
 
 
+def exodus_time_steps(tmp):
+    """Exodus II with 3 time steps (fire_ug.vtu with t + 100 * time, written by
+    vtkExodusIIWriter from a temporal source): one .bin per step, one warning line."""
+    from vtk.util.vtkAlgorithm import VTKPythonAlgorithmBase
+    base = vtk_read(os.path.join(DATA, "vtk/fire_ug.vtu"))
+    t0 = ns.vtk_to_numpy(base.GetPointData().GetArray("t")).astype(np.float64)
+    times = [0.0, 1.0, 2.0]
+    sddp = vtk.vtkStreamingDemandDrivenPipeline
+
+    class Source(VTKPythonAlgorithmBase):
+        def __init__(self):
+            VTKPythonAlgorithmBase.__init__(self, nInputPorts=0, nOutputPorts=1,
+                                            outputType="vtkUnstructuredGrid")
+
+        def RequestInformation(self, request, in_info, out_info):
+            info = out_info.GetInformationObject(0)
+            for t in times:
+                info.Append(sddp.TIME_STEPS(), t)
+            info.Append(sddp.TIME_RANGE(), times[0])
+            info.Append(sddp.TIME_RANGE(), times[-1])
+            return 1
+
+        def RequestData(self, request, in_info, out_info):
+            info = out_info.GetInformationObject(0)
+            t = info.Get(sddp.UPDATE_TIME_STEP()) if info.Has(sddp.UPDATE_TIME_STEP()) else 0.0
+            out = vtk.vtkUnstructuredGrid.GetData(out_info)
+            out.DeepCopy(base)
+            a = ns.numpy_to_vtk(t0 + 100.0 * t, deep=1)
+            a.SetName("t")
+            out.GetPointData().RemoveArray("t")
+            out.GetPointData().AddArray(a)
+            return 1
+
+    src = os.path.join(tmp, "fire_t.exo")
+    alg = Source()  # kept alive while the writer pulls from it
+    w = vtk.vtkExodusIIWriter()
+    w.SetFileName(src)
+    w.SetInputConnection(alg.GetOutputPort())
+    w.WriteAllTimeStepsOn()
+    w.Write()
+    out = os.path.join(tmp, "exo_t.bin")
+    r = convert([src, out, "--scalar", "t"], tmp)
+    steps = [os.path.join(tmp, f"exo_t.{i:04d}.bin") for i in range(3)]
+    ok = r.returncode == 0 and all(os.path.isfile(p) for p in steps) and os.path.isfile(out + ".series")
+    warn = [ln for ln in r.stderr.splitlines() if "warning" in ln]
+    check(ok and len(warn) == 1 and "10462 inverted" in warn[0] and "2 more steps" in warn[0],
+          "Exodus with 3 time steps: 3 .bin and a .series, the inverted hexes said once",
+          (r.returncode, r.stderr.strip()), "one warning line")
+    if ok:
+        maxes = [float(read_bin(p)[0].scalars.max()) for p in steps]
+        check(np.allclose(maxes, [t0.max() + 100 * t for t in times], rtol=1e-6),
+              "Exodus time steps: each step holds its own t", maxes, "t + 100 * time")
+
+
 def test_series(tmp):
     """A time series of real data (post.vtk's Pressure times 1, 2, 3 at times 0, 0.5, 1,
     written by VTK as .vtu files with a ParaView .pvd and a .vtu.series) converts to one
@@ -951,6 +1005,7 @@ def test_series(tmp):
     check(r.returncode == 1 and "missing.vtu" in r.stderr and not left,
           "a series with a missing step: exit 1, names it, writes nothing", (r.returncode, r.stderr, left),
           (1, "missing.vtu", []))
+    exodus_time_steps(tmp)
     if not os.access(CLVR, os.X_OK):
         return
     frame = os.path.join(tmp, "frame.png")
