@@ -3,6 +3,7 @@
  * bit for bit; every kind of broken input returns its specific status and a
  * message naming the file and the problem, never a crash. */
 #include "mesh_io.h"
+#include "series.h"
 #include "test_util.h"
 
 #include <errno.h>
@@ -1146,6 +1147,39 @@ static void test_fields_bin(void)
     clvr_mesh_free(&m);
 }
 
+/* .series files (clvr-convert writes them for time series). */
+static void test_series_files(void)
+{
+    char **paths = NULL;
+    double *times = NULL;
+    uint32_t n = 0;
+    clvr_error err = {0};
+    const char *good = "{\"file-series-version\": \"1.0\", \"files\": [{\"name\": \"a.0000.bin\", \"time\": 0.5},"
+                       " {\"name\": \"/abs/b.bin\", \"time\": 2}]}";
+    write_file(tmp_path("s.bin.series"), good, strlen(good));
+    TU_CHECK(clvr_series_is(tmp_path("s.bin.series")) && !clvr_series_is("s.bin"));
+    TU_CHECK_STATUS(clvr_series_read(tmp_path("s.bin.series"), &paths, &times, &n, &err), CLVR_OK, &err);
+    TU_CHECK(n == 2 && times[0] == 0.5 && times[1] == 2.0);
+    TU_CHECK(n == 2 && strcmp(paths[1], "/abs/b.bin") == 0 && strstr(paths[0], "/a.0000.bin") &&
+             strncmp(paths[0], tmp_dir, strlen(tmp_dir)) == 0); /* relative to the series' folder */
+    clvr_series_free(paths, times, n);
+    const struct {
+        const char *text, *says;
+    } bad[] = {
+        {"{\"files\": []}", "not a series file"},
+        {"[1, 2]", "not a series file"},
+        {"{\"files\": [{\"time\": 1}]}", "\"name\""},
+        {"{\"files\": [{\"name\": 3}]}", "\"name\""},
+        {"{\"files\": [", "bad.series"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        write_file(tmp_path("bad.series"), bad[i].text, strlen(bad[i].text));
+        TU_CHECK(clvr_series_read(tmp_path("bad.series"), &paths, &times, &n, &err) != CLVR_OK);
+        CHECK_MSG(err, "bad.series", bad[i].says);
+        TU_CHECK(paths == NULL && n == 0);
+    }
+}
+
 int main(void)
 {
     snprintf(tmp_dir, sizeof tmp_dir, "/tmp/clvr_test_loaders.%ld", (long)getpid());
@@ -1161,6 +1195,7 @@ int main(void)
     test_umesh();
     test_fields_vtk();
     test_vtk_polyhedra();
+    test_series_files();
     test_fields_bin();
     test_fuzz_smoke();
     char cmd[600];
