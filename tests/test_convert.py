@@ -1027,6 +1027,41 @@ def test_series(tmp):
     check(r.returncode == 2 and "--orbit" in r.stderr, "a series with --orbit: usage error", r.stderr.strip(), 2)
 
 
+def test_cell_data_flat(tmp):
+    """kiefer_tet10.vtu's von Mises stress is cell data: by default clvr renders it
+    averaged onto the vertices (a narrower range); --cell-data flat renders each
+    element's own value, so the range is exactly VTK's cell range and the image differs."""
+    src = os.path.join(DATA, "vtk/kiefer_tet10.vtu")
+    out = os.path.join(tmp, "kiefer_flat.bin")
+    r = convert([src, out, "--quiet"], tmp)
+    if not check(r.returncode == 0, "kiefer_tet10.vtu converts", r.stderr.strip(), "") or \
+            not os.access(CLVR, os.X_OK):
+        return
+    cells = vtk_read(src).GetCellData()
+    lo, hi = cells.GetArray(0).GetRange(0)
+    ra, rf = clvr_info(out), clvr_info(out, "--cell-data", "flat")
+    _, alo, ahi = info_scalar_range(ra.stdout)
+    _, flo, fhi = info_scalar_range(rf.stdout)
+    check(rf.returncode == 0 and abs(flo - lo) <= 1e-5 * abs(lo) + 1e-7 and abs(fhi - hi) <= 1e-5 * abs(hi)
+          and "flat" in rf.stdout, "--cell-data flat: the range is the cells' own", (flo, fhi), (lo, hi))
+    check(ra.returncode == 0 and ahi < hi * 0.99 and "averaged" in ra.stdout,
+          "default: cell data averaged to the vertices (narrower range), and --info says so", (alo, ahi),
+          f"max < {hi}")
+    pngs = []
+    for extra in ([], ["--cell-data", "flat"]):
+        png = os.path.join(tmp, f"kiefer{len(extra)}.png")
+        r = subprocess.run([CLVR, out, "--quiet", "--size", "48x48", "--spp", "2", "-o", png] + extra,
+                           capture_output=True, text=True, timeout=300)
+        if r.returncode != 0 and "device" in r.stderr.lower():
+            print(f"note: no OpenCL device for the flat render: {r.stderr.strip()[:120]}")
+            return
+        check(r.returncode == 0, f"clvr {' '.join(extra) or 'default'} renders kiefer", r.stderr.strip(), "")
+        pngs.append(png)
+    if all(os.path.isfile(p) for p in pngs):
+        diff = float(np.abs(png_pixels(pngs[0]) - png_pixels(pngs[1])).mean())
+        check(diff > 0.2, "flat and averaged cell data render differently", diff, "> 0.2")
+
+
 def main():
     if not os.path.isfile(CONVERT):
         print(f"FAIL no converter at {CONVERT}")
@@ -1050,6 +1085,7 @@ def main():
         test_warnings_once(tmp)
         test_polyhedra(tmp)
         test_series(tmp)
+        test_cell_data_flat(tmp)
         skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
                          if p.endswith(".umesh"))
         print(f"not VTK-readable, skipped: {', '.join(skipped)}")

@@ -958,6 +958,19 @@ static void test_vtk_polyhedra(void)
     TU_CHECK_NEAR(m.scalars[6], 15.0, 1e-6);
     TU_CHECK_NEAR(m.scalars[12], 20.0, 1e-6);
     clvr_mesh_free(&m);
+    /* --cell-data flat: the polyhedron's 8 pieces carry 10, the tet 20. */
+    {
+        clvr_load_options opt = {0};
+        opt.scalar_name = "c";
+        opt.cell_flat = 1;
+        TU_CHECK_STATUS(clvr_mesh_parse_vtk(vtk_poly, strlen(vtk_poly), "flat.vtk", &opt, &m, &err), CLVR_OK, &err);
+        TU_CHECK_EQ_U64(m.num_vertices, 5 * 4 + 4 * 5);
+        TU_CHECK(m.cell_flat);
+        for (uint32_t k = 0; k < 4; ++k) TU_CHECK_NEAR(m.scalars[m.indices[0][k]], 20.0, 0.0); /* the file's tet first */
+        for (uint64_t k = 4; k < 4 * m.num_cells[0]; ++k) TU_CHECK_NEAR(m.scalars[m.indices[0][k]], 10.0, 0.0);
+        for (uint64_t k = 0; k < 5 * m.num_cells[1]; ++k) TU_CHECK_NEAR(m.scalars[m.indices[1][k]], 10.0, 0.0);
+        clvr_mesh_free(&m);
+    }
     /* Broken streams. */
     edit(buf, sizeof buf, vtk_poly, "45 8 6 5", "45 3 6 5");
     TU_CHECK_STATUS(parse_str(buf, "few.vtk", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
@@ -995,6 +1008,14 @@ static void test_fields_vtk(void)
     TU_CHECK_NEAR(m.scalars[4], 20.0, 1e-6);
     TU_CHECK(m.fields[m.scalar_field].association == CLVR_FIELD_CELL);
     clvr_mesh_free(&m);
+    {
+        clvr_load_options fo = {0};
+        fo.scalar_name = "cell:s";
+        fo.cell_flat = 1; /* the vertex cell is left out: 2 tets, 8 vertices */
+        TU_CHECK_STATUS(clvr_mesh_parse_vtk(buf, strlen(buf), "flat.vtk", &fo, &m, &err), CLVR_OK, &err);
+        TU_CHECK(m.num_vertices == 8 && m.scalars[0] == 10.0f && m.scalars[7] == 20.0f && m.cell_flat);
+        clvr_mesh_free(&m);
+    }
     TU_CHECK_STATUS(parse_str(buf, "both.vtk", "cell:nope", &m, &err), CLVR_ERR_BAD_FIELD, &err);
     CHECK_MSG(err, "both.vtk", "point:s, cell:s");
 
@@ -1140,6 +1161,24 @@ static void test_fields_bin(void)
     c[256 + 60 + 32 + 100] = 1; /* reserved byte of field 0 */
     TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "resv.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
     CHECK_MSG(err, "resv.bin", "reserved");
+    /* --cell-data flat: each tet gets its own 4 vertices carrying its value. */
+    n = make_v2(b, sizeof b, fields, 3);
+    opt.scalar_name = "cell:s";
+    opt.cell_flat = 1;
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "flat.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_EQ_U64(m.num_vertices, 8);
+    TU_CHECK(m.cell_flat && m.scalar_min == 10.0f && m.scalar_max == 30.0f);
+    for (uint32_t k = 0; k < 8; ++k) {
+        TU_CHECK(m.indices[0][k] == k);
+        TU_CHECK_NEAR(m.scalars[k], k < 4 ? 10.0 : 30.0, 0.0);
+    }
+    TU_CHECK_NEAR(m.positions[3 * 7 + 0], 1.0, 0.0); /* tet 1's last corner is vertex 4 (1, 1, 1) */
+    clvr_mesh_free(&m);
+    opt.scalar_name = "vel"; /* a point field: flat changes nothing */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "flat.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_vertices == 5 && !m.cell_flat);
+    clvr_mesh_free(&m);
+    opt.cell_flat = 0;
     /* No fields: loads with scalars 0. */
     n = make_v2(b, sizeof b, fields, 0);
     TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "none.bin", NULL, &m, &err), CLVR_OK, &err);

@@ -36,6 +36,9 @@ void clvr_cli_print_help(FILE *out)
         "                         NAME, point:NAME or cell:NAME where both exist; a vector gives\n"
         "                         its magnitude, NAME:x|y|z (or NAME:K) one component. Cell data\n"
         "                         is averaged onto the vertices (default: the file's first field)\n"
+        "  --cell-data flat|average  a cell field: flat shows each element's own value, constant\n"
+        "                         inside it (as ParaView shows cell data; every element gets its\n"
+        "                         own vertices); average (default) interpolates the vertex averages\n"
         "  --kernel-dir DIR       load OpenCL sources from DIR instead of the embedded copies\n"
         "\n"
         "Output:\n"
@@ -239,6 +242,14 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
         else if (!strcmp(a, "--view")) o->view = 1;
         else if (!strcmp(a, "--device")) { const char *v = NEXT(); if (v) o->device = v; }
         else if (!strcmp(a, "--scalar")) { const char *v = NEXT(); if (v) o->scalar_name = v; }
+        else if (!strcmp(a, "--cell-data")) {
+            const char *v = NEXT();
+            if (v) {
+                if (!strcmp(v, "flat")) o->cell_flat = 1;
+                else if (!strcmp(v, "average")) o->cell_flat = 0;
+                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--cell-data expects flat or average, got '%s'", v);
+            }
+        }
         else if (!strcmp(a, "--kernel-dir")) { const char *v = NEXT(); if (v) o->kernel_dir = v; }
         else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { const char *v = NEXT(); if (v) o->output = v; }
         else if (!strcmp(a, "--stats-json")) { const char *v = NEXT(); if (v) o->stats_json = v; }

@@ -15,6 +15,7 @@ typedef struct clvr_options {
     /* input */
     const char *mesh_path;       /* NULL: the built-in default scene */
     const char *scalar_name;     /* --scalar */
+    int cell_flat;               /* --cell-data flat: a cell field shown per element; 0 (average): at the vertices */
     const char *device;          /* --device SPEC, NULL: default */
     const char *kernel_dir;      /* --kernel-dir: load kernels from disk (developers) */
     /* output */

@@ -15,8 +15,10 @@ void clvr_info_print(FILE *out, const char *name, const clvr_mesh *m)
     fprintf(out, "bounds      [%g, %g, %g] - [%g, %g, %g]\n", m->bounds_lo[0], m->bounds_lo[1], m->bounds_lo[2],
             m->bounds_hi[0], m->bounds_hi[1], m->bounds_hi[2]);
     const char *how = "";
-    if (m->num_fields && m->fields[m->scalar_field].association == CLVR_FIELD_CELL)
-        how = " (cell data averaged to the vertices)";
+    if (m->cell_flat)
+        how = " (cell data, flat: each element its own value and vertices, --cell-data flat)";
+    else if (m->num_fields && m->fields[m->scalar_field].association == CLVR_FIELD_CELL)
+        how = " (cell data averaged to the vertices; --cell-data flat shows each element's own value)";
     fprintf(out, "scalar      %s, range [%g, %g]%s\n", m->scalar_name[0] ? m->scalar_name : "(unnamed)", m->scalar_min,
             m->scalar_max, how);
     if (m->decomposed_cells)

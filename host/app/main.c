@@ -74,6 +74,7 @@ static clvr_status load_mesh(const clvr_options *o, clvr_mesh *m, clvr_error *er
     clvr_load_options lo = {0};
     lo.scalar_name = o->scalar_name;
     lo.field_ranges = o->info; /* --info lists every array with its range */
+    lo.cell_flat = o->cell_flat;
     return clvr_mesh_load(o->mesh_path, &lo, m, err);
 }
 

@@ -236,3 +236,50 @@ clvr_status clvr_field_select(const clvr_field_info *fields, uint32_t n, const c
     return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: no field named '%s'; the file has %s%s (clvr --info %s lists them)",
                           file, spec, list, l + 100 >= sizeof list ? ", ..." : "", file);
 }
+
+clvr_status clvr_mesh_flatten_cells(clvr_mesh *m, const float *values, const char *what, clvr_error *err)
+{
+    uint64_t total = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) total += clvr_mesh_num_indices(m, t);
+    if (total > UINT32_MAX)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                              "%s: --cell-data flat gives every element its own vertices: %llu corners, more than the "
+                              "%u vertices clvr indexes; render the averaged field (--cell-data average)",
+                              what, (unsigned long long)total, UINT32_MAX);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint64_t n = clvr_mesh_num_indices(m, t);
+        for (uint64_t j = 0; j < n; ++j)
+            if ((uint64_t)m->indices[t][j] >= m->num_vertices)
+                return clvr_error_set(err, CLVR_ERR_BAD_INDEX,
+                                      "%s: %s[%llu] vertex %u is index %u but the mesh has %llu vertices", what,
+                                      clvr_cell_type_name(t), (unsigned long long)(j / clvr_cell_vertex_count(t)),
+                                      (unsigned)(j % clvr_cell_vertex_count(t)), m->indices[t][j],
+                                      (unsigned long long)m->num_vertices);
+    }
+    float *pos = NULL, *sc = NULL;
+    clvr_status s = alloc_array((void **)&pos, total, 3 * sizeof(float), what, err);
+    if (s == CLVR_OK) s = alloc_array((void **)&sc, total, sizeof(float), what, err);
+    if (s != CLVR_OK) {
+        free(pos);
+        return s;
+    }
+    uint64_t k = 0, e = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        for (uint64_t c = 0; c < m->num_cells[t]; ++c, ++e)
+            for (uint32_t j = 0; j < nv; ++j, ++k) {
+                uint32_t *ix = &m->indices[t][c * nv + j];
+                memcpy(pos + 3 * k, m->positions + 3 * (uint64_t)*ix, 3 * sizeof(float));
+                sc[k] = values[e];
+                *ix = (uint32_t)k;
+            }
+    }
+    free(m->positions);
+    free(m->scalars);
+    m->positions = pos;
+    m->scalars = sc;
+    m->num_vertices = total;
+    m->cell_flat = 1;
+    clvr_mesh_update_ranges(m);
+    return CLVR_OK;
+}

@@ -53,6 +53,7 @@ typedef struct clvr_mesh {
     uint32_t scalar_field;                         /* index into fields when num_fields > 0 */
     int scalar_component;
     uint64_t decomposed_cells;                     /* polyhedra split into tets and pyramids on load */
+    int cell_flat;                                 /* scalars are a cell field made flat (clvr_mesh_flatten_cells) */
 } clvr_mesh;
 
 /* Allocates arrays for the given counts (zeroed struct first). On failure
@@ -98,6 +99,16 @@ void clvr_mesh_set_scalar_name(clvr_mesh *m, const char *name, size_t len);
  * field there is. */
 clvr_status clvr_field_select(const clvr_field_info *fields, uint32_t n, const char *spec, const char *file,
                               uint32_t *index, int *component, clvr_error *err);
+
+/* Gives every element its own copies of its vertices, all carrying the
+ * element's value from values (one per element, in the order tets,
+ * pyramids, wedges, hexes), so that interpolation inside an element is
+ * constant: cell data shown flat, as ParaView shows it, with no change to
+ * the renderer (majorants bound the values as they bound any vertex
+ * scalar). The vertex count becomes the sum of the elements' corner counts
+ * (at most 2^32 - 1, else CLVR_ERR_OVERFLOW naming `what`); m->cell_flat
+ * is set. On failure m is unchanged. */
+clvr_status clvr_mesh_flatten_cells(clvr_mesh *m, const float *values, const char *what, clvr_error *err);
 
 /* Name of a cell type: "tets", "pyramids", "wedges", "hexes". */
 const char *clvr_cell_type_name(uint32_t t);

@@ -358,7 +358,7 @@ static void *bin_array_ptr(clvr_mesh *m, uint32_t a)
  * elements that use each vertex (vertices no element uses get 0), as
  * docs/bin-format.md says. */
 static clvr_status bin_read_field(const bin_src *src, const bin_header *hd, uint32_t fi, int comp, clvr_mesh *m,
-                                  clvr_error *err)
+                                  float *cellv, clvr_error *err)
 {
     const clvr_field_info *f = &hd->fields[fi];
     const uint32_t nc = f->components;
@@ -370,13 +370,13 @@ static clvr_status bin_read_field(const bin_src *src, const bin_header *hd, uint
     float *buf = malloc((size_t)(chunk * nc * sizeof(float)));
     double *acc = NULL;
     uint32_t *cnt = NULL;
-    if (f->association == CLVR_FIELD_CELL) {
+    if (f->association == CLVR_FIELD_CELL && !cellv) {
         size_t nv = m->num_vertices ? (size_t)m->num_vertices : 1;
         acc = calloc(nv, sizeof *acc);
         cnt = calloc(nv, sizeof *cnt);
     }
     clvr_status s = CLVR_OK;
-    if (!buf || (f->association == CLVR_FIELD_CELL && (!acc || !cnt)))
+    if (!buf || (f->association == CLVR_FIELD_CELL && !cellv && (!acc || !cnt)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate scratch to read field '%s'", src->name,
                            f->name);
     uint32_t t = 0;
@@ -398,6 +398,10 @@ static clvr_status bin_read_field(const bin_src *src, const bin_header *hd, uint
                 m->scalars[i0 + j] = (float)v;
                 continue;
             }
+            if (cellv) { /* --cell-data flat: the element's own value */
+                cellv[i0 + j] = (float)v;
+                continue;
+            }
             while (in_type >= m->num_cells[t]) {
                 ++t;
                 in_type = 0;
@@ -412,7 +416,7 @@ static clvr_status bin_read_field(const bin_src *src, const bin_header *hd, uint
             ++in_type;
         }
     }
-    if (s == CLVR_OK && f->association == CLVR_FIELD_CELL)
+    if (s == CLVR_OK && f->association == CLVR_FIELD_CELL && !cellv)
         for (uint64_t i = 0; i < m->num_vertices; ++i) m->scalars[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
     free(buf);
     free(acc);
@@ -488,7 +492,15 @@ static clvr_status bin_load(const bin_src *src, const clvr_load_options *opt, cl
     } else if (s == CLVR_OK && hd.num_fields == 0) {
         if (out->num_vertices) memset(out->scalars, 0, (size_t)out->num_vertices * sizeof(float));
     } else if (s == CLVR_OK) {
-        s = bin_read_field(src, &hd, fi, comp, out, err);
+        float *cellv = NULL;
+        const int flat = opt && opt->cell_flat && hd.fields[fi].association == CLVR_FIELD_CELL;
+        uint64_t ne = clvr_mesh_num_elements(out);
+        if (flat && (ne > SIZE_MAX / sizeof(float) || !(cellv = malloc(ne ? (size_t)ne * sizeof(float) : 1))))
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu cell values", name,
+                               (unsigned long long)ne);
+        if (s == CLVR_OK) s = bin_read_field(src, &hd, fi, comp, out, cellv, err);
+        if (s == CLVR_OK && flat) s = clvr_mesh_flatten_cells(out, cellv, name, err);
+        free(cellv);
         if (s == CLVR_OK) {
             const clvr_field_info *f = &hd.fields[fi];
             char label[CLVR_SCALAR_NAME_MAX + 16];

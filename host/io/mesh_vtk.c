@@ -799,6 +799,8 @@ typedef struct poly_out {
     uint32_t *uniq;              /* its distinct vertices (cell-data averaging) */
     uint64_t cap_uniq;
     uint64_t cells;              /* polyhedra decomposed */
+    float *tv, *pv;              /* --cell-data flat: each piece's cell value */
+    uint64_t cap_tv, cap_pv;
 } poly_out;
 
 static void poly_free(poly_out *p)
@@ -807,6 +809,8 @@ static void poly_free(poly_out *p)
     free(p->pyrs);
     free(p->ids);
     free(p->uniq);
+    free(p->tv);
+    free(p->pv);
 }
 
 static int grow(void **buf, uint64_t *cap, uint64_t need, size_t item)
@@ -932,7 +936,7 @@ static clvr_status poly_accumulate(vtk_in *in, poly_out *p, uint64_t n, double c
 /* Pass 2: cells. Fills the index lists (counts already allocated) and,
  * for a cell-data scalar, accumulates it onto the cells' points. */
 static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *types, clvr_mesh *m, const cand *cell_sc,
-                              int comp, double *acc, uint32_t *cnt, poly_out *poly)
+                              int comp, double *acc, uint32_t *cnt, poly_out *poly, float *const cellv[CLVR_CELL_TYPE_COUNT])
 {
     vit stream, offs, conn, sc;
     uint64_t used = 0, fill[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, 0};
@@ -995,8 +999,17 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                                       in->name, (unsigned long long)c);
             for (int64_t k = 0; k < npts; ++k)
                 if ((s = vit_i64(ids, &poly->ids[k])) != CLVR_OK) return s;
+            const uint64_t t0 = poly->num_tets, p0 = poly->num_pyrs;
             s = poly_decompose(in, poly, m->positions, doc->num_points, c, (uint64_t)npts);
-            if (s == CLVR_OK && acc) s = poly_accumulate(in, poly, (uint64_t)npts, cv, acc, cnt);
+            if (s == CLVR_OK && acc && !cellv[0]) s = poly_accumulate(in, poly, (uint64_t)npts, cv, acc, cnt);
+            if (s == CLVR_OK && cellv[0]) { /* --cell-data flat: every piece carries the polyhedron's value */
+                if (grow((void **)&poly->tv, &poly->cap_tv, poly->num_tets ? poly->num_tets : 1, sizeof(float)) ||
+                    grow((void **)&poly->pv, &poly->cap_pv, poly->num_pyrs ? poly->num_pyrs : 1, sizeof(float)))
+                    return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory decomposing polyhedra",
+                                          in->name);
+                for (uint64_t k = t0; k < poly->num_tets; ++k) poly->tv[k] = (float)cv;
+                for (uint64_t k = p0; k < poly->num_pyrs; ++k) poly->pv[k] = (float)cv;
+            }
             if (s != CLVR_OK) return s;
             continue;
         }
@@ -1017,6 +1030,7 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                                   "%s: cell %llu has VTK type %d (%s) but only %lld points, fewer than its %u corners",
                                   in->name, (unsigned long long)c, (int)types[c], clvr_cell_type_name((uint32_t)t),
                                   (long long)npts, nv);
+        if (cellv[0]) cellv[t][fill[t]] = (float)cv;
         uint32_t *dst = m->indices[t] + fill[t]++ * nv;
         for (uint32_t k = 0; k < nv; ++k) {
             if ((s = vit_i64(ids, &v)) != CLVR_OK) return s;
@@ -1028,7 +1042,7 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                                       "%s: cell %llu vertex %u is index %lld but the mesh has %llu points", in->name,
                                       (unsigned long long)c, k, (long long)v, (unsigned long long)doc->num_points);
             dst[k] = (uint32_t)v;
-            if (acc) {
+            if (acc && !cellv[0]) {
                 acc[v] += cv;
                 cnt[v] += 1;
             }
@@ -1059,6 +1073,8 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
     int comp = CLVR_FIELD_MAGNITUDE;
     poly_out poly;
     memset(&poly, 0, sizeof poly);
+    float *cellv[CLVR_CELL_TYPE_COUNT] = {NULL, NULL, NULL, NULL};
+    int flat = 0;
     clvr_status s;
     memset(&doc, 0, sizeof doc);
     memset(out, 0, sizeof *out);
@@ -1136,6 +1152,7 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
             out->positions[i] = (float)x;
         }
     }
+    flat = opt && opt->cell_flat && sc->cell;
     if (sc->cell) {
         acc = calloc(doc.num_points ? (size_t)doc.num_points : 1, sizeof *acc);
         cnt = calloc(doc.num_points ? (size_t)doc.num_points : 1, sizeof *cnt);
@@ -1144,7 +1161,14 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
             goto done;
         }
     }
-    s = fill_cells(&in, &doc, types, out, sc->cell ? sc : NULL, comp, acc, cnt, &poly);
+    if (flat) {
+        /* --cell-data flat: each element's own value, per type; polyhedron pieces in poly.tv/pv. */
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t)
+            if (!(cellv[t] = malloc(counts[t] ? (size_t)counts[t] * sizeof(float) : sizeof(float))))
+                s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the cell values", name);
+        if (s != CLVR_OK) goto done;
+    }
+    s = fill_cells(&in, &doc, types, out, sc->cell ? sc : NULL, comp, acc, cnt, &poly, cellv);
     if (s != CLVR_OK) goto done;
     if (poly.num_tets || poly.num_pyrs) {
         /* The pieces go after the file's own tets and pyramids. */
@@ -1171,7 +1195,29 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
         }
     }
     out->decomposed_cells = poly.cells;
-    if (sc->cell) {
+    if (flat) {
+        /* One value per element in mesh order: each type's file cells, then its polyhedron pieces. */
+        uint64_t ne = clvr_mesh_num_elements(out), e = 0;
+        float *all = ne <= SIZE_MAX / sizeof(float) ? malloc(ne ? (size_t)ne * sizeof(float) : 1) : NULL;
+        if (!all) {
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the cell values", name);
+            goto done;
+        }
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            memcpy(all + e, cellv[t], (size_t)counts[t] * sizeof(float));
+            e += counts[t];
+            const float *extra = t == 0 ? poly.tv : t == 1 ? poly.pv : NULL;
+            const uint64_t n_extra = t == 0 ? poly.num_tets : t == 1 ? poly.num_pyrs : 0;
+            if (n_extra) memcpy(all + e, extra, (size_t)n_extra * sizeof(float));
+            e += n_extra;
+        }
+        s = clvr_mesh_flatten_cells(out, all, name, err);
+        free(all);
+        if (s != CLVR_OK) goto done;
+    }
+    if (flat) {
+        /* scalars set by clvr_mesh_flatten_cells */
+    } else if (sc->cell) {
         for (uint64_t i = 0; i < doc.num_points; ++i) out->scalars[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
     } else {
         vit it;
@@ -1219,6 +1265,7 @@ done:
     free(cnt);
     free(fields);
     poly_free(&poly);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(cellv[t]);
     free(doc.cands.v);
     return s;
 }
