@@ -16,7 +16,8 @@ usage: graded_gmsh.py point|layers OUT.vtu [--scale S] [--uniform H] [--threads 
           at the wall. Scalar "density": a wall jet, exp(-z/0.02) (1 + 0.5 sin 6x).
 
 S (default 1) scales every size; element count goes about as S^-3 (point) and
-S^-2 (layers): S = 0.8 gives 0.66M tets (point), S = 1.2 0.86M (layers).
+S^-2 (layers): S = 0.8 gives 0.66M tets (point), S = 1.2 0.86M (layers); --uniform 0.038 (point)
+and 0.0174 (layers) give twins of about the same count.
 --uniform H meshes the same box with the same scalar field at constant edge H: the
 uniform mesh of the same optical depth that issue #19 compares against.
 """
