@@ -51,7 +51,7 @@ GRADED=(gmsh-point gmsh-layers)
 if [ -f "$DIR/of-igloo-tets.bin" ]; then
   # No same-field twin exists for the OpenFOAM case: a nearly uniform Delaunay mesh
   # (clvr-gen cellvar) of the same element count stands in (other optical depth).
-  n=$(python3 -c "import struct,sys; h=open(sys.argv[1],'rb').read(56); print(struct.unpack('<Q',h[24:32])[0])" "$DIR/of-igloo-tets.bin")
+  n=$(/usr/bin/python3 -c "import struct,sys; h=open(sys.argv[1],'rb').read(56); print(struct.unpack('<Q',h[24:32])[0])" "$DIR/of-igloo-tets.bin")
   [ -f "$DIR/cellvar-igloo.bin" ] || nice "$BUILD/clvr-gen" cellvar "$DIR/cellvar-igloo.bin" --elements "$n" --quiet
   TWIN[of-igloo-tets]=cellvar-igloo
 fi
@@ -81,7 +81,7 @@ if ! skip stats; then
   for m in "${LOCATE[@]}"; do args+=("$DIR/$m.bin"); done
   [ -f "$DIR/of-igloo.bin" ] && args+=("$DIR/of-igloo.bin")
   { echo "## Cell sizes (tools/cell-stats.py; volumes in mesh units^3)"; echo
-    nice python3 "$ROOT/tools/cell-stats.py" "${args[@]}" --json "$RAW/stats.json"; echo; } >>"$MD"
+    nice /usr/bin/python3 "$ROOT/tools/cell-stats.py" "${args[@]}" --json "$RAW/stats.json"; echo; } >>"$MD"
 fi
 
 export POCL_MEMORY_LIMIT=${POCL_MEMORY_LIMIT:-20}
@@ -133,7 +133,7 @@ fi
 say "summary"
 pairs=()
 for g in "${GRADED[@]}"; do pairs+=("$g=${TWIN[$g]}"); done
-python3 "$ROOT/bench/graded_summary.py" "$RAW" "$BASE.json" "${pairs[@]}" >"$RAW/summary.md"
+/usr/bin/python3 "$ROOT/bench/graded_summary.py" "$RAW" "$BASE.json" "${pairs[@]}" >"$RAW/summary.md"
 cat "$RAW/head.md" "$RAW/summary.md" "$MD" >"$BASE.md"
 rm -rf "$RAW"
 say "wrote $BASE.md and $BASE.json"
