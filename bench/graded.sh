@@ -7,7 +7,8 @@
 #      and sorted (renderer-like coherent) points
 #   3. the paper's Table 2 shape (bench_locate, leaf N = 1..32, random points)
 #   4. rendering: build/bench_render samples/ray, null collisions/ray, Mrays/s
-#      (track and dda), then bench_render --converge time to 2 % relative RMSE
+#      (track and dda; urm and delta estimators), then bench_render --converge time
+#      to 2 % relative RMSE (delta and urm, shadows off and on)
 # Writes bench/results/graded/<date>-<device>.md (every tool's own table plus a
 # summary against #19's goals) and .json (all raw JSON merged).
 #
@@ -17,6 +18,7 @@
 #   --queries  point queries per locate run (default 300000: the machine is shared, 2 cores)
 #   --size     bench_render frame size (default 256x256; --converge is 256x256, --ref-spp 32, --max-spp 48)
 #   --skip     comma list of stats,locate,table2,render,converge
+#   --tag TAG  results go to <date>-<device>-TAG.{md,json} (a partial rerun beside a full one)
 # The machine may be shared: every tool records the 1-minute load average beside each
 # figure; compare ratios measured in one run.
 set -euo pipefail
@@ -26,6 +28,7 @@ BUILD=$ROOT/build
 QUERIES=300000
 SIZE=256x256
 SKIP=
+TAG=
 while [ $# -gt 0 ]; do
   case $1 in
     --dir) DIR=$2; shift 2 ;;
@@ -33,6 +36,7 @@ while [ $# -gt 0 ]; do
     --queries) QUERIES=$2; shift 2 ;;
     --size) SIZE=$2; shift 2 ;;
     --skip) SKIP=$2; shift 2 ;;
+    --tag) TAG=-$2; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "graded.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
   esac
@@ -64,7 +68,7 @@ DEV=$("$BUILD/clvr" --list-devices 2>/dev/null | sed -n 's/^ *device 0:0 *//p' |
 SLUG=$(printf '%s' "${DEV:-device}" | tr -c 'A-Za-z0-9' '-' | tr 'A-Z' 'a-z' | sed 's/--*/-/g; s/^-//; s/-$//')
 OUT=$ROOT/bench/results/graded
 mkdir -p "$OUT"
-BASE=$OUT/$(date -u +%F)-$SLUG
+BASE=$OUT/$(date -u +%F)-$SLUG$TAG
 RAW=$(mktemp -d /tmp/clvr-graded-results-XXXXXX)
 MD=$RAW/body.md
 : >"$MD"
@@ -110,12 +114,16 @@ if ! skip table2; then
 fi
 
 if ! skip render; then
-  say "bench_render"
   args=()
   for g in "${GRADED[@]}"; do args+=(--mesh "$DIR/$g.bin" --mesh "$DIR/${TWIN[$g]}.bin"); done
-  { echo "## Rendering (bench_render $SIZE, track and dda)"; echo
-    nice "$BUILD/bench_render" "${args[@]}" --size "$SIZE" --frames 3 --warmup 1 --methods track,dda \
-      --json "$RAW/render.json" 2>&1 || echo "bench_render FAILED"; echo; } >>"$MD"
+  # urm (the renderer's default: a fixed number of steps per ray, so samples/ray hardly
+  # depend on the mesh) and delta tracking (samples and null collisions follow the majorants).
+  for est in urm delta; do
+    say "bench_render --estimator $est"
+    { echo "## Rendering (bench_render $SIZE, --estimator $est, track and dda)"; echo
+      nice "$BUILD/bench_render" "${args[@]}" --estimator "$est" --size "$SIZE" --frames 3 --warmup 1 \
+        --methods track,dda --json "$RAW/render-$est.json" 2>&1 || echo "bench_render FAILED"; echo; } >>"$MD"
+  done
 fi
 
 if ! skip converge; then

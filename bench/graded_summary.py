@@ -4,7 +4,7 @@
 usage: graded_summary.py RAWDIR OUT.json GRADED=UNIFORM ...
 
 Reads the JSON files graded.sh left in RAWDIR (stats.json, locate-MESH-ORDER.json,
-table2-MESH.json, render.json, converge-MESH.json), merges them into OUT.json (the
+table2-MESH.json, render-EST.json, converge-MESH.json), merges them into OUT.json (the
 converge runs without their per-spp points and transfer-function tables) and prints
 Markdown: point location vs Embree (goal >= 1.5x, tree + indices <= 1/3 of Embree's),
 best leaf size per mesh, and graded over uniform rendering ratios (goal <= 2x).
@@ -35,7 +35,12 @@ def main():
         merged["locate"][base(p)[len("locate-"):]] = load(p)
     for p in sorted(glob.glob(os.path.join(raw, "table2-*.json"))):
         merged["table2"][base(p)[len("table2-"):]] = load(p)
-    merged["render"] = load(os.path.join(raw, "render.json"))
+    merged["render"] = {}
+    for p in sorted(glob.glob(os.path.join(raw, "render*.json"))):
+        d = load(p)
+        if d:
+            # render-EST.json; a plain render.json (older runs) is urm, the renderer's default
+            merged["render"][base(p)[len("render-"):] or "urm"] = d
     for p in sorted(glob.glob(os.path.join(raw, "converge-*.json"))):
         d = load(p)
         if d:
@@ -84,14 +89,14 @@ def main():
                 " | ".join("%.3g" % rows[n]["queries_per_s"] if n in rows else "" for n in (1, 4, 8, 16, 32)),
                 best["load"]))
         o.append("")
-    r = merged["render"]
-    if r:
+    if merged["render"]:
+        o += ["Rendering, graded over uniform (goal: samples/ray and null collisions/ray <= 2x):", "",
+              "| graded / uniform | estimator, method | samples/ray | null/ray | samples ratio | null ratio | Mrays/s graded / uniform | goal | load |",
+              "|---|---|---:|---:|---:|---:|---:|---|---:|"]
+    for est, r in merged["render"].items():
         by = {}
         for row in r["rows"]:
             by[(os.path.splitext(row["mesh"])[0], row["label"])] = row
-        o += ["Rendering, graded over uniform (goal: samples/ray and null collisions/ray <= 2x):", "",
-              "| graded / uniform | method | samples/ray | null/ray | samples ratio | null ratio | Mrays/s graded / uniform | goal | load |",
-              "|---|---|---:|---:|---:|---:|---:|---|---:|"]
         for g, u in pairs:
             for (m, label), gr in by.items():
                 if m != g or (u, label) not in by:
@@ -100,13 +105,15 @@ def main():
                 sr = gr["samples_per_ray"] / ur["samples_per_ray"] if ur["samples_per_ray"] else float("inf")
                 nr = (gr["null_collisions_per_ray"] / ur["null_collisions_per_ray"]
                       if ur["null_collisions_per_ray"] else float("inf"))
-                o.append("| %s / %s | %s | %.3g / %.3g | %.3g / %.3g | %.2f | %.2f | %.3g / %.3g | %s | %.1f |" % (
-                    g, u, label, gr["samples_per_ray"], ur["samples_per_ray"], gr["null_collisions_per_ray"],
+                o.append("| %s / %s | %s, %s | %.3g / %.3g | %.3g / %.3g | %.2f | %.2f | %.3g / %.3g | %s | %.1f |" % (
+                    g, u, est, label, gr["samples_per_ray"], ur["samples_per_ray"], gr["null_collisions_per_ray"],
                     ur["null_collisions_per_ray"], sr, nr, gr["mrays_per_s"], ur["mrays_per_s"],
                     "met" if sr <= 2 and nr <= 2 else "missed", gr["load_before"]))
+    if merged["render"]:
         o.append("")
     if merged["converge"]:
-        o += ["Time to 2 % relative RMSE (256x256, dda, 32-spp reference; '>' = not reached within the run):", "",
+        o += ["Time to 2 % relative RMSE (256x256, dda, 32-spp reference; '>X (fit Y)': not reached within "
+              "48 spp, Y = the 1/n fit's estimate):", "",
               "| graded / uniform | estimator | shadows | s graded | s uniform | graded / uniform | samples/ray graded / uniform | load |",
               "|---|---|---|---:|---:|---:|---:|---:|"]
         for g, u in pairs:
@@ -120,12 +127,12 @@ def main():
                     continue
 
                 def t(z):
-                    return z["at"]["device_s"] if z.get("reached") else None
-                tg, tu = t(x), t(y)
+                    if z.get("reached"):
+                        return z["at"]["device_s"], "%.2f" % z["at"]["device_s"]
+                    return z.get("fit_s"), "> (fit %.1f)" % z.get("fit_s", float("nan"))
+                (tg, sg), (tu, su) = t(x), t(y)
                 o.append("| %s / %s | %s | %s | %s | %s | %s | %.3g / %.3g | %.1f |" % (
-                    g, u, x["estimator"], "on" if x["shadows"] else "off",
-                    "%.2f" % tg if tg is not None else ">",
-                    "%.2f" % tu if tu is not None else ">",
+                    g, u, x["estimator"], "on" if x["shadows"] else "off", sg, su,
                     "%.2f" % (tg / tu) if tg and tu else "n/a",
                     x["samples_per_ray"], y["samples_per_ray"], x["load_before"]))
         o.append("")
