@@ -5,6 +5,9 @@
 #   1. cell-size statistics (tools/cell-stats.py)
 #   2. point location vs Embree 3 (and VTK): bench/locate-vs-embree.sh --mesh, random
 #      and sorted (renderer-like coherent) points
+#   2b. REPEATS more runs of bench_locate_embree alone (no VTK) per graded mesh and
+#      order: the summary's goal column uses their median (single runs on a shared
+#      machine disagree by up to 2.6x)
 #   3. the paper's Table 2 shape (bench_locate, leaf N = 1..32, random points)
 #   4. rendering: build/bench_render samples/ray, null collisions/ray, Mrays/s
 #      (track and dda; urm and delta estimators), then bench_render --converge time
@@ -17,7 +20,8 @@
 #   --build    build directory (default build)
 #   --queries  point queries per locate run (default 300000: the machine is shared, 2 cores)
 #   --size     bench_render frame size (default 256x256; --converge is 256x256, --ref-spp 32, --max-spp 48)
-#   --skip     comma list of stats,locate,table2,render,converge
+#   --repeats  bench_locate_embree repeats per graded mesh and order (default 3)
+#   --skip     comma list of stats,locate,repeats,table2,render,converge
 #   --tag TAG  results go to <date>-<device>-TAG.{md,json} (a partial rerun beside a full one)
 # The machine may be shared: every tool records the 1-minute load average beside each
 # figure; compare ratios measured in one run.
@@ -29,6 +33,7 @@ QUERIES=300000
 SIZE=256x256
 SKIP=
 TAG=
+REPEATS=3
 while [ $# -gt 0 ]; do
   case $1 in
     --dir) DIR=$2; shift 2 ;;
@@ -37,6 +42,7 @@ while [ $# -gt 0 ]; do
     --size) SIZE=$2; shift 2 ;;
     --skip) SKIP=$2; shift 2 ;;
     --tag) TAG=-$2; shift 2 ;;
+    --repeats) REPEATS=$2; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "graded.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
   esac
@@ -99,6 +105,18 @@ if ! skip locate; then
         nice "$ROOT/bench/locate-vs-embree.sh" --no-install --build "$BUILD" -- --mesh "$DIR/$m.bin" --order "$order" \
           --queries "$QUERIES" --json "$RAW/locate-$m-$order.json" 2>&1 || echo "FAILED"
         echo '```'; echo; } >>"$MD"
+    done
+  done
+fi
+
+if ! skip repeats; then
+  for ((r = 1; r <= REPEATS; r++)); do
+    for m in "${GRADED[@]}" "${REAL[@]}"; do
+      for order in random sorted; do
+        say "repeat $r: bench_locate_embree $m $order"
+        nice "$BUILD/bench_locate_embree" --mesh "$DIR/$m.bin" --order "$order" --queries "$QUERIES" \
+          --json "$RAW/rep-$m-$order-$r.json" >/dev/null 2>&1 || echo "repeat $r $m $order FAILED" >>"$MD"
+      done
     done
   done
 fi

@@ -3,7 +3,7 @@
 
 usage: graded_summary.py RAWDIR OUT.json GRADED=UNIFORM ...
 
-Reads the JSON files graded.sh left in RAWDIR (stats.json, locate-MESH-ORDER.json,
+Reads the JSON files graded.sh left in RAWDIR (stats.json, locate-MESH-ORDER.json, rep-MESH-ORDER-R.json,
 table2-MESH.json, render-EST.json, converge-MESH.json), merges them into OUT.json (the
 converge runs without their per-spp points and transfer-function tables) and prints
 Markdown: point location vs Embree (goal >= 1.5x, tree + indices <= 1/3 of Embree's),
@@ -12,6 +12,7 @@ best leaf size per mesh, and graded over uniform rendering ratios (goal <= 2x).
 import glob
 import json
 import os
+import statistics
 import sys
 
 
@@ -35,6 +36,9 @@ def main():
         merged["locate"][base(p)[len("locate-"):]] = load(p)
     for p in sorted(glob.glob(os.path.join(raw, "table2-*.json"))):
         merged["table2"][base(p)[len("table2-"):]] = load(p)
+    merged["repeats"] = {}
+    for p in sorted(glob.glob(os.path.join(raw, "rep-*.json"))):
+        merged["repeats"][base(p)[len("rep-"):]] = load(p)
     merged["render"] = {}
     for p in sorted(glob.glob(os.path.join(raw, "render*.json"))):
         d = load(p)
@@ -75,6 +79,26 @@ def main():
             o.append("| %s | %s | %.3g | %.3g | %.2f | %s | %.2f | %s | %.1f |" % (
                 mesh, order, c["queries_per_s"], b["queries_per_s"], ratio, "met" if ratio >= 1.5 else "missed",
                 mem, "met" if mem <= 1 / 3 else "missed", c["load"]))
+        o.append("")
+    if merged["repeats"]:
+        runs = {}
+        for key, d in merged["repeats"].items():
+            mesh_order = key.rsplit("-", 1)[0]
+            rows = {r["method"]: r for r in (d or {}).get("rows", [])}
+            e = [r for m, r in rows.items() if m.startswith("embree")]
+            if "clvr" in rows and e:
+                b = max(e, key=lambda r: r["queries_per_s"])
+                runs.setdefault(mesh_order, []).append((rows["clvr"]["queries_per_s"] / b["queries_per_s"],
+                                                        rows["clvr"]["load"]))
+        o += ["Point location, repeats (bench_locate_embree alone): clvr over Embree's faster query, the goal "
+              "judged on the median:", "",
+              "| mesh | points | per run | median | goal 1.5x | loads |", "|---|---|---|---:|---|---|"]
+        for mesh_order, v in runs.items():
+            mesh, order = mesh_order.rsplit("-", 1)
+            med = statistics.median(x for x, _ in v)
+            o.append("| %s | %s | %s | %.2f | %s | %s |" % (
+                mesh, order, ", ".join("%.2f" % x for x, _ in v), med, "met" if med >= 1.5 else "missed",
+                ", ".join("%.1f" % l for _, l in v)))
         o.append("")
     if merged["table2"]:
         o += ["Table 2 shape, best leaf size N per mesh (random points):", "",
