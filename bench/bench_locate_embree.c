@@ -17,6 +17,8 @@
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
  *                       [--hint coherent|incoherent]  (clvr's query hint, CLVR_LOCATE_*; default
  *                       incoherent for random points, coherent for sorted ones)
+ *                       [--ebox on|off]  (quantized element boxes, kernels/locate.h; default on as
+ *                       in bench_locate; their bytes count in clvr's tree bytes)
  *
  * Last line: `point_queries_vs_embree: RATIO` (clvr queries/s over Embree's;
  * "n/a" without Embree). Built without Embree (CLVR_HAVE_EMBREE unset) it
@@ -46,6 +48,8 @@
 #define NRUNS 5
 
 /* ------------------------------------------------------------ clvr */
+
+static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 
 typedef struct result {
     double qps, qps_cpu, load, build_s, sort_s, found;
@@ -83,7 +87,12 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     /* The BVH's sort: bounds, curve keys, radix sort, leaf boxes. */
     r->sort_s = c.stage_s[CLVR_PP_STAGE_BOUNDS] + c.stage_s[CLVR_PP_STAGE_KEYS] + c.stage_s[CLVR_PP_STAGE_SORT] +
                 c.stage_s[CLVR_PP_STAGE_LEAVES];
-    r->tree_bytes = clvr_bvh_bytes(db.tlas_nodes, db.blas_nodes) + c.num_instances * sizeof(clvr_instance);
+    if (g_ebox)
+        CLVR_TRY(clvr_bvh_element_boxes_device(cl, &k, &db, c.instances, (uint32_t)c.num_instances, c.vertices, c.idx16,
+                                               c.idx32, c.leaf_size, (uint32_t)c.num_leaves, c.num_elements, err));
+    /* Tree bytes include the quantized element boxes: they are part of clvr's acceleration structure. */
+    r->tree_bytes = clvr_bvh_bytes(db.tlas_nodes, db.blas_nodes) + c.num_instances * sizeof(clvr_instance) +
+                    (g_ebox ? db.ebox_bytes : 0);
     r->index_bytes = c.num_idx16 * 2 + c.num_idx32 * 4;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(nq ? nq : 1) * sizeof *pts, pts,
                             "points", &dpts, err));
@@ -104,6 +113,8 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 10, sizeof(cl_mem), &args[7]));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 11, sizeof(cl_mem), &args[8]));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 12, sizeof(cl_uint), &hints));
+    CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 13, sizeof(cl_mem), g_ebox ? &db.ebox : &args[4]));
+    CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 14, sizeof(cl_uint), &g_ebox));
     CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, nq, local, NULL, err)); /* warm-up */
     CLVR_CL_CHECK(clFinish(cl->queue));
     double t[NRUNS], tc[NRUNS], ld[NRUNS];
@@ -434,11 +445,13 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--local") && i + 1 < argc) local = (size_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--dump") && i + 1 < argc) dump = argv[++i];
         else if (!strcmp(argv[i], "--hint") && i + 1 < argc) hint = argv[++i];
+        else if (!strcmp(argv[i], "--ebox") && i + 1 < argc && (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_ebox = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
                     "[--queries Q] [--leaf N] [--order random|sorted] [--threads T] [--local L] [--dump FILE] "
-                    "[--hint coherent|incoherent]\n",
+                    "[--hint coherent|incoherent] [--ebox on|off]\n",
                     argv[0]);
             return 2;
         }
