@@ -493,8 +493,11 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
 #define CLVR_DDA_DESCEND 0.1f
 #endif
 
+/* Most clip planes of a frame (--clip). */
+#define CLVR_MAX_CLIP_PLANES 6u
+
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 208 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 304 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -523,8 +526,16 @@ typedef struct clvr_frame {
     clvr_u32 urm_steps;       /* urm: at least this many quadrature points per ray */
     float urm_kappa;          /* urm: at most this majorant optical depth between two points */
     clvr_u32 light_res;       /* urm with shadows: light grid cells per axis over the grid domain */
-    clvr_u32 pad0, pad1, pad2;
+    clvr_u32 num_clip_planes; /* planes in use, 0..CLVR_MAX_CLIP_PLANES */
+    clvr_u32 pad1, pad2;
+    /* Half-spaces that clip the medium, (nx, ny, nz, d) with a unit normal:
+     * points with n.p <= d are kept (ParaView's Clip with its default
+     * "Invert": the side the normal points away from). Every ray, camera
+     * and shadow alike, is cut to them (clvr_ray_clip), so the medium
+     * outside is gone, as in ParaView; the majorants are left as they are
+     * (still bounds on a shorter interval). */
+    float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 208, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 304, "clvr_frame layout");
 
 #endif /* CLVR_SHARED_H */

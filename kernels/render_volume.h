@@ -58,6 +58,23 @@ inline int clvr_ray_box(float3 org, float3 dir, float3 lo, float3 hi, float *t0,
     return a <= b;
 }
 
+/* Ray vs the frame's clip box (lo, hi) and clip planes: cuts [t0, t1] to the
+ * part of the ray inside every kept half-space n.p <= d (clvr_frame);
+ * returns 0 when nothing is left. A ray parallel to a plane is kept whole
+ * or dropped whole by the side its origin is on. */
+inline int clvr_ray_clip(const clvr_frame *f, float3 org, float3 dir, float3 lo, float3 hi, float *t0, float *t1)
+{
+    if (!clvr_ray_box(org, dir, lo, hi, t0, t1)) return 0;
+    for (uint i = 0; i < f->num_clip_planes && i < CLVR_MAX_CLIP_PLANES; ++i) {
+        const float3 n = vload3(0, f->clip_planes[i]);
+        const float den = dot(n, dir), num = f->clip_planes[i][3] - dot(n, org);
+        if (den > 0.0f) *t1 = fmin(*t1, num / den);
+        else if (den < 0.0f) *t0 = fmax(*t0, num / den);
+        else if (num < 0.0f) return 0;
+    }
+    return *t0 <= *t1;
+}
+
 /* ------------------------------------------------------------ majorant iterators
  * Each method is an iterator over the ray's majorant segments, in order:
  * next(&a, &b, &m) gives [a, b) with a majorant m >= every extinction on it
@@ -599,7 +616,7 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
 {
     float s0 = 0.0f, s1 = INFINITY;
     ++*rays;
-    return clvr_ray_box(p, ldir, lo, hi, &s0, &s1) ? clvr_urm_transmittance(v, p, ldir, s0, s1, u, rng, samples, nulls)
+    return clvr_ray_clip(v->f, p, ldir, lo, hi, &s0, &s1) ? clvr_urm_transmittance(v, p, ldir, s0, s1, u, rng, samples, nulls)
                                                    : 1.0f;
 }
 
@@ -617,7 +634,7 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
     const float3 p = lo + ((float3)((float)x, (float)y, (float)z) + 0.5f) * (hi - lo) / (float)r;
     clvr_rng rng = clvr_rng_make((uint)clvr_grid_index(x, y, z, r), 0x11647u, f->seed_lo, f->seed_hi);
     float s0 = 0.0f, s1 = INFINITY, sum = 0.0f;
-    if (!clvr_ray_box(p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
+    if (!clvr_ray_clip(f, p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
     for (int k = 0; k < 2; ++k)
         sum += clvr_urm_transmittance(v, p, ldir, s0, s1, ((float)k + clvr_rng_next(&rng)) * 0.5f, &rng, samples,
                                       nulls);
@@ -638,7 +655,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi), ldir = vload3(0, f->light_dir);
     const float4 bg = (float4)(vload3(0, f->background), 0.0f);
     float t0 = 0.0f, t1 = INFINITY;
-    if (!clvr_ray_box(org, dir, lo, hi, &t0, &t1)) return bg;
+    if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return bg;
     const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
@@ -667,7 +684,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         const float3 p = org + dir * t;
         float s0 = 0.0f, s1 = INFINITY;
         ++*rays;
-        if (clvr_ray_box(p, ldir, lo, hi, &s0, &s1)) {
+        if (clvr_ray_clip(f, p, ldir, lo, hi, &s0, &s1)) {
             float ts;
             float4 m2;
             const float u_shadow = ld ? ld[3] : clvr_rng_next(rng);
@@ -688,7 +705,7 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, cl
     float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
     float t0 = 0.0f, t1 = INFINITY;
     float4 bg = (float4)(vload3(0, f->background), 0.0f);
-    if (!clvr_ray_box(org, dir, lo, hi, &t0, &t1)) return bg;
+    if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return bg;
     float3 c = (float3)(0.0f);
     float T = 1.0f;
     const float shade = f->ambient + f->light_intensity;

@@ -34,5 +34,6 @@ __kernel void clvr_selftest_sizes(__global uint *out)
     SIZE_AND(clvr_camera, height)
     SIZE_AND(clvr_frame, ambient)
     SIZE_AND(clvr_frame, sampler)
+    SIZE_AND(clvr_frame, clip_planes)
     out[k++] = clvr_cell_vertex_count(CLVR_CELL_HEX);
 }

@@ -72,6 +72,7 @@ int main(void)
             LAYOUT(clvr_camera, height),
             LAYOUT(clvr_frame, ambient),
             LAYOUT(clvr_frame, sampler),
+            LAYOUT(clvr_frame, clip_planes),
         };
 #undef LAYOUT
         const size_t nl = sizeof layout / sizeof layout[0];

@@ -106,6 +106,29 @@ int main(void)
     expect_usage("--tonemap", "reinhard");
     expect_usage("--background", "transparent");
 
+    /* Clipping and the outline: planes repeat up to CLVR_MAX_CLIP_PLANES. */
+    TU_CHECK_STATUS(PARSE(&o, &err, "m.bin"), CLVR_OK, &err);
+    TU_CHECK(o.num_clip_planes == 0 && !o.clip_box_set && !o.outline);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--clip", "1,0,0,0.5", "--clip", "0,-1,0,2", "--clip-box", "0,1,2,3,4,5",
+                          "--outline"),
+                    CLVR_OK, &err);
+    TU_CHECK_EQ_U64(o.num_clip_planes, 2);
+    TU_CHECK(o.clip_planes[0][0] == 1.0f && o.clip_planes[0][3] == 0.5f && o.clip_planes[1][1] == -1.0f &&
+             o.clip_planes[1][3] == 2.0f);
+    TU_CHECK(o.clip_box_set && o.clip_lo[0] == 0.0f && o.clip_lo[2] == 2.0f && o.clip_hi[0] == 3.0f &&
+             o.clip_hi[2] == 5.0f);
+    TU_CHECK(o.outline);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--clip", "1,0,0,0", "--clip", "1,0,0,0", "--clip", "1,0,0,0", "--clip",
+                          "1,0,0,0", "--clip", "1,0,0,0", "--clip", "1,0,0,0", "--clip", "1,0,0,0"),
+                    CLVR_ERR_USAGE, &err);
+    TU_CHECK(strstr(err.msg, "more than 6") != NULL);
+    expect_usage("--clip", "1,0,0");
+    expect_usage("--clip", "0,0,0,1");
+    expect_usage("--clip", "1,0,0,x");
+    expect_usage("--clip-box", "0,0,0,1,1");
+    expect_usage("--clip-box", "0,0,0,1,-1,1");
+    expect_usage("--clip-box", "0,0,0,1,1,1,1");
+
     TU_CHECK_STATUS(PARSE(&o, &err, "--info", "--list-devices", "--help", "--stats"), CLVR_OK, &err);
     TU_CHECK(o.info && o.list_devices && o.help && o.stats && !o.mesh_path);
 

@@ -173,6 +173,34 @@ assert a[h - 10] != b[h - 10], "the bottom rows did not change"
 PYEOF
 expect 2 "--legend" -- "$CLVR" --legend -o "$tmp/leg.exr"
 
+# Clipping and the outline (issue 17): a plane that keeps everything changes
+# nothing (same seed), one that keeps nothing leaves the background, and
+# --outline draws over the image; --tf FILE:NAME picks a preset and an
+# unknown one names those the file has.
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet -o "$tmp/ref32.png"
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet --clip 1,0,0,1e30 -o "$tmp/clipall.png"
+cmp -s "$tmp/clipall.png" "$tmp/ref32.png" && ok || bad "--clip keeping everything changed the image"
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet --clip 1,0,0,-1e30 -o "$tmp/clipnone.png"
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet --clip-box 0,0,0,1e-6,1e-6,1e-6 --outline -o "$tmp/clipbox.png"
+expect 0 "" -- "$CLVR" --device pocl --size 32x32 --spp 2 --quiet --outline -o "$tmp/outline.png"
+$PY - "$tmp/clipnone.png" "$tmp/ref32.png" "$tmp/outline.png" "$(dirname "$0")" <<'PYEOF' && ok || bad "--clip / --outline images"
+import sys
+sys.path.insert(0, sys.argv[4])
+from checklib import read_png
+w, h, ch, none = read_png(sys.argv[1])
+_, _, _, full = read_png(sys.argv[2])
+_, _, _, outl = read_png(sys.argv[3])
+px = lambda img: [img[y][x * ch:x * ch + 3] for y in range(h) for x in range(w)]
+assert len(set(px(none))) == 1, "a clip that keeps nothing left more than the background"
+assert px(none) != px(full)
+assert sum(a != b for a, b in zip(px(outl), px(full))) > 20, "--outline drew nothing"
+PYEOF
+expect 2 "--clip" -- "$CLVR" --clip 0,0,0,1
+expect 2 "--clip-box" -- "$CLVR" --clip-box 1,0,0,0,1,1
+printf '[{"Name":"Blue","RGBPoints":[0,0,0,1, 1,0,0,1]},{"Name":"Red","RGBPoints":[0,1,0,0, 1,1,0,0]}]' >"$tmp/presets.json"
+expect 0 "" -- "$CLVR" --device pocl --size 16x16 --spp 1 --quiet --tf "$tmp/presets.json:Red" -o "$tmp/red.png"
+expect 3 'no colour map named "Green"; the file has "Blue", "Red"' -- "$CLVR" --device pocl --size 16x16 --spp 1 --quiet --tf "$tmp/presets.json:Green" -o "$tmp/green.png"
+
 # First run (issue 17), PoCL with an empty kernel cache: the compilation is
 # announced and timed apart from clustering; no line of the compiler's own
 # ("1 warning generated.") reaches the user; the second run is silent about it.

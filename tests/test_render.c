@@ -4,6 +4,8 @@
  *    interval, for track, dda and bins, and for track and dda with the
  *    low-discrepancy sampler (whose per-pixel error is below the
  *    independent frames' binomial standard error used as the bound);
+ *    and the same box cut by a clip box and clip planes matches the
+ *    transmittance of the chord that is left;
  * 2. track, bins and dda converge to the same image (per-pixel difference of
  *    means within k standard errors) on a mixed mesh and on a real file, and
  *    so does dda with the low-discrepancy sampler (its per-frame variance
@@ -316,6 +318,136 @@ static void test_homogeneous(clvr_cl *cl)
         free(mean);
         free(var);
     }
+    fixture_close(&fx);
+}
+
+/* ---- 1b. clip box and planes: the chord that is left */
+/* Length of the camera ray through (px, py) inside the unit box cut to the
+ * box [lo, hi] and the half-spaces n.p <= d of planes (np of them), in
+ * double; 0 when nothing is left. */
+static double clipped_chord(const clvr_camera *cam, float px, float py, const float lo[3], const float hi[3],
+                            const float (*planes)[4], uint32_t np)
+{
+    float o[3], d[3];
+    clvr_camera_ray(cam, px, py, o, d);
+    double t0 = 0, t1 = 1e30;
+    for (int k = 0; k < 3; ++k) {
+        double l = lo[k] > 0.0f ? lo[k] : 0.0, h = hi[k] < 1.0f ? hi[k] : 1.0;
+        double a = (l - o[k]) / d[k], b = (h - o[k]) / d[k];
+        if (a > b) { double t = a; a = b; b = t; }
+        t0 = a > t0 ? a : t0;
+        t1 = b < t1 ? b : t1;
+    }
+    for (uint32_t i = 0; i < np; ++i) {
+        double den = 0, num = planes[i][3];
+        for (int k = 0; k < 3; ++k) {
+            den += (double)planes[i][k] * d[k];
+            num -= (double)planes[i][k] * o[k];
+        }
+        if (den > 0) t1 = fmin(t1, num / den);
+        else if (den < 0) t0 = fmax(t0, num / den);
+        else if (num < 0) return 0;
+    }
+    return t1 > t0 ? t1 - t0 : 0;
+}
+
+/* A homogeneous unit box cut by a clip box, by planes and by both: every
+ * pixel away from a cut edge has the opacity 1 - exp(-sigma * chord) of the
+ * chord that is left, for each estimator with track and dda (the majorants
+ * stay those of the whole box). */
+static void test_clip(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 4;
+    p.mix = CLVR_SCENE_MIX_CYCLE;
+    p.field = CLVR_SCENE_FIELD_CONSTANT;
+    p.value = 1.0f;
+    clvr_mesh m;
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    const uint32_t W = 24, H = 24, N = 300;
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, W, H)) return;
+    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
+    clvr_camera cam;
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    fx.set.shadows = 0;
+    const float sigma = 2.0f;
+    float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
+    set_table(&fx, table, 2, 0.0f, 2.0f);
+    /* Planes: keep x + y <= 1.2 (normal not unit: the renderer normalises)
+     * and z >= 0.25 (as -z <= -0.25). */
+    const float planes[2][4] = {{1, 1, 0, 1.2f}, {0, 0, -2, -0.5f}};
+    const float nolo[3] = {1, 1, 1}, nohi[3] = {-1, -1, -1};
+    const float blo[3] = {0.1f, -1.0f, 0.2f}, bhi[3] = {0.8f, 0.7f, 2.0f};
+    const float whole_lo[3] = {0, 0, 0}, whole_hi[3] = {1, 1, 1};
+    const struct {
+        const char *name;
+        int box;
+        uint32_t np;
+        uint32_t method, estimator;
+    } cases[] = {
+        {"planes", 0, 2, CLVR_RENDER_TRACK, CLVR_ESTIMATOR_DELTA}, {"planes", 0, 2, CLVR_RENDER_DDA, CLVR_ESTIMATOR_URM},
+        {"box", 1, 0, CLVR_RENDER_DDA, CLVR_ESTIMATOR_DELTA},     {"box", 1, 0, CLVR_RENDER_TRACK, CLVR_ESTIMATOR_URM},
+        {"box+plane", 1, 1, CLVR_RENDER_DDA, CLVR_ESTIMATOR_DELTA},
+    };
+    for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ++ci) {
+        fx.set.method = cases[ci].method;
+        fx.set.estimator = cases[ci].estimator;
+        fx.set.macrocells = 7;
+        memcpy(fx.set.clip_lo, cases[ci].box ? blo : nolo, sizeof fx.set.clip_lo);
+        memcpy(fx.set.clip_hi, cases[ci].box ? bhi : nohi, sizeof fx.set.clip_hi);
+        fx.set.num_clip_planes = cases[ci].np;
+        memcpy(fx.set.clip_planes, planes, sizeof planes);
+        const float *lo = cases[ci].box ? blo : whole_lo, *hi = cases[ci].box ? bhi : whole_hi;
+        float *mean, *var;
+        if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
+        int bad = 0, tested = 0, cut = 0;
+        for (uint32_t y = 0; y < H; ++y)
+            for (uint32_t x = 0; x < W; ++x) {
+                /* Pixels whose 17x17 lattice meets both the medium and
+                 * nothing (a cut edge or the silhouette) are skipped. */
+                double acc = 0;
+                int hits = 0, edge = 0;
+                for (int sy = 0; sy <= 16; ++sy)
+                    for (int sx = 0; sx <= 16; ++sx)
+                        edge += clipped_chord(&cam, x + sx / 16.0f, y + sy / 16.0f, lo, hi, planes, cases[ci].np) > 0;
+                if (edge != 0 && edge != 289) continue;
+                for (int sy = 0; sy < 16; ++sy)
+                    for (int sx = 0; sx < 16; ++sx) {
+                        double len =
+                            clipped_chord(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16, lo, hi, planes,
+                                          cases[ci].np);
+                        hits += len > 0;
+                        acc += 1 - exp(-sigma * len);
+                    }
+                double expect = acc / 256, got = mean[4 * (y * W + x) + 3];
+                double se = sqrt(expect * (1 - expect) / N);
+                ++tested;
+                cut += hits == 256 && fabs(expect - (1 - exp(-sigma * unit_box_chord(&cam, x + 0.5f, y + 0.5f)))) >
+                                          0.05;
+                if (fabs(got - expect) > K_SIGMA * se + 1e-6) {
+                    if (bad < 5)
+                        fprintf(stderr, "clip %s %s %s: pixel (%u,%u) opacity %.4g, expected %.4g +- %.4g\n",
+                                cases[ci].name, clvr_render_estimator_name(cases[ci].estimator),
+                                clvr_render_method_name(cases[ci].method), x, y, got, expect, K_SIGMA * se);
+                    ++bad;
+                }
+            }
+        TU_CHECK_EQ_U64(bad, 0);
+        /* The cut must change a good part of the image, or the test proves nothing. */
+        TU_CHECK(tested > (int)(W * H) / 3 && cut > 30);
+        if (cut <= 30) fprintf(stderr, "clip %s: only %d pixels changed by the cut\n", cases[ci].name, cut);
+        free(mean);
+        free(var);
+    }
+    /* A zero normal is refused. */
+    fx.set.num_clip_planes = 1;
+    memset(fx.set.clip_planes, 0, sizeof fx.set.clip_planes);
+    TU_CHECK_STATUS(clvr_renderer_set_settings(fx.r, &fx.set, &err), CLVR_ERR_USAGE, &err);
+    TU_CHECK(strstr(err.msg, "clip plane 1") != NULL);
     fixture_close(&fx);
 }
 
@@ -651,6 +783,7 @@ int main(void)
     test_ld_sequence();
     tu_open_device(&cl);
     test_homogeneous(&cl);
+    test_clip(&cl);
     test_majorants(&cl);
     test_seeds(&cl);
     {

@@ -359,7 +359,8 @@ static void test_json(void)
     CHECK_RGB(&tf, 0.25f, 0.553524, 0.688407, 0.994915, 1e-3);
     TU_CHECK_NEAR(clvr_tf_opacity(&tf, 0.25f), 0.2, 1e-6);
     TU_CHECK_NEAR(tf.opacity[4 + 2], 0.3, 1e-7); /* midpoint kept */
-    TU_CHECK(!tf.range_set);
+    /* The data-space span is the window (--range overrides it later). */
+    TU_CHECK(tf.range_set && tf.range_lo == 10.0f && tf.range_hi == 30.0f);
     /* A bare object, BOM, no Points (opacity stays), underflowing number. */
     TU_CHECK_STATUS(parse_str(&tf, "\xEF\xBB\xBF{\"RGBPoints\":[0,0,0,0, 1e-400,1,1,1, 2, 0.5, 0.5, 0.5]}", &err),
                     CLVR_OK, &err);
@@ -510,6 +511,69 @@ static void test_from_options_and_files(void)
     clvr_tf_free(&tf);
 }
 
+/* Two exports that ParaView renders alike: opacity points over a wider span
+ * than the colours (constant colour beyond its ends) and the same map with
+ * the colours' end points repeated at the opacity span. One common span
+ * rescales both, so both bake to the same table and the same window. */
+static void test_json_common_span_and_presets(void)
+{
+    clvr_error err = {0};
+    clvr_tf a = {0}, b = {0};
+    const char *ja = "[{\"RGBPoints\":[0,0,0,1, 10,1,0,0],\"Points\":[-10,0,0.5,0, 20,1,0.5,0]}]";
+    const char *jb = "[{\"RGBPoints\":[-10,0,0,1, 0,0,0,1, 10,1,0,0, 20,1,0,0],"
+                     "\"Points\":[-10,0,0.5,0, 5,0.5,0.5,0, 20,1,0.5,0]}]";
+    TU_CHECK_STATUS(clvr_tf_init(&a, NULL, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_tf_init(&b, NULL, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(parse_str(&a, ja, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(parse_str(&b, jb, &err), CLVR_OK, &err);
+    TU_CHECK(a.range_set && a.range_lo == -10.0f && a.range_hi == 20.0f);
+    TU_CHECK(b.range_set && b.range_lo == -10.0f && b.range_hi == 20.0f);
+    float ta[4 * 64], tb[4 * 64];
+    clvr_tf_bake(&a, ta, 64);
+    clvr_tf_bake(&b, tb, 64);
+    double worst = 0.0;
+    for (int i = 0; i < 4 * 64; ++i) worst = fmax(worst, fabs((double)ta[i] - tb[i]));
+    TU_CHECK_NEAR(worst, 0.0, 1e-5);
+    /* Data value 0 (x = 1/3): the first colour, opacity 1/3. */
+    CHECK_RGB(&a, 1.0f / 3.0f, 0.0, 0.0, 1.0, 1e-5);
+    TU_CHECK_NEAR(clvr_tf_opacity(&a, 1.0f / 3.0f), 1.0 / 3.0, 1e-5);
+
+    /* A presets file: pick by name; an unknown name lists the names. */
+    const char *presets = "[{\"Name\":\"Blue\",\"RGBPoints\":[0,0,0,1, 1,0,0,1]},"
+                          "{\"Name\":\"Red\",\"RGBPoints\":[5,1,0,0, 7,1,0,0]}]";
+    TU_CHECK_STATUS(clvr_tf_parse_preset(&a, presets, strlen(presets), "p.json", "Red", &err), CLVR_OK, &err);
+    TU_CHECK(strcmp(a.name, "Red") == 0 && a.range_lo == 5.0f && a.range_hi == 7.0f);
+    CHECK_RGB(&a, 0.5f, 1.0, 0.0, 0.0, 0.0);
+    TU_CHECK_STATUS(clvr_tf_parse_preset(&a, presets, strlen(presets), "p.json", "Green", &err), CLVR_ERR_BAD_FIELD,
+                    &err);
+    TU_CHECK(strstr(err.msg, "p.json: no colour map named \"Green\"; the file has \"Blue\", \"Red\"") != NULL);
+    TU_CHECK_STATUS(clvr_tf_parse_preset(&a, "color 0 1 1 1\n", 14, "t.tf", "Red", &err), CLVR_ERR_BAD_FIELD, &err);
+    TU_CHECK(strstr(err.msg, "ParaView JSON only") != NULL);
+
+    /* FILE:PRESET through the loader, and --range stretching the common span. */
+    char dir[] = "/tmp/clvr_test_tfp_XXXXXX";
+    if (!mkdtemp(dir)) { TU_CHECK(0); return; }
+    char path[256], spec[300];
+    snprintf(path, sizeof path, "%s/presets.json", dir);
+    FILE *f = fopen(path, "w");
+    fputs(presets, f);
+    fclose(f);
+    snprintf(spec, sizeof spec, "%s:Red", path);
+    TU_CHECK_STATUS(clvr_tf_load(&b, spec, &err), CLVR_OK, &err);
+    TU_CHECK(strcmp(b.name, "Red") == 0);
+    snprintf(spec, sizeof spec, "%s:Nope", path);
+    TU_CHECK_STATUS(clvr_tf_load(&b, spec, &err), CLVR_ERR_BAD_FIELD, &err);
+    TU_CHECK(strstr(err.msg, "\"Blue\", \"Red\"") != NULL);
+    clvr_tf_free(&b);
+    snprintf(spec, sizeof spec, "%s:Blue", path);
+    TU_CHECK_STATUS(clvr_tf_from_options(&b, NULL, spec, 1, 100.0f, 200.0f, 1.0f, 0.0f, 1.0f, &err), CLVR_OK, &err);
+    TU_CHECK(b.range_lo == 100.0f && b.range_hi == 200.0f && strcmp(b.name, "Blue") == 0);
+    unlink(path);
+    rmdir(dir);
+    clvr_tf_free(&a);
+    clvr_tf_free(&b);
+}
+
 int main(void)
 {
     test_colormaps();
@@ -519,6 +583,7 @@ int main(void)
     test_majorant();
     test_text_format();
     test_json();
+    test_json_common_span_and_presets();
     test_from_options_and_files();
     return tu_finish("test_tf");
 }

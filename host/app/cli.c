@@ -50,6 +50,8 @@ void clvr_cli_print_help(FILE *out)
         "                         always hold the linear values\n"
         "  --legend               PNG only: draw the colour map with its range and the field's name\n"
         "                         at the bottom-left corner\n"
+        "  --outline              draw the mesh's bounding box (and the --clip-box) over the image\n"
+        "                         (PNG, EXR and PFM), projected with the camera\n"
         "  --size WxH             image size (default 512x512)\n"
         "  --spp N                samples per pixel = frames accumulated (default 16)\n"
         "  --seed N               random seed (default 1); same seed, same image\n"
@@ -73,6 +75,10 @@ void clvr_cli_print_help(FILE *out)
         "  --macrocells R         R^3 macrocell grid for --method dda (default 32)\n"
         "  --leaf-size N          elements per leaf cluster: 1, 4, 8, 16, 32 (default 16)\n"
         "  --sampling-size N      elements per adaptive sampling cluster (default 16)\n"
+        "  --clip NX,NY,NZ,D      remove the medium where NX*x + NY*y + NZ*z > D (keeps the side the\n"
+        "                         normal points away from, as ParaView's Clip with Invert on);\n"
+        "                         shadows see the clipped medium too; up to 6 times\n"
+        "  --clip-box X0,Y0,Z0,X1,Y1,Z1  keep only the medium inside this box\n"
         "\n"
         "Scene:\n"
         "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"
@@ -89,7 +95,9 @@ void clvr_cli_print_help(FILE *out)
         "                         vertical), written as -o's name with .0000, .0001, ... before\n"
         "                         the extension\n"
         "  --colormap NAME        cool-warm | viridis | inferno | grayscale | jet (default cool-warm)\n"
-        "  --tf FILE              transfer function file (clvr text format or ParaView JSON)\n"
+        "  --tf FILE              transfer function file (clvr text format or ParaView JSON; a\n"
+        "                         JSON map's data-space span is the window unless --range)\n"
+        "  --tf FILE:NAME         the ParaView preset NAME from a multi-preset JSON file\n"
         "  --range LO HI          scalar window mapped by the transfer function (default: data range)\n"
         "  --range auto-all       a series: one window over every step's range (the default for a\n"
         "                         series; one mesh: its own range)\n"
@@ -374,6 +382,35 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             }
         }
         else if (!strcmp(a, "--legend")) o->legend = 1;
+        else if (!strcmp(a, "--outline")) o->outline = 1;
+        else if (!strcmp(a, "--clip")) {
+            const char *v = NEXT();
+            if (v) {
+                float q[4];
+                s = parse_floats(a, v, 4, q, err);
+                if (s == CLVR_OK && o->num_clip_planes == CLVR_MAX_CLIP_PLANES)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--clip given more than %u times", CLVR_MAX_CLIP_PLANES);
+                else if (s == CLVR_OK && q[0] == 0.0f && q[1] == 0.0f && q[2] == 0.0f)
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--clip expects a nonzero normal nx,ny,nz, got '%s'", v);
+                else if (s == CLVR_OK)
+                    memcpy(o->clip_planes[o->num_clip_planes++], q, sizeof q);
+            }
+        }
+        else if (!strcmp(a, "--clip-box")) {
+            const char *v = NEXT();
+            if (v) {
+                float b[6];
+                s = parse_floats(a, v, 6, b, err);
+                if (s == CLVR_OK && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
+                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--clip-box expects x0 < x1, y0 < y1, z0 < z1, got '%s'",
+                                       v);
+                else if (s == CLVR_OK) {
+                    memcpy(o->clip_lo, b, sizeof o->clip_lo);
+                    memcpy(o->clip_hi, b + 3, sizeof o->clip_hi);
+                    o->clip_box_set = 1;
+                }
+            }
+        }
         else if (!strcmp(a, "--exposure")) { const char *v = NEXT(); if (v) s = parse_float(a, v, -30.0f, 30.0f, &o->exposure, err); }
         else if (!strcmp(a, "--tonemap")) {
             const char *v = NEXT();

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "clvr_shared.h"
 #include "status.h"
 
 typedef struct clvr_options {
@@ -63,6 +64,12 @@ typedef struct clvr_options {
     float exposure;              /* --exposure EV */
     int tonemap;                 /* --tonemap: clvr_tonemap (image.h), default aces */
     int legend;                  /* --legend: colour bar, range and field name drawn into the PNG */
+    int outline;                 /* --outline: the mesh's bounding box (and the clip box) drawn over the image */
+    /* clipping (kernels/clvr_shared.h clvr_frame: kept where n.p <= d) */
+    uint32_t num_clip_planes;    /* --clip nx,ny,nz,d, repeatable up to CLVR_MAX_CLIP_PLANES */
+    float clip_planes[CLVR_MAX_CLIP_PLANES][4];
+    int clip_box_set;
+    float clip_lo[3], clip_hi[3]; /* --clip-box x0,y0,z0,x1,y1,z1 */
 } clvr_options;
 
 /* Fills defaults, then parses argv. On a bad command line returns

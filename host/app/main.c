@@ -18,6 +18,7 @@
 #include "info.h"
 #include "limits_check.h"
 #include "mesh_io.h"
+#include "outline.h"
 #include "preprocess.h"
 #include "render.h"
 #include "scene.h"
@@ -273,6 +274,12 @@ int main(int argc, char **argv)
     rs.light_intensity = o.light_intensity;
     rs.ambient = o.ambient;
     memcpy(rs.background, o.background, sizeof rs.background);
+    if (o.clip_box_set) {
+        memcpy(rs.clip_lo, o.clip_lo, sizeof rs.clip_lo);
+        memcpy(rs.clip_hi, o.clip_hi, sizeof rs.clip_hi);
+    }
+    rs.num_clip_planes = o.num_clip_planes;
+    memcpy(rs.clip_planes, o.clip_planes, sizeof rs.clip_planes);
     s = clvr_renderer_create(&cl, &clustered, &bvh, &rs, &renderer, &err);
     if (s == CLVR_OK) s = clvr_renderer_set_camera(renderer, &cam, &err);
     if (s == CLVR_OK) {
@@ -352,6 +359,14 @@ int main(int argc, char **argv)
         clvr_render_counters counters;
         s = clvr_renderer_read(renderer, pixels, &counters, &err);
         if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+        if (o.outline) {
+            /* Context for the volume: the mesh's bounds in light grey, the
+             * clip box in amber; about one pixel per 400 of image height. */
+            const float grey[3] = {0.8f, 0.8f, 0.8f}, amber[3] = {1.0f, 0.55f, 0.1f};
+            const float lw = fmaxf(1.0f, (float)o.height / 400.0f);
+            clvr_outline_draw_box(pixels, &cam, clustered.bounds.lo, clustered.bounds.hi, grey, lw);
+            if (o.clip_box_set) clvr_outline_draw_box(pixels, &cam, o.clip_lo, o.clip_hi, amber, lw);
+        }
         s = clvr_image_write_display(path, o.width, o.height, pixels, &display, &err);
         if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
         stats.have_render = 1;

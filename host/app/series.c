@@ -144,7 +144,17 @@ int clvr_series_run(int argc, char **argv, const clvr_options *o, clvr_main_fn r
     }
     /* One range and one camera for every frame: the field's range and the
      * union of the bounds over all steps. */
-    int fix_range = !o->range_set && !o->info, fix_camera = !o->camera_set && !o->info;
+    int file_range = 0;
+    if (!o->range_set && o->tf_file) {
+        /* A --tf file with its own window (`range`, a ParaView map's span)
+         * keeps it for every step, as for one mesh; errors surface later. */
+        clvr_tf t = {0};
+        clvr_error e2 = {0};
+        if (clvr_tf_init(&t, NULL, &e2) == CLVR_OK && clvr_tf_load(&t, o->tf_file, &e2) == CLVR_OK)
+            file_range = t.range_set;
+        clvr_tf_free(&t);
+    }
+    int fix_range = !o->range_set && !file_range && !o->info, fix_camera = !o->camera_set && !o->info;
     float lo = 0, hi = 0, blo[3] = {0, 0, 0}, bhi[3] = {0, 0, 0};
     for (uint32_t i = 0; i < n && (fix_range || fix_camera); ++i) {
         clvr_load_options lo_opt = {0};
@@ -180,8 +190,9 @@ int clvr_series_run(int argc, char **argv, const clvr_options *o, clvr_main_fn r
         lo_opt.scalar_name = o->scalar_name;
         s = clvr_mesh_load(paths[0], &lo_opt, &m, &err);
         if (s == CLVR_OK)
-            s = clvr_tf_from_options(&tf, o->colormap, o->tf_file, 1, fix_range ? lo : o->range_lo,
-                                     fix_range ? hi : o->range_hi, 1.0f, m.scalar_min, m.scalar_max, &err);
+            s = clvr_tf_from_options(&tf, o->colormap, o->tf_file, fix_range || o->range_set,
+                                     fix_range ? lo : o->range_lo, fix_range ? hi : o->range_hi, 1.0f, m.scalar_min,
+                                     m.scalar_max, &err);
         if (s == CLVR_OK) {
             clvr_tf_set_extent(&tf, m.bounds_lo, m.bounds_hi);
             if (!o->opacity_ramp && !tf.opacity_set) {

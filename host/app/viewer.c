@@ -362,6 +362,14 @@ static void print_command_line(viewer *v)
                 (double)v->rs.background[2]);
     if (o->exposure != d.exposure) appendf(line, cap, " --exposure %.9g", (double)o->exposure);
     if (o->tonemap != d.tonemap) appendf(line, cap, " --tonemap %s", clvr_tonemap_name((clvr_tonemap)o->tonemap));
+    /* Clipping and the outline come from the command line unchanged. */
+    for (uint32_t i = 0; i < o->num_clip_planes; ++i)
+        appendf(line, cap, " --clip %.9g,%.9g,%.9g,%.9g", (double)o->clip_planes[i][0], (double)o->clip_planes[i][1],
+                (double)o->clip_planes[i][2], (double)o->clip_planes[i][3]);
+    if (o->clip_box_set)
+        appendf(line, cap, " --clip-box %.9g,%.9g,%.9g,%.9g,%.9g,%.9g", (double)o->clip_lo[0], (double)o->clip_lo[1],
+                (double)o->clip_lo[2], (double)o->clip_hi[0], (double)o->clip_hi[1], (double)o->clip_hi[2]);
+    if (o->outline) appendf(line, cap, " --outline");
     printf("%s\n", line);
     fflush(stdout);
     if (o->tf_file && v->map_changed)

@@ -777,7 +777,7 @@ static clvr_status parse_text(pending *p, const char *text, size_t len, const ch
 /* ---------------------------------------------- JSON (ParaView colour maps; parser: json.c) */
 
 /* Reads a numeric array of groups of 4 into points (stride 4), checking
- * every value; positions are normalised to [0, 1] over their own span. */
+ * every value; positions stay in data space (normalise_points rescales). */
 static clvr_status jpoints(const clvr_json *p, clvr_error *err, const clvr_json_node *arr, const char *key,
                            int opacity, float **out, uint32_t *num)
 {
@@ -822,16 +822,32 @@ static clvr_status jpoints(const clvr_json *p, clvr_error *err, const clvr_json_
         return clvr_json_fail(p, err, arr->line, arr->col, "\"%s\": all %u positions are equal (%g); expected a span",
                               key, n, (double)x0);
     }
-    for (uint32_t i = 0; i < n; ++i) {
-        double x = n > 1 ? ((double)pts[4 * i] - x0) / ((double)x1 - x0) : 0.0;
-        pts[4 * i] = (float)(x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x);
-    }
     *out = pts;
     *num = n;
     return CLVR_OK;
 }
 
-static clvr_status parse_json(pending *pd, const char *text, size_t len, const char *name, clvr_error *err)
+/* Data-space positions to [0, 1] over the common span [lo, hi]. */
+static void normalise_points(float *pts, uint32_t n, double lo, double hi)
+{
+    for (uint32_t i = 0; i < n; ++i) {
+        double x = hi > lo ? ((double)pts[4 * i] - lo) / (hi - lo) : 0.0;
+        pts[4 * i] = (float)(x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x);
+    }
+}
+
+/* The "Name" string of a colour-map object, NULL when it has none. */
+static const char *json_map_name(const clvr_json *p, const clvr_json_node *obj)
+{
+    if (obj->type != CLVR_JSON_OBJECT) return NULL;
+    for (long c = obj->child; c >= 0; c = p->nodes[c].next)
+        if (clvr_json_key_is(p, &p->nodes[c], "Name") && p->nodes[c].type == CLVR_JSON_STRING)
+            return p->arena + p->nodes[c].str;
+    return NULL;
+}
+
+static clvr_status parse_json(pending *pd, const char *text, size_t len, const char *name, const char *preset,
+                              clvr_error *err)
 {
     clvr_json p;
     clvr_status s = clvr_json_parse(text, len, name, &p, err);
@@ -842,7 +858,35 @@ static clvr_status parse_json(pending *pd, const char *text, size_t len, const c
             s = clvr_json_fail(&p, err, obj->line, obj->col, "empty array: expected at least one colour-map object");
             goto done;
         }
-        obj = &p.nodes[obj->child]; /* ParaView exports a list; the first map is used */
+        if (preset) {
+            /* A presets file: the object whose "Name" is the preset. */
+            const clvr_json_node *found = NULL;
+            char names[768];
+            size_t nl = 0;
+            int more = 0;
+            names[0] = '\0';
+            for (long c = obj->child; c >= 0 && !found; c = p.nodes[c].next) {
+                const char *mn = json_map_name(&p, &p.nodes[c]);
+                if (!mn) continue;
+                if (!strcmp(mn, preset)) found = &p.nodes[c];
+                else if (nl + strlen(mn) + 8 < sizeof names)
+                    nl += (size_t)snprintf(names + nl, sizeof names - nl, "%s\"%s\"", nl ? ", " : "", mn);
+                else more = 1;
+            }
+            if (!found) {
+                s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: no colour map named \"%s\"; the file has %s%s", name,
+                                   preset, nl ? names : "no named maps", more ? ", ..." : "");
+                goto done;
+            }
+            obj = found;
+        } else {
+            obj = &p.nodes[obj->child]; /* ParaView exports a list; the first map is used */
+        }
+    } else if (preset && !(json_map_name(&p, obj) && !strcmp(json_map_name(&p, obj), preset))) {
+        const char *mn = json_map_name(&p, obj);
+        s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: no colour map named \"%s\"; the file has %s%s%s", name, preset,
+                           mn ? "\"" : "no named maps", mn ? mn : "", mn ? "\"" : "");
+        goto done;
     }
     if (obj->type != CLVR_JSON_OBJECT) {
         s = clvr_json_fail(&p, err, obj->line, obj->col,
@@ -894,6 +938,25 @@ static clvr_status parse_json(pending *pd, const char *text, size_t len, const c
         if (s != CLVR_OK) goto done;
         pd->have_opacity = 1;
     }
+    {
+        /* Both lists are in data space, as ParaView exports them: one common
+         * span (their union) rescales both, so their relative placement is
+         * kept (each function is constant beyond its ends, as in VTK), and
+         * the span is the window unless --range overrides it, which then
+         * stretches both together as ParaView's "Rescale to custom range". */
+        double lo = pd->colors[0], hi = pd->colors[4 * (pd->num_colors - 1)];
+        if (pd->have_opacity) {
+            lo = fmin(lo, pd->opacity[0]);
+            hi = fmax(hi, pd->opacity[4 * (pd->num_opacity - 1)]);
+        }
+        normalise_points(pd->colors, pd->num_colors, lo, hi);
+        if (pd->have_opacity) normalise_points(pd->opacity, pd->num_opacity, lo, hi);
+        if (hi > lo && (float)hi > (float)lo) {
+            pd->lo = (float)lo;
+            pd->hi = (float)hi;
+            pd->have_range = 1;
+        }
+    }
 done:
     clvr_json_free(&p);
     return s;
@@ -903,6 +966,12 @@ done:
 
 clvr_status clvr_tf_parse(clvr_tf *tf, const char *text, size_t len, const char *name, clvr_error *err)
 {
+    return clvr_tf_parse_preset(tf, text, len, name, NULL, err);
+}
+
+clvr_status clvr_tf_parse_preset(clvr_tf *tf, const char *text, size_t len, const char *name, const char *preset,
+                                 clvr_error *err)
+{
     pending p = {0};
     p.density = 1.0f;
     size_t i = 0;
@@ -911,7 +980,10 @@ clvr_status clvr_tf_parse(clvr_tf *tf, const char *text, size_t len, const char 
     size_t j = i;
     while (j < len && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' || text[j] == '\n')) ++j;
     clvr_status s;
-    if (j < len && (text[j] == '[' || text[j] == '{')) s = parse_json(&p, text + i, len - i, name, err);
+    if (j < len && (text[j] == '[' || text[j] == '{')) s = parse_json(&p, text + i, len - i, name, preset, err);
+    else if (preset)
+        s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: a preset name (\"%s\") applies to ParaView JSON only", name,
+                           preset);
     else s = parse_text(&p, text + i, len - i, name, err);
     if (s == CLVR_OK) commit(tf, &p);
     pending_free(&p);
@@ -921,7 +993,24 @@ clvr_status clvr_tf_parse(clvr_tf *tf, const char *text, size_t len, const char 
 clvr_status clvr_tf_load(clvr_tf *tf, const char *path, clvr_error *err)
 {
     FILE *f = fopen(path, "rb");
-    if (!f) return clvr_error_set(err, CLVR_ERR_IO, "cannot open transfer function %s: %s", path, strerror(errno));
+    const char *preset = NULL;
+    char file[4096];
+    if (!f) {
+        /* FILE:PRESET: the first ':' whose left part opens as a file. */
+        int open_errno = errno;
+        for (const char *c = strchr(path, ':'); c && !f; c = strchr(c + 1, ':')) {
+            size_t n = (size_t)(c - path);
+            if (n == 0 || n >= sizeof file || c[1] == '\0') continue;
+            memcpy(file, path, n);
+            file[n] = '\0';
+            f = fopen(file, "rb");
+            if (f) preset = c + 1;
+        }
+        if (!f)
+            return clvr_error_set(err, CLVR_ERR_IO, "cannot open transfer function %s: %s", path,
+                                  strerror(open_errno));
+        path = file;
+    }
     char *buf = malloc(CLVR_TF_MAX_FILE_BYTES + 1);
     if (!buf) {
         fclose(f);
@@ -935,7 +1024,7 @@ clvr_status clvr_tf_load(clvr_tf *tf, const char *path, clvr_error *err)
     else if (n > CLVR_TF_MAX_FILE_BYTES)
         s = clvr_error_set(err, CLVR_ERR_IO, "transfer function %s is larger than %u MiB; is it the right file?", path,
                            CLVR_TF_MAX_FILE_BYTES >> 20);
-    else s = clvr_tf_parse(tf, buf, n, path, err);
+    else s = clvr_tf_parse_preset(tf, buf, n, path, preset, err);
     free(buf);
     return s;
 }

@@ -65,7 +65,10 @@ clvr_status clvr_tf_set_colormap(clvr_tf *tf, const char *colormap, clvr_error *
 
 /* Loads a transfer-function file into tf (already initialised): the simple
  * text format or a ParaView colour-map JSON export, told apart by the first
- * non-blank character ('[' or '{': JSON). What the file sets replaces what
+ * non-blank character ('[' or '{': JSON). `path` may be FILE:PRESET (when
+ * `path` itself does not open) to pick the JSON map whose "Name" is PRESET
+ * from a multi-preset file. ParaView JSON sets the window to the span of
+ * its data-space positions. What the file sets replaces what
  * tf held; what it leaves out stays. A file `density d` multiplies
  * tf->density. Errors: CLVR_ERR_IO (cannot read, too large),
  * CLVR_ERR_BAD_FIELD with "path:line[:column]: what was expected"; on error
@@ -75,6 +78,10 @@ clvr_status clvr_tf_load(clvr_tf *tf, const char *path, clvr_error *err);
 /* The same from memory (len bytes, need not be NUL-terminated); `name`
  * prefixes the messages. This is what the fuzz target drives. */
 clvr_status clvr_tf_parse(clvr_tf *tf, const char *text, size_t len, const char *name, clvr_error *err);
+/* The same, picking the JSON colour map named `preset` (NULL: the first);
+ * an unknown name is CLVR_ERR_BAD_FIELD listing the file's names. */
+clvr_status clvr_tf_parse_preset(clvr_tf *tf, const char *text, size_t len, const char *name, const char *preset,
+                                 clvr_error *err);
 
 /* What the command line asks for: built-in colormap (NULL: cool-warm), then
  * tf_file (NULL: none) over it, then the window: [range_lo, range_hi] when

@@ -12,6 +12,7 @@
 typedef struct light_key {
     float vol[6], grid[6], light_dir[3], urm_kappa;
     uint32_t u[8];
+    float planes[CLVR_MAX_CLIP_PLANES * 4]; /* the shadow rays are clipped too */
 } light_key;
 
 struct clvr_renderer {
@@ -164,6 +165,19 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         f->grid_hi[k] = grid ? set->grid_hi[k] : m->bounds.hi[k];
         f->background[k] = set->background[k];
     }
+    if (set->num_clip_planes > CLVR_MAX_CLIP_PLANES)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%u clip planes; at most %u", set->num_clip_planes,
+                              CLVR_MAX_CLIP_PLANES);
+    memset(f->clip_planes, 0, sizeof f->clip_planes);
+    f->num_clip_planes = set->num_clip_planes;
+    for (uint32_t i = 0; i < set->num_clip_planes; ++i) {
+        const float *q = set->clip_planes[i];
+        float n = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        if (!(n > 0.0f) || !isfinite(n) || !isfinite(q[3]))
+            return clvr_error_set(err, CLVR_ERR_USAGE, "clip plane %u (%g, %g, %g, %g): expected a finite, nonzero "
+                                  "normal", i + 1, (double)q[0], (double)q[1], (double)q[2], (double)q[3]);
+        for (int k = 0; k < 4; ++k) f->clip_planes[i][k] = q[k] / n;
+    }
     float len = sqrtf(set->light_dir[0] * set->light_dir[0] + set->light_dir[1] * set->light_dir[1] +
                       set->light_dir[2] * set->light_dir[2]);
     if (!(len > 0.0f)) return clvr_error_set(err, CLVR_ERR_USAGE, "the light direction must not be zero");
@@ -203,6 +217,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         k.urm_kappa = f->urm_kappa;
         k.u[0] = f->urm_steps; k.u[1] = f->seed_lo; k.u[2] = f->seed_hi; k.u[3] = f->method;
         k.u[4] = f->grid_res; k.u[5] = f->bins; k.u[6] = f->segments; k.u[7] = f->light_res;
+        memcpy(k.planes, f->clip_planes, sizeof k.planes);
         if (memcmp(&k, &r->light_key, sizeof k) != 0) r->light_valid = 0;
         r->light_key = k;
     }

@@ -45,6 +45,12 @@ typedef struct clvr_render_settings {
      * grid and a partition of a mesh can share one grid domain. */
     float clip_lo[3], clip_hi[3];
     float grid_lo[3], grid_hi[3];
+    /* Clip planes (nx, ny, nz, d): the medium where n.p > d is removed
+     * (kept: n.p <= d, ParaView's Clip with "Invert" on, its default), for
+     * camera and shadow rays alike. n need not be unit length (it is
+     * normalised with d); a zero n is a usage error. Default none. */
+    uint32_t num_clip_planes;  /* 0..CLVR_MAX_CLIP_PLANES */
+    float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_render_settings;
 
 /* Sensible defaults (dda, 512x512, shadows on, ...). */
