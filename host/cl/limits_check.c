@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "elements.h"
 
@@ -121,6 +122,130 @@ clvr_status clvr_limits_check(const clvr_cl *cl, const clvr_mesh *m, const clvr_
                               uint32_t width, uint32_t height, clvr_error *err)
 {
     return clvr_limits_check_named(cl, m, NULL, o, width, height, err);
+}
+
+/* ------------------------------------------------------------ host memory */
+
+/* The number after `key` in a "Key:   123 kB" file (meminfo, status), in bytes. */
+static uint64_t kb_field(const char *path, const char *key)
+{
+    FILE *f = fopen(path, "r");
+    char line[256];
+    uint64_t v = 0;
+    size_t kl = strlen(key);
+    if (!f) return 0;
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, key, kl) && line[kl] == ':') {
+            unsigned long long x = 0;
+            if (sscanf(line + kl + 1, "%llu", &x) == 1) v = (uint64_t)x * 1024u;
+            break;
+        }
+    fclose(f);
+    return v;
+}
+
+/* A file holding one number ("max" or missing: UINT64_MAX). */
+static uint64_t number_file(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    unsigned long long x = 0;
+    uint64_t v = UINT64_MAX;
+    if (!f) return v;
+    if (fscanf(f, "%llu", &x) == 1) v = (uint64_t)x;
+    fclose(f);
+    return v;
+}
+
+void clvr_mem_rss(uint64_t *current, uint64_t *peak)
+{
+    if (current) *current = kb_field("/proc/self/status", "VmRSS");
+    if (peak) *peak = kb_field("/proc/self/status", "VmHWM");
+}
+
+void clvr_mem_limits_read(clvr_mem_limits *out)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t a = kb_field("/proc/meminfo", "MemAvailable");
+    out->mem_available = a ? a : UINT64_MAX;
+    /* cgroup v2 at the unified mount (the process's own group is what
+     * containers mount there); v1's memory controller otherwise. A limit
+     * above 2^60 is "none" (v1 writes a huge number for it). */
+    uint64_t max = number_file("/sys/fs/cgroup/memory.max"), cur = number_file("/sys/fs/cgroup/memory.current");
+    if (max == UINT64_MAX) {
+        max = number_file("/sys/fs/cgroup/memory/memory.limit_in_bytes");
+        cur = number_file("/sys/fs/cgroup/memory/memory.usage_in_bytes");
+    }
+    out->cgroup_left = max >= (1ull << 60) ? UINT64_MAX : cur == UINT64_MAX ? max : max > cur ? max - cur : 0;
+    struct rlimit rl;
+    out->as_left = UINT64_MAX;
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+        uint64_t used = kb_field("/proc/self/status", "VmSize");
+        out->as_left = (uint64_t)rl.rlim_cur > used ? (uint64_t)rl.rlim_cur - used : 0;
+    }
+    out->limit = out->mem_available;
+    out->binding = "available memory (MemAvailable in /proc/meminfo)";
+    if (out->cgroup_left < out->limit) {
+        out->limit = out->cgroup_left;
+        out->binding = "the cgroup's memory limit (memory.max)";
+    }
+    if (out->as_left < out->limit) {
+        out->limit = out->as_left;
+        out->binding = "the address-space limit (ulimit -v, RLIMIT_AS)";
+    }
+}
+
+void clvr_limits_host_estimate(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                               uint64_t part_elements, uint32_t width, uint32_t height, clvr_host_estimate *out)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t N = 0, S = 0, V = num_vertices;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        N = sat_add(N, num_cells[t]);
+        S = sat_add(S, sat_mul(num_cells[t], clvr_cell_vertex_count(t)));
+    }
+    out->mesh_bytes = sat_add(sat_mul(V, 16), sat_mul(S, 4));
+    /* Clustered vertices (>= one float4 per vertex), 16-bit indices, leaf
+     * boxes, sampling clusters and BVH nodes at the default sizes (16
+     * elements per leaf and per sampling cluster: 2 + 2 + ~0.8 bytes per
+     * element; 6 keeps it a lower bound of what was measured, 6.3). */
+    out->result_bytes = sat_add(sat_add(sat_mul(V, 16), sat_mul(S, 2)), sat_mul(N, 6));
+    /* One partition's preprocessing: its share of the mesh as a sub-mesh,
+     * the sort (24 bytes per element) and the split's lists (8 per slot),
+     * its result before the append. */
+    uint64_t pe = part_elements && part_elements < N ? part_elements : N;
+    double f = N ? (double)pe / (double)N : 0.0;
+    double scratch = f * (double)(sat_mul(V, 16) + sat_mul(S, 4)) * 2.0 + (double)pe * 24.0 + f * (double)S * 8.0;
+    /* Partitioned runs also keep a byte per element (the plan) and a vertex map. */
+    if (pe < N) scratch += (double)N + 4.0 * (double)V;
+    out->scratch_bytes = scratch >= 1.8e19 ? UINT64_MAX : (uint64_t)scratch;
+    out->image_bytes = sat_mul((uint64_t)width * height, LIMITS_PIXEL_BYTES + 16u);
+    out->total_bytes = sat_add(sat_add(out->mesh_bytes, out->result_bytes), sat_add(out->scratch_bytes, out->image_bytes));
+}
+
+clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
+                                   const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                   uint32_t width, uint32_t height, int mesh_loaded, const clvr_mem_limits *l,
+                                   clvr_error *err)
+{
+    clvr_host_estimate e;
+    clvr_limits_host_estimate(num_vertices, num_cells, part_elements, width, height, &e);
+    uint64_t need = mesh_loaded ? e.total_bytes - e.mesh_bytes : e.total_bytes;
+    const int as_binds = l->limit == l->as_left && l->as_left != UINT64_MAX;
+    if (as_binds) need = sat_add(need, CLVR_LIMITS_DRIVER_VM_BYTES);
+    if (need <= l->limit) return CLVR_OK;
+    uint64_t N = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) N = sat_add(N, num_cells[t]);
+    return clvr_error_set(
+        err, CLVR_ERR_NO_MEMORY,
+        "%s: %llu elements, %llu vertices need about %.2f GB of memory (mesh %.2f GB%s, clustered result %.2f GB, "
+        "preprocessing scratch %.2f GB, image %.2f GB%s) but %s leaves %.2f GB; refusing before %s. %s",
+        what ? what : "mesh", (unsigned long long)N, (unsigned long long)num_vertices, gb(need), gb(e.mesh_bytes),
+        mesh_loaded ? ", loaded already" : "", gb(e.result_bytes), gb(e.scratch_bytes), gb(e.image_bytes),
+        as_binds ? ", driver address space 1.07 GB" : "", l->binding, gb(l->limit),
+        mesh_loaded ? "preprocessing starts" : "the mesh is read",
+        as_binds ? "Raise the limit (ulimit -v), or render a smaller (cropped or decimated) mesh"
+                 : "Free memory or raise the limit, use a machine with more memory, or render a smaller (cropped or "
+                   "decimated) mesh; more --partitions only shrink the scratch part");
 }
 
 /* ------------------------------------------------------------ mesh scan */
