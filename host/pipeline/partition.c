@@ -6,6 +6,9 @@
 #include "partition.h"
 
 #include <math.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -635,6 +638,12 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
     }
     fill_stats(out, m);
     if (num_partitions) *num_partitions = plan.count;
+#ifdef __GLIBC__
+    /* The partitions' smaller arrays (below glibc's mmap threshold) were
+     * freed into the heap, which keeps the pages: hand them back, or the
+     * footprint after preprocessing keeps one partition's scratch. */
+    malloc_trim(0);
+#endif
     out->wall_s = clvr_clock_monotonic_s() - t_start;
 
 cleanup:
