@@ -215,8 +215,8 @@ void clvr_limits_host_estimate(uint64_t num_vertices, const uint64_t num_cells[C
     uint64_t pe = part_elements && part_elements < N ? part_elements : N;
     double f = N ? (double)pe / (double)N : 0.0;
     double scratch = f * (double)(sat_mul(V, 16) + sat_mul(S, 4)) * 2.0 + (double)pe * 24.0 + f * (double)S * 8.0;
-    /* Partitioned runs also keep a byte per element (the plan) and a vertex map. */
-    if (pe < N) scratch += (double)N + 4.0 * (double)V;
+    /* Partitioned runs also keep 2 bytes per element (the plan) and a vertex map. */
+    if (pe < N) scratch += 2.0 * (double)N + 4.0 * (double)V;
     out->scratch_bytes = scratch >= 1.8e19 ? UINT64_MAX : (uint64_t)scratch;
     out->image_bytes = sat_mul((uint64_t)width * height, LIMITS_PIXEL_BYTES + 16u);
     out->total_bytes = sat_add(sat_add(out->mesh_bytes, out->result_bytes), sat_add(out->scratch_bytes, out->image_bytes));

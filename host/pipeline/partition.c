@@ -49,22 +49,24 @@ static void *key_pass(void *arg)
     key_job *j = arg;
     const clvr_mesh *m = j->m;
     const float scale = clvr_pp_scale(&j->plan->box);
+    uint16_t *part = j->plan->part_of16;
     uint64_t first = 0;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         const uint64_t n = m->num_cells[t];
-        uint64_t b = j->begin > first ? j->begin - first : 0, e = j->end - first < n ? j->end - first : n;
         if (j->end <= first) break;
-        for (uint64_t i = b; i < e && j->begin < first + n; ++i) {
-            const uint32_t k = coarse_key(m, t, i, &j->plan->box, scale, j->morton);
-            if (j->hist) ++j->hist[k];
-            else {
-                const uint32_t p = j->bin_part[k];
-                const uint64_t g = first + i;
-                if (j->plan->part_of) j->plan->part_of[g] = (uint8_t)p;
-                else j->plan->part_of16[g] = (uint16_t)p;
-                ++j->counts[p][t];
+        const uint64_t b = j->begin > first ? j->begin - first : 0, e = j->end - first < n ? j->end - first : n;
+        if (j->hist) /* pass 1: the element's coarse key, kept in its partition slot */
+            for (uint64_t i = b; i < e; ++i) {
+                const uint32_t k = coarse_key(m, t, i, &j->plan->box, scale, j->morton);
+                part[first + i] = (uint16_t)k;
+                ++j->hist[k];
             }
-        }
+        else /* pass 2: coarse key -> partition, in place */
+            for (uint64_t i = b; i < e; ++i) {
+                const uint32_t q = j->bin_part[part[first + i]];
+                part[first + i] = (uint16_t)q;
+                ++j->counts[q][t];
+            }
         first += n;
     }
     return NULL;
@@ -101,14 +103,13 @@ void clvr_partition_plan_free(clvr_partition_plan *p)
 {
     if (!p) return;
     free(p->parts);
-    free(p->part_of);
     free(p->part_of16);
     memset(p, 0, sizeof *p);
 }
 
 uint32_t clvr_partition_of(const clvr_partition_plan *p, uint64_t g)
 {
-    return p->part_of ? p->part_of[g] : p->part_of16[g];
+    return p->part_of16[g];
 }
 
 static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_elements, int morton,
@@ -139,7 +140,8 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
     /* Pass 1: histogram of the coarse keys, one table per thread. */
     hist = calloc((size_t)nbins * nt, sizeof *hist);
     bin_part = malloc((size_t)nbins * sizeof *bin_part);
-    if (!hist || !bin_part) goto oom;
+    out->part_of16 = malloc(N * sizeof *out->part_of16);
+    if (!hist || !bin_part || !out->part_of16) goto oom;
     memset(&proto, 0, sizeof proto);
     proto.m = m;
     proto.plan = out;
@@ -202,10 +204,8 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
         if (out->parts[p].bin_lo > out->parts[p].bin_hi) out->parts[p].bin_lo = out->parts[p].bin_hi;
 
     /* Pass 2: partition of every element, counts per partition and type. */
-    if (out->count <= 256u) out->part_of = malloc(N);
-    else out->part_of16 = malloc(N * sizeof *out->part_of16);
     counts = calloc((size_t)out->count * nt, sizeof *counts);
-    if ((!out->part_of && !out->part_of16) || !counts) goto oom;
+    if (!counts) goto oom;
     proto.bin_part = bin_part;
     free(hist);
     hist = NULL;
@@ -268,24 +268,16 @@ void clvr_partition_plan_reorder(clvr_mesh *m, clvr_partition_plan *p)
                 memcpy(idx + e * vpe, idx + d * vpe, vpe * 4u);
                 memcpy(idx + d * vpe, tmp, vpe * 4u);
                 /* The partition ids travel with the elements. */
-                if (p->part_of) {
-                    const uint8_t old = p->part_of[first + d];
-                    p->part_of[first + d] = (uint8_t)q;
-                    p->part_of[first + e] = old;
-                } else {
-                    const uint16_t old = p->part_of16[first + d];
-                    p->part_of16[first + d] = (uint16_t)q;
-                    p->part_of16[first + e] = old;
-                }
+                const uint16_t old = p->part_of16[first + d];
+                p->part_of16[first + d] = (uint16_t)q;
+                p->part_of16[first + e] = old;
             }
         }
         first += m->num_cells[t];
     }
     if (!next) return; /* out of memory: left in mesh order (extraction scans part_of) */
     free(next);
-    free(p->part_of);
     free(p->part_of16);
-    p->part_of = NULL;
     p->part_of16 = NULL;
     p->reordered = 1;
 }

@@ -31,11 +31,12 @@
 #include "preprocess.h"
 #include "status.h"
 
-/* Bits of the coarse keys (the top bits of the 48-bit Hilbert key): 2^20
- * bins of 4 bytes keep the histogram at 4 MB while a 788M-element mesh
- * still has under a thousand elements per bin, so partition sizes are met
- * closely. */
-#define CLVR_PARTITION_KEY_BITS 20u
+/* Bits of the coarse keys (the top bits of the 48-bit Hilbert key): 16, so
+ * that the first pass keeps each element's coarse key in the 2-byte slot
+ * that then holds its partition (one key computation per element, 2 bytes
+ * per element), while a 788M-element mesh still has ~12k elements per bin,
+ * fine against partitions of millions. */
+#define CLVR_PARTITION_KEY_BITS 16u
 /* Default bound on elements per partition. Measured on 10M mixed elements
  * (PoCL, 2 cores): a partition's scratch (its sub-mesh, the sort, the index
  * lists, its result before the append) is about 110 bytes per element, so
@@ -56,9 +57,8 @@ typedef struct clvr_partition_plan {
     clvr_box box;              /* quantization box shared by every partition: the mesh bounds */
     uint32_t count;            /* K >= 1; partitions may be empty */
     clvr_partition *parts;     /* count entries */
-    uint8_t *part_of;          /* partition of each element, mesh order (types concatenated);
-                                  uint8 when count <= 256, else NULL and part_of16 holds them */
-    uint16_t *part_of16;
+    uint16_t *part_of16;       /* partition of each element, mesh order (types concatenated);
+                                  NULL after a reorder */
     uint64_t num_elements;
     int reordered;             /* the mesh's lists are in partition order (clvr_partition_plan_reorder) */
     double seconds;            /* wall seconds of the coarse key pass and the plan */
@@ -77,7 +77,7 @@ void clvr_partition_plan_free(clvr_partition_plan *p); /* accepts zeroed and hal
 /* Permutes each type's element list of m in place (a cycle-leader
  * counting sort by partition, O(elements)) so that every partition's
  * elements are one range per type (parts[].first_cell), and frees
- * part_of: afterwards membership is by range. The order inside a
+ * part_of16: afterwards membership is by range. The order inside a
  * partition changes (swaps); the partition's own sort orders it anyway. */
 void clvr_partition_plan_reorder(clvr_mesh *m, clvr_partition_plan *p);
 
