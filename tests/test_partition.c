@@ -394,6 +394,18 @@ static void test_host_check(void)
     clvr_limits_host_estimate(31000000ull, cells, 0, 64, 64, &b);
     TU_CHECK(a.scratch_bytes < b.scratch_bytes);
     TU_CHECK(a.mesh_bytes == 31000000ull * 16 + 30000000ull * 32);
+    /* Device estimate in partitions: the preprocessing buffers are one
+     * partition's, so 80M hexes in 4M-element partitions have the 16-bit
+     * local indices (2 bytes per slot of the whole mesh) as largest buffer. */
+    clvr_mesh counts = {0};
+    counts.num_vertices = 81000000ull;
+    counts.num_cells[3] = 80000000ull;
+    clvr_limits_estimate d1, dk;
+    clvr_limits_estimate_parts(&counts, NULL, 0, 64, 64, &d1);
+    clvr_limits_estimate_parts(&counts, NULL, 4u << 20, 64, 64, &dk);
+    TU_CHECK(strcmp(d1.largest_buffer, "element indices") == 0 && d1.largest_buffer_bytes == 80000000ull * 32);
+    TU_CHECK(strcmp(dk.largest_buffer, "16-bit indices") == 0 && dk.largest_buffer_bytes == 80000000ull * 16);
+    TU_CHECK(dk.preprocess_peak_bytes * 10 < d1.preprocess_peak_bytes);
     clvr_mem_limits real;
     clvr_mem_limits_read(&real);
     TU_CHECK(real.limit > 0 && real.binding != NULL);

@@ -224,7 +224,8 @@ int main(int argc, char **argv)
     if (o.sampling_size) po.sampling_size = o.sampling_size;
     /* A mesh or image the device cannot hold fails now, with the numbers,
      * not minutes into preprocessing. */
-    s = clvr_limits_check_named(&cl, &mesh, mesh_name, &po, o.width, o.height, &err);
+    s = clvr_limits_check_parts(&cl, &mesh, mesh_name, &po, part_elements(&o, clvr_mesh_num_elements(&mesh)), o.width,
+                                o.height, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     /* Kernel compilation, timed apart from clustering: the programs'
      * builds, and PoCL's code generation at a kernel's first launch, which a

@@ -29,6 +29,12 @@ static uint64_t max_u64(uint64_t a, uint64_t b) { return a > b ? a : b; }
 void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t width,
                                 uint32_t height, clvr_limits_estimate *out)
 {
+    clvr_limits_estimate_parts(m, o, 0, width, height, out);
+}
+
+void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_options *o, uint64_t part_elements,
+                                uint32_t width, uint32_t height, clvr_limits_estimate *out)
+{
     memset(out, 0, sizeof *out);
     uint32_t leaf = o && o->leaf_size ? o->leaf_size : LIMITS_DEFAULT_LEAF;
     uint32_t sampling = o && o->sampling_size ? o->sampling_size : LIMITS_DEFAULT_SAMPLING;
@@ -47,8 +53,13 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
      * and two key/value pairs (24 N); during the split, positions, scalars,
      * the input and the gathered index lists (8 S) and the local indices
      * (2 or 4 S). */
-    uint64_t sort_phase = sat_add(sat_add(sat_mul(V, 16), sat_mul(S, 4)), sat_mul(N, 24));
-    uint64_t split_phase = sat_add(sat_mul(V, 16), sat_mul(S, bits == 32 ? 12 : 10));
+    /* Partitioned (partition.h), the preprocessing buffers are one
+     * partition's: its share of the elements, slots and (at most) vertices. */
+    const uint64_t PN = part_elements && part_elements < N ? part_elements : N;
+    const double f = N ? (double)PN / (double)N : 1.0;
+    const uint64_t PS = (uint64_t)((double)S * f), PV = (uint64_t)((double)V * f);
+    uint64_t sort_phase = sat_add(sat_add(sat_mul(PV, 16), sat_mul(PS, 4)), sat_mul(PN, 24));
+    uint64_t split_phase = sat_add(sat_mul(PV, 16), sat_mul(PS, bits == 32 ? 12 : 10));
     out->preprocess_peak_bytes = max_u64(sort_phase, split_phase);
 
     /* Rendering: local indices, leaf boxes, sampling clusters, BVH nodes and
@@ -66,9 +77,12 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
 
     /* The largest single buffer, named as clvr_cl_buffer names it. */
     struct { uint64_t bytes; const char *name; } cand[] = {
-        {sat_mul(V, 12), "vertex positions"},
-        {sat_mul(S, 4), "element indices"},
-        {sat_mul(N, 8), "sort keys"},
+        {sat_mul(PV, 12), "vertex positions"},
+        {sat_mul(PS, 4), "element indices"},
+        {sat_mul(PN, 8), "sort keys"},
+        /* (not the clustered vertices: unreferenced vertices are not copied,
+         * so 16 V is no lower bound) */
+        {sat_mul(S, bits == 32 ? 4 : 2), bits == 32 ? "32-bit indices" : "16-bit indices"},
         {sat_mul(pixels, 16), "image accumulator"},
     };
     out->largest_buffer = cand[0].name;
@@ -85,8 +99,15 @@ clvr_status clvr_limits_check_named(const clvr_cl *cl, const clvr_mesh *m, const
                                     const clvr_preprocess_options *o, uint32_t width, uint32_t height,
                                     clvr_error *err)
 {
+    return clvr_limits_check_parts(cl, m, what, o, 0, width, height, err);
+}
+
+clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const char *what,
+                                    const clvr_preprocess_options *o, uint64_t part_elements, uint32_t width,
+                                    uint32_t height, clvr_error *err)
+{
     clvr_limits_estimate e;
-    clvr_limits_estimate_bytes(m, o, width, height, &e);
+    clvr_limits_estimate_parts(m, o, part_elements, width, height, &e);
     const char *name = what ? what : "mesh";
     int image_is_it = e.largest_buffer && strcmp(e.largest_buffer, "image accumulator") == 0;
     if (e.largest_buffer_bytes > cl->max_alloc_bytes)

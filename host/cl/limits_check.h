@@ -47,6 +47,13 @@ typedef struct clvr_limits_estimate {
 void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t width,
                                 uint32_t height, clvr_limits_estimate *out);
 
+/* The same for preprocessing in partitions of at most part_elements
+ * elements (0: one, the whole mesh; partition.h): the preprocessing buffers
+ * are one partition's; the result's local indices are a candidate for the
+ * largest buffer too. */
+void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_options *o, uint64_t part_elements,
+                                uint32_t width, uint32_t height, clvr_limits_estimate *out);
+
 /* Checks the estimate against cl's CL_DEVICE_GLOBAL_MEM_SIZE and
  * CL_DEVICE_MAX_MEM_ALLOC_SIZE. CLVR_ERR_DEVICE_MEMORY names the mesh size,
  * the bytes needed, what the device has, and what to change: a smaller
@@ -59,6 +66,10 @@ clvr_status clvr_limits_check(const clvr_cl *cl, const clvr_mesh *m, const clvr_
 clvr_status clvr_limits_check_named(const clvr_cl *cl, const clvr_mesh *m, const char *what,
                                     const clvr_preprocess_options *o, uint32_t width, uint32_t height,
                                     clvr_error *err);
+/* The same for partitions of at most part_elements elements (0: one). */
+clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const char *what,
+                                    const clvr_preprocess_options *o, uint64_t part_elements, uint32_t width,
+                                    uint32_t height, clvr_error *err);
 
 /* ------------------------------------------------------------ host memory
  * On a CPU device (PoCL) device buffers are host memory, so a run that does
@@ -79,8 +90,10 @@ void clvr_mem_limits_read(clvr_mem_limits *out);
 void clvr_mem_rss(uint64_t *current, uint64_t *peak);
 
 /* Host bytes of a run on a CPU device, from counts: the loaded mesh
- * (16 V + 4 S), the clustered result with its BVH (lower bound: 16 V +
- * 2 S + about 6 bytes per element), the scratch of one preprocessing
+ * (16 V + 4 S, exact), the clustered result with its BVH (16 V + 2 S +
+ * about 6 bytes per element: measured 100M mixed elements needed 10% more,
+ * as vertices are duplicated across instance clusters; a mesh with many
+ * unreferenced vertices needs less), the scratch of one preprocessing
  * partition of at most part_elements elements (0: the whole mesh) and the
  * image. Address space (RLIMIT_AS) also pays the driver's reservations
  * (CLVR_LIMITS_DRIVER_VM_BYTES). */
