@@ -66,7 +66,8 @@ run_one() { # KIND SIZE
   case $kind in mixed) gen=mixed; file=$DATA/mixed-$size.bin ;; tets) gen=cellvar; file=$DATA/tets-$size.bin ;; esac
   n=$(count "$size")
   if [ ! -f "$file" ]; then
-    need=$(( n * (kind == "mixed" ? 38 : 21) / 1024 ))
+    local per=38; [ "$kind" = mixed ] || per=21   # bytes per element of the .bin, with slack
+    need=$(( n * per / 1024 ))
     avail=$(df -Pk "$DATA" | awk 'NR==2{print $4}')
     if [ "$need" -gt "$avail" ]; then
       echo "scale.sh: $kind $size needs ~$((need / 1048576)) GB of disk in $DATA, $((avail / 1048576)) GB free: skipped" >&2

@@ -95,7 +95,8 @@ void clvr_mem_rss(uint64_t *current, uint64_t *peak);
  * as vertices are duplicated across instance clusters; a mesh with many
  * unreferenced vertices needs less), the scratch of one preprocessing
  * partition of at most part_elements elements (0: the whole mesh) and the
- * image. Address space (RLIMIT_AS) also pays the driver's reservations
+ * image; in partitions the mesh shrinks as the result grows, so the two
+ * count as the larger of mesh and vertices + result. Address space (RLIMIT_AS) also pays the driver's reservations
  * (CLVR_LIMITS_DRIVER_VM_BYTES). */
 #define CLVR_LIMITS_DRIVER_VM_BYTES (1ull << 30)
 typedef struct clvr_host_estimate {
