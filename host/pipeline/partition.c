@@ -528,7 +528,7 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         double t0 = clvr_clock_monotonic_s();
         CLVR_TRY(clvr_partition_extract(m, &plan, k, vmap, &sub, opt.keep_order ? &ids : NULL, err));
         if (consume && plan.reordered) release_gathered(m, &plan.parts[k], released);
-        out->stage_s[CLVR_PP_STAGE_PARTITION] += clvr_clock_monotonic_s() - t0;
+        out->stage_s[CLVR_PP_STAGE_EXTRACT] += clvr_clock_monotonic_s() - t0;
         s = clvr_preprocess(cl, &sub, &opt, &pc, err);
         if (s != CLVR_OK && err) {
             char why[sizeof err->msg];

@@ -105,8 +105,8 @@ clvr_status clvr_partition_extract(const clvr_mesh *m, const clvr_partition_plan
  * buffers are made once at the end from host arrays the result owns (on a
  * CPU device with CL_MEM_USE_HOST_PTR, so the device reads them where they
  * are: no second copy). Stages: the partitions' stage_s summed, plus the
- * plan and extraction time under CLVR_PP_STAGE_PARTITION and the appends
- * under CLVR_PP_STAGE_MERGE. num_cells are the totals; first_cell is the
+ * plan and reorder time under CLVR_PP_STAGE_PARTITION, the sub-mesh gathers
+ * under CLVR_PP_STAGE_EXTRACT and the appends under CLVR_PP_STAGE_MERGE. num_cells are the totals; first_cell is the
  * first partition's (each partition has its own type lists). With
  * o->keep_order, order holds mesh element ids (types concatenated). */
 clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_preprocess_options *o,

@@ -59,7 +59,7 @@ const char *clvr_pp_stage_name(int stage)
 {
     static const char *names[CLVR_PP_STAGE_COUNT] = {"upload", "bounds", "keys", "sort", "gather",
                                                      "sampling", "split", "instances", "vertices", "leaves",
-                                                     "partition", "merge"};
+                                                     "partition", "extract", "merge"};
     return stage >= 0 && stage < CLVR_PP_STAGE_COUNT ? names[stage] : "?";
 }
 

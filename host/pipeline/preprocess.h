@@ -58,7 +58,8 @@ enum {
     CLVR_PP_STAGE_INSTANCES,  /* flagged select, scans, instance table */
     CLVR_PP_STAGE_VERTICES,   /* copy of the per-instance vertices */
     CLVR_PP_STAGE_LEAVES,     /* leaf boxes and instance bounds */
-    CLVR_PP_STAGE_PARTITION,  /* partitioned runs only (partition.h): coarse keys, plan, sub-mesh gathers (wall) */
+    CLVR_PP_STAGE_PARTITION,  /* partitioned runs only (partition.h): coarse keys, plan, reorder (wall) */
+    CLVR_PP_STAGE_EXTRACT,    /* partitioned runs only: the partitions' sub-mesh gathers on the host (wall) */
     CLVR_PP_STAGE_MERGE,      /* partitioned runs only: appending the partitions' results (wall) */
     CLVR_PP_STAGE_COUNT
 };
