@@ -375,6 +375,32 @@ static void test_render_same(clvr_cl *cl)
     clvr_mesh_free(&m);
 }
 
+/* The duplicate scan in bounded memory finds what the one-group scan finds. */
+static void test_scan_budget(void)
+{
+    clvr_error err = {0};
+    clvr_mesh m = {0};
+    TU_CHECK_STATUS(fx_grid_mesh(30, FX_MIXED, 0.0f, 1.0f, 0.0f, 3, &m, &err), CLVR_OK, &err);
+    /* Duplicate a few hexes (vertex order rotated) and tets onto later slots. */
+    const uint64_t nh = m.num_cells[3], nt = m.num_cells[0];
+    for (uint64_t k = 0; k < 5; ++k) {
+        uint32_t *d = m.indices[3] + (nh - 1 - 37 * k) * 8, *src = m.indices[3] + (11 + 53 * k) * 8;
+        for (int j = 0; j < 8; ++j) d[j] = src[(j + 3) % 8];
+    }
+    memcpy(m.indices[0] + (nt - 2) * 4, m.indices[0] + 7 * 4, 16);
+    clvr_mesh_update_ranges(&m);
+    clvr_limits_report a, b;
+    clvr_limits_scan(&m, &a);
+    clvr_limits_scan_budget(&m, 12 * 1000, &b); /* many groups: 1000 pairs each */
+    TU_CHECK(a.duplicates_checked && b.duplicates_checked);
+    TU_CHECK_EQ_U64(a.duplicates, 6);
+    TU_CHECK_EQ_U64(b.duplicates, a.duplicates);
+    TU_CHECK_EQ_U64(b.first_duplicate, a.first_duplicate);
+    TU_CHECK_EQ_U64(b.first_duplicate_type, a.first_duplicate_type);
+    TU_CHECK_EQ_U64(b.duplicate_of, a.duplicate_of);
+    clvr_mesh_free(&m);
+}
+
 static void test_host_check(void)
 {
     clvr_error err = {0};
@@ -417,6 +443,7 @@ static void test_host_check(void)
 int main(void)
 {
     test_plans();
+    test_scan_budget();
     test_host_check();
     clvr_cl cl;
     tu_open_device(&cl);

@@ -370,7 +370,13 @@ static uint64_t element_hash(const clvr_mesh *m, uint32_t t, uint64_t e)
  * 64-bit hashes match. Within a partition elements come in id order, so
  * the table keeps the earliest of equal elements and every later one
  * counts as a duplicate of it, as a single pass in id order would. */
-static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
+/* Bytes of (hash, id) pairs the duplicate scan holds at once: the hash
+ * partitions are processed in groups of about this size (one pass over the
+ * elements per group), so a 788M-element mesh does not need 9.5 GB of
+ * scratch beside itself (issue #15: the scan was the peak of a 100M run). */
+#define LIMITS_SCAN_BUDGET ((uint64_t)256 << 20)
+
+static void scan_duplicates(const clvr_mesh *m, uint64_t budget, clvr_limits_report *r)
 {
     uint64_t n = clvr_mesh_num_elements(m), first[CLVR_CELL_TYPE_COUNT], acc = 0;
     if (n >= 0x7fffffffull) return; /* ids are 32-bit with room for the doubling below */
@@ -383,13 +389,12 @@ static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
     uint32_t pbits = 0;
     while (pbits < 10 && (n >> pbits) > 32768) ++pbits;
     const uint32_t np = 1u << pbits;
-    uint64_t *hs = malloc((n ? n : 1) * sizeof *hs);
-    uint32_t *ids = malloc((n ? n : 1) * sizeof *ids);
-    uint64_t *start = calloc(np + 1, sizeof *start);
-    uint32_t *table = NULL;
-    if (!hs || !ids || !start) goto done;
+    uint64_t *start = calloc(np + 1, sizeof *start), *fill = malloc(np * sizeof *fill);
+    uint64_t *hs = NULL;
+    uint32_t *ids = NULL, *table = NULL;
+    if (!start || !fill) goto done;
     uint32_t key[CLVR_CELL_MAX_VERTS], other[CLVR_CELL_MAX_VERTS];
-    /* Pass 1: partition sizes. Pass 2: scatter (hash, id) in id order. */
+    /* Pass 1: partition sizes. */
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
             uint64_t h = element_hash(m, t, e);
@@ -400,69 +405,83 @@ static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
         if (start[p + 1] > maxp) maxp = start[p + 1];
         start[p + 1] += start[p];
     }
-    {
-        uint64_t *fill = malloc(np * sizeof *fill);
-        if (!fill) goto done;
+    /* Groups of consecutive partitions of at most the budget (at least one partition each). */
+    const uint64_t per_group = budget / 12u > maxp ? budget / 12u : maxp;
+    hs = malloc((n < per_group ? (n ? n : 1) : per_group) * sizeof *hs);
+    ids = malloc((n < per_group ? (n ? n : 1) : per_group) * sizeof *ids);
+    uint64_t cap = 16;
+    while (cap < 2 * maxp) cap <<= 1;
+    table = malloc(cap * sizeof *table);
+    if (!hs || !ids || !table) goto done;
+    r->duplicates_checked = 1;
+    uint64_t best = UINT64_MAX; /* global id of the first duplicate */
+    for (uint32_t g0 = 0; g0 < np;) {
+        uint32_t g1 = g0 + 1;
+        while (g1 < np && start[g1 + 1] - start[g0] <= per_group) ++g1;
+        const uint64_t base = start[g0];
+        /* Pass 2 for this group: scatter (hash, id) in id order. */
         memcpy(fill, start, np * sizeof *fill);
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
             for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
                 uint64_t h = element_hash(m, t, e);
-                uint64_t at = fill[pbits ? h >> (64 - pbits) : 0]++;
+                uint32_t p = pbits ? (uint32_t)(h >> (64 - pbits)) : 0;
+                if (p < g0 || p >= g1) continue;
+                uint64_t at = fill[p]++ - base;
                 hs[at] = h;
                 ids[at] = (uint32_t)(first[t] + e);
             }
-        free(fill);
-    }
-    uint64_t cap = 16;
-    while (cap < 2 * maxp) cap <<= 1;
-    table = malloc(cap * sizeof *table);
-    if (!table) goto done;
-    r->duplicates_checked = 1;
-    uint64_t best = UINT64_MAX; /* global id of the first duplicate */
-    for (uint32_t p = 0; p < np; ++p) {
-        const uint64_t b = start[p], e = start[p + 1];
-        uint64_t c = 16;
-        while (c < 2 * (e - b)) c <<= 1;
-        memset(table, 0, c * sizeof *table);
-        for (uint64_t i = b; i < e; ++i) {
-            const uint64_t h = hs[i];
-            const uint32_t t = type_of(ids[i], first);
-            int have_key = 0;
-            for (uint64_t s = h & (c - 1);; s = (s + 1) & (c - 1)) {
-                const uint32_t slot = table[s];
-                if (slot == 0) {
-                    table[s] = (uint32_t)(i - b + 1);
-                    break;
-                }
-                const uint64_t j = b + slot - 1;
-                if (hs[j] != h || type_of(ids[j], first) != t) continue;
-                const uint32_t nv = clvr_cell_vertex_count(t);
-                if (!have_key) {
-                    sorted_key(m->indices[t] + (ids[i] - first[t]) * nv, nv, key);
-                    have_key = 1;
-                }
-                sorted_key(m->indices[t] + (ids[j] - first[t]) * nv, nv, other);
-                if (memcmp(key, other, nv * sizeof *key) == 0) {
-                    ++r->duplicates;
-                    if (ids[i] < best) {
-                        best = ids[i];
-                        r->first_duplicate_type = t;
-                        r->first_duplicate = ids[i] - first[t];
-                        r->duplicate_of = ids[j] - first[t];
+        for (uint32_t p = g0; p < g1; ++p) {
+            const uint64_t b = start[p] - base, e = start[p + 1] - base;
+            uint64_t c = 16;
+            while (c < 2 * (e - b)) c <<= 1;
+            memset(table, 0, c * sizeof *table);
+            for (uint64_t i = b; i < e; ++i) {
+                const uint64_t h = hs[i];
+                const uint32_t t = type_of(ids[i], first);
+                int have_key = 0;
+                for (uint64_t sl = h & (c - 1);; sl = (sl + 1) & (c - 1)) {
+                    const uint32_t slot = table[sl];
+                    if (slot == 0) {
+                        table[sl] = (uint32_t)(i - b + 1);
+                        break;
                     }
-                    break;
+                    const uint64_t j = b + slot - 1;
+                    if (hs[j] != h || type_of(ids[j], first) != t) continue;
+                    const uint32_t nv = clvr_cell_vertex_count(t);
+                    if (!have_key) {
+                        sorted_key(m->indices[t] + (ids[i] - first[t]) * nv, nv, key);
+                        have_key = 1;
+                    }
+                    sorted_key(m->indices[t] + (ids[j] - first[t]) * nv, nv, other);
+                    if (memcmp(key, other, nv * sizeof *key) == 0) {
+                        ++r->duplicates;
+                        if (ids[i] < best) {
+                            best = ids[i];
+                            r->first_duplicate_type = t;
+                            r->first_duplicate = ids[i] - first[t];
+                            r->duplicate_of = ids[j] - first[t];
+                        }
+                        break;
+                    }
                 }
             }
         }
+        g0 = g1;
     }
 done:
     free(hs);
     free(ids);
     free(start);
+    free(fill);
     free(table);
 }
 
 void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out)
+{
+    clvr_limits_scan_budget(m, LIMITS_SCAN_BUDGET, out);
+}
+
+void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limits_report *out)
 {
     memset(out, 0, sizeof *out);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
@@ -478,7 +497,7 @@ void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out)
             }
         }
     }
-    scan_duplicates(m, out);
+    scan_duplicates(m, scan_bytes, out);
     if (m->num_vertices > 0 && m->scalar_min == m->scalar_max) {
         out->constant_scalar = 1;
         out->constant_value = m->scalar_min;

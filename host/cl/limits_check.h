@@ -128,9 +128,14 @@ typedef struct clvr_limits_report {
 } clvr_limits_report;
 
 /* Scans a validated mesh (every index < num_vertices, finite values): one
- * pass over the elements plus a hash of their vertex sets, about 8 bytes
- * of host memory per element, freed before return. */
+ * pass over the elements plus a hash of their vertex sets, at most about
+ * 256 MB of host memory, freed before return. */
 void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out);
+/* The same with the duplicate search's scratch bounded by about scan_bytes
+ * (clvr_limits_scan: 256 MB; 12 bytes per element in one go would be 9.5 GB
+ * at 788M elements): its hash partitions are taken in groups, one pass
+ * over the elements per group. Same report for any budget. */
+void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limits_report *out);
 
 /* Prints one "clvr: warning: ..." line per finding to out (stderr in
  * clvr) and returns how many it printed. `what` names the mesh. The lines
