@@ -2,7 +2,7 @@
 # bench/scale.sh: clvr end to end on ever larger generated meshes (issue #15):
 # per size the peak resident set, the resident footprint after preprocessing
 # and their ratio, every preprocessing stage's time, the load rate of the
-# .bin, the first frame's time and the total render time, or the error clvr
+# .bin, the mean frame time and the total render time, or the error clvr
 # refused the mesh with. Meshes are generated at bench time (clvr-gen) into
 # a data folder and reused; they are never committed.
 #
@@ -125,7 +125,7 @@ json.dump({"benchmark": "scale", "commit": commit, "date": date, "spp": int(spp)
 with open(base + ".md", "w") as md:
     md.write(f"bench/scale.sh at clvr commit {commit} ({date}), {img} at {spp} spp, PoCL on the 2-core 24 GiB VM\n\n")
     md.write("| mesh | elements | partitions | peak RSS GB | resident GB | peak/resident | load s | load GB/s | "
-             "preprocess s | first frame s | render s | load avg |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+             "preprocess s | frame s (mean) | render s | load avg |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
     stages = []
     for r in rows:
         name = f"{r['kind']} {r['size']}"
@@ -145,7 +145,7 @@ with open(base + ".md", "w") as md:
         md.write("\n| stage (s) | " + " | ".join(s[0] for s in stages) + " |\n|---|" + "---:|" * len(stages) + "\n")
         for k in names:
             md.write(f"| {k} | " + " | ".join(f"{s[2].get(k, 0):.3f}" for s in stages) + " |\n")
-    md.write("\nfirst frame s: the renderer's mean device seconds per frame (stats render.frame_s); "
+    md.write("\nframe s: the renderer's mean device seconds per frame (stats render.frame_s); "
              "render s: wall time of all frames.\n")
 print(open(base + ".md").read())
 EOF
