@@ -42,8 +42,10 @@ static void check_plan(const char *name, const clvr_mesh *m, const clvr_partitio
     uint64_t total = 0, first = 0, bad = 0;
     for (uint32_t k = 0; k < p->count; ++k) {
         total += p->parts[k].num_elements;
-        if (k > 0 && p->parts[k].num_elements && p->parts[k].bin_lo < p->parts[k - 1].bin_hi &&
-            p->parts[k - 1].num_elements)
+        /* increasing along the curve; pieces of one split bin share it */
+        const clvr_partition *c = &p->parts[k], *b = k ? &p->parts[k - 1] : NULL;
+        if (b && c->num_elements && b->num_elements && c->bin_lo < b->bin_hi &&
+            !(c->bin_lo == b->bin_lo && c->bin_hi == b->bin_hi && c->bin_hi == c->bin_lo + 1))
             ++bad;
     }
     TU_CHECK_EQ_U64(total, clvr_mesh_num_elements(m));
@@ -144,7 +146,40 @@ static void test_plans(void)
         free(after);
         clvr_partition_plan_free(&p);
     }
+    /* At most one element per partition: every bin of two or more is split;
+     * partitions of exactly one element, none empty. */
+    {
+        clvr_partition_plan p;
+        TU_CHECK_STATUS(clvr_partition_plan_make(&m, 0, 1, &p, &err), CLVR_OK, &err);
+        check_plan("mixed 7^3, 1 per partition", &m, &p);
+        TU_CHECK_EQ_U64(p.count, N);
+        uint64_t not_one = 0;
+        for (uint32_t k = 0; k < p.count; ++k) not_one += p.parts[k].num_elements != 1;
+        TU_CHECK_EQ_U64(not_one, 0);
+        clvr_partition_plan_free(&p);
+    }
     clvr_mesh_free(&m);
+    /* Every element in one spot of the grid (one coarse bin): still bounded partitions. */
+    {
+        clvr_mesh pile = {0};
+        uint64_t c[4] = {1000, 0, 0, 0};
+        TU_CHECK_STATUS(clvr_mesh_alloc(&pile, 4, c, &err), CLVR_OK, &err);
+        const float pos[12] = {0, 0, 0, 1e-6f, 0, 0, 0, 1e-6f, 0, 0, 0, 1e-6f};
+        memcpy(pile.positions, pos, sizeof pos);
+        for (uint32_t i = 0; i < 4; ++i) pile.scalars[i] = (float)i;
+        for (uint64_t i = 0; i < 4000; ++i) pile.indices[0][i] = (uint32_t)(i % 4);
+        clvr_mesh_update_ranges(&pile);
+        /* the box is the whole mesh here; put a far vertex so the pile is one bin */
+        clvr_partition_plan p;
+        TU_CHECK_STATUS(clvr_partition_plan_make(&pile, 0, 64, &p, &err), CLVR_OK, &err);
+        check_plan("1000 tets in one spot, <= 64 per partition", &pile, &p);
+        uint64_t over = 0;
+        for (uint32_t k = 0; k < p.count; ++k) over += p.parts[k].num_elements > 64;
+        TU_CHECK_EQ_U64(over, 0);
+        TU_CHECK_EQ_U64(p.count, 16); /* ceil(1000 / 64) */
+        clvr_partition_plan_free(&p);
+        clvr_mesh_free(&pile);
+    }
     /* One element; K = 4 leaves three partitions empty. */
     {
         clvr_mesh one = {0};

@@ -37,7 +37,10 @@ static uint32_t coarse_key(const clvr_mesh *m, uint32_t t, uint64_t e, const clv
 typedef struct key_job {
     const clvr_mesh *m;
     const clvr_partition_plan *plan;
-    const uint32_t *bin_part;  /* pass 2: partition of each bin */
+    const uint32_t *bin_part;  /* pass 2: (first) partition of each bin */
+    const uint32_t *bin_split; /* pass 2: partitions a bin is split into (a bin above max_elements) */
+    uint32_t *rank;            /* pass 2: this thread's next rank inside each bin */
+    uint64_t max_elements;
     int morton;
     uint64_t begin, end;       /* global element ids */
     uint32_t *hist;            /* pass 1: 2^KEY_BITS counts (this thread's own) */
@@ -63,7 +66,12 @@ static void *key_pass(void *arg)
             }
         else /* pass 2: coarse key -> partition, in place */
             for (uint64_t i = b; i < e; ++i) {
-                const uint32_t q = j->bin_part[part[first + i]];
+                const uint32_t bin = part[first + i];
+                uint32_t q = j->bin_part[bin];
+                /* A bin too big for one partition (elements piled into one
+                 * spot of the grid): its elements in mesh order, max_elements
+                 * per partition; the ranks continue across threads. */
+                if (j->bin_split[bin] > 1) q += (uint32_t)(j->rank[bin]++ / j->max_elements);
                 part[first + i] = (uint16_t)q;
                 ++j->counts[q][t];
             }
@@ -119,7 +127,7 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
     const double t0 = clvr_clock_monotonic_s();
     const uint32_t nbins = 1u << CLVR_PARTITION_KEY_BITS;
     uint32_t nt = host_threads();
-    uint32_t *hist = NULL, *bin_part = NULL;
+    uint32_t *hist = NULL, *bin_part = NULL, *bin_split = NULL, *tot = NULL;
     uint64_t(*counts)[CLVR_CELL_TYPE_COUNT] = NULL;
     key_job jobs[8], proto;
     memset(out, 0, sizeof *out);
@@ -140,8 +148,10 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
     /* Pass 1: histogram of the coarse keys, one table per thread. */
     hist = calloc((size_t)nbins * nt, sizeof *hist);
     bin_part = malloc((size_t)nbins * sizeof *bin_part);
+    bin_split = malloc((size_t)nbins * sizeof *bin_split);
+    tot = calloc(nbins, sizeof *tot);
     out->part_of16 = malloc(N * sizeof *out->part_of16);
-    if (!hist || !bin_part || !out->part_of16) goto oom;
+    if (!hist || !bin_part || !bin_split || !tot || !out->part_of16) goto oom;
     memset(&proto, 0, sizeof proto);
     proto.m = m;
     proto.plan = out;
@@ -152,9 +162,16 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
             jobs[i].hist = hist + (size_t)nbins * i;
         }
         run_key_pass(jobs, nt, N);
-        for (uint32_t i = 1; i < nt; ++i)
-            for (uint32_t b = 0; b < nbins; ++b) hist[b] += hist[(size_t)nbins * i + b];
+        /* Totals, and each thread's histogram turned into its first rank
+         * inside every bin (the counts of the threads before it). */
+        for (uint32_t i = 0; i < nt; ++i)
+            for (uint32_t b = 0; b < nbins; ++b) {
+                const uint32_t c = hist[(size_t)nbins * i + b];
+                hist[(size_t)nbins * i + b] = tot[b];
+                tot[b] += c;
+            }
     }
+    for (uint32_t b = 0; b < nbins; ++b) bin_split[b] = 1;
 
     /* Cut the curve into contiguous bin ranges. */
     {
@@ -166,24 +183,28 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
              * the partitions in between empty. */
             for (uint32_t b = 0; b < nbins; ++b) {
                 bin_part[b] = k;
-                acc += hist[b];
+                acc += tot[b];
                 while (k + 1 < count && acc >= (uint64_t)(((unsigned __int128)N * (k + 1)) / count)) ++k;
             }
             out->count = count;
         } else {
             for (uint32_t b = 0; b < nbins; ++b) {
-                if (in_part > 0 && in_part + hist[b] > max_elements) {
-                    if (k + 1 >= 65535u) {
-                        s = clvr_error_set(err, CLVR_ERR_OVERFLOW,
-                                           "partition: more than 65535 partitions of at most %llu elements; "
-                                           "allow larger partitions", (unsigned long long)max_elements);
-                        goto cleanup;
-                    }
+                if (in_part > 0 && in_part + tot[b] > max_elements) {
                     ++k;
                     in_part = 0;
                 }
                 bin_part[b] = k;
-                in_part += hist[b];
+                if (tot[b] > max_elements) { /* partitions of its own, the last one full */
+                    bin_split[b] = (uint32_t)((tot[b] + max_elements - 1) / max_elements);
+                    k += bin_split[b] - 1;
+                    in_part = max_elements;
+                } else in_part += tot[b];
+                if (k >= 65535u) {
+                    s = clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                                       "partition: more than 65535 partitions of at most %llu elements; "
+                                       "allow larger partitions", (unsigned long long)max_elements);
+                    goto cleanup;
+                }
             }
             out->count = k + 1;
         }
@@ -195,11 +216,12 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
         out->parts[p].bin_lo = nbins;
         out->parts[p].bin_hi = 0;
     }
-    for (uint32_t b = 0; b < nbins; ++b) {
-        clvr_partition *q = &out->parts[bin_part[b]];
-        if (b < q->bin_lo) q->bin_lo = b;
-        if (b + 1 > q->bin_hi) q->bin_hi = b + 1;
-    }
+    for (uint32_t b = 0; b < nbins; ++b)
+        for (uint32_t j = 0; j < bin_split[b] && tot[b]; ++j) { /* empty bins do not widen the ranges */
+            clvr_partition *q = &out->parts[bin_part[b] + j];
+            if (b < q->bin_lo) q->bin_lo = b;
+            if (b + 1 > q->bin_hi) q->bin_hi = b + 1;
+        }
     for (uint32_t p = 0; p < out->count; ++p)
         if (out->parts[p].bin_lo > out->parts[p].bin_hi) out->parts[p].bin_lo = out->parts[p].bin_hi;
 
@@ -207,11 +229,12 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
     counts = calloc((size_t)out->count * nt, sizeof *counts);
     if (!counts) goto oom;
     proto.bin_part = bin_part;
-    free(hist);
-    hist = NULL;
+    proto.bin_split = bin_split;
+    proto.max_elements = max_elements;
     for (uint32_t i = 0; i < nt; ++i) {
         jobs[i] = proto;
         jobs[i].counts = counts + (size_t)out->count * i;
+        jobs[i].rank = hist + (size_t)nbins * i;
     }
     run_key_pass(jobs, nt, N);
     for (uint32_t p = 0; p < out->count; ++p)
@@ -229,6 +252,8 @@ oom:
 cleanup:
     free(hist);
     free(bin_part);
+    free(bin_split);
+    free(tot);
     free(counts);
     if (s != CLVR_OK) clvr_partition_plan_free(out);
     return s;

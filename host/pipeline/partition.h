@@ -68,8 +68,10 @@ typedef struct clvr_partition_plan {
  * count > 0 exactly `count` partitions of near-equal element counts (cut at
  * coarse-bin boundaries, so some may be empty, and all but one are when
  * count exceeds the element count); with count == 0 as few as keep each
- * partition at most max_elements elements (0: the default) where a
- * single coarse bin allows. At most 65535 partitions. */
+ * partition at most max_elements elements (0: the default): a coarse bin
+ * with more elements (a mesh piled into one spot of the grid) is split into
+ * partitions of its own in mesh order, as an unbounded partition would
+ * need unbounded scratch. At most 65535 partitions. */
 clvr_status clvr_partition_plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_elements,
                                      clvr_partition_plan *out, clvr_error *err);
 void clvr_partition_plan_free(clvr_partition_plan *p); /* accepts zeroed and half-built */
