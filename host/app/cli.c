@@ -79,6 +79,8 @@ void clvr_cli_print_help(FILE *out)
         "                         normal points away from, as ParaView's Clip with Invert on);\n"
         "                         shadows see the clipped medium too; up to 6 times\n"
         "  --clip-box X0,Y0,Z0,X1,Y1,Z1  keep only the medium inside this box\n"
+        "  --partitions K         preprocess in K pieces of the Hilbert curve (default 0: automatic,\n"
+        "                         one per 4.2M elements; less scratch memory, same image)\n"
         "\n"
         "Scene:\n"
         "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"
@@ -322,6 +324,7 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             }
         }
         else if (!strcmp(a, "--sampling-size")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 20, &o->sampling_size, err); }
+        else if (!strcmp(a, "--partitions")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 0, 65535u, &o->partitions, err); }
         else if (!strcmp(a, "--camera")) { const char *v = NEXT(); if (v) { s = parse_floats(a, v, 9, o->camera, err); o->camera_set = 1; } }
         else if (!strcmp(a, "--fovy")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.1f, 179.0f, &o->fovy, err); }
         else if (!strcmp(a, "--colormap")) { const char *v = NEXT(); if (v) o->colormap = v; }

@@ -19,6 +19,7 @@
 #include "limits_check.h"
 #include "mesh_io.h"
 #include "outline.h"
+#include "partition.h"
 #include "preprocess.h"
 #include "render.h"
 #include "scene.h"
@@ -66,6 +67,14 @@ static clvr_status warm_up_kernels(clvr_cl *cl, const clvr_preprocess_options *p
     clvr_clustered_release(cl, &tc);
     clvr_mesh_free(&tiny);
     return s;
+}
+
+/* Elements per preprocessing partition for the memory checks: the mesh
+ * over --partitions K, or partition.h's default bound. */
+static uint64_t part_elements(const clvr_options *o, uint64_t n)
+{
+    if (o->partitions) return (n + o->partitions - 1) / o->partitions;
+    return n > CLVR_PARTITION_DEFAULT_ELEMENTS ? CLVR_PARTITION_DEFAULT_ELEMENTS : n;
 }
 
 /* Loads MESH or builds the default scene. */
@@ -128,7 +137,21 @@ int main(int argc, char **argv)
 #endif
     }
 
-    /* --- mesh */
+    /* --- mesh. On a CPU device the device's memory is the host's: a mesh
+     * that cannot fit is refused from the .bin header, before it is read
+     * (not by the OOM killer or an allocation failure inside the driver). */
+    if (o.mesh_path && !o.info) {
+        uint64_t hv = 0, hc[CLVR_CELL_TYPE_COUNT] = {0};
+        clvr_error perr = {0};
+        if (clvr_mesh_peek_bin(o.mesh_path, &hv, hc, &perr) == CLVR_OK) {
+            uint64_t n = 0;
+            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += hc[t];
+            clvr_mem_limits ml;
+            clvr_mem_limits_read(&ml);
+            s = clvr_limits_check_host(o.mesh_path, hv, hc, part_elements(&o, n), o.width, o.height, 0, &ml, &err);
+            if (s != CLVR_OK) return fail(&err);
+        }
+    }
     double t0 = clvr_clock_monotonic_s();
     if (!o.quiet && !o.info) fprintf(stderr, "clvr: loading %s\n", o.mesh_path ? o.mesh_path : "the built-in scene");
     s = load_mesh(&o, &mesh, &err);
@@ -185,6 +208,16 @@ int main(int argc, char **argv)
         if (!o.quiet) fprintf(stderr, "clvr: automatic density %.3g (--density auto)\n", (double)o.density);
     }
 
+    /* Other formats are checked once loaded (their headers do not give
+     * every count), .bin files again with what is left now. */
+    {
+        clvr_mem_limits ml;
+        clvr_mem_limits_read(&ml);
+        s = clvr_limits_check_host(mesh_name, mesh.num_vertices, mesh.num_cells,
+                                   part_elements(&o, clvr_mesh_num_elements(&mesh)), o.width, o.height, 1, &ml, &err);
+        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    }
+
     /* --- device */
     s = clvr_cl_create(o.device, &cl, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
@@ -201,7 +234,8 @@ int main(int argc, char **argv)
     if (o.sampling_size) po.sampling_size = o.sampling_size;
     /* A mesh or image the device cannot hold fails now, with the numbers,
      * not minutes into preprocessing. */
-    s = clvr_limits_check_named(&cl, &mesh, mesh_name, &po, o.width, o.height, &err);
+    s = clvr_limits_check_parts(&cl, &mesh, mesh_name, &po, part_elements(&o, clvr_mesh_num_elements(&mesh)), o.width,
+                                o.height, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     /* Kernel compilation, timed apart from clustering: the programs'
      * builds, and PoCL's code generation at a kernel's first launch, which a
@@ -214,8 +248,21 @@ int main(int argc, char **argv)
     warm_s = clvr_clock_monotonic_s() - warm_s - (cl.build_s - build0);
     t0 = clvr_clock_monotonic_s();
     build0 = cl.build_s;
-    s = clvr_preprocess(&cl, &mesh, &po, &clustered, &err);
+    /* The statistics of the input, before preprocessing takes it apart. */
+    stats.have_mesh = 1;
+    clvr_stats_from_mesh(&stats, &mesh);
+    /* Consumed: the element lists are given back partition by partition, so
+     * the input shrinks while the clustered mesh grows (partition.h). */
+    s = clvr_preprocess_partitioned(&cl, &mesh, &po, o.partitions, 0, 1, &clustered, &stats.partitions, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    /* What is left of the mesh (vertices) is not needed by the trees: give it
+     * back before they are built. Its bounds and field name are kept. */
+    float mesh_lo[3], mesh_hi[3];
+    char legend_name[sizeof mesh.scalar_name];
+    memcpy(mesh_lo, mesh.bounds_lo, sizeof mesh_lo);
+    memcpy(mesh_hi, mesh.bounds_hi, sizeof mesh_hi);
+    memcpy(legend_name, mesh.scalar_name, sizeof legend_name);
+    clvr_mesh_free(&mesh);
     s = clvr_accel_build(&cl, &clustered, &bvh, &err);
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     /* Compiling kernels (seconds on a cold driver cache) is not clustering. */
@@ -227,8 +274,6 @@ int main(int argc, char **argv)
                 stats.preprocess_s, (unsigned long long)clustered.num_instances,
                 (unsigned long long)clustered.num_instances16, (unsigned long long)clustered.num_leaves,
                 (unsigned long long)clustered.num_sampling);
-    stats.have_mesh = 1;
-    clvr_stats_from_mesh(&stats, &mesh);
     clvr_stats_from_clusters(&stats, &clustered, &bvh);
 
     /* --- transfer function and camera */
@@ -242,7 +287,7 @@ int main(int argc, char **argv)
         view.azimuth_deg = o.azimuth;
         view.elevation_deg = o.elevation;
         view.zoom = o.zoom;
-        s = clvr_camera_frame_view(&cam, mesh.bounds_lo, mesh.bounds_hi, &view, o.fovy, o.width, o.height, &err);
+        s = clvr_camera_frame_view(&cam, mesh_lo, mesh_hi, &view, o.fovy, o.width, o.height, &err);
     }
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     /* A turntable turns the eye about the look-at point's vertical: the
@@ -251,10 +296,6 @@ int main(int argc, char **argv)
     const float eye0[3] = {cam.origin[0], cam.origin[1], cam.origin[2]};
     const float target0[3] = {cam.target[0], cam.target[1], cam.target[2]};
 
-    /* The mesh's host copy is no longer needed: the device has it. */
-    char legend_name[sizeof mesh.scalar_name];
-    memcpy(legend_name, mesh.scalar_name, sizeof legend_name);
-    clvr_mesh_free(&mesh);
 
     clvr_render_settings rs;
     clvr_render_settings_default(&rs);
@@ -292,6 +333,9 @@ int main(int argc, char **argv)
         }
     }
     if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    /* The footprint the run keeps: mesh freed, clustered mesh, trees and
+     * renderer in place (on a CPU device all of it host memory). */
+    clvr_mem_rss(&stats.bytes_resident, NULL);
     stats.kernel_build_s = cl.build_s + warm_s;
     if (!o.quiet && cl.build_notice_shown)
         fprintf(stderr, "clvr: kernels compiled in %.2f s; later runs load them from the driver's cache\n",
@@ -373,6 +417,7 @@ int main(int argc, char **argv)
         clvr_stats_from_render(&stats, &counters, (uint32_t)o.method, o.width, o.height);
         if (!o.quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp)\n", path, o.width, o.height, frame);
     }
+    clvr_mem_rss(NULL, &stats.bytes_peak_rss);
     if (o.stats) clvr_stats_print(stdout, &stats);
     if (o.stats_json) {
         s = clvr_stats_write_json(o.stats_json, &stats, &err);

@@ -105,6 +105,12 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
         fprintf(out, "| total (wall) | %.4f | %.3g |\n", s->preprocess_s,
                 s->preprocess_s > 0 ? (double)s->elements / s->preprocess_s : 0.0);
         fprintf(out, "\nkernel compilation (not in the total): %.3f s\n", s->kernel_build_s);
+        if (s->partitions) fprintf(out, "partitions: %u\n", s->partitions);
+    }
+    if (s->bytes_peak_rss || s->bytes_resident) {
+        fprintf(out, "memory: peak resident %.3f GB, resident after preprocessing %.3f GB (ratio %.2f)\n",
+                s->bytes_peak_rss / 1e9, s->bytes_resident / 1e9,
+                s->bytes_resident ? (double)s->bytes_peak_rss / (double)s->bytes_resident : 0.0);
     }
     if (s->have_render) {
         fprintf(out, "\nrender: %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
@@ -138,6 +144,8 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
         {"bvh_one_per_leaf", (double)s->bytes_bvh_one_per_leaf},
         {"sampling", (double)s->bytes_sampling},
         {"element_boxes", (double)s->bytes_element_boxes},
+        {"peak_rss", (double)s->bytes_peak_rss},
+        {"resident", (double)s->bytes_resident},
     };
     struct { const char *k; double v; } r[] = {
         {"rays_per_s", s->rays_per_s},
@@ -191,6 +199,7 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
             snprintf(key, sizeof key, "render.%s", r[i].k);
             jnum(f, "  ", key, r[i].v, 1);
         }
+    jnum(f, "  ", "partitions", (double)s->partitions, 1);
     jnum(f, "  ", "time.kernel_build_s", s->kernel_build_s, 1);
     jnum(f, "  ", "time.preprocess_s", s->preprocess_s, 0);
     fprintf(f, "}\n");

@@ -31,6 +31,10 @@ typedef struct clvr_stats {
     uint64_t bytes_bvh_one_per_leaf;/* estimate for one element per leaf (Table 1 "pre") */
     uint64_t bytes_sampling;        /* sampling clusters */
     uint64_t bytes_element_boxes;   /* quantized element boxes of point location (kernels/locate.h) */
+    uint64_t bytes_peak_rss;        /* the process's peak resident set (VmHWM) when the stats are written */
+    uint64_t bytes_resident;        /* its resident set once the mesh is freed and the renderer is ready:
+                                       the footprint the run keeps (CPU devices: device memory included) */
+    uint32_t partitions;            /* preprocessing partitions (partition.h) */
     /* clusters */
     uint64_t num_instances, num_instances16, num_leaves, num_sampling;
     uint32_t leaf_size, sampling_size;

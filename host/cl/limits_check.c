@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "elements.h"
 
@@ -28,6 +29,12 @@ static uint64_t max_u64(uint64_t a, uint64_t b) { return a > b ? a : b; }
 void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t width,
                                 uint32_t height, clvr_limits_estimate *out)
 {
+    clvr_limits_estimate_parts(m, o, 0, width, height, out);
+}
+
+void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_options *o, uint64_t part_elements,
+                                uint32_t width, uint32_t height, clvr_limits_estimate *out)
+{
     memset(out, 0, sizeof *out);
     uint32_t leaf = o && o->leaf_size ? o->leaf_size : LIMITS_DEFAULT_LEAF;
     uint32_t sampling = o && o->sampling_size ? o->sampling_size : LIMITS_DEFAULT_SAMPLING;
@@ -46,8 +53,13 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
      * and two key/value pairs (24 N); during the split, positions, scalars,
      * the input and the gathered index lists (8 S) and the local indices
      * (2 or 4 S). */
-    uint64_t sort_phase = sat_add(sat_add(sat_mul(V, 16), sat_mul(S, 4)), sat_mul(N, 24));
-    uint64_t split_phase = sat_add(sat_mul(V, 16), sat_mul(S, bits == 32 ? 12 : 10));
+    /* Partitioned (partition.h), the preprocessing buffers are one
+     * partition's: its share of the elements, slots and (at most) vertices. */
+    const uint64_t PN = part_elements && part_elements < N ? part_elements : N;
+    const double f = N ? (double)PN / (double)N : 1.0;
+    const uint64_t PS = (uint64_t)((double)S * f), PV = (uint64_t)((double)V * f);
+    uint64_t sort_phase = sat_add(sat_add(sat_mul(PV, 16), sat_mul(PS, 4)), sat_mul(PN, 24));
+    uint64_t split_phase = sat_add(sat_mul(PV, 16), sat_mul(PS, bits == 32 ? 12 : 10));
     out->preprocess_peak_bytes = max_u64(sort_phase, split_phase);
 
     /* Rendering: local indices, leaf boxes, sampling clusters, BVH nodes and
@@ -58,6 +70,7 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
     resident = sat_add(resident, sat_mul(leaves, sizeof(clvr_box)));
     resident = sat_add(resident, sat_mul(N / sampling, sizeof(clvr_sampling_cluster)));
     resident = sat_add(resident, sat_mul(leaves / 3, LIMITS_BVH_NODE_BYTES));
+    resident = sat_add(resident, sat_mul(N, 6)); /* element boxes (kernels/locate.h) */
     uint64_t pixels = (uint64_t)width * height;
     out->image_bytes = sat_mul(pixels, LIMITS_PIXEL_BYTES);
     out->render_bytes = sat_add(resident, out->image_bytes);
@@ -65,9 +78,12 @@ void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_option
 
     /* The largest single buffer, named as clvr_cl_buffer names it. */
     struct { uint64_t bytes; const char *name; } cand[] = {
-        {sat_mul(V, 12), "vertex positions"},
-        {sat_mul(S, 4), "element indices"},
-        {sat_mul(N, 8), "sort keys"},
+        {sat_mul(PV, 12), "vertex positions"},
+        {sat_mul(PS, 4), "element indices"},
+        {sat_mul(PN, 8), "sort keys"},
+        /* (not the clustered vertices: unreferenced vertices are not copied,
+         * so 16 V is no lower bound) */
+        {sat_mul(S, bits == 32 ? 4 : 2), bits == 32 ? "32-bit indices" : "16-bit indices"},
         {sat_mul(pixels, 16), "image accumulator"},
     };
     out->largest_buffer = cand[0].name;
@@ -84,8 +100,15 @@ clvr_status clvr_limits_check_named(const clvr_cl *cl, const clvr_mesh *m, const
                                     const clvr_preprocess_options *o, uint32_t width, uint32_t height,
                                     clvr_error *err)
 {
+    return clvr_limits_check_parts(cl, m, what, o, 0, width, height, err);
+}
+
+clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const char *what,
+                                    const clvr_preprocess_options *o, uint64_t part_elements, uint32_t width,
+                                    uint32_t height, clvr_error *err)
+{
     clvr_limits_estimate e;
-    clvr_limits_estimate_bytes(m, o, width, height, &e);
+    clvr_limits_estimate_parts(m, o, part_elements, width, height, &e);
     const char *name = what ? what : "mesh";
     int image_is_it = e.largest_buffer && strcmp(e.largest_buffer, "image accumulator") == 0;
     if (e.largest_buffer_bytes > cl->max_alloc_bytes)
@@ -121,6 +144,150 @@ clvr_status clvr_limits_check(const clvr_cl *cl, const clvr_mesh *m, const clvr_
                               uint32_t width, uint32_t height, clvr_error *err)
 {
     return clvr_limits_check_named(cl, m, NULL, o, width, height, err);
+}
+
+/* ------------------------------------------------------------ host memory */
+
+/* The number after `key` in a "Key:   123 kB" file (meminfo, status), in bytes. */
+static uint64_t kb_field(const char *path, const char *key)
+{
+    FILE *f = fopen(path, "r");
+    char line[256];
+    uint64_t v = 0;
+    size_t kl = strlen(key);
+    if (!f) return 0;
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, key, kl) && line[kl] == ':') {
+            unsigned long long x = 0;
+            if (sscanf(line + kl + 1, "%llu", &x) == 1) v = (uint64_t)x * 1024u;
+            break;
+        }
+    fclose(f);
+    return v;
+}
+
+/* A file holding one number ("max" or missing: UINT64_MAX). */
+static uint64_t number_file(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    unsigned long long x = 0;
+    uint64_t v = UINT64_MAX;
+    if (!f) return v;
+    if (fscanf(f, "%llu", &x) == 1) v = (uint64_t)x;
+    fclose(f);
+    return v;
+}
+
+void clvr_mem_rss(uint64_t *current, uint64_t *peak)
+{
+    if (current) *current = kb_field("/proc/self/status", "VmRSS");
+    if (peak) *peak = kb_field("/proc/self/status", "VmHWM");
+}
+
+void clvr_mem_limits_read(clvr_mem_limits *out)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t a = kb_field("/proc/meminfo", "MemAvailable");
+    out->mem_available = a ? a : UINT64_MAX;
+    /* cgroup v2 at the unified mount (the process's own group is what
+     * containers mount there); v1's memory controller otherwise. A limit
+     * above 2^60 is "none" (v1 writes a huge number for it). */
+    uint64_t max = number_file("/sys/fs/cgroup/memory.max"), cur = number_file("/sys/fs/cgroup/memory.current");
+    if (max == UINT64_MAX) {
+        max = number_file("/sys/fs/cgroup/memory/memory.limit_in_bytes");
+        cur = number_file("/sys/fs/cgroup/memory/memory.usage_in_bytes");
+    }
+    out->cgroup_left = max >= (1ull << 60) ? UINT64_MAX : cur == UINT64_MAX ? max : max > cur ? max - cur : 0;
+    struct rlimit rl;
+    out->as_left = UINT64_MAX;
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+        uint64_t used = kb_field("/proc/self/status", "VmSize");
+        out->as_left = (uint64_t)rl.rlim_cur > used ? (uint64_t)rl.rlim_cur - used : 0;
+    }
+    out->limit = out->mem_available;
+    out->binding = "available memory (MemAvailable in /proc/meminfo)";
+    if (out->cgroup_left < out->limit) {
+        out->limit = out->cgroup_left;
+        out->binding = "the cgroup's memory limit (memory.max)";
+    }
+    if (out->as_left < out->limit) {
+        out->limit = out->as_left;
+        out->binding = "the address-space limit (ulimit -v, RLIMIT_AS)";
+    }
+}
+
+void clvr_limits_host_estimate(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                               uint64_t part_elements, uint32_t width, uint32_t height, clvr_host_estimate *out)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t N = 0, S = 0, V = num_vertices;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        N = sat_add(N, num_cells[t]);
+        S = sat_add(S, sat_mul(num_cells[t], clvr_cell_vertex_count(t)));
+    }
+    out->mesh_bytes = sat_add(sat_mul(V, 16), sat_mul(S, 4));
+    /* Clustered vertices (>= one float4 per vertex), 16-bit indices, leaf
+     * boxes, sampling clusters and BVH nodes at the default sizes (16
+     * elements per leaf and per sampling cluster: 2 + 2 + ~0.8 bytes per
+     * element; 6 keeps it a lower bound of what was measured, 6.3). */
+    out->result_bytes = sat_add(sat_add(sat_mul(V, 16), sat_mul(S, 2)), sat_mul(N, 6));
+    /* and the point-location element boxes, CLVR_EBOX_BYTES (6) per element */
+    out->result_bytes = sat_add(out->result_bytes, sat_mul(N, 6));
+    /* One partition's preprocessing: its share of the mesh as a sub-mesh,
+     * the sort (24 bytes per element) and the split's lists (8 per slot),
+     * its result before the append. */
+    uint64_t pe = part_elements && part_elements < N ? part_elements : N;
+    double f = N ? (double)pe / (double)N : 0.0;
+    double scratch = f * (double)(sat_mul(V, 16) + sat_mul(S, 4)) * 2.0 + (double)pe * 24.0 + f * (double)S * 8.0;
+    /* Partitioned runs also keep 2 bytes per element (the plan) and a vertex map. */
+    if (pe < N) scratch += 2.0 * (double)N + 4.0 * (double)V;
+    out->scratch_bytes = scratch >= 1.8e19 ? UINT64_MAX : (uint64_t)scratch;
+    out->image_bytes = sat_mul((uint64_t)width * height, LIMITS_PIXEL_BYTES + 16u);
+    /* In partitions the mesh is consumed as the result grows (partition.h):
+     * the vertices stay, the element lists go as the result comes, so the
+     * peak is the larger of the input and vertices + result (100M mixed:
+     * 4.89 GB measured against 3.7 + 3.5 GB side by side). In one piece
+     * both are alive at the end of preprocessing. */
+    uint64_t held = pe < N ? max_u64(out->mesh_bytes, sat_add(sat_mul(V, 16), out->result_bytes))
+                           : sat_add(out->mesh_bytes, out->result_bytes);
+    out->total_bytes = sat_add(held, sat_add(out->scratch_bytes, out->image_bytes));
+}
+
+clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
+                                   const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                   uint32_t width, uint32_t height, int mesh_loaded, const clvr_mem_limits *l,
+                                   clvr_error *err)
+{
+    clvr_host_estimate e;
+    clvr_limits_host_estimate(num_vertices, num_cells, part_elements, width, height, &e);
+    /* A loaded mesh is in use already: only what comes on top of it is needed. */
+    uint64_t need = mesh_loaded ? (e.total_bytes > e.mesh_bytes ? e.total_bytes - e.mesh_bytes : 0) : e.total_bytes;
+    const int as_binds = l->limit == l->as_left && l->as_left != UINT64_MAX;
+    if (as_binds) need = sat_add(need, CLVR_LIMITS_DRIVER_VM_BYTES);
+    /* The estimate is only about right (300M mixed: 3% above it) and the
+     * system needs room too: at most 90% of memory; the address space is
+     * exact. A sparse 500M-element .bin piled on one vertex that passed the
+     * bare limit by 1% ended in the OOM killer at 23.5 GB. */
+    const uint64_t allowed = as_binds ? l->limit : l->limit / 10 * 9;
+    if (need <= allowed) return CLVR_OK;
+    uint64_t N = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) N = sat_add(N, num_cells[t]);
+    return clvr_error_set(
+        err, CLVR_ERR_NO_MEMORY,
+        "%s: %llu elements, %llu vertices need about %.2f GB of memory (mesh %.2f GB%s, clustered result %.2f GB%s, "
+        "preprocessing scratch %.2f GB, image %.2f GB%s) but %s leaves %.2f GB (%.2f GB usable); refusing before "
+        "%s. %s",
+        what ? what : "mesh", (unsigned long long)N, (unsigned long long)num_vertices, gb(need), gb(e.mesh_bytes),
+        mesh_loaded ? ", loaded already" : "", gb(e.result_bytes),
+        e.total_bytes < sat_add(sat_add(e.mesh_bytes, e.result_bytes), sat_add(e.scratch_bytes, e.image_bytes))
+            ? " growing as the mesh is consumed"
+            : "",
+        gb(e.scratch_bytes), gb(e.image_bytes),
+        as_binds ? ", driver address space 1.07 GB" : "", l->binding, gb(l->limit), gb(allowed),
+        mesh_loaded ? "preprocessing starts" : "the mesh is read",
+        as_binds ? "Raise the limit (ulimit -v), or render a smaller (cropped or decimated) mesh"
+                 : "Free memory or raise the limit, use a machine with more memory, or render a smaller (cropped or "
+                   "decimated) mesh; more --partitions only shrink the scratch part");
 }
 
 /* ------------------------------------------------------------ mesh scan */
@@ -212,7 +379,13 @@ static uint64_t element_hash(const clvr_mesh *m, uint32_t t, uint64_t e)
  * 64-bit hashes match. Within a partition elements come in id order, so
  * the table keeps the earliest of equal elements and every later one
  * counts as a duplicate of it, as a single pass in id order would. */
-static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
+/* Bytes of (hash, id) pairs the duplicate scan holds at once: the hash
+ * partitions are processed in groups of about this size (one pass over the
+ * elements per group), so a 788M-element mesh does not need 9.5 GB of
+ * scratch beside itself (issue #15: the scan was the peak of a 100M run). */
+#define LIMITS_SCAN_BUDGET ((uint64_t)256 << 20)
+
+static void scan_duplicates(const clvr_mesh *m, uint64_t budget, clvr_limits_report *r)
 {
     uint64_t n = clvr_mesh_num_elements(m), first[CLVR_CELL_TYPE_COUNT], acc = 0;
     if (n >= 0x7fffffffull) return; /* ids are 32-bit with room for the doubling below */
@@ -225,13 +398,12 @@ static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
     uint32_t pbits = 0;
     while (pbits < 10 && (n >> pbits) > 32768) ++pbits;
     const uint32_t np = 1u << pbits;
-    uint64_t *hs = malloc((n ? n : 1) * sizeof *hs);
-    uint32_t *ids = malloc((n ? n : 1) * sizeof *ids);
-    uint64_t *start = calloc(np + 1, sizeof *start);
-    uint32_t *table = NULL;
-    if (!hs || !ids || !start) goto done;
+    uint64_t *start = calloc(np + 1, sizeof *start), *fill = malloc(np * sizeof *fill);
+    uint64_t *hs = NULL;
+    uint32_t *ids = NULL, *table = NULL;
+    if (!start || !fill) goto done;
     uint32_t key[CLVR_CELL_MAX_VERTS], other[CLVR_CELL_MAX_VERTS];
-    /* Pass 1: partition sizes. Pass 2: scatter (hash, id) in id order. */
+    /* Pass 1: partition sizes. */
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
             uint64_t h = element_hash(m, t, e);
@@ -242,69 +414,83 @@ static void scan_duplicates(const clvr_mesh *m, clvr_limits_report *r)
         if (start[p + 1] > maxp) maxp = start[p + 1];
         start[p + 1] += start[p];
     }
-    {
-        uint64_t *fill = malloc(np * sizeof *fill);
-        if (!fill) goto done;
+    /* Groups of consecutive partitions of at most the budget (at least one partition each). */
+    const uint64_t per_group = budget / 12u > maxp ? budget / 12u : maxp;
+    hs = malloc((n < per_group ? (n ? n : 1) : per_group) * sizeof *hs);
+    ids = malloc((n < per_group ? (n ? n : 1) : per_group) * sizeof *ids);
+    uint64_t cap = 16;
+    while (cap < 2 * maxp) cap <<= 1;
+    table = malloc(cap * sizeof *table);
+    if (!hs || !ids || !table) goto done;
+    r->duplicates_checked = 1;
+    uint64_t best = UINT64_MAX; /* global id of the first duplicate */
+    for (uint32_t g0 = 0; g0 < np;) {
+        uint32_t g1 = g0 + 1;
+        while (g1 < np && start[g1 + 1] - start[g0] <= per_group) ++g1;
+        const uint64_t base = start[g0];
+        /* Pass 2 for this group: scatter (hash, id) in id order. */
         memcpy(fill, start, np * sizeof *fill);
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
             for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
                 uint64_t h = element_hash(m, t, e);
-                uint64_t at = fill[pbits ? h >> (64 - pbits) : 0]++;
+                uint32_t p = pbits ? (uint32_t)(h >> (64 - pbits)) : 0;
+                if (p < g0 || p >= g1) continue;
+                uint64_t at = fill[p]++ - base;
                 hs[at] = h;
                 ids[at] = (uint32_t)(first[t] + e);
             }
-        free(fill);
-    }
-    uint64_t cap = 16;
-    while (cap < 2 * maxp) cap <<= 1;
-    table = malloc(cap * sizeof *table);
-    if (!table) goto done;
-    r->duplicates_checked = 1;
-    uint64_t best = UINT64_MAX; /* global id of the first duplicate */
-    for (uint32_t p = 0; p < np; ++p) {
-        const uint64_t b = start[p], e = start[p + 1];
-        uint64_t c = 16;
-        while (c < 2 * (e - b)) c <<= 1;
-        memset(table, 0, c * sizeof *table);
-        for (uint64_t i = b; i < e; ++i) {
-            const uint64_t h = hs[i];
-            const uint32_t t = type_of(ids[i], first);
-            int have_key = 0;
-            for (uint64_t s = h & (c - 1);; s = (s + 1) & (c - 1)) {
-                const uint32_t slot = table[s];
-                if (slot == 0) {
-                    table[s] = (uint32_t)(i - b + 1);
-                    break;
-                }
-                const uint64_t j = b + slot - 1;
-                if (hs[j] != h || type_of(ids[j], first) != t) continue;
-                const uint32_t nv = clvr_cell_vertex_count(t);
-                if (!have_key) {
-                    sorted_key(m->indices[t] + (ids[i] - first[t]) * nv, nv, key);
-                    have_key = 1;
-                }
-                sorted_key(m->indices[t] + (ids[j] - first[t]) * nv, nv, other);
-                if (memcmp(key, other, nv * sizeof *key) == 0) {
-                    ++r->duplicates;
-                    if (ids[i] < best) {
-                        best = ids[i];
-                        r->first_duplicate_type = t;
-                        r->first_duplicate = ids[i] - first[t];
-                        r->duplicate_of = ids[j] - first[t];
+        for (uint32_t p = g0; p < g1; ++p) {
+            const uint64_t b = start[p] - base, e = start[p + 1] - base;
+            uint64_t c = 16;
+            while (c < 2 * (e - b)) c <<= 1;
+            memset(table, 0, c * sizeof *table);
+            for (uint64_t i = b; i < e; ++i) {
+                const uint64_t h = hs[i];
+                const uint32_t t = type_of(ids[i], first);
+                int have_key = 0;
+                for (uint64_t sl = h & (c - 1);; sl = (sl + 1) & (c - 1)) {
+                    const uint32_t slot = table[sl];
+                    if (slot == 0) {
+                        table[sl] = (uint32_t)(i - b + 1);
+                        break;
                     }
-                    break;
+                    const uint64_t j = b + slot - 1;
+                    if (hs[j] != h || type_of(ids[j], first) != t) continue;
+                    const uint32_t nv = clvr_cell_vertex_count(t);
+                    if (!have_key) {
+                        sorted_key(m->indices[t] + (ids[i] - first[t]) * nv, nv, key);
+                        have_key = 1;
+                    }
+                    sorted_key(m->indices[t] + (ids[j] - first[t]) * nv, nv, other);
+                    if (memcmp(key, other, nv * sizeof *key) == 0) {
+                        ++r->duplicates;
+                        if (ids[i] < best) {
+                            best = ids[i];
+                            r->first_duplicate_type = t;
+                            r->first_duplicate = ids[i] - first[t];
+                            r->duplicate_of = ids[j] - first[t];
+                        }
+                        break;
+                    }
                 }
             }
         }
+        g0 = g1;
     }
 done:
     free(hs);
     free(ids);
     free(start);
+    free(fill);
     free(table);
 }
 
 void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out)
+{
+    clvr_limits_scan_budget(m, LIMITS_SCAN_BUDGET, out);
+}
+
+void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limits_report *out)
 {
     memset(out, 0, sizeof *out);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
@@ -320,7 +506,7 @@ void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out)
             }
         }
     }
-    scan_duplicates(m, out);
+    scan_duplicates(m, scan_bytes, out);
     if (m->num_vertices > 0 && m->scalar_min == m->scalar_max) {
         out->constant_scalar = 1;
         out->constant_value = m->scalar_min;

@@ -47,6 +47,13 @@ typedef struct clvr_limits_estimate {
 void clvr_limits_estimate_bytes(const clvr_mesh *m, const clvr_preprocess_options *o, uint32_t width,
                                 uint32_t height, clvr_limits_estimate *out);
 
+/* The same for preprocessing in partitions of at most part_elements
+ * elements (0: one, the whole mesh; partition.h): the preprocessing buffers
+ * are one partition's; the result's local indices are a candidate for the
+ * largest buffer too. */
+void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_options *o, uint64_t part_elements,
+                                uint32_t width, uint32_t height, clvr_limits_estimate *out);
+
 /* Checks the estimate against cl's CL_DEVICE_GLOBAL_MEM_SIZE and
  * CL_DEVICE_MAX_MEM_ALLOC_SIZE. CLVR_ERR_DEVICE_MEMORY names the mesh size,
  * the bytes needed, what the device has, and what to change: a smaller
@@ -59,6 +66,52 @@ clvr_status clvr_limits_check(const clvr_cl *cl, const clvr_mesh *m, const clvr_
 clvr_status clvr_limits_check_named(const clvr_cl *cl, const clvr_mesh *m, const char *what,
                                     const clvr_preprocess_options *o, uint32_t width, uint32_t height,
                                     clvr_error *err);
+/* The same for partitions of at most part_elements elements (0: one). */
+clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const char *what,
+                                    const clvr_preprocess_options *o, uint64_t part_elements, uint32_t width,
+                                    uint32_t height, clvr_error *err);
+
+/* ------------------------------------------------------------ host memory
+ * On a CPU device (PoCL) device buffers are host memory, so a run that does
+ * not fit ends in the OOM killer or in an allocation failure inside the
+ * driver (PoCL asserts: SIGABRT) unless it is refused first. These read the
+ * limits that apply to this process and check a run's host bytes against
+ * them from the mesh's counts alone, so that the check can run from a
+ * file's header before the mesh is read. */
+typedef struct clvr_mem_limits {
+    uint64_t mem_available;   /* MemAvailable of /proc/meminfo; UINT64_MAX when unknown */
+    uint64_t cgroup_left;     /* cgroup v2 memory.max - memory.current (v1: limit - usage); UINT64_MAX: none */
+    uint64_t as_left;         /* RLIMIT_AS (ulimit -v) - VmSize; UINT64_MAX: unlimited */
+    uint64_t limit;           /* the smallest of the three */
+    const char *binding;      /* which one it is, as a user would name it */
+} clvr_mem_limits;
+void clvr_mem_limits_read(clvr_mem_limits *out);
+/* Resident set now (VmRSS) and its peak so far (VmHWM) in bytes; 0 when unknown. */
+void clvr_mem_rss(uint64_t *current, uint64_t *peak);
+
+/* Host bytes of a run on a CPU device, from counts: the loaded mesh
+ * (16 V + 4 S, exact), the clustered result with its BVH (16 V + 2 S +
+ * about 6 bytes per element: measured 100M mixed elements needed 10% more,
+ * as vertices are duplicated across instance clusters; a mesh with many
+ * unreferenced vertices needs less), the scratch of one preprocessing
+ * partition of at most part_elements elements (0: the whole mesh) and the
+ * image; in partitions the mesh shrinks as the result grows, so the two
+ * count as the larger of mesh and vertices + result. Address space (RLIMIT_AS) also pays the driver's reservations
+ * (CLVR_LIMITS_DRIVER_VM_BYTES). */
+#define CLVR_LIMITS_DRIVER_VM_BYTES (1ull << 30)
+typedef struct clvr_host_estimate {
+    uint64_t mesh_bytes, result_bytes, scratch_bytes, image_bytes, total_bytes;
+} clvr_host_estimate;
+void clvr_limits_host_estimate(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                               uint64_t part_elements, uint32_t width, uint32_t height, clvr_host_estimate *out);
+/* Refuses (CLVR_ERR_NO_MEMORY) a run whose estimate exceeds what l allows,
+ * naming the mesh, its size, the need, the binding limit and what to do.
+ * mesh_loaded: the mesh's bytes are resident already (then they are not
+ * needed again from the limits). */
+clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
+                                   const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                   uint32_t width, uint32_t height, int mesh_loaded, const clvr_mem_limits *l,
+                                   clvr_error *err);
 
 /* What clvr_limits_scan found. Element ids are per type (tets[i] etc.). */
 typedef struct clvr_limits_report {
@@ -75,9 +128,14 @@ typedef struct clvr_limits_report {
 } clvr_limits_report;
 
 /* Scans a validated mesh (every index < num_vertices, finite values): one
- * pass over the elements plus a hash of their vertex sets, about 8 bytes
- * of host memory per element, freed before return. */
+ * pass over the elements plus a hash of their vertex sets, at most about
+ * 256 MB of host memory, freed before return. */
 void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out);
+/* The same with the duplicate search's scratch bounded by about scan_bytes
+ * (clvr_limits_scan: 256 MB; 12 bytes per element in one go would be 9.5 GB
+ * at 788M elements): its hash partitions are taken in groups, one pass
+ * over the elements per group. Same report for any budget. */
+void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limits_report *out);
 
 /* Prints one "clvr: warning: ..." line per finding to out (stderr in
  * clvr) and returns how many it printed. `what` names the mesh. The lines

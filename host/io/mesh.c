@@ -5,6 +5,9 @@
 #include <string.h>
 #include <float.h>
 #include <stdio.h>
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 int clvr_mul_u64(uint64_t a, uint64_t b, uint64_t *out)
 {
@@ -45,6 +48,19 @@ static clvr_status alloc_array(void **p, uint64_t count, uint64_t size, const ch
         return clvr_error_set(err, CLVR_ERR_OVERFLOW, "%s: %llu entries of %llu bytes overflow the address space",
                               what, (unsigned long long)count, (unsigned long long)size);
     if (bytes == 0) return CLVR_OK;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    /* Big arrays on transparent huge pages: filling 4 KiB pages one fault at
+     * a time was half of loading a 3.7 GB .bin (perf: page faults and
+     * clearing, 5.1 s for 100M mixed elements). free() takes them as any. */
+    const size_t huge = (size_t)2 << 20;
+    if (bytes >= 16 * huge && bytes <= SIZE_MAX - huge) {
+        *p = aligned_alloc(huge, ((size_t)bytes + huge - 1) / huge * huge);
+        if (*p) {
+            madvise(*p, ((size_t)bytes + huge - 1) / huge * huge, MADV_HUGEPAGE);
+            return CLVR_OK;
+        }
+    }
+#endif
     *p = malloc((size_t)bytes);
     if (!*p)
         return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %.3f GB of host memory", what,

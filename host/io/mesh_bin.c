@@ -787,3 +787,28 @@ clvr_status clvr_mesh_save_bin(const char *path, const clvr_mesh *m, clvr_error 
     }
     return clvr_bin_writer_close(w, err);
 }
+
+clvr_status clvr_mesh_peek_bin(const char *path, uint64_t *num_vertices, uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                               clvr_error *err)
+{
+    bin_header hd;
+    struct stat st;
+    clvr_status s;
+    int fd = open(path, O_RDONLY);
+    if (fd < 0) return clvr_error_set(err, CLVR_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        s = clvr_error_set(err, CLVR_ERR_IO, "%s: not a regular file", path);
+        goto done;
+    }
+    {
+        const bin_src src = {NULL, fd, (uint64_t)st.st_size, path};
+        s = bin_read_header(&src, &hd, err);
+    }
+    if (s == CLVR_OK) {
+        *num_vertices = hd.num_vertices;
+        memcpy(num_cells, hd.num_cells, sizeof hd.num_cells);
+    }
+done:
+    close(fd);
+    return s;
+}

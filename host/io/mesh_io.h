@@ -28,6 +28,12 @@ clvr_status clvr_mesh_load_bin(const char *path, const clvr_load_options *opt, c
 clvr_status clvr_mesh_load_umesh(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err);
 clvr_status clvr_mesh_load_vtk(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err);
 
+/* Counts from a .bin file's header alone (validated against the file size),
+ * so that memory can be checked before the mesh is read. Not a .bin:
+ * CLVR_ERR_BAD_MAGIC. */
+clvr_status clvr_mesh_peek_bin(const char *path, uint64_t *num_vertices, uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                               clvr_error *err);
+
 /* Parsers over a memory buffer (what the fuzz targets call); `name` is used
  * in messages only. Same contracts as the file loaders. */
 clvr_status clvr_mesh_parse_bin(const void *data, size_t size, const char *name, const clvr_load_options *opt,

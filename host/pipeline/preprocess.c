@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <time.h>
 
 static double wall_now(void)
@@ -57,7 +58,8 @@ const clvr_box *clvr_pp_quantize_box(const clvr_preprocess_options *o, const clv
 const char *clvr_pp_stage_name(int stage)
 {
     static const char *names[CLVR_PP_STAGE_COUNT] = {"upload", "bounds", "keys", "sort", "gather",
-                                                     "sampling", "split", "instances", "vertices", "leaves"};
+                                                     "sampling", "split", "instances", "vertices", "leaves",
+                                                     "partition", "extract", "merge"};
     return stage >= 0 && stage < CLVR_PP_STAGE_COUNT ? names[stage] : "?";
 }
 
@@ -485,6 +487,9 @@ void clvr_clustered_release(clvr_cl *cl, clvr_clustered *c)
     clvr_cl_release(cl, &c->leaf_boxes);
     clvr_cl_release(cl, &c->sampling);
     clvr_cl_release(cl, &c->order);
+    /* After the buffers: a finished command may still read them until released. */
+    for (size_t i = 0; i < sizeof c->host_arrays / sizeof c->host_arrays[0]; ++i)
+        if (c->host_arrays[i]) munmap(c->host_arrays[i], (size_t)c->host_array_bytes[i]);
     free(c->host_instances);
     memset(c, 0, sizeof *c);
 }
@@ -634,6 +639,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     out->index_bits = opt.index_bits;
     out->morton = opt.morton;
     out->num_elements = L.num_elements;
+    out->num_partitions = 1;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = L.count[t]; out->first_cell[t] = L.first[t]; }
 
     double tb = wall_now();

@@ -58,6 +58,9 @@ enum {
     CLVR_PP_STAGE_INSTANCES,  /* flagged select, scans, instance table */
     CLVR_PP_STAGE_VERTICES,   /* copy of the per-instance vertices */
     CLVR_PP_STAGE_LEAVES,     /* leaf boxes and instance bounds */
+    CLVR_PP_STAGE_PARTITION,  /* partitioned runs only (partition.h): coarse keys, plan, reorder (wall) */
+    CLVR_PP_STAGE_EXTRACT,    /* partitioned runs only: the partitions' sub-mesh gathers on the host (wall) */
+    CLVR_PP_STAGE_MERGE,      /* partitioned runs only: appending the partitions' results (wall) */
     CLVR_PP_STAGE_COUNT
 };
 /* "upload", "bounds", ... */
@@ -75,6 +78,12 @@ typedef struct clvr_clustered {
     cl_mem order;             /* uint [num_elements] original global element id per sorted element;
                                  NULL unless options.keep_order */
     clvr_instance *host_instances; /* host copy of `instances` (malloc'ed; bounds filled) */
+    void *host_arrays[8];     /* page-aligned anonymous mappings the buffers above live in
+                                 (CL_MEM_USE_HOST_PTR) when the result was assembled on the host
+                                 (partition.h); unmapped by clvr_clustered_release after the
+                                 buffers; NULL otherwise */
+    uint64_t host_array_bytes[8]; /* their mapped sizes */
+    uint32_t num_partitions;  /* partitions it was preprocessed in (1 for clvr_preprocess) */
     uint64_t num_elements, num_vertices, num_idx16, num_idx32, num_instances, num_instances16, num_leaves,
         num_sampling;
     uint64_t num_cells[CLVR_CELL_TYPE_COUNT];   /* elements per type (sorted lists in this order) */
