@@ -121,6 +121,11 @@ CLVR_API int clvr_result_exit_code(clvr_result r);
 CLVR_API clvr_result clvr_context_create(const char *device, clvr_context **out, clvr_message *msg);
 /* Destroys ctx. Every tracer of ctx must be destroyed first. */
 CLVR_API void clvr_context_destroy(clvr_context *ctx);
+/* Compiles the preprocessing and tree kernels now, by preprocessing a tiny
+ * mesh of every element type (PoCL generates code at a kernel's first
+ * launch), so that a later clvr_tracer_create's "preprocess_s" is
+ * clustering, not compilation. Optional. */
+CLVR_API clvr_result clvr_context_warm_up(clvr_context *ctx, clvr_message *msg);
 /* The device's and its platform's names, NUL-terminated and truncated to
  * the sizes given (either buffer may be NULL). */
 CLVR_API clvr_result clvr_context_describe(const clvr_context *ctx, char *device, size_t device_size, char *platform,
@@ -182,6 +187,11 @@ CLVR_API clvr_result clvr_dataset_field_range(const clvr_dataset *ds, const char
 CLVR_API clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *field, uint32_t width,
                                         uint32_t height, clvr_tracer **out, clvr_message *msg);
 CLVR_API void clvr_tracer_destroy(clvr_tracer *tr);
+/* Lets go of the tracer's dataset (its host memory is freed when nothing
+ * else holds it: a big mesh's arrays once on the device). Afterwards
+ * clvr_tracer_set_tf, which reads the field for the automatic opacity and
+ * density, fails with ERR_USAGE; clvr_tracer_set_tf_table still works. */
+CLVR_API clvr_result clvr_tracer_drop_dataset(clvr_tracer *tr, clvr_message *msg);
 
 /* Every setter below restarts the accumulation (the next render starts a
  * new image). */

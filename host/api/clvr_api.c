@@ -6,6 +6,7 @@
  * one onto clvr_result (checked at compile time below). */
 #define CLVR_API_BUILD 1
 #include "clvr.h"
+#include "clvr_bridge.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -23,6 +24,7 @@
 #include "mesh_io.h"
 #include "preprocess.h"
 #include "render.h"
+#include "scene.h"
 #include "status.h"
 #include "tf.h"
 #include "tf_auto.h"
@@ -68,8 +70,10 @@ struct clvr_context {
 
 struct clvr_tracer {
     clvr_context *ctx;
-    clvr_dataset *ds;
+    clvr_dataset *ds; /* NULL after clvr_tracer_drop_dataset */
     uint32_t field;
+    float lo[3], hi[3]; /* the dataset's bounds */
+    clvr_tf tf;         /* the transfer function set by options (the viewer edits it) */
     clvr_clustered clustered;
     clvr_accel accel;
     clvr_renderer *renderer;
@@ -78,6 +82,7 @@ struct clvr_tracer {
     clvr_camera cam;
     float up[3];
     float density, range_lo, range_hi;
+    uint64_t clustered_points; /* the dataset's points */
     uint64_t frames;
     double preprocess_s;
 };
@@ -133,6 +138,41 @@ void clvr_context_destroy(clvr_context *ctx)
         fprintf(stderr, "clvr: clvr_context_destroy: %u tracer(s) still alive; destroy them first\n", ctx->tracers);
     clvr_cl_destroy(&ctx->cl);
     free(ctx);
+}
+
+clvr_cl *clvr_context_cl(clvr_context *ctx) { return &ctx->cl; }
+
+clvr_status clvr_context_warm_up_setup(clvr_context *ctx, const clvr_preprocess_options *po, clvr_error *err)
+{
+    clvr_scene_box_params bp;
+    clvr_scene_box_params_init(&bp);
+    bp.nx = bp.ny = bp.nz = 4;
+    bp.mix = CLVR_SCENE_MIX_CYCLE;
+    clvr_mesh tiny = {0};
+    clvr_clustered tc = {0};
+    clvr_accel ta = {0};
+    clvr_status s = clvr_scene_box(&bp, &tiny, err);
+    if (s == CLVR_OK) s = clvr_preprocess(&ctx->cl, &tiny, po, &tc, err);
+    if (s == CLVR_OK) s = clvr_accel_build(&ctx->cl, &tc, &ta, err);
+    clvr_accel_release(&ctx->cl, &ta);
+    clvr_clustered_release(&ctx->cl, &tc);
+    clvr_mesh_free(&tiny);
+    return s;
+}
+
+clvr_result clvr_context_warm_up(clvr_context *ctx, clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!ctx) return finish(NULL_ARG("clvr_context_warm_up", "ctx"), &e, msg);
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    return finish(clvr_context_warm_up_setup(ctx, &po, &e), &e, msg);
+}
+
+clvr_status clvr_bridge_status(clvr_result r, const clvr_message *msg, clvr_error *err)
+{
+    if (r == CLVR_RESULT_OK) return CLVR_OK;
+    return clvr_error_set(err, (clvr_status)r, "%s", msg->text);
 }
 
 static void copy_str(char *dst, size_t size, const char *src)
@@ -370,38 +410,49 @@ clvr_result clvr_dataset_add_field(clvr_dataset *ds, const char *name, const flo
     return finish(s, &e, msg);
 }
 
+clvr_status clvr_dataset_adopt(clvr_mesh *m, clvr_dataset **out, clvr_error *err)
+{
+    clvr_dataset *ds = calloc(1, sizeof *ds);
+    if (!ds) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for a dataset");
+    ds->loaded = *m;
+    memset(m, 0, sizeof *m);
+    m = &ds->loaded;
+    ds->refs = 1;
+    ds->num_points = m->num_vertices;
+    ds->xyz = m->positions;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        ds->cells[t] = m->indices[t];
+        ds->num_cells[t] = m->num_cells[t];
+        ds->has_cells[t] = m->num_cells[t] > 0;
+    }
+    update_bounds(ds);
+    clvr_status s = push_field(ds, m->scalar_name[0] ? m->scalar_name : "scalar", m->scalars, NULL, err);
+    if (s != CLVR_OK) {
+        clvr_mesh_free(&ds->loaded);
+        free(ds->fields);
+        free(ds);
+        return s;
+    }
+    *out = ds;
+    return CLVR_OK;
+}
+
 clvr_result clvr_dataset_load(const char *path, const char *field, clvr_dataset **out, clvr_message *msg)
 {
     clvr_error e = {0};
     static const char fn[] = "clvr_dataset_load";
     if (!path) return finish(NULL_ARG(fn, "path"), &e, msg);
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
-    clvr_dataset *ds = calloc(1, sizeof *ds);
-    if (!ds) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
+    clvr_mesh m = {0};
     clvr_load_options lo = {0};
     lo.scalar_name = field;
-    clvr_status s = clvr_mesh_load(path, &lo, &ds->loaded, &e);
+    clvr_status s = clvr_mesh_load(path, &lo, &m, &e);
     if (s == CLVR_OK) {
-        clvr_mesh *m = &ds->loaded;
-        ds->refs = 1;
-        ds->num_points = m->num_vertices;
-        ds->xyz = m->positions;
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-            ds->cells[t] = m->indices[t];
-            ds->num_cells[t] = m->num_cells[t];
-            ds->has_cells[t] = m->num_cells[t] > 0;
-        }
-        update_bounds(ds);
-        s = push_field(ds, m->scalar_name[0] ? m->scalar_name : (field ? field : "scalar"), m->scalars, NULL, &e);
+        if (!m.scalar_name[0] && field) clvr_mesh_set_scalar_name(&m, field, strlen(field));
+        s = clvr_dataset_adopt(&m, out, &e);
     }
-    if (s != CLVR_OK) {
-        clvr_mesh_free(&ds->loaded);
-        free(ds->fields);
-        free(ds);
-        return finish(s, &e, msg);
-    }
-    *out = ds;
-    return finish(CLVR_OK, &e, msg);
+    clvr_mesh_free(&m);
+    return finish(s, &e, msg);
 }
 
 static void dataset_release(clvr_dataset *ds)
@@ -498,6 +549,17 @@ static void mesh_view(const clvr_dataset *ds, uint32_t field, clvr_mesh *m)
     m->scalar_max = ds->fields[field].hi;
 }
 
+clvr_status clvr_dataset_view(const clvr_dataset *ds, const char *field, clvr_mesh *out, clvr_error *err)
+{
+    int i;
+    clvr_status s = lookup_field(ds, "clvr_dataset_view", field, &i, err);
+    if (s == CLVR_OK) {
+        mesh_view(ds, (uint32_t)i, out);
+        out->skipped_cells = ds->loaded.skipped_cells;
+    }
+    return s;
+}
+
 /* --- tracer --------------------------------------------------------------- */
 
 static clvr_status apply_settings(clvr_tracer *tr, clvr_error *e)
@@ -532,7 +594,7 @@ static clvr_status frame_view(clvr_tracer *tr, const float up[3], float az, floa
     view.elevation_deg = el;
     view.zoom = zoom;
     clvr_camera cam;
-    clvr_status s = clvr_camera_frame_view(&cam, tr->ds->lo, tr->ds->hi, &view, fovy, tr->rs.width, tr->rs.height, e);
+    clvr_status s = clvr_camera_frame_view(&cam, tr->lo, tr->hi, &view, fovy, tr->rs.width, tr->rs.height, e);
     if (s == CLVR_OK) s = clvr_renderer_set_camera(tr->renderer, &cam, e);
     if (s == CLVR_OK) {
         tr->cam = cam;
@@ -542,8 +604,8 @@ static clvr_status frame_view(clvr_tracer *tr, const float up[3], float az, floa
     return s;
 }
 
-/* Uploads tf baked, as the program does. */
-static clvr_status upload_tf(clvr_tracer *tr, const clvr_tf *tf, clvr_error *e)
+/* Uploads tf baked, as the program does, and keeps it (moved: *tf zeroed). */
+static clvr_status upload_tf(clvr_tracer *tr, clvr_tf *tf, clvr_error *e)
 {
     const uint32_t n = clvr_tf_table_size(tf);
     float *table = malloc((size_t)n * 4 * sizeof(float));
@@ -556,8 +618,37 @@ static clvr_status upload_tf(clvr_tracer *tr, const clvr_tf *tf, clvr_error *e)
         tr->range_lo = tf->range_lo;
         tr->range_hi = tf->range_hi;
         tr->frames = 0;
+        clvr_tf_free(&tr->tf);
+        tr->tf = *tf;
+        memset(tf, 0, sizeof *tf);
     }
     return s;
+}
+
+clvr_status clvr_api_tf_build(const clvr_mesh *m, const char *colormap, const char *tf_path, int range_set,
+                              float lo, float hi, float density, int density_auto, int ramp, clvr_tf *tf,
+                              float *auto_density, clvr_error *err)
+{
+    *auto_density = 1;
+    clvr_status s = clvr_tf_from_options(tf, colormap ? colormap : "cool-warm", tf_path, range_set, lo, hi,
+                                         density_auto ? 1.0f : density, m->scalar_min, m->scalar_max, err);
+    if (s != CLVR_OK) return s;
+    clvr_tf_set_extent(tf, m->bounds_lo, m->bounds_hi);
+    /* The automatic transfer function (tf_auto.h): opacity from the scalar's
+     * volume histogram over the window, unless a ramp or a file's points;
+     * density from the optical depth of probe rays. */
+    if (!ramp && !tf->opacity_set) {
+        double hist[CLVR_TF_AUTO_BINS];
+        clvr_tf_auto_histogram(m, tf->range_lo, tf->range_hi, hist, CLVR_TF_AUTO_BINS);
+        s = clvr_tf_auto_opacity(tf, hist, CLVR_TF_AUTO_BINS, err);
+        if (s != CLVR_OK) return s;
+    }
+    if (density_auto) {
+        s = clvr_tf_auto_density(m, tf, auto_density, err);
+        if (s != CLVR_OK) return s;
+        tf->density *= *auto_density;
+    }
+    return CLVR_OK;
 }
 
 static clvr_status set_tf(clvr_tracer *tr, const char *colormap, const char *tf_path, float lo, float hi,
@@ -571,28 +662,78 @@ static clvr_status set_tf(clvr_tracer *tr, const char *colormap, const char *tf_
     if (!(density >= 0) || !isfinite(density))
         return clvr_error_set(e, CLVR_ERR_USAGE,
                               "clvr_tracer_set_tf: density is %g; use a value > 0, or 0 for automatic", (double)density);
-    const int density_auto = density == 0;
+    if (!tr->ds)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "clvr_tracer_set_tf: the tracer's dataset was dropped "
+                              "(clvr_tracer_drop_dataset); use clvr_tracer_set_tf_table");
     clvr_mesh m;
     mesh_view(tr->ds, tr->field, &m);
     clvr_tf tf = {0};
-    clvr_status s = clvr_tf_from_options(&tf, colormap ? colormap : "cool-warm", tf_path, range_set, lo, hi,
-                                         density_auto ? 1.0f : density, m.scalar_min, m.scalar_max, e);
-    if (s == CLVR_OK) {
-        clvr_tf_set_extent(&tf, m.bounds_lo, m.bounds_hi);
-        if (!ramp && !tf.opacity_set) {
-            double hist[CLVR_TF_AUTO_BINS];
-            clvr_tf_auto_histogram(&m, tf.range_lo, tf.range_hi, hist, CLVR_TF_AUTO_BINS);
-            s = clvr_tf_auto_opacity(&tf, hist, CLVR_TF_AUTO_BINS, e);
-        }
-    }
-    if (s == CLVR_OK && density_auto) {
-        float d = 1;
-        s = clvr_tf_auto_density(&m, &tf, &d, e);
-        tf.density *= d;
-    }
+    float auto_density;
+    clvr_status s = clvr_api_tf_build(&m, colormap, tf_path, range_set, lo, hi, density, density == 0, ramp, &tf,
+                                      &auto_density, e);
     if (s == CLVR_OK) s = upload_tf(tr, &tf, e);
     clvr_tf_free(&tf);
     return s;
+}
+
+void clvr_tracer_setup_default(clvr_tracer_setup *s, uint32_t width, uint32_t height)
+{
+    memset(s, 0, sizeof *s);
+    clvr_preprocess_options_default(&s->po);
+    clvr_render_settings_default(&s->rs);
+    s->rs.width = width;
+    s->rs.height = height;
+    s->shadows = s->rs.shadows;
+}
+
+clvr_status clvr_tracer_create_setup(clvr_context *ctx, clvr_dataset *ds, const char *field,
+                                     clvr_tracer_setup *setup, clvr_tracer **out, clvr_error *err)
+{
+    static const char fn[] = "clvr_tracer_create";
+    const uint32_t width = setup->rs.width, height = setup->rs.height;
+    if (width < 1 || height < 1 || width > CLVR_IMAGE_MAX_DIM || height > CLVR_IMAGE_MAX_DIM)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s: image %ux%u; width and height must be in [1, %u]", fn, width,
+                              height, CLVR_IMAGE_MAX_DIM);
+    int fi;
+    clvr_status s = lookup_field(ds, fn, field, &fi, err);
+    if (s != CLVR_OK) return s;
+    clvr_mesh m;
+    mesh_view(ds, (uint32_t)fi, &m);
+    if (clvr_mesh_num_elements(&m) == 0)
+        return clvr_error_set(err, CLVR_ERR_EMPTY, "%s: the dataset has no cells; add some with "
+                              "clvr_dataset_add_cells", fn);
+    clvr_tracer *tr = calloc(1, sizeof *tr);
+    if (!tr) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn);
+    tr->ctx = ctx;
+    tr->ds = ds;
+    tr->field = (uint32_t)fi;
+    memcpy(tr->lo, ds->lo, sizeof tr->lo);
+    memcpy(tr->hi, ds->hi, sizeof tr->hi);
+    tr->clustered_points = ds->num_points;
+    ++ds->refs;
+    ++ctx->tracers;
+
+    /* A mesh or image the device cannot hold fails now, with the numbers,
+     * not minutes into preprocessing. */
+    s = clvr_limits_check_named(&ctx->cl, &m, setup->name ? setup->name : "dataset", &setup->po, width, height, err);
+    const double build0 = ctx->cl.build_s, t0 = clvr_clock_monotonic_s();
+    if (s == CLVR_OK) s = clvr_preprocess(&ctx->cl, &m, &setup->po, &tr->clustered, err);
+    if (s == CLVR_OK) s = clvr_accel_build(&ctx->cl, &tr->clustered, &tr->accel, err);
+    /* Compiling kernels (seconds on a cold driver cache) is not clustering. */
+    tr->preprocess_s = clvr_clock_monotonic_s() - t0 - (ctx->cl.build_s - build0);
+    tr->rs = setup->rs;
+    tr->shadows = setup->shadows;
+    tr->rs.shadows = tr->shadows && tr->rs.method != CLVR_RENDER_MARCH;
+    if (s == CLVR_OK) s = clvr_renderer_create(&ctx->cl, &tr->clustered, &tr->accel, &tr->rs, &tr->renderer, err);
+    /* The program's defaults: framing, transfer function. */
+    if (s == CLVR_OK) s = frame_view(tr, NULL, 0, 0, 1, 30.0f, err);
+    if (s == CLVR_OK) s = setup->tf ? upload_tf(tr, setup->tf, err) : set_tf(tr, NULL, NULL, NAN, NAN, 0, 0, err);
+    if (s != CLVR_OK) {
+        clvr_tracer_destroy(tr);
+        return s;
+    }
+    *out = tr;
+    return CLVR_OK;
 }
 
 clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *field, uint32_t width,
@@ -603,48 +744,9 @@ clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *
     if (!ctx) return finish(NULL_ARG(fn, "ctx"), &e, msg);
     if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
-    if (width < 1 || height < 1 || width > CLVR_IMAGE_MAX_DIM || height > CLVR_IMAGE_MAX_DIM)
-        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: image %ux%u; width and height must be in [1, %u]", fn,
-                                     width, height, CLVR_IMAGE_MAX_DIM),
-                      &e, msg);
-    int fi;
-    clvr_status s = lookup_field(ds, fn, field, &fi, &e);
-    if (s != CLVR_OK) return finish(s, &e, msg);
-    clvr_mesh m;
-    mesh_view(ds, (uint32_t)fi, &m);
-    if (clvr_mesh_num_elements(&m) == 0)
-        return finish(clvr_error_set(&e, CLVR_ERR_EMPTY, "%s: the dataset has no cells; add some with "
-                                     "clvr_dataset_add_cells", fn),
-                      &e, msg);
-    clvr_tracer *tr = calloc(1, sizeof *tr);
-    if (!tr) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
-    tr->ctx = ctx;
-    tr->ds = ds;
-    tr->field = (uint32_t)fi;
-    ++ds->refs;
-    ++ctx->tracers;
-
-    clvr_preprocess_options po;
-    clvr_preprocess_options_default(&po);
-    s = clvr_limits_check_named(&ctx->cl, &m, "dataset", &po, width, height, &e);
-    const double build0 = ctx->cl.build_s, t0 = clvr_clock_monotonic_s();
-    if (s == CLVR_OK) s = clvr_preprocess(&ctx->cl, &m, &po, &tr->clustered, &e);
-    if (s == CLVR_OK) s = clvr_accel_build(&ctx->cl, &tr->clustered, &tr->accel, &e);
-    tr->preprocess_s = clvr_clock_monotonic_s() - t0 - (ctx->cl.build_s - build0);
-    clvr_render_settings_default(&tr->rs);
-    tr->rs.width = width;
-    tr->rs.height = height;
-    tr->shadows = tr->rs.shadows;
-    if (s == CLVR_OK) s = clvr_renderer_create(&ctx->cl, &tr->clustered, &tr->accel, &tr->rs, &tr->renderer, &e);
-    /* The program's defaults: framing, transfer function. */
-    if (s == CLVR_OK) s = frame_view(tr, NULL, 0, 0, 1, 30.0f, &e);
-    if (s == CLVR_OK) s = set_tf(tr, NULL, NULL, NAN, NAN, 0, 0, &e);
-    if (s != CLVR_OK) {
-        clvr_tracer_destroy(tr);
-        return finish(s, &e, msg);
-    }
-    *out = tr;
-    return finish(CLVR_OK, &e, msg);
+    clvr_tracer_setup setup;
+    clvr_tracer_setup_default(&setup, width, height);
+    return finish(clvr_tracer_create_setup(ctx, ds, field, &setup, out, &e), &e, msg);
 }
 
 void clvr_tracer_destroy(clvr_tracer *tr)
@@ -655,7 +757,28 @@ void clvr_tracer_destroy(clvr_tracer *tr)
     clvr_clustered_release(&tr->ctx->cl, &tr->clustered);
     --tr->ctx->tracers;
     dataset_release(tr->ds);
+    clvr_tf_free(&tr->tf);
     free(tr);
+}
+
+clvr_result clvr_tracer_drop_dataset(clvr_tracer *tr, clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!tr) return finish(NULL_ARG("clvr_tracer_drop_dataset", "tr"), &e, msg);
+    dataset_release(tr->ds);
+    tr->ds = NULL;
+    return finish(CLVR_OK, &e, msg);
+}
+
+void clvr_tracer_parts_of(clvr_tracer *tr, clvr_tracer_parts *out)
+{
+    out->clustered = &tr->clustered;
+    out->accel = &tr->accel;
+    out->renderer = tr->renderer;
+    out->rs = &tr->rs;
+    out->cam = &tr->cam;
+    out->tf = &tr->tf;
+    out->preprocess_s = tr->preprocess_s;
 }
 
 static int finite3(const float *v) { return v && isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
@@ -731,7 +854,7 @@ clvr_result clvr_tracer_set_tf_table(clvr_tracer *tr, const float *rgba, uint32_
     if (!table) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
     /* Opacity to extinction as clvr_tf_bake: relative to the mesh diagonal. */
     clvr_tf scale = {0};
-    clvr_tf_set_extent(&scale, tr->ds->lo, tr->ds->hi);
+    clvr_tf_set_extent(&scale, tr->lo, tr->hi);
     const float k = clvr_tf_extinction_scale(&scale);
     for (uint32_t i = 0; i < n; ++i) {
         memcpy(table + 4 * i, rgba + 4 * i, 3 * sizeof(float));
@@ -740,6 +863,7 @@ clvr_result clvr_tracer_set_tf_table(clvr_tracer *tr, const float *rgba, uint32_
     clvr_status s = clvr_renderer_set_tf(tr->renderer, table, n, range_lo, range_hi, density, &e);
     free(table);
     if (s == CLVR_OK) {
+        clvr_tf_free(&tr->tf);
         tr->density = density;
         tr->range_lo = range_lo;
         tr->range_hi = range_hi;
@@ -877,7 +1001,7 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "preprocess_s")) v = tr->preprocess_s;
     else if (!strcmp(name, "kernel_build_s")) v = tr->ctx->cl.build_s;
     else if (!strcmp(name, "elements")) v = (double)k->num_elements;
-    else if (!strcmp(name, "points")) v = (double)tr->ds->num_points;
+    else if (!strcmp(name, "points")) v = (double)tr->clustered_points;
     else if (!strcmp(name, "instances")) v = (double)k->num_instances;
     else if (!strcmp(name, "leaves")) v = (double)k->num_leaves;
     else if (!strcmp(name, "sampling_clusters")) v = (double)k->num_sampling;
