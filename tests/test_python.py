@@ -14,7 +14,9 @@ installed copy). Proves:
     names; a bad device raises clvr.Error (ERR_NO_DEVICE); nothing the
     caller passed is modified (values, dtype, writeable flag);
   - render returns float32 (H, W, 4); save_image writes PNG and EXR through
-    the program's writers and reports a bad path.
+    the program's writers and reports a bad path;
+  - the clvr program and the module write the same pixels for the same
+    mesh, defaults and seed (one pipeline, no drift).
 Exit 77 (skipped) without numpy/meshio/vtk or an OpenCL device."""
 import os
 import subprocess
@@ -156,6 +158,26 @@ def test_same_image(ctx):
     check(differing_blocks(sl, sm, "load(.bin) vs from_meshio") == 0, ".bin and from_meshio differ")
 
 
+def test_program_matches_module(ctx):
+    """The clvr program and the module share one pipeline: with the same
+    defaults, seed and device they write the same pixels (a drift of any
+    default, camera, transfer function or setting shows here)."""
+    vtk = os.path.join(DATA, "vtk", "notch_stress.vtk")
+    with tempfile.TemporaryDirectory() as tmp:
+        pfm = os.path.join(tmp, "cli.pfm")
+        subprocess.run([os.path.join(BUILD, "clvr"), vtk, "--device", "pocl", "--size", "40x32", "--spp", "4",
+                        "--seed", "7", "--quiet", "-o", pfm], check=True)
+        raw = open(pfm, "rb").read()
+    magic, size, scale, data = raw.split(b"\n", 3)
+    w, h = (int(x) for x in size.split())
+    cli = np.frombuffer(data, "<f4").reshape(h, w, 3)[::-1]  # PFM rows run bottom to top
+    r = clvr.Renderer(clvr.Mesh.load(vtk), device=ctx, width=40, height=32)
+    img = r.render(spp=4, seed=7)
+    d = np.abs(img[..., :3] - cli).max()
+    print("test_python: clvr program vs module, same seed: largest difference %g" % d, file=sys.stderr)
+    check(d <= 1e-6 and cli.mean() > 0.01, "the program and the module render differently (%g)" % d)
+
+
 def test_bad_inputs(ctx):
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float64)
     tet = np.array([[0, 1, 2, 3]], np.int64)
@@ -234,6 +256,7 @@ def main():
         warnings.simplefilter("ignore")
         test_bad_inputs(ctx)
     if "--quick" not in sys.argv:
+        test_program_matches_module(ctx)
         test_same_image(ctx)
     print("test_python: %s" % ("all passed" if not failures else "%d failure(s)" % failures), file=sys.stderr)
     return 1 if failures else 0
