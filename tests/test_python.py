@@ -205,6 +205,9 @@ def test_bad_inputs(ctx):
     e = raises(lambda: mk(pts, {"tetra": tet}, {"f": badf}), E, "point_data['f'][3]", "infinite field")
     check(e is None or e.result == "ERR_BAD_VALUE", "NaN's result name")
     check(isinstance(e, ValueError), "InputError is a ValueError")
+    pairs = mk(pts, [("tetra", tet), ("tetra", tet)], {"f": f})  # meshio's list of (type, array)
+    check(pairs.num_cells["tetra"] == 2 and pairs.field_names == ["f"], "cells as (type, array) pairs: %r" % pairs)
+    raises(lambda: mk(pts, [tet], {"f": f}), E, "pairs", "cells list without types")
     ro = pts.copy()
     ro.flags.writeable = False
     good = mk(ro, {"tetra": tet}, {"f": f})

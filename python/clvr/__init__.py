@@ -262,9 +262,12 @@ class Context:
         self.platform_name = plat.value.decode("utf-8", "replace")
         self._renderers = 0
 
+    # Bound here: module globals may be gone when __del__ runs at exit.
+    _destroy = staticmethod(_lib.clvr_context_destroy)
+
     def close(self):
         if getattr(self, "_h", None) and self._h.value:
-            _lib.clvr_context_destroy(self._h)
+            self._destroy(self._h)
             self._h = _P()
 
     def __del__(self):
@@ -291,6 +294,13 @@ class Mesh:
         modified."""
         p = _as_points(points)
         n = p.shape[0]
+        if isinstance(cells, (list, tuple)):  # meshio's [(type, array), ...]
+            merged = {}
+            for item in cells:
+                if not (isinstance(item, (list, tuple)) and len(item) == 2):
+                    raise InputError("cells as a list must hold (type, array) pairs")
+                merged.setdefault(item[0], []).append(np.asarray(item[1]))
+            cells = {k: np.concatenate(v) if len(v) > 1 else v[0] for k, v in merged.items()}
         if not isinstance(cells, dict):
             raise InputError("cells must be a dict like {'tetra': (M, 4) array}; got %s" % type(cells).__name__)
         cs = {name: _as_cells(name, c, n) for name, c in cells.items()}
@@ -372,9 +382,12 @@ class Mesh:
         import meshio
         return cls.from_meshio(meshio.read(os.fspath(path)), None if field is None else [field])
 
+    _destroy = staticmethod(_lib.clvr_dataset_destroy)
+
     def close(self):
+        """Releases the mesh (a Renderer made from it keeps libclvr's copy alive)."""
         if getattr(self, "_h", None) and self._h.value:
-            _lib.clvr_dataset_destroy(self._h)  # a renderer keeps its own reference
+            self._destroy(self._h)
             self._h = _P()
 
     def __del__(self):
@@ -466,9 +479,12 @@ class Renderer:
         self.width, self.height = int(width), int(height)
         self._seed = 1  # the renderer's default, as the program's --seed
 
+    _destroy = staticmethod(_lib.clvr_tracer_destroy)
+
     def close(self):
+        """Releases the device memory now (also done when the object goes away)."""
         if getattr(self, "_h", None) and self._h.value:
-            _lib.clvr_tracer_destroy(self._h)
+            self._destroy(self._h)
             self._h = _P()
 
     def __del__(self):
