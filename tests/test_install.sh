@@ -107,7 +107,7 @@ if cmake -S "$tmp/cm" -B "$tmp/cm/b" -DCMAKE_PREFIX_PATH="$P" >"$tmp/cm.log" 2>&
   cmake --build "$tmp/cm/b" >>"$tmp/cm.log" 2>&1 && "$tmp/cm/b/use" | grep -q "API 1000"; then
   ok
 else
-  bad "find_package(clvr): $(tail -5 "$tmp/cm.log")"
+  bad "find_package(clvr): $(grep -m3 -B2 -A3 "error" "$tmp/cm.log")"
 fi
 # The installed Python module finds the installed library (not the build
 # tree's: CLVR_LIBRARY unset, run from $tmp). Not for sanitizer builds.
