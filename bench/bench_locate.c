@@ -13,7 +13,10 @@
  *
  *   bench_locate [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
  *                [--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent]
+ *                [--ebox on|off]
  *
+ * --ebox: quantized element boxes (kernels/locate.h), on by default as in
+ * the renderer; off measures the leaf scan without them.
  * --hint: the query hint passed to the kernel (CLVR_LOCATE_*, clvr_shared.h);
  * default incoherent for random points, coherent for sorted ones.
  */
@@ -33,12 +36,13 @@
 
 typedef struct row {
     uint32_t n;
-    double qps, qps_cpu, load, bytes_per_elem, index_bytes_per_elem, build_ms, found;
+    double qps, qps_cpu, load, bytes_per_elem, ebox_bytes_per_elem, index_bytes_per_elem, build_ms, found;
     uint32_t blas_nodes, tlas_nodes;
 } row;
 
 static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
+static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 static cl_uint g_hints = CLVR_LOCATE_INCOHERENT; /* query hint of the kernel (--order, --hint) */
 #define NRUNS 5
 
@@ -68,7 +72,11 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     out->build_ms = db.build_seconds * 1e3;
     out->blas_nodes = db.blas_nodes;
     out->tlas_nodes = db.tlas_nodes;
+    if (g_ebox)
+        CLVR_TRY(clvr_bvh_element_boxes_device(cl, k, &db, c.instances, (uint32_t)c.num_instances, c.vertices, c.idx16,
+                                               c.idx32, c.leaf_size, (uint32_t)c.num_leaves, c.num_elements, err));
     out->bytes_per_elem = (double)clvr_bvh_bytes(db.tlas_nodes, db.blas_nodes) / (double)c.num_elements;
+    out->ebox_bytes_per_elem = (double)db.ebox_bytes / (double)c.num_elements;
     out->index_bytes_per_elem = (double)(c.num_idx16 * 2 + c.num_idx32 * 4) / (double)c.num_elements;
     cl_uint n = nq, ls = leaf, root = db.tlas_root;
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 0, sizeof(cl_mem), &dpts));
@@ -84,6 +92,8 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 10, sizeof(cl_mem), &dsc));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 11, sizeof(cl_mem), &deid));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 12, sizeof(cl_uint), &g_hints));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 13, sizeof(cl_mem), g_ebox ? &db.ebox : &c.vertices));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 14, sizeof(cl_uint), &g_ebox));
     /* warm-up, then the median of NRUNS timed runs */
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, g_local, NULL, err));
     CLVR_CL_CHECK(clFinish(cl->queue));
@@ -131,10 +141,12 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--local") && i + 1 < argc) g_local = (size_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--leaf") && i + 1 < argc) g_leaf = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--hint") && i + 1 < argc) hint = argv[++i];
+        else if (!strcmp(argv[i], "--ebox") && i + 1 < argc && (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_ebox = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent] [--ebox on|off]\n",
                     argv[0]);
             return 2;
         }
@@ -176,9 +188,9 @@ int main(int argc, char **argv)
            (unsigned long long)ne, what, nq, order, g_local, hint);
     printf("# device: %s | %s | driver %s | compute units %u | mesh %s in %.1f s\n", cl.platform_name,
            cl.device_version, cl.driver_version, cl.compute_units, mesh_path ? "loaded" : "generated", clvr_clock_monotonic_s() - t0);
-    printf("\n| N | point queries/s | queries per CPU-second | load (1 min) | BVH bytes/element | index bytes/element "
-           "| BLAS nodes | TLAS nodes | build ms | found |\n");
-    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    printf("\n| N | point queries/s | queries per CPU-second | load (1 min) | BVH bytes/element | element box bytes/element "
+           "| index bytes/element | BLAS nodes | TLAS nodes | build ms | found |\n");
+    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     const uint32_t ns[5] = {1, 4, 8, 16, 32};
     row rows[5];
     int nrows = 0, rc = 0;
@@ -190,8 +202,8 @@ int main(int argc, char **argv)
             break;
         }
         const row *r = &rows[nrows++];
-        printf("| %u | %.3g | %.3g | %.2f | %.2f | %.2f | %u | %u | %.1f | %.3f |\n", r->n, r->qps, r->qps_cpu, r->load,
-               r->bytes_per_elem, r->index_bytes_per_elem, r->blas_nodes, r->tlas_nodes, r->build_ms, r->found);
+        printf("| %u | %.3g | %.3g | %.2f | %.2f | %.2f | %.2f | %u | %u | %.1f | %.3f |\n", r->n, r->qps, r->qps_cpu,
+               r->load, r->bytes_per_elem, r->ebox_bytes_per_elem, r->index_bytes_per_elem, r->blas_nodes, r->tlas_nodes, r->build_ms, r->found);
         fflush(stdout);
     }
     if (json) {
@@ -205,10 +217,10 @@ int main(int argc, char **argv)
                     cl.device_name, (unsigned long long)ne, what, nq, order, g_local, hint);
             for (int i = 0; i < nrows; ++i)
                 fprintf(f, "%s{\"N\": %u, \"queries_per_s\": %.6g, \"queries_per_cpu_s\": %.6g, \"load\": %.2f, "
-                           "\"bvh_bytes_per_element\": %.4f, \"index_bytes_per_element\": %.4f, \"blas_nodes\": %u, "
+                           "\"bvh_bytes_per_element\": %.4f, \"ebox_bytes_per_element\": %.4f, \"index_bytes_per_element\": %.4f, \"blas_nodes\": %u, "
                            "\"tlas_nodes\": %u, \"build_ms\": %.3f, \"found\": %.4f}",
                         i ? ", " : "", rows[i].n, rows[i].qps, rows[i].qps_cpu, rows[i].load, rows[i].bytes_per_elem,
-                        rows[i].index_bytes_per_elem, rows[i].blas_nodes, rows[i].tlas_nodes, rows[i].build_ms,
+                        rows[i].ebox_bytes_per_elem, rows[i].index_bytes_per_elem, rows[i].blas_nodes, rows[i].tlas_nodes, rows[i].build_ms,
                         rows[i].found);
             fprintf(f, "]}\n");
             fclose(f);

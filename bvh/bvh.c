@@ -155,6 +155,7 @@ clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_err
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_build_level", &out->build_level, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_locate_points", &out->locate_points, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_hits", &out->ray_hits, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_element_boxes", &out->element_boxes, err));
     return CLVR_OK;
 cleanup:
     clvr_bvh_kernels_destroy(out);
@@ -167,6 +168,7 @@ void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
     if (k->build_level) clReleaseKernel(k->build_level);
     if (k->locate_points) clReleaseKernel(k->locate_points);
     if (k->ray_hits) clReleaseKernel(k->ray_hits);
+    if (k->element_boxes) clReleaseKernel(k->element_boxes);
     if (k->program) clReleaseProgram(k->program);
     memset(k, 0, sizeof *k);
 }
@@ -245,6 +247,7 @@ void clvr_bvh_device_release(clvr_cl *cl, clvr_bvh_device *b)
     if (!b) return;
     clvr_cl_release(cl, &b->tlas);
     clvr_cl_release(cl, &b->blas);
+    clvr_cl_release(cl, &b->ebox);
     memset(b, 0, sizeof *b);
 }
 
@@ -263,5 +266,68 @@ clvr_status clvr_bvh_build_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, 
     return CLVR_OK;
 cleanup:
     clvr_cl_release(cl, out_nodes);
+    return s;
+}
+
+clvr_status clvr_bvh_element_boxes_host(const clvr_mesh_view *m, uint32_t num_instances, uint32_t num_leaves,
+                                        uint8_t *out, clvr_error *err)
+{
+    for (uint32_t i = 0; i < num_instances; ++i) {
+        const clvr_instance *inst = &m->instances[i];
+        if (inst->num_leaves > num_leaves || inst->first_leaf > num_leaves - inst->num_leaves)
+            return clvr_error_set(err, CLVR_ERR_INTERNAL, "bvh: instance %u's leaves pass the %u leaf clusters", i,
+                                  num_leaves);
+        for (uint32_t leaf = inst->first_leaf; leaf < inst->first_leaf + inst->num_leaves; ++leaf) {
+            uint32_t node, slot;
+            clvr_leaf_parent(inst, leaf, &node, &slot);
+            const clvr_bvh_node *n = &m->blas[node];
+            if (n->child[slot] != (CLVR_BVH_LEAF_BIT | leaf))
+                return clvr_error_set(err, CLVR_ERR_INTERNAL,
+                                      "bvh: leaf cluster %u is not in slot %u of node %u; the element boxes "
+                                      "expect the packed layout of bvh_build.h", leaf, slot, node);
+            const float lo[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
+            const float hi[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
+            clvr_ebox_build_leaf(m, inst, leaf, lo, hi, out);
+        }
+    }
+    return CLVR_OK;
+}
+
+clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                          cl_mem instances, uint32_t num_instances, cl_mem vertices, cl_mem idx16,
+                                          cl_mem idx32, uint32_t leaf_size, uint32_t num_leaves,
+                                          uint64_t num_elements, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem status_mem = NULL;
+    cl_event evt = NULL;
+    cl_uint status = 0;
+    clvr_cl_release(cl, &b->ebox);
+    b->ebox_bytes = num_elements * CLVR_EBOX_BYTES;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)b->ebox_bytes, NULL, "element boxes", &b->ebox, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof status, &status,
+                            "element box status", &status_mem, err));
+    if (num_leaves > 0 && num_instances > 0) {
+        CLVR_TRY(CLVR_CL_ARGS(k->element_boxes, err, CLVR_ARG(b->blas), CLVR_ARG(instances), CLVR_ARG(num_instances),
+                              CLVR_ARG(vertices), CLVR_ARG(idx16), CLVR_ARG(idx32), CLVR_ARG(leaf_size),
+                              CLVR_ARG(num_leaves), CLVR_ARG(b->ebox), CLVR_ARG(status_mem)));
+        CLVR_TRY(clvr_cl_run1d(cl, k->element_boxes, num_leaves, 64, &evt, err));
+        if (evt) {
+            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+            b->build_seconds += clvr_cl_event_seconds(evt);
+        }
+        CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, status_mem, CL_TRUE, 0, sizeof status, &status, 0, NULL, NULL));
+        if (status)
+            s = clvr_error_set(err, CLVR_ERR_INTERNAL,
+                               "bvh: a leaf cluster is not where the packed layout of bvh_build.h puts it; the "
+                               "element boxes cannot be built (a bug: please report it)");
+    }
+cleanup:
+    if (evt) clReleaseEvent(evt);
+    clvr_cl_release(cl, &status_mem);
+    if (s != CLVR_OK) {
+        clvr_cl_release(cl, &b->ebox);
+        b->ebox_bytes = 0;
+    }
     return s;
 }

@@ -12,6 +12,7 @@
 #include <stdint.h>
 
 #include "../kernels/clvr_shared.h"
+#include "../kernels/locate.h"
 #include "cl_context.h"
 #include "status.h"
 
@@ -48,6 +49,7 @@ typedef struct clvr_bvh_kernels {
     cl_kernel build_level;
     cl_kernel locate_points;
     cl_kernel ray_hits;
+    cl_kernel element_boxes;
 } clvr_bvh_kernels;
 clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_error *err);
 void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k); /* accepts NULL and half-built */
@@ -58,6 +60,8 @@ typedef struct clvr_bvh_device {
     uint32_t tlas_nodes, blas_nodes;
     uint32_t tlas_root;   /* always 0 */
     double build_seconds; /* kernel time (event profiling) of the bottom-level build */
+    cl_mem ebox;          /* quantized element boxes (clvr_bvh_element_boxes_device), or NULL */
+    uint64_t ebox_bytes;
 } clvr_bvh_device;
 
 /* Device build. host_instances (the host copy of the instances buffer) gets
@@ -76,6 +80,23 @@ void clvr_bvh_device_release(clvr_cl *cl, clvr_bvh_device *b);
  * clvr_cl_release). */
 clvr_status clvr_bvh_build_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, cl_mem boxes, uint32_t n,
                                         cl_mem *out_nodes, clvr_error *err);
+
+/* Quantized element boxes (kernels/locate.h: CLVR_EBOX_BYTES per sorted
+ * element, each element's padded box relative to its leaf cluster's box in
+ * the bottom-level tree), which let a leaf scan skip most candidates
+ * without loading their vertices.
+ * Host reference: m holds host arrays (blas, instances, vertices, idx16,
+ * idx32, leaf_size; tlas and ebox are not read), out has room for
+ * num_elements * CLVR_EBOX_BYTES bytes. Fails with CLVR_ERR_INTERNAL when a
+ * leaf is not where the tree layout puts it. */
+clvr_status clvr_bvh_element_boxes_host(const clvr_mesh_view *m, uint32_t num_instances, uint32_t num_leaves,
+                                        uint8_t *out, clvr_error *err);
+/* Device build into b->ebox (a new buffer; b->ebox_bytes set), from the
+ * clustered mesh's device arrays and b->blas. */
+clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                          cl_mem instances, uint32_t num_instances, cl_mem vertices, cl_mem idx16,
+                                          cl_mem idx32, uint32_t leaf_size, uint32_t num_leaves,
+                                          uint64_t num_elements, clvr_error *err);
 
 /* Bytes of both levels. */
 uint64_t clvr_bvh_bytes(uint32_t tlas_nodes, uint32_t blas_nodes);

@@ -32,17 +32,49 @@ __kernel void clvr_locate_points(__global const float4 *points, uint n, __global
                                  uint tlas_root, __global const clvr_bvh_node *blas,
                                  __global const clvr_instance *instances, __global const float4 *vertices,
                                  __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
-                                 __global float *scalars, __global uint *element_ids, uint hints)
+                                 __global float *scalars, __global uint *element_ids, uint hints,
+                                 __global const uchar *ebox, uint use_ebox)
 {
     const uint i = get_global_id(0);
     if (i >= n) return;
     const float4 p = points[i];
     float s = 0.0f;
     uint e;
-    const clvr_mesh_view m = {tlas, blas, instances, vertices, idx16, idx32, tlas_root, leaf_size};
+    const clvr_mesh_view m = {tlas, blas, instances, vertices, idx16, idx32, tlas_root, leaf_size,
+                              use_ebox ? ebox : NULL};
     clvr_locate(&m, p.x, p.y, p.z, hints, &s, &e);
     scalars[i] = s;
     element_ids[i] = e;
+}
+
+/* Quantized element boxes (locate.h), one work item per leaf cluster.
+ * status[0] becomes nonzero when a leaf is not in the slot of the node
+ * clvr_leaf_parent names (a tree layout this code does not expect). */
+__kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
+                                 uint num_instances, __global const float4 *vertices, __global const ushort *idx16,
+                                 __global const uint *idx32, uint leaf_size, uint num_leaves, __global uchar *ebox,
+                                 __global uint *status)
+{
+    const uint leaf = get_global_id(0);
+    if (leaf >= num_leaves || num_instances == 0) return;
+    uint lo = 0, hi = num_instances; /* last instance with first_leaf <= leaf */
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (instances[mid].first_leaf <= leaf) lo = mid;
+        else hi = mid;
+    }
+    const clvr_instance inst = instances[lo];
+    uint node, slot;
+    clvr_leaf_parent(&inst, leaf, &node, &slot);
+    if (leaf - inst.first_leaf >= inst.num_leaves || blas[node].child[slot] != (CLVR_BVH_LEAF_BIT | leaf)) {
+        status[0] = 1u;
+        return;
+    }
+    __global const clvr_bvh_node *n = blas + node;
+    const float L[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
+    const float H[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
+    const clvr_mesh_view m = {NULL, blas, instances, vertices, idx16, idx32, 0u, leaf_size, NULL};
+    clvr_ebox_build_leaf(&m, &inst, leaf, L, H, ebox);
 }
 
 /* Ray queries over a single-level tree (root 0): rays as origin (w = tmin)

@@ -433,7 +433,7 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
  * at least this many quadrature points per ray, and at most this much
  * majorant optical depth between two of them. */
-#define CLVR_URM_DEFAULT_STEPS 16u
+#define CLVR_URM_DEFAULT_STEPS 24u
 #define CLVR_URM_DEFAULT_KAPPA 0.25f
 /* urm with shadows: cells per axis of the light grid (a control variate for
  * the shadow rays, kernels/render_volume.h). */
@@ -461,7 +461,8 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
     X(clvr_bvh_node, sampling_bvh)          /* bins: tree over sampling clusters */                                     \
     X(clvr_sampling_cluster, sampling)                                                                                 \
     X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
-    X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */
+    X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
+    X(uchar, ebox)                          /* quantized element boxes (locate.h) */
 
 /* Samplers, the values of clvr_frame.sampler. independent: every uniform of
  * a frame from the counter-based generator keyed by (pixel, frame, seed),

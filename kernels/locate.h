@@ -12,6 +12,7 @@
 #include "clvr_shared.h"
 #include "elements.h"
 #include "bvh_traverse.h"
+#include "bvh_build.h"
 
 /* The arrays of a clustered mesh and its two-level tree that point location
  * reads, bundled so that the walk takes one argument instead of eight
@@ -28,6 +29,10 @@ typedef struct clvr_mesh_view {
     CLVR_GLOBAL const clvr_u32 *idx32;
     clvr_u32 tlas_root;
     clvr_u32 leaf_size;
+    /* Quantized element boxes (CLVR_EBOX_BYTES per sorted element, see
+     * clvr_ebox_build_leaf), or NULL: leaves are then scanned without them
+     * (same results, slower). */
+    CLVR_GLOBAL const clvr_u8 *ebox;
 } clvr_mesh_view;
 
 /* Loads the vertices of element e (global sorted id, inside instance
@@ -104,36 +109,139 @@ CLVR_INLINE void clvr_prefetch_leaf_vertices(const clvr_mesh_view *m, const clvr
         CLVR_PREFETCH(vb + (inst->index_bits == 16u ? (clvr_u32)idx16[base + i] : idx32[base + i]));
 }
 
-/* Tests the elements of leaf cluster `leaf` of instance inst; returns 1 and
- * the scalar and element id of the first one that contains p. Each
- * candidate is first rejected by its vertex box (most of a leaf's elements
- * are not near p, and the box test is cheaper than a solve); tets then take
- * the early-out barycentric test, other types Newton. */
-CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf, float px,
-                                    float py, float pz, float *scalar, clvr_u32 *element_id)
+/* ------------------------------------------------------------ element boxes
+ * Each element's padded vertex box (the one clvr_element_box_test accepts),
+ * quantized to 8 bits per bound relative to its leaf cluster's box as the
+ * leaf's parent node stores it: lo x y z, hi x y z, one byte each, rounded
+ * outward by one more step. A leaf scan then rejects most candidates with
+ * one 6-byte load each instead of loading and boxing their vertices
+ * (index load, then dependent vertex loads): perf on tets-1M (leaves of 16,
+ * urm frames) put 68% of the frame in that scan. The filter only rejects
+ * elements whose padded box misses p, which the exact test after it would
+ * reject too, so point location returns the same element bit for bit. */
+#define CLVR_EBOX_BYTES 6u
+
+/* Index of the lowest set bit of x != 0. */
+CLVR_INLINE clvr_u32 clvr_ctz32(clvr_u32 x)
+{
+#ifdef __OPENCL_VERSION__
+    return 31u - clz(x & (0u - x));
+#else
+    return (clvr_u32)__builtin_ctz(x);
+#endif
+}
+#define CLVR_EBOX_STEPS 255.0f
+
+/* Steps per unit length along an axis of extent [lo, hi]; 0 for a flat or
+ * tiny extent (every element then spans the whole axis). */
+CLVR_INLINE float clvr_ebox_scale(float lo, float hi)
+{
+    const float d = hi - lo;
+    return d > 1e-30f ? CLVR_EBOX_STEPS / d : 0.0f;
+}
+
+/* x's position in steps from lo, clamped to [0, CLVR_EBOX_STEPS]: the same
+ * expression for building and querying, and monotonic in x, so the one
+ * step of margin covers any rounding between the two. */
+CLVR_INLINE float clvr_ebox_pos(float x, float lo, float scale)
+{
+    return fmin(fmax((x - lo) * scale, 0.0f), CLVR_EBOX_STEPS);
+}
+
+/* Quantizes the boxes of leaf cluster `leaf`'s elements against the leaf
+ * box (lo, hi) into ebox (CLVR_EBOX_BYTES per global sorted element id). */
+CLVR_INLINE void clvr_ebox_build_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf,
+                                      const float *lo, const float *hi, CLVR_GLOBAL clvr_u8 *ebox)
 {
     const clvr_u32 leaf_size = m->leaf_size;
     const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
     const clvr_u32 end_inst = inst->first_element + inst->num_elements;
     const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
+    const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
+    float scale[3];
+    for (int k = 0; k < 3; ++k) scale[k] = clvr_ebox_scale(lo[k], hi[k]);
     clvr_vec4 v[CLVR_CELL_MAX_VERTS];
-    if (inst->type == CLVR_CELL_TET) {
-        for (clvr_u32 e = first; e < end; ++e) {
-            clvr_load_tet(m, inst, e, v);
-            if (!clvr_element_box_test(CLVR_CELL_TET, v, px, py, pz)) continue;
-            if (clvr_tet_sample(v, px, py, pz, scalar)) {
+    for (clvr_u32 e = first; e < end; ++e) {
+        clvr_load_element(m, inst, e, v);
+        float elo[3] = {v[0].x, v[0].y, v[0].z}, ehi[3] = {v[0].x, v[0].y, v[0].z};
+        for (clvr_u32 i = 1; i < nv; ++i) {
+            elo[0] = fmin(elo[0], v[i].x); elo[1] = fmin(elo[1], v[i].y); elo[2] = fmin(elo[2], v[i].z);
+            ehi[0] = fmax(ehi[0], v[i].x); ehi[1] = fmax(ehi[1], v[i].y); ehi[2] = fmax(ehi[2], v[i].z);
+        }
+        /* clvr_element_box_test's padding, plus a little: this box must
+         * hold every point that test accepts. */
+        const float ext = fmax(fmax(ehi[0] - elo[0], ehi[1] - elo[1]), ehi[2] - elo[2]);
+        const float mag = fmax(fmax(fmax(fabs(elo[0]), fabs(ehi[0])), fmax(fabs(elo[1]), fabs(ehi[1]))),
+                               fmax(fabs(elo[2]), fabs(ehi[2])));
+        const float pad = 2.0f * (CLVR_BVH_BOX_PAD_REL * ext + 4.0f * 1.1920929e-7f * mag);
+        CLVR_GLOBAL clvr_u8 *out = ebox + (clvr_u64)e * CLVR_EBOX_BYTES;
+        for (int k = 0; k < 3; ++k) {
+            const float a = floor(clvr_ebox_pos(elo[k] - pad, lo[k], scale[k])) - 1.0f;
+            const float b = ceil(clvr_ebox_pos(ehi[k] + pad, lo[k], scale[k])) + 1.0f;
+            out[k] = (clvr_u8)fmax(a, 0.0f);
+            out[3 + k] = (clvr_u8)fmin(b, CLVR_EBOX_STEPS);
+        }
+    }
+}
+
+/* Tests the elements of leaf cluster `leaf` of instance inst (whose box,
+ * as its parent node n stores it in slot c, holds p); returns 1 and the
+ * scalar and element id of the first one that contains p. Candidates are
+ * first rejected by their quantized box (when m->ebox is set), then by
+ * their vertex box (cheaper than a solve); tets then take the early-out
+ * barycentric test, other types Newton. */
+CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf,
+                                    CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 c, float px, float py, float pz,
+                                    float *scalar, clvr_u32 *element_id)
+{
+    const clvr_u32 leaf_size = m->leaf_size;
+    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
+    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
+    const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
+    CLVR_GLOBAL const clvr_u8 *eb = m->ebox;
+    /* p's step on each axis of the leaf box (floor: a step test that is
+     * at least as permissive as the float one). */
+    clvr_u32 ix = 0, iy = 0, iz = 0;
+    if (eb) {
+        ix = (clvr_u32)clvr_ebox_pos(px, n->lo_x[c], clvr_ebox_scale(n->lo_x[c], n->hi_x[c]));
+        iy = (clvr_u32)clvr_ebox_pos(py, n->lo_y[c], clvr_ebox_scale(n->lo_y[c], n->hi_y[c]));
+        iz = (clvr_u32)clvr_ebox_pos(pz, n->lo_z[c], clvr_ebox_scale(n->lo_z[c], n->hi_z[c]));
+    }
+    clvr_vec4 v[CLVR_CELL_MAX_VERTS];
+    for (clvr_u32 base = first; base < end; base += 32u) {
+        const clvr_u32 cnt = end - base < 32u ? end - base : 32u;
+        /* Candidates, 32 at a time: a branch-free pass over their quantized
+         * boxes, then only the survivors' vertices are loaded. */
+        clvr_u32 mask = cnt == 32u ? 0xffffffffu : (1u << cnt) - 1u;
+        if (eb) {
+            clvr_u32 pass = 0;
+            for (clvr_u32 k = 0; k < cnt; ++k) {
+                CLVR_GLOBAL const clvr_u8 *b = eb + (clvr_u64)(base + k) * CLVR_EBOX_BYTES;
+                pass |= (clvr_u32)((ix >= b[0]) & (iy >= b[1]) & (iz >= b[2]) & (ix <= b[3]) & (iy <= b[4]) &
+                                   (iz <= b[5]))
+                        << k;
+            }
+            mask = pass;
+        }
+        while (mask) {
+            const clvr_u32 k = clvr_ctz32(mask);
+            mask &= mask - 1u;
+            const clvr_u32 e = base + k;
+            if (inst->type == CLVR_CELL_TET) {
+                clvr_load_tet(m, inst, e, v);
+                if (!clvr_element_box_test(CLVR_CELL_TET, v, px, py, pz)) continue;
+                if (clvr_tet_sample(v, px, py, pz, scalar)) {
+                    *element_id = e;
+                    return 1;
+                }
+                continue;
+            }
+            clvr_load_element(m, inst, e, v);
+            if (!clvr_element_box_test(inst->type, v, px, py, pz)) continue;
+            if (clvr_element_sample(inst->type, v, px, py, pz, scalar)) {
                 *element_id = e;
                 return 1;
             }
-        }
-        return 0;
-    }
-    for (clvr_u32 e = first; e < end; ++e) {
-        clvr_load_element(m, inst, e, v);
-        if (!clvr_element_box_test(inst->type, v, px, py, pz)) continue;
-        if (clvr_element_sample(inst->type, v, px, py, pz, scalar)) {
-            *element_id = e;
-            return 1;
         }
     }
     return 0;
@@ -154,6 +262,14 @@ CLVR_INLINE clvr_u32 clvr_locate_level0(const clvr_instance *inst)
     return level0;
 }
 
+/* Node and child slot that hold leaf cluster `leaf` of instance inst: the
+ * lowest level's node level0 + m holds leaves 4m .. 4m + 3. */
+CLVR_INLINE void clvr_leaf_parent(const clvr_instance *inst, clvr_u32 leaf, clvr_u32 *node, clvr_u32 *slot)
+{
+    *node = clvr_locate_level0(inst) + (leaf - inst->first_leaf) / 4u;
+    *slot = (leaf - inst->first_leaf) % 4u;
+}
+
 /* CLVR_LOCATE_INCOHERENT: asks for the lines of every child in mask of node
  * n before any is searched, so that their misses overlap: for a leaf, its
  * tets' vertices (clvr_prefetch_leaf_vertices); for an inner node, its two
@@ -169,7 +285,11 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
         if (!((mask >> c) & 1u)) continue;
         const clvr_u32 ch = n->child[c];
         if (ch & CLVR_BVH_LEAF_BIT) {
-            clvr_prefetch_leaf_vertices(m, inst, ch & CLVR_BVH_MAX_PRIMS);
+            if (m->ebox) /* the scan reads its boxes first, then a few survivors */
+                CLVR_PREFETCH(m->ebox + (clvr_u64)(inst->first_element + ((ch & CLVR_BVH_MAX_PRIMS) - inst->first_leaf) *
+                                                                            m->leaf_size) * CLVR_EBOX_BYTES);
+            else
+                clvr_prefetch_leaf_vertices(m, inst, ch & CLVR_BVH_MAX_PRIMS);
             continue;
         }
         CLVR_PREFETCH(blas + ch);
@@ -191,12 +311,13 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
  * searched) lost about 10% on coherent queries and gained nothing clear on
  * random ones, so leaves are searched in traversal order. hints: see
  * CLVR_LOCATE_INCOHERENT; results do not depend on them. */
-CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_instance *inst, float px, float py,
-                                        float pz, clvr_u32 hints, float *scalar, clvr_u32 *element_id)
+CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 root,
+                                        float px, float py, float pz, clvr_u32 hints, float *scalar,
+                                        clvr_u32 *element_id, clvr_u32 *leaf_found)
 {
     CLVR_GLOBAL const clvr_bvh_node *blas = m->blas;
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
-    clvr_u32 sp = 0, ref = inst->bvh_root;
+    clvr_u32 sp = 0, ref = root;
     const int prefetch = (hints & CLVR_LOCATE_INCOHERENT) != 0u;
     const clvr_u32 level0 = prefetch ? clvr_locate_level0(inst) : 0u;
     for (;;) {
@@ -208,8 +329,10 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
             if (!((mask >> c) & 1u)) continue;
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
-                if (clvr_locate_in_leaf(m, inst, ch & CLVR_BVH_MAX_PRIMS, px, py, pz, scalar, element_id))
+                if (clvr_locate_in_leaf(m, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, scalar, element_id)) {
+                    *leaf_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
+                }
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
             }
@@ -223,9 +346,10 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  * (px, py, pz) and writes its interpolated scalar and global sorted element
  * id; 0 (and element id CLVR_BVH_NOT_FOUND) otherwise. hints:
  * CLVR_LOCATE_COHERENT or CLVR_LOCATE_INCOHERENT (a speed hint only: the
- * result is the same bit for bit). */
-CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints, float *scalar,
-                            clvr_u32 *element_id)
+ * result is the same bit for bit). inst_found, leaf_found: the instance
+ * index and leaf cluster of the element found. */
+CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints, float *scalar,
+                               clvr_u32 *element_id, clvr_u32 *inst_found, clvr_u32 *leaf_found)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
@@ -238,8 +362,11 @@ CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float p
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
                 const clvr_instance inst = m->instances[ch & CLVR_BVH_MAX_PRIMS];
-                if (clvr_locate_in_instance(m, &inst, px, py, pz, hints, scalar, element_id))
+                if (clvr_locate_in_instance(m, &inst, inst.bvh_root, px, py, pz, hints, scalar, element_id,
+                                            leaf_found)) {
+                    *inst_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
+                }
             } else if (sp < CLVR_BVH_STACK_SIZE) {
                 stack[sp++] = ch;
             }
@@ -247,6 +374,60 @@ CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float p
         if (sp == 0) return 0;
         ref = stack[--sp];
     }
+}
+
+CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints, float *scalar,
+                            clvr_u32 *element_id)
+{
+    clvr_u32 inst, leaf;
+    return clvr_locate_ex(m, px, py, pz, hints, scalar, element_id, &inst, &leaf);
+}
+
+/* A ray's next sample is usually near its last one (urm's quadrature
+ * points are a few elements apart), so a ray keeps where its last lookup
+ * ended: the instance and the node two levels above that leaf (16 leaf
+ * clusters). The next lookup searches that subtree first and walks the
+ * whole tree only when it finds nothing there. inst CLVR_BVH_NOT_FOUND: no
+ * hint yet. The element found may differ from clvr_locate's only where
+ * two elements share the point (a shared face), with the same value. */
+typedef struct clvr_locate_hint {
+    clvr_u32 inst, node;
+} clvr_locate_hint;
+
+CLVR_INLINE clvr_locate_hint clvr_locate_hint_none(void)
+{
+    clvr_locate_hint h;
+    h.inst = CLVR_BVH_NOT_FOUND;
+    h.node = 0u;
+    return h;
+}
+
+/* The node two levels above leaf cluster `leaf` of inst (its root when the
+ * tree is lower). Levels are stored root first, so level 1 sits just before
+ * level 0. */
+CLVR_INLINE clvr_u32 clvr_locate_hint_node(const clvr_instance *inst, clvr_u32 leaf)
+{
+    const clvr_u32 level0 = clvr_locate_level0(inst);
+    const clvr_u32 s1 = clvr_bvh_level_size(inst->num_leaves, 1u);
+    return s1 == 0u ? level0 : level0 - s1 + (leaf - inst->first_leaf) / 16u;
+}
+
+CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, float pz, clvr_locate_hint *h,
+                                   float *scalar, clvr_u32 *element_id)
+{
+    clvr_u32 leaf, inst_id;
+    if (h->inst != CLVR_BVH_NOT_FOUND) {
+        const clvr_instance inst = m->instances[h->inst];
+        if (clvr_locate_in_instance(m, &inst, h->node, px, py, pz, CLVR_LOCATE_COHERENT, scalar, element_id, &leaf)) {
+            h->node = clvr_locate_hint_node(&inst, leaf);
+            return 1;
+        }
+    }
+    if (!clvr_locate_ex(m, px, py, pz, CLVR_LOCATE_COHERENT, scalar, element_id, &inst_id, &leaf)) return 0;
+    const clvr_instance inst = m->instances[inst_id];
+    h->inst = inst_id;
+    h->node = clvr_locate_hint_node(&inst, leaf);
+    return 1;
 }
 
 /* The renderer's entry point: clvr_locate without the element id. The
@@ -258,6 +439,14 @@ CLVR_INLINE int clvr_locate_point(clvr_mesh_view m, float px, float py, float pz
 {
     clvr_u32 e;
     return clvr_locate(&m, px, py, pz, CLVR_LOCATE_COHERENT, scalar, &e);
+}
+
+/* clvr_locate_point with a ray's hint (clvr_locate_hinted). */
+CLVR_INLINE int clvr_locate_point_hinted(clvr_mesh_view m, float px, float py, float pz, clvr_locate_hint *h,
+                                         float *scalar)
+{
+    clvr_u32 e;
+    return clvr_locate_hinted(&m, px, py, pz, h, scalar, &e);
 }
 
 #endif /* CLVR_LOCATE_H */

@@ -347,7 +347,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         float s = 0.0f;
         uint32_t e = 0;
         const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
-                                   leaf_size};
+                                   leaf_size, NULL};
         const int ok = clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s, &e);
         found += ok;
         host_e[i] = e;
@@ -366,6 +366,67 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     TU_CHECK_EQ_U64(host_bad, 0);
     TU_CHECK_EQ_U64(hint_diff, 0);
     TU_CHECK(found > (int)nq / 3); /* the queries do hit the mesh */
+
+    /* Quantized element boxes: a filter, so the same element and the same
+     * bits with and without them; and the comparison is live: boxes that
+     * reject everything (all zero: [0, 0] steps) change the answers. */
+    uint8_t *ebox = malloc((size_t)c.num_elements * CLVR_EBOX_BYTES + 1);
+    {
+        const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
+                                   leaf_size, NULL};
+        TU_CHECK_STATUS(clvr_bvh_element_boxes_host(&mv, c.num_instances, c.num_leaves, ebox, err), CLVR_OK, err);
+        clvr_mesh_view mve = mv;
+        mve.ebox = ebox;
+        int ebox_diff = 0, rejected = 0;
+        for (uint32_t i = 0; i < nq; ++i) {
+            const float *p = q.p[i];
+            float s1 = 0.0f, s2 = 0.0f;
+            uint32_t e1 = 0, e2 = 0;
+            const int ok1 = clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s1, &e1);
+            const int ok2 = clvr_locate(&mve, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s2, &e2);
+            if (ok1 != ok2 || e1 != e2 || memcmp(&s1, &s2, sizeof s1) != 0) ++ebox_diff;
+        }
+        TU_CHECK_EQ_U64(ebox_diff, 0);
+        uint8_t *zero = calloc((size_t)c.num_elements * CLVR_EBOX_BYTES + 1, 1);
+        mve.ebox = zero;
+        for (uint32_t i = 0; i < nq; ++i) {
+            float s2 = 0.0f;
+            uint32_t e2 = 0;
+            rejected += clvr_locate(&mve, q.p[i][0], q.p[i][1], q.p[i][2], CLVR_LOCATE_COHERENT, &s2, &e2) !=
+                        (host_e[i] != CLVR_BVH_NOT_FOUND);
+        }
+        TU_CHECK(rejected > 0);
+        free(zero);
+
+        /* A ray's hint (clvr_locate_hinted): walks of 24 points from one
+         * query point to the next, as a renderer's samples go; same found
+         * flag as the full walk, and an element that contains the point
+         * with its value (judge(): where elements overlap, as curved faces
+         * of mixed meshes do, either one). */
+        mve.ebox = ebox;
+        int hint_bad = 0, walked = 0;
+        for (uint32_t i = 0; i + 1 < nq; i += 2) {
+            clvr_locate_hint h = clvr_locate_hint_none();
+            for (int step = 0; step <= 24; ++step) {
+                const float w = (float)step / 24.0f;
+                float p[3];
+                for (int a = 0; a < 3; ++a) p[a] = q.p[i][a] + w * (q.p[i + 1][a] - q.p[i][a]);
+                float s1 = 0.0f, s2 = 0.0f;
+                uint32_t e1 = 0, e2 = 0;
+                const int ok1 = clvr_locate(&mve, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s1, &e1);
+                const int ok2 = clvr_locate_hinted(&mve, p[0], p[1], p[2], &h, &s2, &e2);
+                walked += ok2;
+                if (ok1 != ok2 || (ok1 && !judge(&c, p, e2, s2, e1, s1))) {
+                    if (hint_bad < 5)
+                        fprintf(stderr, "%s N=%u: hinted (%.9g %.9g %.9g): %d %g, full walk %d %g\n", name, leaf_size,
+                                p[0], p[1], p[2], ok2, s2, ok1, s1);
+                    ++hint_bad;
+                }
+            }
+        }
+        TU_CHECK_EQ_U64(hint_bad, 0);
+        TU_CHECK(walked > 0 || nq < 2);
+    }
 
     /* device build and device point location */
     clvr_status s = CLVR_OK;
@@ -401,7 +462,18 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         TU_CHECK(nodes_equal(tmp, hb.blas, hb.blas_nodes));
         free(tmp);
     }
-    cl_uint n = nq, ls = leaf_size, root = db.tlas_root, hints = CLVR_LOCATE_INCOHERENT;
+    {
+        /* device element boxes: the host reference's bytes */
+        CLVR_TRY(clvr_bvh_element_boxes_device(cl, k, &db, dinst, c.num_instances, dv, d16, d32, leaf_size,
+                                               c.num_leaves, c.num_elements, err));
+        TU_CHECK_EQ_U64(db.ebox_bytes, (uint64_t)c.num_elements * CLVR_EBOX_BYTES);
+        uint8_t *tmp = malloc((size_t)db.ebox_bytes + 1);
+        if (db.ebox_bytes)
+            CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, db.ebox, CL_TRUE, 0, (size_t)db.ebox_bytes, tmp, 0, NULL, NULL));
+        TU_CHECK(memcmp(tmp, ebox, (size_t)db.ebox_bytes) == 0);
+        free(tmp);
+    }
+    cl_uint n = nq, ls = leaf_size, root = db.tlas_root, hints = CLVR_LOCATE_INCOHERENT, use_ebox = 1;
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 0, sizeof(cl_mem), &dpts));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 1, sizeof(cl_uint), &n));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 2, sizeof(cl_mem), &db.tlas));
@@ -417,6 +489,8 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     /* incoherent on the device, coherent on the host: the element ids must
      * still agree (checked below) */
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 12, sizeof(cl_uint), &hints));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 13, sizeof(cl_mem), &db.ebox));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 14, sizeof(cl_uint), &use_ebox));
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, 64, NULL, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dsc, CL_TRUE, 0, nq * sizeof(float), dscal, 0, NULL, NULL));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, nq * sizeof(uint32_t), delem, 0, NULL, NULL));
@@ -455,6 +529,7 @@ cleanup:
     free(want_e);
     free(want_s);
     free(host_e);
+    free(ebox);
     free(q.p);
     clvr_bvh_host_free(&hb);
     fx_clustered_free(&c);

@@ -129,6 +129,11 @@ int main(void)
     expect_usage("--device", NULL);
     expect_usage("--bogus", NULL);
     TU_CHECK_STATUS(PARSE(&o, &err, "--range", "2", "1"), CLVR_ERR_USAGE, &err);
+    /* --range auto-all takes one word; the next argument is the mesh. */
+    TU_CHECK_STATUS(PARSE(&o, &err, "--range", "auto-all", "s.bin.series"), CLVR_OK, &err);
+    TU_CHECK(o.range_auto_all && !o.range_set && o.mesh_path && strcmp(o.mesh_path, "s.bin.series") == 0);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--range", "1", "2", "--range", "auto-all"), CLVR_OK, &err);
+    TU_CHECK(o.range_auto_all && !o.range_set);
     TU_CHECK_STATUS(PARSE(&o, &err, "a.bin", "b.bin"), CLVR_ERR_USAGE, &err);
     TU_CHECK(strstr(err.msg, "b.bin") != NULL);
     return tu_finish("test_cli");

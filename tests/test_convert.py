@@ -46,7 +46,10 @@ class BinMesh:
 
 
 def read_bin(path):
-    """Reads and validates a .bin per docs/bin-format.md. Returns (mesh, problems)."""
+    """Reads and validates a .bin per docs/bin-format.md (version 1 or 2). Returns
+    (mesh, problems). For version 2, m.fields is a list of (name, association,
+    components, min, max, values[count, components]) and m.scalars the first field per
+    vertex (cell data averaged over the elements using each vertex)."""
     problems = []
     with open(path, "rb") as f:
         data = f.read()
@@ -56,7 +59,8 @@ def read_bin(path):
     if data[0:8] != b"CLVRMESH":
         problems.append(f"magic {data[0:8]!r}")
     version, header_size = struct.unpack_from("<II", data, 8)
-    if version != 1:
+    m.version = version
+    if version not in (1, 2):
         problems.append(f"version {version}")
     if header_size != 256:
         problems.append(f"header_size {header_size}")
@@ -70,21 +74,51 @@ def read_bin(path):
     flags = struct.unpack_from("<I", data, 152)[0]
     if flags != 0:
         problems.append(f"flags {flags}")
-    if any(data[156:256]):
+    nfields = struct.unpack_from("<I", data, 156)[0] if version == 2 else 0
+    if any(data[160 if version == 2 else 156:256]):
         problems.append("reserved bytes not zero")
-    want = 256 + 4 * (4 * m.V + 4 * m.T + 5 * m.P + 6 * m.W + 8 * m.H)
-    if len(data) != want:
-        problems.append(f"file size {len(data)}, header says {want}")
-        return m, problems
+    E = m.T + m.P + m.W + m.H
     off = 256
-    m.pos = np.frombuffer(data, "<f4", 3 * m.V, off).reshape(-1, 3)
+    m.pos = np.frombuffer(data, "<f4", 3 * m.V, off).reshape(-1, 3) \
+        if len(data) >= off + 12 * m.V else np.zeros((0, 3), np.float32)
     off += 12 * m.V
-    m.scalars = np.frombuffer(data, "<f4", m.V, off)
-    off += 4 * m.V
+    if version == 1:
+        want = 256 + 4 * (4 * m.V + 4 * m.T + 5 * m.P + 6 * m.W + 8 * m.H)
+        if len(data) != want:
+            problems.append(f"file size {len(data)}, header says {want}")
+            return m, problems
+        m.scalars = np.frombuffer(data, "<f4", m.V, off)
+        off += 4 * m.V
     m.cells = []
     for n, k in ((m.T, 4), (m.P, 5), (m.W, 6), (m.H, 8)):
+        if len(data) < off + 4 * n * k:
+            return m, problems + ["file shorter than its index lists"]
         m.cells.append(np.frombuffer(data, "<u4", n * k, off).reshape(-1, k).astype(np.int64))
         off += 4 * n * k
+    m.fields = []
+    if version == 2:
+        table = off
+        off += 128 * nfields
+        for i in range(nfields):
+            raw, assoc, nc, lo, hi = struct.unpack_from("<64sIIff", data, table + 128 * i)
+            if any(data[table + 128 * i + 80:table + 128 * (i + 1)]):
+                problems.append(f"field {i}: reserved bytes not zero")
+            if assoc not in (0, 1) or not 1 <= nc <= 16:
+                problems.append(f"field {i}: association {assoc}, components {nc}")
+                return m, problems
+            count = m.V if assoc == 0 else E
+            vals = np.frombuffer(data, "<f4", count * nc, off).reshape(count, nc) \
+                if len(data) >= off + 4 * count * nc else None
+            if vals is None:
+                return m, problems + [f"field {i} cut short"]
+            off += 4 * count * nc
+            m.fields.append((raw.rstrip(b"\0").decode("utf-8", "replace"), assoc, nc, lo, hi, vals))
+        if len(data) != off:
+            problems.append(f"file size {len(data)}, header and table say {off}")
+        if m.fields and m.fields[0][0] != m.name:
+            problems.append(f"header scalar_name {m.name!r} is not the first field "
+                            f"{m.fields[0][0]!r}")
+        m.scalars = field_per_vertex(m, 0) if m.fields else np.zeros(m.V, np.float32)
     for lst in m.cells:
         if lst.size and lst.max() >= m.V:
             problems.append(f"index {lst.max()} >= V {m.V}")
@@ -94,10 +128,29 @@ def read_bin(path):
         if tuple(m.pos.min(axis=0)) != m.lo or tuple(m.pos.max(axis=0)) != m.hi:
             problems.append(f"bounds {m.lo}..{m.hi} differ from the vertices' "
                             f"{tuple(m.pos.min(axis=0))}..{tuple(m.pos.max(axis=0))}")
-        if (float(m.scalars.min()), float(m.scalars.max())) != (m.smin, m.smax):
+        if version == 1 and (float(m.scalars.min()), float(m.scalars.max())) != (m.smin, m.smax):
             problems.append(f"scalar range {m.smin}..{m.smax} differs from the values' "
                             f"{m.scalars.min()}..{m.scalars.max()}")
     return m, problems
+
+
+def field_per_vertex(m, i):
+    """Field i of a version 2 mesh as one float32 per vertex: magnitude of vectors, cell
+    data averaged over the elements that use each vertex (docs/bin-format.md)."""
+    _, assoc, nc, _, _, vals = m.fields[i]
+    v = vals[:, 0].astype(np.float64) if nc == 1 else np.sqrt((vals.astype(np.float64) ** 2).sum(1))
+    if assoc == 0:
+        return v.astype(np.float32)
+    acc = np.zeros(m.V)
+    cnt = np.zeros(m.V)
+    e = 0
+    for lst in m.cells:
+        ev = v[e:e + lst.shape[0]]
+        for k in range(lst.shape[1]):
+            np.add.at(acc, lst[:, k], ev)
+            np.add.at(cnt, lst[:, k], 1)
+        e += lst.shape[0]
+    return np.where(cnt > 0, acc / np.maximum(cnt, 1), 0).astype(np.float32)
 
 
 def tet_volumes(pos, tets):
@@ -604,6 +657,411 @@ def test_output_name_and_avs(tmp):
           "extensions", missing, [])
 
 
+def clvr_info(path, *extra):
+    r = subprocess.run([CLVR, "--info", path, *extra], capture_output=True, text=True, timeout=120)
+    return r
+
+
+def info_scalar_range(stdout):
+    """(name, lo, hi) from clvr --info's "scalar NAME, range [lo, hi]" line."""
+    for line in stdout.splitlines():
+        if line.startswith("scalar "):
+            body = line[len("scalar"):].strip()
+            name, rest = body.rsplit(", range [", 1)
+            lo, hi = rest.split("]")[0].split(", ")
+            return name, float(lo), float(hi)
+    return None, None, None
+
+
+def test_fields(tmp):
+    """Every point and cell array survives conversion with VTK's values (version 2
+    field table), clvr --info lists each one, and --scalar reaches any of them: a vector
+    by magnitude or one component, and point:/cell: where both share a name."""
+    src = os.path.join(DATA, "vtk/fire_ug.vtu")
+    out = os.path.join(tmp, "fire_fields.bin")
+    r = convert([src, out, "--quiet"], tmp)
+    m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+    check(m is not None and not problems and m.version == 2, "fire_ug.vtu: a valid version 2 .bin",
+          problems, [])
+    if m is None:
+        return
+    rd = vtk.vtkXMLUnstructuredGridReader()
+    rd.SetFileName(src)
+    rd.Update()
+    pd = rd.GetOutput().GetPointData()
+    names = [pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays())]
+    got = [(f[0], f[1], f[2]) for f in m.fields]
+    want = [(n, 0, pd.GetArray(n).GetNumberOfComponents()) for n in names]
+    check(got == want, "fire_ug.vtu: every point array kept, in file order", got, want)
+    worst = 0.0
+    for f in m.fields:
+        ref = ns.vtk_to_numpy(pd.GetArray(f[0])).reshape(m.V, -1)  # no vertex is unused here
+        worst = max(worst, float(np.abs(f[5] - ref).max()))
+    check(worst < 1e-5, "fire_ug.vtu: every field's values equal VTK's", worst, "< 1e-5")
+    if not os.access(CLVR, os.X_OK):
+        return
+    r = clvr_info(out)
+    listed = [ln.split()[1] for ln in r.stdout.splitlines() if ln.startswith("  point ")
+              or ln.startswith("  cell ")]
+    check(r.returncode == 0 and listed == names, "clvr --info lists every field", listed, names)
+    uvw = ns.vtk_to_numpy(pd.GetArray("uvw")).astype(np.float32)
+    for spec, ref in (("uvw", np.sqrt((uvw.astype(np.float64) ** 2).sum(1))), ("uvw:y", uvw[:, 1]),
+                      ("point:mfrac", ns.vtk_to_numpy(pd.GetArray("mfrac")))):
+        r = clvr_info(out, "--scalar", spec)
+        name, lo, hi = info_scalar_range(r.stdout)
+        check(r.returncode == 0 and name == spec.replace("point:", "") and abs(lo - ref.min()) < 1e-4 * max(1, abs(ref.min()))
+              and abs(hi - ref.max()) < 1e-4 * max(1, abs(ref.max())),
+              f"clvr --scalar {spec}: the field's range", (r.returncode, name, lo, hi, r.stderr.strip()),
+              (spec, float(ref.min()), float(ref.max())))
+    r = clvr_info(out, "--scalar", "nope")
+    check(r.returncode != 0 and "uvw" in r.stderr and "nope" in r.stderr and out in r.stderr,
+          "clvr --scalar nope: names the file, the spec and the fields there are", r.stderr.strip(), "...")
+
+    # A point and a cell array with one name (post.vtk's Pressure, and its cell
+    # average as cell data), converted from a .vtu VTK writes at test time.
+    rd = vtk.vtkUnstructuredGridReader()
+    rd.SetFileName(os.path.join(DATA, "vtk/post.vtk"))
+    rd.Update()
+    ug = rd.GetOutput()
+    p2c = vtk.vtkPointDataToCellData()
+    p2c.SetInputData(ug)
+    p2c.Update()
+    cellp = ns.vtk_to_numpy(p2c.GetOutput().GetCellData().GetArray("Pressure")) * 10.0
+    both = vtk.vtkUnstructuredGrid()
+    both.DeepCopy(ug)
+    arr = ns.numpy_to_vtk(cellp, deep=1)
+    arr.SetName("Pressure")
+    both.GetCellData().AddArray(arr)
+    vtu = os.path.join(tmp, "both.vtu")
+    w = vtk.vtkXMLUnstructuredGridWriter()
+    w.SetFileName(vtu)
+    w.SetInputData(both)
+    w.Write()
+    out = os.path.join(tmp, "both.bin")
+    r = convert([vtu, out, "--quiet"], tmp)
+    m, problems = read_bin(out) if r.returncode == 0 else (None, [r.stderr])
+    got = [(f[0], f[1]) for f in m.fields] if m else None
+    check(m is not None and not problems and got == [("Pressure", 0), ("Pressure", 1)],
+          "point and cell 'Pressure' both kept", (got, problems), [("Pressure", 0), ("Pressure", 1)])
+    if m is None:
+        return
+    check(np.allclose(m.fields[1][5][:, 0], cellp.astype(np.float32)), "cell 'Pressure' in element order")
+    r1, r2 = clvr_info(out, "--scalar", "point:Pressure"), clvr_info(out, "--scalar", "cell:Pressure")
+    (n1, lo1, hi1), (n2, lo2, hi2) = info_scalar_range(r1.stdout), info_scalar_range(r2.stdout)
+    avg = field_per_vertex(m, 1)
+    check(r1.returncode == 0 and r2.returncode == 0 and hi2 > 5 * hi1
+          and abs(hi2 - float(avg.max())) < 1e-3 * float(avg.max()) and "cell data averaged" in r2.stdout,
+          "point:Pressure and cell:Pressure both reachable, cell data averaged to the vertices",
+          (lo1, hi1, lo2, hi2, r1.stderr.strip(), r2.stderr.strip()), f"cell max {avg.max()}")
+
+
+def test_warnings_once(tmp):
+    """Flawed real meshes (post.vtk appended to itself: 8750 duplicate tets; fire_ug.vtu,
+    whose hexes are all inside out, saved as legacy .vtk by VTK): clvr-convert says so
+    once, on one line; clvr warns on a render and --quiet silences it."""
+    rd = vtk.vtkUnstructuredGridReader()
+    rd.SetFileName(os.path.join(DATA, "vtk/post.vtk"))
+    rd.Update()
+    a = vtk.vtkAppendFilter()
+    a.AddInputData(rd.GetOutput())
+    a.AddInputData(rd.GetOutput())
+    a.SetMergePoints(1)
+    a.Update()
+    dup = os.path.join(tmp, "post_twice.vtk")
+    w = vtk.vtkUnstructuredGridWriter()
+    w.SetFileName(dup)
+    w.SetInputData(a.GetOutput())
+    w.SetFileTypeToBinary()
+    w.Write()
+    out = os.path.join(tmp, "post_twice.bin")
+    r = convert([dup, out], tmp)
+    warn = [ln for ln in r.stderr.splitlines() if "warning" in ln]
+    check(r.returncode == 0 and len(warn) == 1 and "8750 duplicate elements" in warn[0] and dup in warn[0],
+          "clvr-convert: duplicates said once, on one line", r.stderr.strip(), "... 8750 duplicate elements ...")
+    r = convert([dup, os.path.join(tmp, "q.bin"), "--quiet"], tmp)
+    check(r.returncode == 0 and r.stderr == "" and r.stdout == "", "clvr-convert --quiet prints nothing",
+          (r.stdout, r.stderr), ("", ""))
+    if not os.access(CLVR, os.X_OK):
+        return
+    png = os.path.join(tmp, "w.png")
+    base = ["--size", "16x16", "--spp", "1", "-o", png]
+    for mesh, what in ((out, "8750 duplicate elements"), (None, "10462 inverted elements")):
+        if mesh is None:
+            x = vtk.vtkXMLUnstructuredGridReader()
+            x.SetFileName(os.path.join(DATA, "vtk/fire_ug.vtu"))
+            x.Update()
+            mesh = os.path.join(tmp, "fire_legacy.vtk")
+            w = vtk.vtkUnstructuredGridWriter()
+            w.SetFileName(mesh)
+            w.SetInputData(x.GetOutput())
+            w.SetFileTypeToBinary()
+            w.Write()
+        r = subprocess.run([CLVR, mesh] + base, capture_output=True, text=True, timeout=300)
+        if r.returncode != 0 and "device" in r.stderr.lower():
+            print(f"note: no OpenCL device for the render warnings: {r.stderr.strip()[:120]}")
+            return
+        warn = [ln for ln in r.stderr.splitlines() if "warning" in ln and what in ln]
+        check(r.returncode == 0 and len(warn) == 1, f"clvr {os.path.basename(mesh)}: '{what}' warned once",
+              r.stderr.strip()[:300], what)
+        r = subprocess.run([CLVR, mesh, "--quiet"] + base, capture_output=True, text=True, timeout=300)
+        check(r.returncode == 0 and r.stderr == "", f"clvr --quiet {os.path.basename(mesh)}: no warning",
+              r.stderr.strip()[:300], "")
+
+
+HEX_FACES = ((0, 4, 7, 3), (1, 2, 6, 5), (0, 1, 5, 4), (3, 7, 6, 2), (0, 3, 2, 1), (4, 5, 6, 7))
+
+
+def png_pixels(path):
+    r = vtk.vtkPNGReader()
+    r.SetFileName(path)
+    r.Update()
+    return ns.vtk_to_numpy(r.GetOutput().GetPointData().GetScalars()).astype(np.float64)
+
+
+def test_polyhedra(tmp):
+    """fire_ug.vtu's 10,462 hexes written by VTK as polyhedron cells (type 42) in legacy
+    .vtk, as OpenFOAM's foamToVTK -legacy writes its polyhedra (4.2 classic cells and
+    5.1 offsets): clvr reads them directly, decomposes each (3 pyramids per hex), says
+    how many, leaves no hole, and renders what the hexes render."""
+    x = vtk.vtkXMLUnstructuredGridReader()
+    x.SetFileName(os.path.join(DATA, "vtk/fire_ug.vtu"))
+    x.Update()
+    src = x.GetOutput()
+    poly = vtk.vtkUnstructuredGrid()
+    poly.SetPoints(src.GetPoints())
+    poly.GetPointData().ShallowCopy(src.GetPointData())
+    ids = vtk.vtkIdList()
+    for c in range(src.GetNumberOfCells()):
+        cell = src.GetCell(c)
+        p = [cell.GetPointId(i) for i in range(8)]
+        ids.Reset()
+        ids.InsertNextId(6)
+        for f in HEX_FACES:
+            ids.InsertNextId(4)
+            for k in f:
+                ids.InsertNextId(p[k])
+        poly.InsertNextCell(vtk.VTK_POLYHEDRON, ids)
+    hexes = os.path.join(tmp, "fire_hex.vtk")
+    w = vtk.vtkUnstructuredGridWriter()
+    w.SetFileName(hexes)
+    w.SetInputData(src)
+    w.SetFileTypeToBinary()
+    w.Write()
+    if not os.access(CLVR, os.X_OK):
+        return
+    ref = None
+    for version in (42, 51):
+        path = os.path.join(tmp, f"fire_poly{version}.vtk")
+        w = vtk.vtkUnstructuredGridWriter()
+        w.SetFileName(path)
+        w.SetInputData(poly)
+        w.SetFileTypeToBinary()
+        if version == 42:
+            w.SetFileVersion(42)
+        w.Write()
+        r = clvr_info(path)
+        tokens = r.stdout.split()
+        check(r.returncode == 0 and "decomposed" in tokens and tokens[tokens.index("decomposed") + 1] == "10462"
+              and tokens[tokens.index("pyramids") + 1] == "31386" and "left out" not in r.stdout,
+              f"polyhedra {version}: clvr --info: 10462 decomposed into 31386 pyramids, none left out",
+              (r.returncode, r.stdout[:400], r.stderr.strip()), "decomposed 10462")
+        png = os.path.join(tmp, f"poly{version}.png")
+        args = ["--size", "48x48", "--spp", "2", "-o", png]
+        r = subprocess.run([CLVR, path] + args, capture_output=True, text=True, timeout=300)
+        if r.returncode != 0 and "device" in r.stderr.lower():
+            print(f"note: no OpenCL device for the polyhedra render: {r.stderr.strip()[:120]}")
+            return
+        check(r.returncode == 0 and "10462 polyhedra decomposed" in r.stderr and "left out" not in r.stderr
+              and "inverted" not in r.stderr and "degenerate" not in r.stderr,
+              f"polyhedra {version}: rendered, decomposition said, no hole, no inverted element",
+              r.stderr.strip()[-400:], "... 10462 polyhedra decomposed ...")
+        if ref is None:
+            hpng = os.path.join(tmp, "hex.png")
+            r = subprocess.run([CLVR, hexes, "--quiet"] + args[:-1] + [hpng], capture_output=True, text=True,
+                               timeout=300)
+            ref = png_pixels(hpng) if r.returncode == 0 else None
+        if ref is not None and os.path.exists(png):
+            diff = float(np.abs(png_pixels(png) - ref).mean())
+            check(diff < 2.0, f"polyhedra {version}: the image matches the hexes' (mean |diff| of 255)",
+                  diff, "< 2")
+
+
+def exodus_time_steps(tmp):
+    """Exodus II with 3 time steps (fire_ug.vtu with t + 100 * time, written by
+    vtkExodusIIWriter from a temporal source): one .bin per step, one warning line."""
+    from vtk.util.vtkAlgorithm import VTKPythonAlgorithmBase
+    base = vtk_read(os.path.join(DATA, "vtk/fire_ug.vtu"))
+    t0 = ns.vtk_to_numpy(base.GetPointData().GetArray("t")).astype(np.float64)
+    times = [0.0, 1.0, 2.0]
+    sddp = vtk.vtkStreamingDemandDrivenPipeline
+
+    class Source(VTKPythonAlgorithmBase):
+        def __init__(self):
+            VTKPythonAlgorithmBase.__init__(self, nInputPorts=0, nOutputPorts=1,
+                                            outputType="vtkUnstructuredGrid")
+
+        def RequestInformation(self, request, in_info, out_info):
+            info = out_info.GetInformationObject(0)
+            for t in times:
+                info.Append(sddp.TIME_STEPS(), t)
+            info.Append(sddp.TIME_RANGE(), times[0])
+            info.Append(sddp.TIME_RANGE(), times[-1])
+            return 1
+
+        def RequestData(self, request, in_info, out_info):
+            info = out_info.GetInformationObject(0)
+            t = info.Get(sddp.UPDATE_TIME_STEP()) if info.Has(sddp.UPDATE_TIME_STEP()) else 0.0
+            out = vtk.vtkUnstructuredGrid.GetData(out_info)
+            out.DeepCopy(base)
+            a = ns.numpy_to_vtk(t0 + 100.0 * t, deep=1)
+            a.SetName("t")
+            out.GetPointData().RemoveArray("t")
+            out.GetPointData().AddArray(a)
+            return 1
+
+    src = os.path.join(tmp, "fire_t.exo")
+    alg = Source()  # kept alive while the writer pulls from it
+    w = vtk.vtkExodusIIWriter()
+    w.SetFileName(src)
+    w.SetInputConnection(alg.GetOutputPort())
+    w.WriteAllTimeStepsOn()
+    w.Write()
+    out = os.path.join(tmp, "exo_t.bin")
+    r = convert([src, out, "--scalar", "t"], tmp)
+    steps = [os.path.join(tmp, f"exo_t.{i:04d}.bin") for i in range(3)]
+    ok = r.returncode == 0 and all(os.path.isfile(p) for p in steps) and os.path.isfile(out + ".series")
+    warn = [ln for ln in r.stderr.splitlines() if "warning" in ln]
+    check(ok and len(warn) == 1 and "10462 inverted" in warn[0] and "2 more steps" in warn[0],
+          "Exodus with 3 time steps: 3 .bin and a .series, the inverted hexes said once",
+          (r.returncode, r.stderr.strip()), "one warning line")
+    if ok:
+        maxes = [float(read_bin(p)[0].scalars.max()) for p in steps]
+        check(np.allclose(maxes, [t0.max() + 100 * t for t in times], rtol=1e-6),
+              "Exodus time steps: each step holds its own t", maxes, "t + 100 * time")
+
+
+def test_series(tmp):
+    """A time series of real data (post.vtk's Pressure times 1, 2, 3 at times 0, 0.5, 1,
+    written by VTK as .vtu files with a ParaView .pvd and a .vtu.series) converts to one
+    .bin per step plus OUT.bin.series; clvr renders it to numbered frames with one range
+    over all steps (--range auto-all) and one camera; a missing step leaves nothing."""
+    import json
+    rd = vtk.vtkUnstructuredGridReader()
+    rd.SetFileName(os.path.join(DATA, "vtk/post.vtk"))
+    rd.Update()
+    base = rd.GetOutput()
+    pres = ns.vtk_to_numpy(base.GetPointData().GetArray("Pressure")).astype(np.float64)
+    sdir = os.path.join(tmp, "series")
+    os.makedirs(sdir)
+    names = []
+    for i in range(3):
+        g = vtk.vtkUnstructuredGrid()
+        g.DeepCopy(base)
+        a = ns.numpy_to_vtk(pres * (i + 1), deep=1)
+        a.SetName("Pressure")
+        g.GetPointData().RemoveArray("Pressure")
+        g.GetPointData().AddArray(a)
+        names.append(f"post_{i}.vtu")
+        w = vtk.vtkXMLUnstructuredGridWriter()
+        w.SetFileName(os.path.join(sdir, names[-1]))
+        w.SetInputData(g)
+        w.Write()
+    pvd = os.path.join(sdir, "post.pvd")
+    with open(pvd, "w") as f:
+        f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n')
+        for i, n in enumerate(names):
+            f.write(f'<DataSet timestep="{i * 0.5}" part="0" file="{n}"/>\n')
+        f.write("</Collection></VTKFile>\n")
+    jser = os.path.join(sdir, "post.vtu.series")
+    with open(jser, "w") as f:
+        json.dump({"file-series-version": "1.0",
+                   "files": [{"name": n, "time": i * 0.5} for i, n in enumerate(names)]}, f)
+    outs = {}
+    for src, stem in ((pvd, "pvd"), (jser, "json")):
+        out = os.path.join(tmp, f"{stem}.bin")
+        r = convert([src, out, "--quiet"], tmp)
+        series = out + ".series"
+        steps = [os.path.join(tmp, f"{stem}.{i:04d}.bin") for i in range(3)]
+        ok = r.returncode == 0 and os.path.isfile(series) and all(os.path.isfile(p) for p in steps)
+        check(ok, f"{os.path.basename(src)}: 3 steps and a .series written", (r.returncode, r.stderr.strip()), "0")
+        if not ok:
+            return
+        with open(series) as f:
+            doc = json.load(f)
+        check([e["name"] for e in doc["files"]] == [os.path.basename(p) for p in steps]
+              and [e["time"] for e in doc["files"]] == [0.0, 0.5, 1.0],
+              f"{os.path.basename(series)}: names and times", doc, "0000..0002 at 0, 0.5, 1")
+        maxes = [float(read_bin(p)[0].scalars.max()) for p in steps]
+        check(np.allclose(maxes, [pres.max() * k for k in (1, 2, 3)], rtol=1e-6),
+              f"{os.path.basename(src)}: each step holds its own values", maxes, "x1, x2, x3")
+        outs[stem] = series
+    # A step that cannot be read: exit 1, one line, nothing written.
+    bad = os.path.join(sdir, "bad.pvd")
+    with open(bad, "w") as f:
+        f.write('<VTKFile type="Collection"><Collection><DataSet timestep="0" file="post_0.vtu"/>'
+                '<DataSet timestep="1" file="missing.vtu"/></Collection></VTKFile>\n')
+    r = convert([bad, os.path.join(tmp, "bad.bin")], tmp)
+    left = [f for f in os.listdir(tmp) if f.startswith("bad.")]
+    check(r.returncode == 1 and "missing.vtu" in r.stderr and not left,
+          "a series with a missing step: exit 1, names it, writes nothing", (r.returncode, r.stderr, left),
+          (1, "missing.vtu", []))
+    exodus_time_steps(tmp)
+    if not os.access(CLVR, os.X_OK):
+        return
+    frame = os.path.join(tmp, "frame.png")
+    r = subprocess.run([CLVR, outs["pvd"], "-o", frame, "--size", "32x32", "--spp", "2"],
+                       capture_output=True, text=True, timeout=300)
+    if r.returncode != 0 and "device" in r.stderr.lower():
+        print(f"note: no OpenCL device for the series render: {r.stderr.strip()[:120]}")
+        return
+    frames = [os.path.join(tmp, f"frame.{i:04d}.png") for i in range(3)]
+    want = f"one range [{np.float32(pres.min()):g}, {np.float32(pres.max() * 3):g}]"
+    check(r.returncode == 0 and all(os.path.isfile(p) for p in frames) and want in r.stderr,
+          "clvr renders the series to frame.0000..0002.png with one range over all steps",
+          (r.returncode, r.stderr.strip()[-600:]), want)
+    if all(os.path.isfile(p) for p in frames):
+        a, c = png_pixels(frames[0]), png_pixels(frames[2])
+        check(float(np.abs(a - c).mean()) > 1.0, "the fixed range shows the field growing: frames differ",
+              float(np.abs(a - c).mean()), "> 1")
+    r = subprocess.run([CLVR, outs["json"], "--orbit", "3"], capture_output=True, text=True, timeout=60)
+    check(r.returncode == 2 and "--orbit" in r.stderr, "a series with --orbit: usage error", r.stderr.strip(), 2)
+
+
+def test_cell_data_flat(tmp):
+    """kiefer_tet10.vtu's von Mises stress is cell data: by default clvr renders it
+    averaged onto the vertices (a narrower range); --cell-data flat renders each
+    element's own value, so the range is exactly VTK's cell range and the image differs."""
+    src = os.path.join(DATA, "vtk/kiefer_tet10.vtu")
+    out = os.path.join(tmp, "kiefer_flat.bin")
+    r = convert([src, out, "--quiet"], tmp)
+    if not check(r.returncode == 0, "kiefer_tet10.vtu converts", r.stderr.strip(), "") or \
+            not os.access(CLVR, os.X_OK):
+        return
+    cells = vtk_read(src).GetCellData()
+    lo, hi = cells.GetArray(0).GetRange(0)
+    ra, rf = clvr_info(out), clvr_info(out, "--cell-data", "flat")
+    _, alo, ahi = info_scalar_range(ra.stdout)
+    _, flo, fhi = info_scalar_range(rf.stdout)
+    check(rf.returncode == 0 and abs(flo - lo) <= 1e-5 * abs(lo) + 1e-7 and abs(fhi - hi) <= 1e-5 * abs(hi)
+          and "flat" in rf.stdout, "--cell-data flat: the range is the cells' own", (flo, fhi), (lo, hi))
+    check(ra.returncode == 0 and ahi < hi * 0.99 and "averaged" in ra.stdout,
+          "default: cell data averaged to the vertices (narrower range), and --info says so", (alo, ahi),
+          f"max < {hi}")
+    pngs = []
+    for extra in ([], ["--cell-data", "flat"]):
+        png = os.path.join(tmp, f"kiefer{len(extra)}.png")
+        r = subprocess.run([CLVR, out, "--quiet", "--size", "48x48", "--spp", "2", "-o", png] + extra,
+                           capture_output=True, text=True, timeout=300)
+        if r.returncode != 0 and "device" in r.stderr.lower():
+            print(f"note: no OpenCL device for the flat render: {r.stderr.strip()[:120]}")
+            return
+        check(r.returncode == 0, f"clvr {' '.join(extra) or 'default'} renders kiefer", r.stderr.strip(), "")
+        pngs.append(png)
+    if all(os.path.isfile(p) for p in pngs):
+        diff = float(np.abs(png_pixels(pngs[0]) - png_pixels(pngs[1])).mean())
+        check(diff > 0.2, "flat and averaged cell data render differently", diff, "> 0.2")
+
+
 def main():
     if not os.path.isfile(CONVERT):
         print(f"FAIL no converter at {CONVERT}")
@@ -623,6 +1081,11 @@ def main():
         test_errors(tmp)
         test_list(tmp)
         test_output_name_and_avs(tmp)
+        test_fields(tmp)
+        test_warnings_once(tmp)
+        test_polyhedra(tmp)
+        test_series(tmp)
+        test_cell_data_flat(tmp)
         skipped = sorted(os.path.relpath(p, DATA) for p in glob.glob(os.path.join(DATA, "*", "*"))
                          if p.endswith(".umesh"))
         print(f"not VTK-readable, skipped: {', '.join(skipped)}")

@@ -3,6 +3,7 @@
  * bit for bit; every kind of broken input returns its specific status and a
  * message naming the file and the problem, never a crash. */
 #include "mesh_io.h"
+#include "series.h"
 #include "test_util.h"
 
 #include <errno.h>
@@ -244,9 +245,9 @@ static void test_bin_broken(void)
     TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "magic.bin", NULL, &back, &err), CLVR_ERR_BAD_MAGIC, &err);
     CHECK_MSG(err, "magic.bin", "CLVRMESH");
     memcpy(b, good, n);
-    b[8] = 2;
+    b[8] = 3;
     TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "ver.bin", NULL, &back, &err), CLVR_ERR_BAD_VERSION, &err);
-    CHECK_MSG(err, "ver.bin", "version is 2");
+    CHECK_MSG(err, "ver.bin", "version is 3");
     write_file(tmp_path("ver.bin"), b, n);
     TU_CHECK_STATUS(clvr_mesh_load(tmp_path("ver.bin"), NULL, &back, &err), CLVR_ERR_BAD_VERSION, &err);
     memcpy(b, good, n);
@@ -440,7 +441,7 @@ static void test_vtk_files(void)
     opt.scalar_name = "pressure";
     TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
     CHECK_MSG(err, "uGridEx.vtk", "'pressure'");
-    TU_CHECK(strstr(err.msg, "'scalars'") && strstr(err.msg, "'vectors'"));
+    TU_CHECK(strstr(err.msg, "point:scalars") && strstr(err.msg, "point:vectors"));
 }
 
 /* A 5-point, 2-tet mesh plus a vertex cell, classic CELLS layout. */
@@ -646,7 +647,7 @@ static void test_vtk_synthetic(void)
     CHECK_MSG(err, "offs.vtk", "OFFSETS");
     /* Unknown name lists both associations. */
     TU_CHECK_STATUS(parse_str(vtk_classic, "names.vtk", "q", &b, &err), CLVR_ERR_BAD_FIELD, &err);
-    CHECK_MSG(err, "names.vtk", "'s' (point), 'c' (cell)");
+    CHECK_MSG(err, "names.vtk", "point:s, cell:c");
 
     /* Truncation sweep: every prefix before the last point value fails;
      * cuts inside POINTS say TRUNCATED. No prefix may crash. */
@@ -871,6 +872,353 @@ static void test_fuzz_smoke(void)
     for (int f = 0; f < 5; ++f) free(files[f]);
 }
 
+/* A hexagonal prism as a VTK polyhedron (type 42, the face stream OpenFOAM's
+ * foamToVTK -legacy writes) beside a tet. */
+static const char vtk_poly[] =
+    "# vtk DataFile Version 4.2\n"
+    "polyhedra\n"
+    "ASCII\n"
+    "DATASET UNSTRUCTURED_GRID\n"
+    "POINTS 13 float\n"
+    "1.0 0.0 0\n"
+    "0.5 0.866025 0\n"
+    "-0.5 0.866025 0\n"
+    "-1.0 0.0 0\n"
+    "-0.5 -0.866025 0\n"
+    "0.5 -0.866025 0\n"
+    "1.0 0.0 1\n"
+    "0.5 0.866025 1\n"
+    "-0.5 0.866025 1\n"
+    "-1.0 0.0 1\n"
+    "-0.5 -0.866025 1\n"
+    "0.5 -0.866025 1\n"
+    "0 0 2\n"
+    "CELLS 2 51\n"
+    "45 8 6 5 4 3 2 1 0 6 6 7 8 9 10 11 4 0 1 7 6 4 1 2 8 7 4 2 3 9 8 4 3 4 10 9 4 4 5 11 10 4 5 0 6 11\n"
+    "4 6 7 8 12\n"
+    "CELL_TYPES 2\n"
+    "42 10\n"
+    "POINT_DATA 13\n"
+    "SCALARS s float\n"
+    "LOOKUP_TABLE default\n"
+    "0 1 2 3 4 5 6 7 8 9 10 11 12\n"
+    "CELL_DATA 2\n"
+    "SCALARS c float\n"
+    "LOOKUP_TABLE default\n"
+    "10 20\n";
+
+static double tet_vol(const clvr_mesh *m, const uint32_t *t)
+{
+    const float *a = m->positions + 3 * t[0], *b = m->positions + 3 * t[1], *c = m->positions + 3 * t[2],
+                *d = m->positions + 3 * t[3];
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+        w[k] = d[k] - a[k];
+    }
+    return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])) /
+           6.0;
+}
+
+/* Polyhedra are decomposed on load into positively oriented tets and
+ * pyramids that fill exactly the cell's volume; broken face streams fail. */
+static void test_vtk_polyhedra(void)
+{
+    clvr_mesh m = {0};
+    clvr_error err = {0};
+    char buf[2048];
+    TU_CHECK_STATUS(parse_str(vtk_poly, "poly.vtk", NULL, &m, &err), CLVR_OK, &err);
+    TU_CHECK_EQ_U64(m.decomposed_cells, 1);
+    TU_CHECK_EQ_U64(m.skipped_cells, 0);
+    TU_CHECK_EQ_U64(m.num_cells[CLVR_CELL_TET], 5);     /* the file's tet, then the top hexagon's fan of 4 */
+    TU_CHECK_EQ_U64(m.num_cells[CLVR_CELL_PYRAMID], 4); /* the 4 side quads away from the apex */
+    double vol = 0.0, worst = 1.0;
+    for (uint64_t e = 1; e < m.num_cells[0]; ++e) {
+        double v = tet_vol(&m, m.indices[0] + 4 * e);
+        vol += v;
+        worst = v < worst ? v : worst;
+    }
+    for (uint64_t e = 0; e < m.num_cells[1]; ++e) {
+        const uint32_t *q = m.indices[1] + 5 * e;
+        /* VTK's pyramid: base (0,1,2,3) counterclockwise seen from the apex, so the
+         * tets (0,1,2,4) and (0,2,3,4) are positive. */
+        const uint32_t t1[4] = {q[0], q[1], q[2], q[4]}, t2[4] = {q[0], q[2], q[3], q[4]};
+        double v1 = tet_vol(&m, t1), v2 = tet_vol(&m, t2);
+        vol += v1 + v2;
+        worst = v1 < worst ? v1 : worst;
+        worst = v2 < worst ? v2 : worst;
+    }
+    TU_CHECK_NEAR(vol, 1.5 * sqrt(3.0), 1e-5); /* hexagon area 3*sqrt(3)/2, height 1 */
+    TU_CHECK(worst > 0.0);
+    clvr_mesh_free(&m);
+    /* Cell data: the polyhedron's value counts once per distinct vertex. */
+    TU_CHECK_STATUS(parse_str(vtk_poly, "poly.vtk", "cell:c", &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 10.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[6], 15.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[12], 20.0, 1e-6);
+    clvr_mesh_free(&m);
+    /* --cell-data flat: the polyhedron's 8 pieces carry 10, the tet 20. */
+    {
+        clvr_load_options opt = {0};
+        opt.scalar_name = "c";
+        opt.cell_flat = 1;
+        TU_CHECK_STATUS(clvr_mesh_parse_vtk(vtk_poly, strlen(vtk_poly), "flat.vtk", &opt, &m, &err), CLVR_OK, &err);
+        TU_CHECK_EQ_U64(m.num_vertices, 5 * 4 + 4 * 5);
+        TU_CHECK(m.cell_flat);
+        for (uint32_t k = 0; k < 4; ++k) TU_CHECK_NEAR(m.scalars[m.indices[0][k]], 20.0, 0.0); /* the file's tet first */
+        for (uint64_t k = 4; k < 4 * m.num_cells[0]; ++k) TU_CHECK_NEAR(m.scalars[m.indices[0][k]], 10.0, 0.0);
+        for (uint64_t k = 0; k < 5 * m.num_cells[1]; ++k) TU_CHECK_NEAR(m.scalars[m.indices[1][k]], 10.0, 0.0);
+        clvr_mesh_free(&m);
+    }
+    /* Broken streams. */
+    edit(buf, sizeof buf, vtk_poly, "45 8 6 5", "45 3 6 5");
+    TU_CHECK_STATUS(parse_str(buf, "few.vtk", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "few.vtk", "faces");
+    edit(buf, sizeof buf, vtk_poly, "45 8 6 5", "45 8 60 5");
+    TU_CHECK_STATUS(parse_str(buf, "past.vtk", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "past.vtk", "runs past");
+    edit(buf, sizeof buf, vtk_poly, "4 5 0 6 11", "4 5 0 6 99");
+    TU_CHECK_STATUS(parse_str(buf, "idx.vtk", NULL, &m, &err), CLVR_ERR_BAD_INDEX, &err);
+    CHECK_MSG(err, "idx.vtk", "99");
+}
+
+/* --scalar on a legacy .vtk: point:/cell: when both share a name, a vector
+ * component or its magnitude (uGridEx.vtk's 'vectors', VTK's own file),
+ * and the field table --info prints. */
+static void test_fields_vtk(void)
+{
+    clvr_mesh m = {0};
+    clvr_error err = {0};
+    char buf[2048];
+    /* Cell data named like the point data: both reachable. */
+    edit(buf, sizeof buf, vtk_classic, "SCALARS c double 1", "SCALARS s double 1");
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "point:s", &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 0.5, 1e-6);
+    TU_CHECK(m.num_fields == 2 && m.fields[m.scalar_field].association == CLVR_FIELD_POINT);
+    clvr_mesh_free(&m);
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "s", &m, &err), CLVR_OK, &err); /* unprefixed: the point array */
+    TU_CHECK_NEAR(m.scalars[0], 0.5, 1e-6);
+    clvr_mesh_free(&m);
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "cell:s", &m, &err), CLVR_OK, &err);
+    /* vertex 0 is in tet 0 only (10); vertex 1 in tets 0 and 1 (15); vertex 4 in tet 1 and the vertex cell,
+     * which is left out: 20 */
+    TU_CHECK_NEAR(m.scalars[0], 10.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[1], 15.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[4], 20.0, 1e-6);
+    TU_CHECK(m.fields[m.scalar_field].association == CLVR_FIELD_CELL);
+    clvr_mesh_free(&m);
+    {
+        clvr_load_options fo = {0};
+        fo.scalar_name = "cell:s";
+        fo.cell_flat = 1; /* the vertex cell is left out: 2 tets, 8 vertices */
+        TU_CHECK_STATUS(clvr_mesh_parse_vtk(buf, strlen(buf), "flat.vtk", &fo, &m, &err), CLVR_OK, &err);
+        TU_CHECK(m.num_vertices == 8 && m.scalars[0] == 10.0f && m.scalars[7] == 20.0f && m.cell_flat);
+        clvr_mesh_free(&m);
+    }
+    TU_CHECK_STATUS(parse_str(buf, "both.vtk", "cell:nope", &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "both.vtk", "point:s, cell:s");
+
+    /* Vector components of uGridEx.vtk: x, y, z add up to the file's sums. */
+    clvr_load_options opt = {0};
+    double sum[3];
+    const char *names[3] = {"vectors:x", "vectors:y", "vectors:z"};
+    for (int k = 0; k < 3; ++k) {
+        opt.scalar_name = names[k];
+        TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_OK, &err);
+        sum[k] = scalar_sum(&m);
+        TU_CHECK(m.scalar_component == k && strcmp(m.scalar_name, names[k]) == 0);
+        clvr_mesh_free(&m);
+    }
+    /* uGridEx's vectors are (1,0,0) at 8 points and (0,0,1) ... : each component sums to what VTK reads. */
+    TU_CHECK(sum[0] + sum[1] + sum[2] > 0.0);
+    opt.scalar_name = "vectors:3";
+    TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "uGridEx.vtk", "3 components");
+    opt.scalar_name = "scalars:x";
+    TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "uGridEx.vtk", "1 component");
+    /* --info's table: every array with its range on request. */
+    opt.scalar_name = NULL;
+    opt.field_ranges = 1;
+    TU_CHECK_STATUS(clvr_mesh_load(data_path("vtk/uGridEx.vtk"), &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_fields == 2 && m.fields[1].components == 3 && m.fields[1].has_range && m.fields[0].has_range);
+    TU_CHECK(strcmp(m.fields[0].name, "scalars") == 0 && strcmp(m.fields[1].name, "vectors") == 0);
+    clvr_mesh_free(&m);
+}
+
+/* A version 2 .bin built by hand from docs/bin-format.md: two tets sharing
+ * a face, point field "s", cell field "s", point vector "vel". */
+typedef struct v2field {
+    const char *name;
+    uint32_t assoc, ncomp;
+    const float *data;
+} v2field;
+
+static size_t make_v2(uint8_t *b, size_t cap, const v2field *f, uint32_t nf)
+{
+    static const float pos[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    static const uint32_t tets[8] = {0, 1, 2, 3, 1, 2, 3, 4};
+    size_t n = 256;
+    memset(b, 0, cap);
+    memcpy(b, "CLVRMESH", 8);
+    uint32_t u = 2;
+    memcpy(b + 8, &u, 4);
+    u = 256;
+    memcpy(b + 12, &u, 4);
+    uint64_t q = 5;
+    memcpy(b + 16, &q, 8);
+    q = 2;
+    memcpy(b + 24, &q, 8);
+    memcpy(b + 156, &nf, 4);
+    memcpy(b + n, pos, sizeof pos);
+    n += sizeof pos;
+    memcpy(b + n, tets, sizeof tets);
+    n += sizeof tets;
+    for (uint32_t i = 0; i < nf; ++i, n += 128) {
+        memcpy(b + n, f[i].name, strlen(f[i].name));
+        memcpy(b + n + 64, &f[i].assoc, 4);
+        memcpy(b + n + 68, &f[i].ncomp, 4);
+    }
+    for (uint32_t i = 0; i < nf; ++i) {
+        size_t bytes = (f[i].assoc ? 2u : 5u) * f[i].ncomp * sizeof(float);
+        memcpy(b + n, f[i].data, bytes);
+        n += bytes;
+    }
+    return n;
+}
+
+static void test_fields_bin(void)
+{
+    static const float ps[5] = {1, 2, 3, 4, 5}, cs[2] = {10, 30};
+    static const float vel[15] = {3, 4, 0, 0, 1, 0, 0, 0, 2, 1, 1, 1, 0, 0, 0};
+    const v2field fields[3] = {{"s", 0, 1, ps}, {"s", 1, 1, cs}, {"vel", 0, 3, vel}};
+    uint8_t b[2048], c[2048];
+    clvr_mesh m = {0};
+    clvr_error err = {0};
+    clvr_load_options opt = {0};
+    size_t n = make_v2(b, sizeof b, fields, 3);
+    /* Default: the first field. */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "v2.bin", NULL, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_fields == 3 && m.scalar_field == 0 && strcmp(m.scalar_name, "s") == 0);
+    TU_CHECK_NEAR(scalar_sum(&m), 15.0, 1e-6);
+    TU_CHECK(clvr_mesh_num_elements(&m) == 2 && m.indices[0][7] == 4);
+    clvr_mesh_free(&m);
+    /* cell:s averaged: vertex 0 only in tet 0 (10), 1..3 in both (20), 4 in tet 1 (30). */
+    opt.scalar_name = "cell:s";
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "v2.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 10.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[2], 20.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[4], 30.0, 1e-6);
+    TU_CHECK(m.fields[m.scalar_field].association == CLVR_FIELD_CELL);
+    clvr_mesh_free(&m);
+    /* A vector: magnitude by default, a component on request; the file loader agrees. */
+    opt.scalar_name = "vel";
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "v2.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 5.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[3], sqrt(3.0), 1e-6);
+    clvr_mesh_free(&m);
+    write_file(tmp_path("v2.bin"), b, n);
+    opt.scalar_name = "vel:y";
+    TU_CHECK_STATUS(clvr_mesh_load(tmp_path("v2.bin"), &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_NEAR(m.scalars[0], 4.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[1], 1.0, 1e-6);
+    TU_CHECK(strcmp(m.scalar_name, "vel:y") == 0);
+    clvr_mesh_free(&m);
+    opt.scalar_name = "pressure";
+    TU_CHECK_STATUS(clvr_mesh_load(tmp_path("v2.bin"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "v2.bin", "point:s, cell:s, point:vel (vector)");
+
+    /* Broken tables: exact status and a message naming the field. */
+    for (size_t k = 257; k < n; k += 7) { /* every cut fails, none crashes */
+        clvr_status s = clvr_mesh_parse_bin(b, k, "cut2.bin", NULL, &m, &err);
+        if (s != CLVR_ERR_TRUNCATED) {
+            TU_CHECK_STATUS(s, CLVR_ERR_TRUNCATED, &err);
+            break;
+        }
+    }
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 128 + 64] = 2; /* field 1 association */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "assoc.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "assoc.bin", "association");
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 68] = 0; /* field 0: 0 components */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "comp.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "comp.bin", "components");
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 128 + 64] = 0; /* field 1 becomes a second point "s" */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "dup.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "dup.bin", "both point data named 's'");
+    memcpy(c, b, n);
+    c[156 + 1] = 0x20; /* num_fields 8195 */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "many.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "many.bin", "num_fields");
+    memcpy(c, b, n);
+    c[156] = 2; /* 2 fields declared, 3 there: trailing bytes */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "trail.bin", NULL, &m, &err), CLVR_ERR_FORMAT, &err);
+    CHECK_MSG(err, "trail.bin", "trailing");
+    memcpy(c, b, n);
+    c[256 + 60 + 32 + 100] = 1; /* reserved byte of field 0 */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(c, n, "resv.bin", NULL, &m, &err), CLVR_ERR_BAD_FIELD, &err);
+    CHECK_MSG(err, "resv.bin", "reserved");
+    /* --cell-data flat: each tet gets its own 4 vertices carrying its value. */
+    n = make_v2(b, sizeof b, fields, 3);
+    opt.scalar_name = "cell:s";
+    opt.cell_flat = 1;
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "flat.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK_EQ_U64(m.num_vertices, 8);
+    TU_CHECK(m.cell_flat && m.scalar_min == 10.0f && m.scalar_max == 30.0f);
+    for (uint32_t k = 0; k < 8; ++k) {
+        TU_CHECK(m.indices[0][k] == k);
+        TU_CHECK_NEAR(m.scalars[k], k < 4 ? 10.0 : 30.0, 0.0);
+    }
+    TU_CHECK_NEAR(m.positions[3 * 7 + 0], 1.0, 0.0); /* tet 1's last corner is vertex 4 (1, 1, 1) */
+    clvr_mesh_free(&m);
+    opt.scalar_name = "vel"; /* a point field: flat changes nothing */
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "flat.bin", &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_vertices == 5 && !m.cell_flat);
+    clvr_mesh_free(&m);
+    opt.cell_flat = 0;
+    /* No fields: loads with scalars 0. */
+    n = make_v2(b, sizeof b, fields, 0);
+    TU_CHECK_STATUS(clvr_mesh_parse_bin(b, n, "none.bin", NULL, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.num_fields == 0 && m.scalar_max == 0.0f);
+    clvr_mesh_free(&m);
+}
+
+/* .series files (clvr-convert writes them for time series). */
+static void test_series_files(void)
+{
+    char **paths = NULL;
+    double *times = NULL;
+    uint32_t n = 0;
+    clvr_error err = {0};
+    const char *good = "{\"file-series-version\": \"1.0\", \"files\": [{\"name\": \"a.0000.bin\", \"time\": 0.5},"
+                       " {\"name\": \"/abs/b.bin\", \"time\": 2}]}";
+    write_file(tmp_path("s.bin.series"), good, strlen(good));
+    TU_CHECK(clvr_series_is(tmp_path("s.bin.series")) && !clvr_series_is("s.bin"));
+    TU_CHECK_STATUS(clvr_series_read(tmp_path("s.bin.series"), &paths, &times, &n, &err), CLVR_OK, &err);
+    TU_CHECK(n == 2 && times[0] == 0.5 && times[1] == 2.0);
+    TU_CHECK(n == 2 && strcmp(paths[1], "/abs/b.bin") == 0 && strstr(paths[0], "/a.0000.bin") &&
+             strncmp(paths[0], tmp_dir, strlen(tmp_dir)) == 0); /* relative to the series' folder */
+    clvr_series_free(paths, times, n);
+    const struct {
+        const char *text, *says;
+    } bad[] = {
+        {"{\"files\": []}", "not a series file"},
+        {"[1, 2]", "not a series file"},
+        {"{\"files\": [{\"time\": 1}]}", "\"name\""},
+        {"{\"files\": [{\"name\": 3}]}", "\"name\""},
+        {"{\"files\": [", "bad.series"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        write_file(tmp_path("bad.series"), bad[i].text, strlen(bad[i].text));
+        TU_CHECK(clvr_series_read(tmp_path("bad.series"), &paths, &times, &n, &err) != CLVR_OK);
+        CHECK_MSG(err, "bad.series", bad[i].says);
+        TU_CHECK(paths == NULL && n == 0);
+    }
+}
+
 int main(void)
 {
     snprintf(tmp_dir, sizeof tmp_dir, "/tmp/clvr_test_loaders.%ld", (long)getpid());
@@ -884,6 +1232,10 @@ int main(void)
     test_vtk_files();
     test_vtk_synthetic();
     test_umesh();
+    test_fields_vtk();
+    test_vtk_polyhedra();
+    test_series_files();
+    test_fields_bin();
     test_fuzz_smoke();
     char cmd[600];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);

@@ -553,11 +553,12 @@ clvr_status clvr_dataset_view(const clvr_dataset *ds, const char *field, clvr_me
 {
     int i;
     clvr_status s = lookup_field(ds, "clvr_dataset_view", field, &i, err);
-    if (s == CLVR_OK) {
+    if (s != CLVR_OK) return s;
+    if (ds->loaded.positions && i == 0)
+        *out = ds->loaded; /* a file's mesh as its loader left it: its fields, skipped cells, ... */
+    else
         mesh_view(ds, (uint32_t)i, out);
-        out->skipped_cells = ds->loaded.skipped_cells;
-    }
-    return s;
+    return CLVR_OK;
 }
 
 /* --- tracer --------------------------------------------------------------- */

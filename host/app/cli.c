@@ -16,7 +16,9 @@ void clvr_cli_print_help(FILE *out)
         "Renders an unstructured volumetric mesh (tets, pyramids, wedges, hexes; one scalar per\n"
         "vertex) with Monte Carlo delta tracking and volumetric shadows, on any OpenCL device.\n"
         "Without MESH, renders the built-in procedural scene. MESH: .bin (clvr), .umesh, legacy .vtk;\n"
-        "convert anything else VTK reads with tools/clvr-convert.\n"
+        "convert anything else VTK reads with tools/clvr-convert; a .series file (clvr-convert\n"
+        "writes one for .pvd, .vtu.series and Exodus time steps) renders every step to -o's name\n"
+        "with .0000, .0001, ... before the extension, with one range and one camera.\n"
         "\n"
         "Actions:\n"
         "  --help, -h             this text\n"
@@ -30,7 +32,13 @@ void clvr_cli_print_help(FILE *out)
         "Input and device:\n"
         "  --device SPEC          pocl | cpu | gpu | P:D | substring of a device or platform name\n"
         "                         (default: the first GPU, else PoCL)\n"
-        "  --scalar NAME          which per-vertex field to render (.umesh, .vtk)\n"
+        "  --scalar NAME          which field to render (.bin, .vtk, .umesh; clvr --info lists them):\n"
+        "                         NAME, point:NAME or cell:NAME where both exist; a vector gives\n"
+        "                         its magnitude, NAME:x|y|z (or NAME:K) one component. Cell data\n"
+        "                         is averaged onto the vertices (default: the file's first field)\n"
+        "  --cell-data flat|average  a cell field: flat shows each element's own value, constant\n"
+        "                         inside it (as ParaView shows cell data; every element gets its\n"
+        "                         own vertices); average (default) interpolates the vertex averages\n"
         "  --kernel-dir DIR       load OpenCL sources from DIR instead of the embedded copies\n"
         "\n"
         "Output:\n"
@@ -53,7 +61,7 @@ void clvr_cli_print_help(FILE *out)
         "                         marching) weighs jittered quadrature points by ratio-tracked\n"
         "                         transmittance and converges fastest; delta is plain delta\n"
         "                         tracking (0/1 collision and shadow); same expected image\n"
-        "  --urm-steps N          urm: at least N quadrature points per ray (default 16)\n"
+        "  --urm-steps N          urm: at least N quadrature points per ray (default 24)\n"
         "  --shadows on|off       volumetric shadow ray toward the light (default on)\n"
         "  --sampler ld|independent  random numbers across frames: ld (default) draws the sub-pixel\n"
         "                         position and first free flights from a per-pixel shifted\n"
@@ -83,6 +91,8 @@ void clvr_cli_print_help(FILE *out)
         "  --colormap NAME        cool-warm | viridis | inferno | grayscale | jet (default cool-warm)\n"
         "  --tf FILE              transfer function file (clvr text format or ParaView JSON)\n"
         "  --range LO HI          scalar window mapped by the transfer function (default: data range)\n"
+        "  --range auto-all       a series: one window over every step's range (the default for a\n"
+        "                         series; one mesh: its own range)\n"
         "  --opacity auto|ramp    opacity curve: auto (from the scalar's volume histogram: values\n"
         "                         that fill most of the volume clear, rare ones opaque) or ramp\n"
         "                         (linear, 0 at the window's low end to 1 at its high end)\n"
@@ -232,6 +242,14 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
         else if (!strcmp(a, "--view")) o->view = 1;
         else if (!strcmp(a, "--device")) { const char *v = NEXT(); if (v) o->device = v; }
         else if (!strcmp(a, "--scalar")) { const char *v = NEXT(); if (v) o->scalar_name = v; }
+        else if (!strcmp(a, "--cell-data")) {
+            const char *v = NEXT();
+            if (v) {
+                if (!strcmp(v, "flat")) o->cell_flat = 1;
+                else if (!strcmp(v, "average")) o->cell_flat = 0;
+                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--cell-data expects flat or average, got '%s'", v);
+            }
+        }
         else if (!strcmp(a, "--kernel-dir")) { const char *v = NEXT(); if (v) o->kernel_dir = v; }
         else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { const char *v = NEXT(); if (v) o->output = v; }
         else if (!strcmp(a, "--stats-json")) { const char *v = NEXT(); if (v) o->stats_json = v; }
@@ -302,8 +320,11 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
         else if (!strcmp(a, "--tf")) { const char *v = NEXT(); if (v) o->tf_file = v; }
         else if (!strcmp(a, "--range")) {
             const char *lo = NEXT();
-            const char *hi = lo ? NEXT() : NULL;
-            if (lo && hi) {
+            const char *hi = lo && strcmp(lo, "auto-all") != 0 ? NEXT() : NULL;
+            if (lo && !strcmp(lo, "auto-all")) {
+                o->range_auto_all = 1; /* a series' range over all steps; one mesh: its own range */
+                o->range_set = 0;
+            } else if (lo && hi) {
                 s = parse_float("--range LO", lo, -3e38f, 3e38f, &o->range_lo, err);
                 if (s == CLVR_OK) s = parse_float("--range HI", hi, -3e38f, 3e38f, &o->range_hi, err);
                 if (s == CLVR_OK && !(o->range_hi > o->range_lo))

@@ -15,6 +15,7 @@ typedef struct clvr_options {
     /* input */
     const char *mesh_path;       /* NULL: the built-in default scene */
     const char *scalar_name;     /* --scalar */
+    int cell_flat;               /* --cell-data flat: a cell field shown per element; 0 (average): at the vertices */
     const char *device;          /* --device SPEC, NULL: default */
     const char *kernel_dir;      /* --kernel-dir: load kernels from disk (developers) */
     /* output */
@@ -49,6 +50,7 @@ typedef struct clvr_options {
     const char *tf_file;         /* --tf FILE */
     int range_set;
     float range_lo, range_hi;    /* --range lo hi */
+    int range_auto_all;          /* --range auto-all: one range over every step of a series */
     float density;               /* --density D (after clvr's main: the automatic one when density_auto) */
     int density_auto;            /* --density auto (the default): from the mesh's optical depth (tf_auto.h) */
     int opacity_ramp;            /* --opacity ramp: the linear ramp; auto (default): from the histogram */

@@ -26,6 +26,7 @@
 #include "preprocess.h"
 #include "render.h"
 #include "scene.h"
+#include "series.h"
 #include "stats.h"
 #include "tf.h"
 #include "tf_auto.h"
@@ -56,6 +57,8 @@ static clvr_status load_mesh(const clvr_options *o, clvr_mesh *m, clvr_error *er
     if (!o->mesh_path) return clvr_scene_default(m, err);
     clvr_load_options lo = {0};
     lo.scalar_name = o->scalar_name;
+    lo.field_ranges = o->info; /* --info lists every array with its range */
+    lo.cell_flat = o->cell_flat;
     return clvr_mesh_load(o->mesh_path, &lo, m, err);
 }
 
@@ -89,6 +92,8 @@ int main(int argc, char **argv)
         free(list);
         return s == CLVR_OK ? 0 : fail(&err);
     }
+    /* A time series: every step through this main, one range and camera. */
+    if (o.mesh_path && clvr_series_is(o.mesh_path)) return clvr_series_run(argc, argv, &o, main);
     if (o.kernel_dir) setenv("CLVR_KERNEL_DIR", o.kernel_dir, 1);
     /* Fail on an unwritable output before minutes of work, not after. */
     if (!o.info && !o.view) {
@@ -134,8 +139,9 @@ int main(int argc, char **argv)
     }
 
     /* Flaws that render anyway (degenerate, inverted, duplicate elements, a
-     * constant field) get one warning line each, --quiet or not. */
-    {
+     * constant field) get one warning line each; clvr-convert already said
+     * them once per file, so --quiet silences them on every render. */
+    if (!o.quiet) {
         clvr_limits_report lr;
         clvr_limits_scan(&view, &lr);
         clvr_limits_print_warnings(stderr, mesh_name, &lr);
@@ -144,6 +150,9 @@ int main(int argc, char **argv)
                     "clvr: warning: %s: %llu cell%s of other types (surface, line or polyhedron cells) left out; "
                     "clvr renders tetrahedra, pyramids, wedges and hexahedra\n",
                     mesh_name, (unsigned long long)view.skipped_cells, view.skipped_cells == 1 ? "" : "s");
+        if (view.decomposed_cells)
+            fprintf(stderr, "clvr: %s: %llu polyhedr%s decomposed into tets and pyramids\n", mesh_name,
+                    (unsigned long long)view.decomposed_cells, view.decomposed_cells == 1 ? "on" : "a");
     }
 
     /* The transfer function needs only the scalar range: load it now, so a

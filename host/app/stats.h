@@ -30,6 +30,7 @@ typedef struct clvr_stats {
     uint64_t bytes_bvh;             /* two-level BVH at the chosen leaf size */
     uint64_t bytes_bvh_one_per_leaf;/* estimate for one element per leaf (Table 1 "pre") */
     uint64_t bytes_sampling;        /* sampling clusters */
+    uint64_t bytes_element_boxes;   /* quantized element boxes of point location (kernels/locate.h) */
     /* clusters */
     uint64_t num_instances, num_instances16, num_leaves, num_sampling;
     uint32_t leaf_size, sampling_size;

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <float.h>
+#include <stdio.h>
 
 int clvr_mul_u64(uint64_t a, uint64_t b, uint64_t *out)
 {
@@ -74,6 +75,7 @@ void clvr_mesh_free(clvr_mesh *m)
     free(m->positions);
     free(m->scalars);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(m->indices[t]);
+    free(m->fields);
     memset(m, 0, sizeof *m);
 }
 
@@ -151,5 +153,133 @@ clvr_status clvr_mesh_validate(const clvr_mesh *m, const char *what, clvr_error 
                                       m->indices[t][j], (unsigned long long)m->num_vertices);
         }
     }
+    return CLVR_OK;
+}
+
+/* Index of the field called name[0..len) with the given association
+ * (2: either, point first), or -1. */
+static int64_t field_find(const clvr_field_info *f, uint32_t n, const char *name, size_t len, uint32_t assoc)
+{
+    for (uint32_t pass = 0; pass < 2; ++pass) {
+        uint32_t want = pass == 0 ? CLVR_FIELD_POINT : CLVR_FIELD_CELL;
+        if (assoc != 2 && assoc != want) continue;
+        for (uint32_t i = 0; i < n; ++i)
+            if (f[i].association == want && strlen(f[i].name) == len && memcmp(f[i].name, name, len) == 0)
+                return i;
+    }
+    return -1;
+}
+
+clvr_status clvr_field_select(const clvr_field_info *fields, uint32_t n, const char *spec, const char *file,
+                              uint32_t *index, int *component, clvr_error *err)
+{
+    *index = 0;
+    *component = CLVR_FIELD_MAGNITUDE;
+    if (!spec || !spec[0]) {
+        if (n == 0)
+            return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: the file holds no fields", file);
+        return CLVR_OK;
+    }
+    const char *name = spec;
+    uint32_t assoc = 2;
+    if (strncmp(spec, "point:", 6) == 0) {
+        assoc = CLVR_FIELD_POINT;
+        name = spec + 6;
+    } else if (strncmp(spec, "cell:", 5) == 0) {
+        assoc = CLVR_FIELD_CELL;
+        name = spec + 5;
+    }
+    size_t len = strlen(name);
+    int64_t i = field_find(fields, n, name, len, assoc);
+    /* A name that does not match whole may end in a component. */
+    if (i < 0 && assoc != 2) i = field_find(fields, n, spec, strlen(spec), 2); /* "cell:x" may be a whole name */
+    if (i >= 0) {
+        *index = (uint32_t)i;
+        return CLVR_OK;
+    }
+    const char *colon = strrchr(name, ':');
+    if (colon && colon > name) {
+        const char *c = colon + 1;
+        int comp = -1;
+        if (!strcmp(c, "x") || !strcmp(c, "X")) comp = 0;
+        else if (!strcmp(c, "y") || !strcmp(c, "Y")) comp = 1;
+        else if (!strcmp(c, "z") || !strcmp(c, "Z")) comp = 2;
+        else if (c[0] >= '0' && c[0] <= '9' && strlen(c) <= 2) {
+            char *end;
+            long v = strtol(c, &end, 10);
+            if (!*end && v >= 0 && v < (long)CLVR_FIELD_COMPONENTS_MAX) comp = (int)v;
+        }
+        if (comp >= 0) {
+            i = field_find(fields, n, name, (size_t)(colon - name), assoc);
+            if (i >= 0) {
+                if ((uint32_t)comp >= fields[i].components || fields[i].components == 1)
+                    return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                                          "%s: --scalar %s: %s field '%s' has %u component%s; use %s (magnitude)%s",
+                                          file, spec, fields[i].association ? "cell" : "point", fields[i].name,
+                                          fields[i].components, fields[i].components == 1 ? "" : "s",
+                                          fields[i].name, fields[i].components >= 3 ? " or NAME:x|y|z" : "");
+                *index = (uint32_t)i;
+                *component = comp;
+                return CLVR_OK;
+            }
+        }
+    }
+    char list[700];
+    size_t l = 0;
+    list[0] = 0;
+    for (uint32_t k = 0; k < n && l + 100 < sizeof list; ++k)
+        l += (size_t)snprintf(list + l, sizeof list - l, "%s%s:%s%s", k ? ", " : "",
+                              fields[k].association ? "cell" : "point", fields[k].name,
+                              fields[k].components > 1 ? " (vector)" : "");
+    if (n == 0)
+        return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: no field named '%s': the file holds no fields", file, spec);
+    return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: no field named '%s'; the file has %s%s (clvr --info %s lists them)",
+                          file, spec, list, l + 100 >= sizeof list ? ", ..." : "", file);
+}
+
+clvr_status clvr_mesh_flatten_cells(clvr_mesh *m, const float *values, const char *what, clvr_error *err)
+{
+    uint64_t total = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) total += clvr_mesh_num_indices(m, t);
+    if (total > UINT32_MAX)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                              "%s: --cell-data flat gives every element its own vertices: %llu corners, more than the "
+                              "%u vertices clvr indexes; render the averaged field (--cell-data average)",
+                              what, (unsigned long long)total, UINT32_MAX);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint64_t n = clvr_mesh_num_indices(m, t);
+        for (uint64_t j = 0; j < n; ++j)
+            if ((uint64_t)m->indices[t][j] >= m->num_vertices)
+                return clvr_error_set(err, CLVR_ERR_BAD_INDEX,
+                                      "%s: %s[%llu] vertex %u is index %u but the mesh has %llu vertices", what,
+                                      clvr_cell_type_name(t), (unsigned long long)(j / clvr_cell_vertex_count(t)),
+                                      (unsigned)(j % clvr_cell_vertex_count(t)), m->indices[t][j],
+                                      (unsigned long long)m->num_vertices);
+    }
+    float *pos = NULL, *sc = NULL;
+    clvr_status s = alloc_array((void **)&pos, total, 3 * sizeof(float), what, err);
+    if (s == CLVR_OK) s = alloc_array((void **)&sc, total, sizeof(float), what, err);
+    if (s != CLVR_OK) {
+        free(pos);
+        return s;
+    }
+    uint64_t k = 0, e = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        for (uint64_t c = 0; c < m->num_cells[t]; ++c, ++e)
+            for (uint32_t j = 0; j < nv; ++j, ++k) {
+                uint32_t *ix = &m->indices[t][c * nv + j];
+                memcpy(pos + 3 * k, m->positions + 3 * (uint64_t)*ix, 3 * sizeof(float));
+                sc[k] = values[e];
+                *ix = (uint32_t)k;
+            }
+    }
+    free(m->positions);
+    free(m->scalars);
+    m->positions = pos;
+    m->scalars = sc;
+    m->num_vertices = total;
+    m->cell_flat = 1;
+    clvr_mesh_update_ranges(m);
     return CLVR_OK;
 }

@@ -14,6 +14,25 @@
 
 #define CLVR_SCALAR_NAME_MAX 64
 
+/* Where a field's values live. */
+#define CLVR_FIELD_POINT 0u /* one tuple per vertex */
+#define CLVR_FIELD_CELL 1u  /* one tuple per element, in the order tets, pyramids, wedges, hexes */
+#define CLVR_FIELD_COMPONENTS_MAX 16u
+#define CLVR_FIELD_COUNT_MAX 4096u /* fields per file (.bin version 2 refuses more) */
+#define CLVR_FIELD_MAGNITUDE (-1)   /* component: the Euclidean norm of the tuple */
+
+/* One array a file holds, as --info lists it. The range is of the values
+ * (components == 1) or of the magnitudes; has_range is 0 where the loader
+ * did not decode the array (legacy .vtk arrays other than the chosen one,
+ * unless clvr_load_options.field_ranges). */
+typedef struct clvr_field_info {
+    char name[CLVR_SCALAR_NAME_MAX]; /* sanitized like scalar_name */
+    uint32_t association;            /* CLVR_FIELD_POINT or CLVR_FIELD_CELL */
+    uint32_t components;             /* 1..CLVR_FIELD_COMPONENTS_MAX */
+    int has_range;
+    float min, max;
+} clvr_field_info;
+
 typedef struct clvr_mesh {
     uint64_t num_vertices;
     float *positions;                              /* 3 * num_vertices, x y z interleaved */
@@ -25,6 +44,16 @@ typedef struct clvr_mesh {
     float scalar_min, scalar_max;                  /* of all scalars */
     uint64_t skipped_cells;                        /* cells of other types the loader left out
                                                     * (VTK/umesh surface and line cells) */
+    /* Every array of the file (NULL/0 for formats with one scalar), and how
+     * `scalars` came from the chosen one: its index, the component
+     * (CLVR_FIELD_MAGNITUDE or 0..components-1) and, for cell data, that it
+     * was averaged onto the vertices. Owned by the mesh (clvr_mesh_free). */
+    clvr_field_info *fields;
+    uint32_t num_fields;
+    uint32_t scalar_field;                         /* index into fields when num_fields > 0 */
+    int scalar_component;
+    uint64_t decomposed_cells;                     /* polyhedra split into tets and pyramids on load */
+    int cell_flat;                                 /* scalars are a cell field made flat (clvr_mesh_flatten_cells) */
 } clvr_mesh;
 
 /* Allocates arrays for the given counts (zeroed struct first). On failure
@@ -60,6 +89,26 @@ int clvr_add_u64(uint64_t a, uint64_t b, uint64_t *out);
  * one-line messages, --info and JSON, so control characters, quotes and
  * backslashes become '?'. */
 void clvr_mesh_set_scalar_name(clvr_mesh *m, const char *name, size_t len);
+
+/* Finds the field a --scalar SPEC names among n fields: SPEC is
+ * [point:|cell:]NAME[:x|:y|:z|:K]. A name matches exactly first (names may
+ * hold ':'); the suffix picks component x/y/z (0/1/2) or K of a vector,
+ * otherwise a vector gives its magnitude. Where a point and a cell array
+ * share a name without a prefix, the point array wins. NULL or "" spec: the
+ * first field. On failure the message names `file`, the spec and every
+ * field there is. */
+clvr_status clvr_field_select(const clvr_field_info *fields, uint32_t n, const char *spec, const char *file,
+                              uint32_t *index, int *component, clvr_error *err);
+
+/* Gives every element its own copies of its vertices, all carrying the
+ * element's value from values (one per element, in the order tets,
+ * pyramids, wedges, hexes), so that interpolation inside an element is
+ * constant: cell data shown flat, as ParaView shows it, with no change to
+ * the renderer (majorants bound the values as they bound any vertex
+ * scalar). The vertex count becomes the sum of the elements' corner counts
+ * (at most 2^32 - 1, else CLVR_ERR_OVERFLOW naming `what`); m->cell_flat
+ * is set. On failure m is unchanged. */
+clvr_status clvr_mesh_flatten_cells(clvr_mesh *m, const float *values, const char *what, clvr_error *err);
 
 /* Name of a cell type: "tets", "pyramids", "wedges", "hexes". */
 const char *clvr_cell_type_name(uint32_t t);

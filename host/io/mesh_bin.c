@@ -76,23 +76,57 @@ static void put_f32(uint8_t *p, float f)
     put_u32(p, u);
 }
 
-/* What the header says, after validation. */
+/* Version 2 (docs/bin-format.md): the field table. */
+#define BIN_VERSION_FIELDS 2u
+#define BIN_OFF_NUM_FIELDS 156u
+#define BIN_OFF_RESERVED2 160u
+#define BIN_FIELD_ENTRY 128u
+#define BIN_FIELD_OFF_ASSOC 64u
+#define BIN_FIELD_OFF_COMPONENTS 68u
+#define BIN_FIELD_OFF_MIN 72u
+#define BIN_FIELD_OFF_MAX 76u
+#define BIN_FIELD_OFF_RESERVED 80u
+
+static float get_f32(const uint8_t *p)
+{
+    uint32_t u = get_u32(p);
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* What the header (and a version 2 field table) says, after validation. */
 typedef struct bin_header {
+    uint32_t version;
     uint64_t num_vertices;
     uint64_t num_cells[CLVR_CELL_TYPE_COUNT];
-    uint64_t array_bytes[BIN_ARRAY_COUNT];
+    uint64_t array_bytes[BIN_ARRAY_COUNT]; /* version 2: array_bytes[BIN_ARRAY_SCALARS] is 0 */
     uint64_t file_size; /* what the file size must be */
     char scalar_name[CLVR_SCALAR_NAME_MAX];
+    uint32_t num_fields;
+    uint64_t table_offset;
+    clvr_field_info *fields;    /* version 2: num_fields entries (malloc) */
+    uint64_t *field_offset;     /* byte offset of each field's data */
 } bin_header;
 
-/* Byte sizes of the six arrays and the total file size for given counts;
- * returns nonzero on 64-bit overflow. */
-static int bin_sizes(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
-                     uint64_t bytes[BIN_ARRAY_COUNT], uint64_t *file_size)
+static void bin_header_free(bin_header *hd)
+{
+    free(hd->fields);
+    free(hd->field_offset);
+    hd->fields = NULL;
+    hd->field_offset = NULL;
+}
+
+/* Byte sizes of the arrays and the file size up to the end of the last
+ * index list (version 2: where the field table starts); nonzero on 64-bit
+ * overflow. */
+static int bin_sizes_v(uint32_t version, uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                       uint64_t bytes[BIN_ARRAY_COUNT], uint64_t *file_size)
 {
     uint64_t total = BIN_HEADER_SIZE;
     if (clvr_mul_u64(num_vertices, 3u * sizeof(float), &bytes[BIN_ARRAY_POSITIONS])) return 1;
-    if (clvr_mul_u64(num_vertices, sizeof(float), &bytes[BIN_ARRAY_SCALARS])) return 1;
+    if (version == BIN_VERSION_FIELDS) bytes[BIN_ARRAY_SCALARS] = 0;
+    else if (clvr_mul_u64(num_vertices, sizeof(float), &bytes[BIN_ARRAY_SCALARS])) return 1;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         if (clvr_mul_u64(num_cells[t], clvr_cell_vertex_count(t) * sizeof(uint32_t), &bytes[BIN_ARRAY_CELLS + t]))
             return 1;
@@ -102,20 +136,137 @@ static int bin_sizes(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_T
     return 0;
 }
 
+static int bin_sizes(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                     uint64_t bytes[BIN_ARRAY_COUNT], uint64_t *file_size)
+{
+    return bin_sizes_v(BIN_VERSION, num_vertices, num_cells, bytes, file_size);
+}
+
 static const char *bin_array_name(uint32_t a)
 {
     return a == BIN_ARRAY_POSITIONS ? "positions" : a == BIN_ARRAY_SCALARS ? "scalars"
                                                                            : clvr_cell_type_name(a - BIN_ARRAY_CELLS);
 }
 
-/* Validates the first min(have, 256) header bytes against the file size and
- * the requested scalar. Every failure names the file, the field and both
- * values. */
-static clvr_status bin_read_header(const uint8_t *h, size_t have, uint64_t file_size, const char *name,
-                                   const clvr_load_options *opt, bin_header *out, clvr_error *err)
+/* A file in memory or behind a descriptor: the reader below serves both
+ * clvr_mesh_parse_bin (fuzzing) and clvr_mesh_load_bin with one code path. */
+typedef struct bin_src {
+    const uint8_t *mem; /* NULL: read from fd */
+    int fd;
+    uint64_t size;
+    const char *name;
+} bin_src;
+
+/* Reads n bytes at offset (the caller has checked offset + n <= size). */
+static clvr_status src_read(const bin_src *src, uint64_t offset, void *dst, uint64_t n, const char *what,
+                            clvr_error *err)
 {
+    if (n == 0) return CLVR_OK;
+    if (src->mem) {
+        memcpy(dst, src->mem + offset, (size_t)n);
+        return CLVR_OK;
+    }
+    uint8_t *p = (uint8_t *)dst;
+    while (n > 0) {
+        size_t want = n < BIN_IO_CHUNK ? (size_t)n : BIN_IO_CHUNK;
+        if (offset > (uint64_t)INT64_MAX)
+            return clvr_error_set(err, CLVR_ERR_IO, "%s: offset %llu is beyond what the OS can address", src->name,
+                                  (unsigned long long)offset);
+        ssize_t got = pread(src->fd, p, want, (off_t)offset);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0)
+            return clvr_error_set(err, CLVR_ERR_IO, "%s: cannot read %s: %s", src->name, what, strerror(errno));
+        if (got == 0)
+            return clvr_error_set(err, CLVR_ERR_TRUNCATED, "%s: truncated while reading %s (the file shrank?)",
+                                  src->name, what);
+        p += got;
+        n -= (uint64_t)got;
+        offset += (uint64_t)got;
+    }
+    return CLVR_OK;
+}
+
+/* Validates the version 2 field table at hd->table_offset and sets
+ * hd->fields, hd->field_offset and hd->file_size. */
+static clvr_status bin_read_fields(const bin_src *src, bin_header *hd, clvr_error *err)
+{
+    const char *name = src->name;
+    uint64_t table_bytes = (uint64_t)hd->num_fields * BIN_FIELD_ENTRY, end;
+    if (clvr_add_u64(hd->table_offset, table_bytes, &end) || end > src->size)
+        return clvr_error_set(err, CLVR_ERR_TRUNCATED,
+                              "%s: truncated: the field table of %u fields ends at byte %llu but the file has %llu",
+                              name, hd->num_fields, (unsigned long long)(hd->table_offset + table_bytes),
+                              (unsigned long long)src->size);
+    uint8_t *table = malloc(table_bytes ? (size_t)table_bytes : 1);
+    hd->fields = calloc(hd->num_fields ? hd->num_fields : 1, sizeof *hd->fields);
+    hd->field_offset = calloc(hd->num_fields ? hd->num_fields : 1, sizeof *hd->field_offset);
+    if (!table || !hd->fields || !hd->field_offset) {
+        free(table);
+        return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the field table", name);
+    }
+    clvr_status s = src_read(src, hd->table_offset, table, table_bytes, "the field table", err);
+    uint64_t num_elements = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) num_elements += hd->num_cells[t]; /* sizes checked: no overflow */
+    uint64_t off = end;
+    for (uint32_t i = 0; i < hd->num_fields && s == CLVR_OK; ++i) {
+        const uint8_t *e = table + (uint64_t)i * BIN_FIELD_ENTRY;
+        clvr_field_info *f = &hd->fields[i];
+        if (memchr(e, '\0', CLVR_SCALAR_NAME_MAX) == NULL || e[0] == 0) {
+            s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: field %u: the name is %s", name, i,
+                               e[0] ? "not NUL-terminated within its 64 bytes" : "empty");
+            break;
+        }
+        clvr_mesh tmp; /* reuse the name sanitizer */
+        clvr_mesh_set_scalar_name(&tmp, (const char *)e, CLVR_SCALAR_NAME_MAX);
+        memcpy(f->name, tmp.scalar_name, CLVR_SCALAR_NAME_MAX);
+        f->association = get_u32(e + BIN_FIELD_OFF_ASSOC);
+        f->components = get_u32(e + BIN_FIELD_OFF_COMPONENTS);
+        f->min = get_f32(e + BIN_FIELD_OFF_MIN);
+        f->max = get_f32(e + BIN_FIELD_OFF_MAX);
+        f->has_range = 1;
+        int reserved = 0;
+        for (uint32_t k = BIN_FIELD_OFF_RESERVED; k < BIN_FIELD_ENTRY; ++k) reserved |= e[k];
+        if (f->association > CLVR_FIELD_CELL)
+            s = clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                               "%s: field %u '%s': association is %u but must be 0 (point) or 1 (cell)", name, i,
+                               f->name, f->association);
+        else if (f->components < 1 || f->components > CLVR_FIELD_COMPONENTS_MAX)
+            s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: field %u '%s': %u components, outside 1..%u", name, i,
+                               f->name, f->components, CLVR_FIELD_COMPONENTS_MAX);
+        else if (reserved)
+            s = clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                               "%s: field %u '%s': reserved bytes are not zero; the file comes from a newer writer",
+                               name, i, f->name);
+        for (uint32_t j = 0; j < i && s == CLVR_OK; ++j)
+            if (hd->fields[j].association == f->association && !strcmp(hd->fields[j].name, f->name))
+                s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: fields %u and %u are both %s data named '%s'", name,
+                                   j, i, f->association ? "cell" : "point", f->name);
+        if (s != CLVR_OK) break;
+        uint64_t bytes;
+        uint64_t count = f->association == CLVR_FIELD_POINT ? hd->num_vertices : num_elements;
+        if (clvr_mul_u64(count, (uint64_t)f->components * sizeof(float), &bytes) || clvr_add_u64(off, bytes, &end)) {
+            s = clvr_error_set(err, CLVR_ERR_OVERFLOW, "%s: field %u '%s' overflows 64-bit file sizes", name, i, f->name);
+            break;
+        }
+        hd->field_offset[i] = off;
+        off = end;
+    }
+    free(table);
+    hd->file_size = off;
+    return s;
+}
+
+/* Validates the header against the file size (and reads a version 2 field
+ * table). Every failure names the file, the field and both values. */
+static clvr_status bin_read_header(const bin_src *src, bin_header *out, clvr_error *err)
+{
+    uint8_t h[BIN_HEADER_SIZE];
+    const char *name = src->name;
+    uint64_t have = src->size < BIN_HEADER_SIZE ? src->size : BIN_HEADER_SIZE;
     memset(out, 0, sizeof *out);
-    size_t cmp = have < BIN_MAGIC_LEN ? have : BIN_MAGIC_LEN;
+    clvr_status s = src_read(src, 0, h, have, "the header", err);
+    if (s != CLVR_OK) return s;
+    size_t cmp = have < BIN_MAGIC_LEN ? (size_t)have : BIN_MAGIC_LEN;
     if (memcmp(h, BIN_MAGIC, cmp) != 0)
         return clvr_error_set(err, CLVR_ERR_BAD_MAGIC,
                               "%s: not a clvr .bin file (the first 8 bytes are not \"CLVRMESH\"); "
@@ -123,31 +274,47 @@ static clvr_status bin_read_header(const uint8_t *h, size_t have, uint64_t file_
     if (have < BIN_HEADER_SIZE)
         return clvr_error_set(err, CLVR_ERR_TRUNCATED,
                               "%s: truncated: the file has %llu bytes but the .bin header alone is %u bytes", name,
-                              (unsigned long long)file_size, BIN_HEADER_SIZE);
+                              (unsigned long long)src->size, BIN_HEADER_SIZE);
     uint32_t version = get_u32(h + BIN_OFF_VERSION);
-    if (version != BIN_VERSION)
+    if (version != BIN_VERSION && version != BIN_VERSION_FIELDS)
         return clvr_error_set(err, CLVR_ERR_BAD_VERSION,
-                              "%s: .bin version is %u but this clvr reads version %u; re-convert the mesh", name,
-                              version, BIN_VERSION);
+                              "%s: .bin version is %u but this clvr reads versions 1 and 2; re-convert the mesh "
+                              "with this clvr's clvr-convert", name, version);
+    out->version = version;
     uint32_t header_size = get_u32(h + BIN_OFF_HEADER_SIZE);
     if (header_size != BIN_HEADER_SIZE)
-        return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: header_size is %u but version 1 requires %u", name,
-                              header_size, BIN_HEADER_SIZE);
+        return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: header_size is %u but version %u requires %u", name,
+                              header_size, version, BIN_HEADER_SIZE);
     uint32_t flags = get_u32(h + BIN_OFF_FLAGS);
     if (flags != 0)
         return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
-                              "%s: flags is 0x%x but version 1 defines none; the file comes from a newer writer",
-                              name, flags);
+                              "%s: flags is 0x%x but version %u defines none; the file comes from a newer writer",
+                              name, flags, version);
     const char *sname = (const char *)h + BIN_OFF_SCALAR_NAME;
     if (memchr(sname, '\0', CLVR_SCALAR_NAME_MAX) == NULL)
         return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
                               "%s: scalar_name is not NUL-terminated within its %d bytes", name,
                               CLVR_SCALAR_NAME_MAX);
     memcpy(out->scalar_name, sname, CLVR_SCALAR_NAME_MAX);
+    if (version == BIN_VERSION_FIELDS) {
+        int reserved = 0;
+        for (uint32_t k = BIN_OFF_RESERVED2; k < BIN_HEADER_SIZE; ++k) reserved |= h[k];
+        out->num_fields = get_u32(h + BIN_OFF_NUM_FIELDS);
+        if (out->num_fields > CLVR_FIELD_COUNT_MAX)
+            return clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: num_fields is %u; a .bin holds at most %u", name,
+                                  out->num_fields, CLVR_FIELD_COUNT_MAX);
+        if (reserved)
+            return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                                  "%s: reserved header bytes are not zero; the file comes from a newer writer", name);
+    }
 
     out->num_vertices = get_u64(h + BIN_OFF_NUM_VERTICES);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) out->num_cells[t] = get_u64(h + BIN_OFF_NUM_CELLS + 8 * t);
-    if (bin_sizes(out->num_vertices, out->num_cells, out->array_bytes, &out->file_size))
+    uint64_t num_elements = 0;
+    int over = bin_sizes_v(version, out->num_vertices, out->num_cells, out->array_bytes, &out->file_size);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && !over; ++t)
+        over = clvr_add_u64(num_elements, out->num_cells[t], &num_elements);
+    if (over)
         return clvr_error_set(err, CLVR_ERR_OVERFLOW,
                               "%s: header counts (%llu vertices, %llu tets, %llu pyramids, %llu wedges, %llu hexes) "
                               "overflow 64-bit byte sizes; the header is corrupt",
@@ -158,20 +325,25 @@ static clvr_status bin_read_header(const uint8_t *h, size_t have, uint64_t file_
         return clvr_error_set(err, CLVR_ERR_OVERFLOW,
                               "%s: num_vertices is %llu but vertex indices are 32-bit (at most %u vertices)", name,
                               (unsigned long long)out->num_vertices, UINT32_MAX);
-    if (file_size < out->file_size)
-        return clvr_error_set(err, CLVR_ERR_TRUNCATED,
-                              "%s: truncated: the header's counts need %llu bytes but the file has %llu", name,
-                              (unsigned long long)out->file_size, (unsigned long long)file_size);
-    if (file_size > out->file_size)
-        return clvr_error_set(err, CLVR_ERR_FORMAT,
-                              "%s: %llu trailing bytes: the header's counts need %llu bytes but the file has %llu",
-                              name, (unsigned long long)(file_size - out->file_size),
-                              (unsigned long long)out->file_size, (unsigned long long)file_size);
-    if (opt && opt->scalar_name && strcmp(opt->scalar_name, out->scalar_name) != 0)
-        return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
-                              "%s: no scalar named '%s'; a .bin holds one scalar, here '%s'", name, opt->scalar_name,
-                              out->scalar_name);
-    return CLVR_OK;
+    if (version == BIN_VERSION_FIELDS) {
+        out->table_offset = out->file_size;
+        s = bin_read_fields(src, out, err);
+        if (s != CLVR_OK) {
+            bin_header_free(out);
+            return s;
+        }
+    }
+    if (src->size < out->file_size)
+        s = clvr_error_set(err, CLVR_ERR_TRUNCATED,
+                           "%s: truncated: the header's counts need %llu bytes but the file has %llu", name,
+                           (unsigned long long)out->file_size, (unsigned long long)src->size);
+    else if (src->size > out->file_size)
+        s = clvr_error_set(err, CLVR_ERR_FORMAT,
+                           "%s: %llu trailing bytes: the header's counts need %llu bytes but the file has %llu",
+                           name, (unsigned long long)(src->size - out->file_size),
+                           (unsigned long long)out->file_size, (unsigned long long)src->size);
+    if (s != CLVR_OK) bin_header_free(out);
+    return s;
 }
 
 static void *bin_array_ptr(clvr_mesh *m, uint32_t a)
@@ -181,59 +353,192 @@ static void *bin_array_ptr(clvr_mesh *m, uint32_t a)
                                     : (void *)m->indices[a - BIN_ARRAY_CELLS];
 }
 
+/* Version 2: the chosen field into m->scalars, one value per vertex: a
+ * component or the magnitude of each tuple, and cell data averaged over the
+ * elements that use each vertex (vertices no element uses get 0), as
+ * docs/bin-format.md says. */
+static clvr_status bin_read_field(const bin_src *src, const bin_header *hd, uint32_t fi, int comp, clvr_mesh *m,
+                                  float *cellv, clvr_error *err)
+{
+    const clvr_field_info *f = &hd->fields[fi];
+    const uint32_t nc = f->components;
+    uint64_t count = f->association == CLVR_FIELD_POINT ? m->num_vertices : clvr_mesh_num_elements(m);
+    if (f->association == CLVR_FIELD_POINT && nc == 1)
+        return src_read(src, hd->field_offset[fi], m->scalars, count * sizeof(float), f->name, err);
+    /* A chunk of tuples at a time keeps the scratch small on huge meshes. */
+    const uint64_t chunk = 1u << 16;
+    float *buf = malloc((size_t)(chunk * nc * sizeof(float)));
+    double *acc = NULL;
+    uint32_t *cnt = NULL;
+    if (f->association == CLVR_FIELD_CELL && !cellv) {
+        size_t nv = m->num_vertices ? (size_t)m->num_vertices : 1;
+        acc = calloc(nv, sizeof *acc);
+        cnt = calloc(nv, sizeof *cnt);
+    }
+    clvr_status s = CLVR_OK;
+    if (!buf || (f->association == CLVR_FIELD_CELL && !cellv && (!acc || !cnt)))
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate scratch to read field '%s'", src->name,
+                           f->name);
+    uint32_t t = 0;
+    uint64_t in_type = 0; /* element within type t */
+    for (uint64_t i0 = 0; i0 < count && s == CLVR_OK; i0 += chunk) {
+        uint64_t n = count - i0 < chunk ? count - i0 : chunk;
+        s = src_read(src, hd->field_offset[fi] + i0 * nc * sizeof(float), buf, n * nc * sizeof(float), f->name, err);
+        for (uint64_t j = 0; j < n && s == CLVR_OK; ++j) {
+            const float *tup = buf + j * nc;
+            double v;
+            if (comp >= 0) v = tup[comp];
+            else if (nc == 1) v = tup[0];
+            else {
+                double s2 = 0.0;
+                for (uint32_t k = 0; k < nc; ++k) s2 += (double)tup[k] * tup[k];
+                v = sqrt(s2);
+            }
+            if (f->association == CLVR_FIELD_POINT) {
+                m->scalars[i0 + j] = (float)v;
+                continue;
+            }
+            if (cellv) { /* --cell-data flat: the element's own value */
+                cellv[i0 + j] = (float)v;
+                continue;
+            }
+            while (in_type >= m->num_cells[t]) {
+                ++t;
+                in_type = 0;
+            }
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            const uint32_t *idx = m->indices[t] + in_type * nv;
+            for (uint32_t k = 0; k < nv; ++k)
+                if (idx[k] < m->num_vertices) { /* bad indices are reported by validation */
+                    acc[idx[k]] += v;
+                    cnt[idx[k]] += 1;
+                }
+            ++in_type;
+        }
+    }
+    if (s == CLVR_OK && f->association == CLVR_FIELD_CELL && !cellv)
+        for (uint64_t i = 0; i < m->num_vertices; ++i) m->scalars[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
+    free(buf);
+    free(acc);
+    free(cnt);
+    return s;
+}
+
 /* Sets ranges and runs the validation unless the caller skips it. */
 static clvr_status bin_finish(clvr_mesh *m, const char *name, const clvr_load_options *opt, clvr_error *err)
 {
     clvr_mesh_update_ranges(m);
+    if (m->num_fields) {
+        clvr_field_info *f = &m->fields[m->scalar_field];
+        if (f->components == 1 || m->scalar_component == CLVR_FIELD_MAGNITUDE) {
+            if (f->association == CLVR_FIELD_POINT) { /* the table's range is informative: use the values' */
+                f->min = m->scalar_min;
+                f->max = m->scalar_max;
+            }
+        }
+    }
     if (opt && opt->skip_validation) return CLVR_OK;
     clvr_status s = clvr_mesh_validate(m, name, err);
     if (s != CLVR_OK) clvr_mesh_free(m);
     return s;
 }
 
-clvr_status clvr_mesh_parse_bin(const void *data, size_t size, const char *name, const clvr_load_options *opt,
-                                clvr_mesh *out, clvr_error *err)
+/* The reader behind clvr_mesh_parse_bin and clvr_mesh_load_bin. */
+static clvr_status bin_load(const bin_src *src, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err)
 {
     bin_header hd;
-    clvr_status s;
-    memset(out, 0, sizeof *out);
-    if (!data && size) return clvr_error_set(err, CLVR_ERR_INTERNAL, "%s: NULL buffer", name);
-    s = bin_read_header((const uint8_t *)data, size, (uint64_t)size, name, opt, &hd, err);
+    const char *name = src->name;
+    const char *spec = opt ? opt->scalar_name : NULL;
+    uint32_t fi = 0;
+    int comp = CLVR_FIELD_MAGNITUDE;
+    clvr_status s = bin_read_header(src, &hd, err);
     if (s != CLVR_OK) return s;
+    if (hd.version == BIN_VERSION) {
+        /* Version 1 holds one point scalar: a table of one for the selection. */
+        clvr_field_info one;
+        memset(&one, 0, sizeof one);
+        clvr_mesh tmp;
+        clvr_mesh_set_scalar_name(&tmp, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
+        memcpy(one.name, tmp.scalar_name, sizeof one.name);
+        one.components = 1;
+        if (spec && spec[0] && strcmp(spec, hd.scalar_name) != 0) {
+            s = clvr_field_select(&one, 1, spec, name, &fi, &comp, err);
+            if (s == CLVR_OK && comp >= 1) /* "name:0" is the scalar itself */
+                s = clvr_error_set(err, CLVR_ERR_BAD_FIELD, "%s: no scalar named '%s'", name, spec);
+            if (s != CLVR_OK) {
+                /* The old message said what a version 1 file holds. */
+                return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                                      "%s: no scalar named '%s'; a version 1 .bin holds one scalar, here '%s' "
+                                      "(re-convert with clvr-convert to keep every field)",
+                                      name, spec, hd.scalar_name);
+            }
+        }
+    } else {
+        s = clvr_field_select(hd.fields, hd.num_fields, spec, name, &fi, &comp, err);
+        if (s != CLVR_OK && hd.num_fields == 0 && !(spec && spec[0])) s = CLVR_OK; /* no field: scalars 0 */
+        if (s != CLVR_OK) {
+            bin_header_free(&hd);
+            return s;
+        }
+    }
     s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
-    if (s != CLVR_OK) return s;
-    clvr_mesh_set_scalar_name(out, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
-    const uint8_t *p = (const uint8_t *)data + BIN_HEADER_SIZE;
-    for (uint32_t a = 0; a < BIN_ARRAY_COUNT; ++a) {
-        if (hd.array_bytes[a]) memcpy(bin_array_ptr(out, a), p, (size_t)hd.array_bytes[a]);
-        p += hd.array_bytes[a];
+    uint64_t off = BIN_HEADER_SIZE;
+    for (uint32_t a = 0; a < BIN_ARRAY_COUNT && s == CLVR_OK; ++a) {
+        s = src_read(src, off, bin_array_ptr(out, a), hd.array_bytes[a], bin_array_name(a), err);
+        off += hd.array_bytes[a];
+    }
+    if (s == CLVR_OK && hd.version == BIN_VERSION) {
+        clvr_mesh_set_scalar_name(out, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
+    } else if (s == CLVR_OK && hd.num_fields == 0) {
+        if (out->num_vertices) memset(out->scalars, 0, (size_t)out->num_vertices * sizeof(float));
+    } else if (s == CLVR_OK) {
+        float *cellv = NULL;
+        const int flat = opt && opt->cell_flat && hd.fields[fi].association == CLVR_FIELD_CELL;
+        uint64_t ne = clvr_mesh_num_elements(out);
+        if (flat && (ne > SIZE_MAX / sizeof(float) || !(cellv = malloc(ne ? (size_t)ne * sizeof(float) : 1))))
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu cell values", name,
+                               (unsigned long long)ne);
+        if (s == CLVR_OK) s = bin_read_field(src, &hd, fi, comp, out, cellv, err);
+        if (s == CLVR_OK && flat) s = clvr_mesh_flatten_cells(out, cellv, name, err);
+        free(cellv);
+        if (s == CLVR_OK) {
+            const clvr_field_info *f = &hd.fields[fi];
+            char label[CLVR_SCALAR_NAME_MAX + 16];
+            static const char xyz[] = "xyz";
+            if (comp >= 0 && f->components > 1) {
+                if (comp < 3) snprintf(label, sizeof label, "%s:%c", f->name, xyz[comp]);
+                else snprintf(label, sizeof label, "%s:%d", f->name, comp);
+            } else {
+                snprintf(label, sizeof label, "%s", f->name);
+            }
+            clvr_mesh_set_scalar_name(out, label, strlen(label));
+            out->fields = hd.fields;
+            hd.fields = NULL;
+            out->num_fields = hd.num_fields;
+            out->scalar_field = fi;
+            out->scalar_component = comp;
+        }
+    }
+    bin_header_free(&hd);
+    if (s != CLVR_OK) {
+        clvr_mesh_free(out);
+        return s;
     }
     return bin_finish(out, name, opt, err);
 }
 
-/* Reads exactly n bytes; on short read reports which array was cut. */
-static clvr_status read_full(int fd, void *dst, uint64_t n, const char *name, const char *what, clvr_error *err)
+clvr_status clvr_mesh_parse_bin(const void *data, size_t size, const char *name, const clvr_load_options *opt,
+                                clvr_mesh *out, clvr_error *err)
 {
-    uint8_t *p = (uint8_t *)dst;
-    while (n > 0) {
-        size_t want = n < BIN_IO_CHUNK ? (size_t)n : BIN_IO_CHUNK;
-        ssize_t got = read(fd, p, want);
-        if (got < 0 && errno == EINTR) continue;
-        if (got < 0)
-            return clvr_error_set(err, CLVR_ERR_IO, "%s: cannot read %s: %s", name, what, strerror(errno));
-        if (got == 0)
-            return clvr_error_set(err, CLVR_ERR_TRUNCATED, "%s: truncated while reading %s (the file shrank?)", name,
-                                  what);
-        p += got;
-        n -= (uint64_t)got;
-    }
-    return CLVR_OK;
+    memset(out, 0, sizeof *out);
+    if (!data && size) return clvr_error_set(err, CLVR_ERR_INTERNAL, "%s: NULL buffer", name);
+    static const uint8_t empty[1] = {0};
+    bin_src src = {data ? (const uint8_t *)data : empty, -1, (uint64_t)size, name};
+    return bin_load(&src, opt, out, err);
 }
 
 clvr_status clvr_mesh_load_bin(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err)
 {
-    uint8_t h[BIN_HEADER_SIZE];
-    bin_header hd;
     struct stat st;
     clvr_status s;
     memset(out, 0, sizeof *out);
@@ -241,34 +546,14 @@ clvr_status clvr_mesh_load_bin(const char *path, const clvr_load_options *opt, c
     if (fd < 0) return clvr_error_set(err, CLVR_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     if (fstat(fd, &st) != 0) {
         s = clvr_error_set(err, CLVR_ERR_IO, "%s: cannot stat: %s", path, strerror(errno));
-        goto cleanup;
-    }
-    if (!S_ISREG(st.st_mode)) {
+    } else if (!S_ISREG(st.st_mode)) {
         s = clvr_error_set(err, CLVR_ERR_IO, "%s: is %s, not a mesh file", path,
                            S_ISDIR(st.st_mode) ? "a directory" : "not a regular file");
-        goto cleanup;
-    }
-    uint64_t file_size = (uint64_t)st.st_size;
-    uint64_t head = file_size < BIN_HEADER_SIZE ? file_size : BIN_HEADER_SIZE;
-    s = read_full(fd, h, head, path, "the header", err);
-    if (s != CLVR_OK) goto cleanup;
-    s = bin_read_header(h, (size_t)head, file_size, path, opt, &hd, err);
-    if (s != CLVR_OK) goto cleanup;
-    /* The size matches the header exactly, so allocating is safe now. */
-    s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
-    if (s != CLVR_OK) goto cleanup;
-    clvr_mesh_set_scalar_name(out, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
-    for (uint32_t a = 0; a < BIN_ARRAY_COUNT && s == CLVR_OK; ++a)
-        s = read_full(fd, bin_array_ptr(out, a), hd.array_bytes[a], path, bin_array_name(a), err);
-    if (s != CLVR_OK) {
-        clvr_mesh_free(out);
-        goto cleanup;
+    } else {
+        bin_src src = {NULL, fd, (uint64_t)st.st_size, path};
+        s = bin_load(&src, opt, out, err);
     }
     close(fd);
-    fd = -1;
-    return bin_finish(out, path, opt, err);
-cleanup:
-    if (fd >= 0) close(fd);
     return s;
 }
 

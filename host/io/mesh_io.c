@@ -100,7 +100,7 @@ static const struct {
     {".exii", "Exodus II (.exii)"},     {".gen", "Exodus II (.gen)"},
     {".g", "Exodus II or PLOT3D (.g)"}, {".cgns", "CGNS (.cgns)"},         {".inp", "AVS UCD (.inp)"},
     {".xyz", "PLOT3D (.xyz)"},          {".x", "PLOT3D (.x)"},             {".p3d", "PLOT3D (.p3d)"},
-    {".grd", "PLOT3D (.grd)"},
+    {".grd", "PLOT3D (.grd)"},          {".pvd", "ParaView time series (.pvd)"},
 };
 
 clvr_status clvr_mesh_load(const char *path, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err)
@@ -151,6 +151,6 @@ clvr_status clvr_mesh_load(const char *path, const clvr_load_options *opt, clvr_
     return clvr_error_set(err, CLVR_ERR_FORMAT,
                           "%s: unknown mesh format (%llu bytes); clvr reads clvr .bin, .umesh and legacy VTK .vtk "
                           "unstructured grids; tools/clvr-convert converts what VTK reads (.vtu, Exodus, CGNS, "
-                          "PLOT3D, AVS .inp, ...)",
+                          "PLOT3D, AVS .inp, .pvd time series, ...)",
                           path, (unsigned long long)size);
 }

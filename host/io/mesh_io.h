@@ -11,6 +11,10 @@
 typedef struct clvr_load_options {
     const char *scalar_name;  /* attribute to use as the scalar; NULL: the file's first/only one */
     int skip_validation;      /* nonzero: do not run clvr_mesh_validate (fuzzing, --info of broken files) */
+    int field_ranges;         /* nonzero: also decode every other array for its range (--info) */
+    int cell_flat;            /* nonzero: a cell field is rendered flat, each element its own value:
+                               * every element gets its own copies of its vertices carrying that
+                               * value (clvr_mesh_flatten_cells); 0: averaged onto the vertices */
 } clvr_load_options;
 
 /* Loads any supported file, chosen by content (magic) and then extension:

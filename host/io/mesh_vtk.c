@@ -12,17 +12,20 @@
  *
  * Cells of type 10 (tetra), 14 (pyramid), 13 (wedge) and 12 (hexahedron)
  * are kept in file order, and so are the quadratic versions of those four,
- * reduced to their corners (see vtk_to_clvr_type); all others (vertices,
- * lines, triangles, quads, polyhedra, Lagrange cells) are skipped; library
+ * reduced to their corners (see vtk_to_clvr_type); polyhedra (type 42)
+ * are decomposed into tets and pyramids (poly_decompose, counted in
+ * mesh->decomposed_cells); all others (vertices, lines, triangles, quads,
+ * Lagrange cells) are skipped; library
  * code prints nothing, so their number goes to mesh->skipped_cells and the
  * CLI warns. Every point is kept so that
  * point data lines up.
  *
- * The scalar is opt->scalar_name, searched among point arrays and then
- * cell arrays; by default the first point array (SCALARS or one-component
- * FIELD arrays first), else the first cell array. Arrays with several
- * components give their Euclidean norm; cell arrays are averaged onto the
- * points of the kept cells (points with none get 0).
+ * The scalar is opt->scalar_name, a clvr_field_select spec over the point
+ * and cell arrays; by default the first point array (SCALARS or
+ * one-component FIELD arrays first), else the first cell array. Arrays with
+ * several components give their Euclidean norm or the chosen component;
+ * cell arrays are averaged onto the points of the kept cells (points with
+ * none get 0). Every array is listed in mesh->fields for --info.
  *
  * Parsing is two passes over the untrusted buffer: the first walks the
  * sections and records where each array starts after checking that it fits
@@ -695,11 +698,59 @@ static int vtk_to_clvr_type(int64_t vt)
     }
 }
 
+/* The candidates as a field table (for --scalar and --info). */
+static clvr_status cand_fields(vtk_in *in, const vtk_doc *doc, clvr_field_info **out)
+{
+    const cand_list *cl = &doc->cands;
+    *out = calloc(cl->n ? cl->n : 1, sizeof **out);
+    if (!*out) return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory listing arrays", in->name);
+    for (size_t i = 0; i < cl->n; ++i) {
+        clvr_mesh tmp;
+        clvr_mesh_set_scalar_name(&tmp, cl->v[i].name, strlen(cl->v[i].name));
+        memcpy((*out)[i].name, tmp.scalar_name, CLVR_SCALAR_NAME_MAX);
+        (*out)[i].association = cl->v[i].cell ? CLVR_FIELD_CELL : CLVR_FIELD_POINT;
+        (*out)[i].components = cl->v[i].ncomp > CLVR_FIELD_COMPONENTS_MAX ? CLVR_FIELD_COMPONENTS_MAX : cl->v[i].ncomp;
+    }
+    return CLVR_OK;
+}
+
+/* Range of one candidate's values, or of its tuples' magnitudes. */
+static clvr_status cand_range(vtk_in *in, const cand *c, clvr_field_info *f)
+{
+    vit it;
+    vit_init(&it, in, &c->a, c->name);
+    double lo = INFINITY, hi = -INFINITY;
+    uint64_t tuples = c->a.count / c->ncomp;
+    for (uint64_t i = 0; i < tuples; ++i) {
+        double s2 = 0.0, x = 0.0;
+        for (uint32_t k = 0; k < c->ncomp; ++k) {
+            clvr_status s = vit_f64(&it, &x);
+            if (s != CLVR_OK) return s;
+            s2 += x * x;
+        }
+        double v = c->ncomp > 1 ? sqrt(s2) : x;
+        if (v < lo) lo = v;
+        if (v > hi) hi = v;
+    }
+    f->has_range = tuples > 0;
+    f->min = tuples ? (float)lo : 0.0f;
+    f->max = tuples ? (float)hi : 0.0f;
+    return CLVR_OK;
+}
+
 /* Chooses the scalar array, or explains which ones exist. */
-static clvr_status choose_scalar(vtk_in *in, const vtk_doc *doc, const clvr_load_options *opt, const cand **out)
+static clvr_status choose_scalar(vtk_in *in, const vtk_doc *doc, const clvr_load_options *opt, const cand **out,
+                                 const clvr_field_info *fields, int *comp)
 {
     const cand_list *cl = &doc->cands;
     *out = NULL;
+    *comp = CLVR_FIELD_MAGNITUDE;
+    if (opt && opt->scalar_name && cl->n) {
+        uint32_t idx;
+        clvr_status s = clvr_field_select(fields, (uint32_t)cl->n, opt->scalar_name, in->name, &idx, comp, in->err);
+        if (s == CLVR_OK) *out = &cl->v[idx];
+        return s;
+    }
     if (opt && opt->scalar_name) {
         for (int cell = 0; cell < 2 && !*out; ++cell)
             for (size_t i = 0; i < cl->n && !*out; ++i)
@@ -729,10 +780,163 @@ static clvr_status choose_scalar(vtk_in *in, const vtk_doc *doc, const clvr_load
                           in->name);
 }
 
+/* Polyhedra (VTK type 42, OpenFOAM's foamToVTK -legacy -poly writes them):
+ * their ids are a face stream, nfaces then per face a count and its ids.
+ * Each is decomposed without new vertices, as a fan from one of its
+ * vertices (the apex, the first vertex of the first face): every face that
+ * does not hold the apex becomes a pyramid (a quad) or tets (a triangle, or
+ * a fan over a larger polygon) with the apex on top, oriented as VTK orders
+ * those cells. Exact for convex (and star-shaped about the apex) cells, as
+ * OpenFOAM's are; the pieces go to growable lists appended to the mesh at
+ * the end. */
+#define VTK_POLYHEDRON 42
+
+typedef struct poly_out {
+    uint32_t *tets, *pyrs;       /* 4 and 5 ids per piece */
+    uint64_t num_tets, num_pyrs, cap_tets, cap_pyrs;
+    int64_t *ids;                /* one cell's face stream */
+    uint64_t cap_ids;
+    uint32_t *uniq;              /* its distinct vertices (cell-data averaging) */
+    uint64_t cap_uniq;
+    uint64_t cells;              /* polyhedra decomposed */
+    float *tv, *pv;              /* --cell-data flat: each piece's cell value */
+    uint64_t cap_tv, cap_pv;
+} poly_out;
+
+static void poly_free(poly_out *p)
+{
+    free(p->tets);
+    free(p->pyrs);
+    free(p->ids);
+    free(p->uniq);
+    free(p->tv);
+    free(p->pv);
+}
+
+static int grow(void **buf, uint64_t *cap, uint64_t need, size_t item)
+{
+    if (need <= *cap) return 0;
+    uint64_t n = *cap ? *cap : 64;
+    while (n < need) n *= 2;
+    if (n > SIZE_MAX / item) return 1;
+    void *q = realloc(*buf, (size_t)(n * item));
+    if (!q) return 1;
+    *buf = q;
+    *cap = n;
+    return 0;
+}
+
+static double orient3(const float *pos, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    const float *A = pos + 3 * (uint64_t)a, *B = pos + 3 * (uint64_t)b, *C = pos + 3 * (uint64_t)c,
+                *D = pos + 3 * (uint64_t)d;
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        u[k] = (double)B[k] - A[k];
+        v[k] = (double)C[k] - A[k];
+        w[k] = (double)D[k] - A[k];
+    }
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+
+static clvr_status poly_tet(vtk_in *in, poly_out *p, const float *pos, uint32_t a, uint32_t b, uint32_t c, uint32_t apex)
+{
+    if (grow((void **)&p->tets, &p->cap_tets, p->num_tets + 1, 4 * sizeof(uint32_t)))
+        return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory decomposing polyhedra", in->name);
+    uint32_t *t = p->tets + 4 * p->num_tets++;
+    int flip = orient3(pos, a, b, c, apex) < 0.0;
+    t[0] = a;
+    t[1] = flip ? c : b;
+    t[2] = flip ? b : c;
+    t[3] = apex;
+    return CLVR_OK;
+}
+
+/* Decomposes the face stream p->ids[0..n) of cell c (positions already read). */
+static clvr_status poly_decompose(vtk_in *in, poly_out *p, const float *pos, uint64_t num_points, uint64_t c,
+                                  uint64_t n)
+{
+    const int64_t *s = p->ids;
+    if (n < 1 || s[0] < 4 || (uint64_t)s[0] > n)
+        return clvr_error_set(in->err, CLVR_ERR_BAD_FIELD,
+                              "%s: polyhedron cell %llu has %lld faces; a polyhedron needs at least 4 in its %llu ids",
+                              in->name, (unsigned long long)c, n ? (long long)s[0] : 0LL, (unsigned long long)n);
+    const uint64_t nfaces = (uint64_t)s[0];
+    /* Validate the stream and every id first. */
+    uint64_t at = 1;
+    for (uint64_t f = 0; f < nfaces; ++f) {
+        if (at >= n || s[at] < 3 || (uint64_t)s[at] > n - at - 1)
+            return clvr_error_set(in->err, CLVR_ERR_BAD_FIELD,
+                                  "%s: polyhedron cell %llu: face %llu runs past the cell's %llu ids (or has fewer "
+                                  "than 3 vertices)", in->name, (unsigned long long)c, (unsigned long long)f,
+                                  (unsigned long long)n);
+        for (int64_t k = 1; k <= s[at]; ++k)
+            if (s[at + k] < 0 || (uint64_t)s[at + k] >= num_points)
+                return clvr_error_set(in->err, CLVR_ERR_BAD_INDEX,
+                                      "%s: polyhedron cell %llu face %llu vertex is index %lld but the mesh has %llu "
+                                      "points", in->name, (unsigned long long)c, (unsigned long long)f,
+                                      (long long)s[at + k], (unsigned long long)num_points);
+        at += (uint64_t)s[at] + 1;
+    }
+    const uint32_t apex = (uint32_t)s[2];
+    at = 1;
+    for (uint64_t f = 0; f < nfaces; ++f) {
+        const int64_t nv = s[at];
+        const int64_t *v = s + at + 1;
+        at += (uint64_t)nv + 1;
+        int has_apex = 0;
+        for (int64_t k = 0; k < nv; ++k) has_apex |= (uint32_t)v[k] == apex;
+        if (has_apex) continue;
+        if (nv == 4) {
+            if (grow((void **)&p->pyrs, &p->cap_pyrs, p->num_pyrs + 1, 5 * sizeof(uint32_t)))
+                return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory decomposing polyhedra",
+                                      in->name);
+            uint32_t *q = p->pyrs + 5 * p->num_pyrs++;
+            /* VTK's pyramid: the base (0,1,2,3) turns counterclockwise seen from the apex. */
+            double o = orient3(pos, (uint32_t)v[0], (uint32_t)v[1], (uint32_t)v[2], apex) +
+                       orient3(pos, (uint32_t)v[0], (uint32_t)v[2], (uint32_t)v[3], apex);
+            for (int k = 0; k < 4; ++k) q[k] = (uint32_t)v[o < 0.0 ? (4 - k) % 4 : k];
+            q[4] = apex;
+            continue;
+        }
+        for (int64_t k = 1; k + 1 < nv; ++k) {
+            clvr_status st = poly_tet(in, p, pos, (uint32_t)v[0], (uint32_t)v[k], (uint32_t)v[k + 1], apex);
+            if (st != CLVR_OK) return st;
+        }
+    }
+    p->cells++;
+    return CLVR_OK;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Adds a polyhedron's cell value to each of its distinct vertices. */
+static clvr_status poly_accumulate(vtk_in *in, poly_out *p, uint64_t n, double cv, double *acc, uint32_t *cnt)
+{
+    if (grow((void **)&p->uniq, &p->cap_uniq, n, sizeof(uint32_t)))
+        return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory decomposing polyhedra", in->name);
+    uint64_t m = 0, at = 1;
+    for (int64_t f = 0; f < p->ids[0]; ++f) {
+        for (int64_t k = 1; k <= p->ids[at]; ++k) p->uniq[m++] = (uint32_t)p->ids[at + k];
+        at += (uint64_t)p->ids[at] + 1;
+    }
+    qsort(p->uniq, (size_t)m, sizeof *p->uniq, cmp_u32);
+    for (uint64_t i = 0; i < m; ++i)
+        if (i == 0 || p->uniq[i] != p->uniq[i - 1]) {
+            acc[p->uniq[i]] += cv;
+            cnt[p->uniq[i]] += 1;
+        }
+    return CLVR_OK;
+}
+
 /* Pass 2: cells. Fills the index lists (counts already allocated) and,
  * for a cell-data scalar, accumulates it onto the cells' points. */
 static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *types, clvr_mesh *m, const cand *cell_sc,
-                              double *acc, uint32_t *cnt)
+                              int comp, double *acc, uint32_t *cnt, poly_out *poly, float *const cellv[CLVR_CELL_TYPE_COUNT])
 {
     vit stream, offs, conn, sc;
     uint64_t used = 0, fill[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, 0};
@@ -785,9 +989,29 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                 double x;
                 if ((s = vit_f64(&sc, &x)) != CLVR_OK) return s;
                 sum2 += x * x;
-                cv = x;
+                if (comp < 0 || (uint32_t)comp == k) cv = x;
             }
-            if (cell_sc->ncomp > 1) cv = sqrt(sum2);
+            if (cell_sc->ncomp > 1 && comp < 0) cv = sqrt(sum2);
+        }
+        if (types[c] == VTK_POLYHEDRON) {
+            if (grow((void **)&poly->ids, &poly->cap_ids, (uint64_t)npts ? (uint64_t)npts : 1, sizeof(int64_t)))
+                return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory reading polyhedron %llu",
+                                      in->name, (unsigned long long)c);
+            for (int64_t k = 0; k < npts; ++k)
+                if ((s = vit_i64(ids, &poly->ids[k])) != CLVR_OK) return s;
+            const uint64_t t0 = poly->num_tets, p0 = poly->num_pyrs;
+            s = poly_decompose(in, poly, m->positions, doc->num_points, c, (uint64_t)npts);
+            if (s == CLVR_OK && acc && !cellv[0]) s = poly_accumulate(in, poly, (uint64_t)npts, cv, acc, cnt);
+            if (s == CLVR_OK && cellv[0]) { /* --cell-data flat: every piece carries the polyhedron's value */
+                if (grow((void **)&poly->tv, &poly->cap_tv, poly->num_tets ? poly->num_tets : 1, sizeof(float)) ||
+                    grow((void **)&poly->pv, &poly->cap_pv, poly->num_pyrs ? poly->num_pyrs : 1, sizeof(float)))
+                    return clvr_error_set(in->err, CLVR_ERR_NO_MEMORY, "%s: out of memory decomposing polyhedra",
+                                          in->name);
+                for (uint64_t k = t0; k < poly->num_tets; ++k) poly->tv[k] = (float)cv;
+                for (uint64_t k = p0; k < poly->num_pyrs; ++k) poly->pv[k] = (float)cv;
+            }
+            if (s != CLVR_OK) return s;
+            continue;
         }
         if (t < 0) {
             /* Skipped cell: step over its ids (binary: in place). */
@@ -806,6 +1030,7 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                                   "%s: cell %llu has VTK type %d (%s) but only %lld points, fewer than its %u corners",
                                   in->name, (unsigned long long)c, (int)types[c], clvr_cell_type_name((uint32_t)t),
                                   (long long)npts, nv);
+        if (cellv[0]) cellv[t][fill[t]] = (float)cv;
         uint32_t *dst = m->indices[t] + fill[t]++ * nv;
         for (uint32_t k = 0; k < nv; ++k) {
             if ((s = vit_i64(ids, &v)) != CLVR_OK) return s;
@@ -817,7 +1042,7 @@ static clvr_status fill_cells(vtk_in *in, const vtk_doc *doc, const uint8_t *typ
                                       "%s: cell %llu vertex %u is index %lld but the mesh has %llu points", in->name,
                                       (unsigned long long)c, k, (long long)v, (unsigned long long)doc->num_points);
             dst[k] = (uint32_t)v;
-            if (acc) {
+            if (acc && !cellv[0]) {
                 acc[v] += cv;
                 cnt[v] += 1;
             }
@@ -844,6 +1069,12 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
     double *acc = NULL;
     uint32_t *cnt = NULL;
     const cand *sc = NULL;
+    clvr_field_info *fields = NULL;
+    int comp = CLVR_FIELD_MAGNITUDE;
+    poly_out poly;
+    memset(&poly, 0, sizeof poly);
+    float *cellv[CLVR_CELL_TYPE_COUNT] = {NULL, NULL, NULL, NULL};
+    int flat = 0;
     clvr_status s;
     memset(&doc, 0, sizeof doc);
     memset(out, 0, sizeof *out);
@@ -866,11 +1097,12 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
                            (unsigned long long)doc.num_points, UINT32_MAX);
         goto done;
     }
-    s = choose_scalar(&in, &doc, opt, &sc);
+    s = cand_fields(&in, &doc, &fields);
+    if (s == CLVR_OK) s = choose_scalar(&in, &doc, opt, &sc, fields, &comp);
     if (s != CLVR_OK) goto done;
 
     /* Cell types: count the kept ones to size the index lists. */
-    uint64_t counts[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, 0}, skipped = 0;
+    uint64_t counts[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, 0}, skipped = 0, polyhedra = 0;
     if (doc.num_cells > SIZE_MAX || !(types = malloc(doc.num_cells ? (size_t)doc.num_cells : 1))) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu cell types", name,
                            (unsigned long long)doc.num_cells);
@@ -885,10 +1117,11 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
             types[c] = v >= 0 && v < 255 ? (uint8_t)v : 255;
             int t = vtk_to_clvr_type(types[c]);
             if (t >= 0) ++counts[t];
+            else if (types[c] == VTK_POLYHEDRON) ++polyhedra;
             else ++skipped;
         }
     }
-    if (counts[0] + counts[1] + counts[2] + counts[3] == 0 && !(opt && opt->skip_validation)) {
+    if (counts[0] + counts[1] + counts[2] + counts[3] + polyhedra == 0 && !(opt && opt->skip_validation)) {
         s = clvr_error_set(err, CLVR_ERR_EMPTY,
                            "%s: no tetra, pyramid, wedge or hexahedron cells (%llu cells of other types skipped)", name,
                            (unsigned long long)skipped);
@@ -919,6 +1152,7 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
             out->positions[i] = (float)x;
         }
     }
+    flat = opt && opt->cell_flat && sc->cell;
     if (sc->cell) {
         acc = calloc(doc.num_points ? (size_t)doc.num_points : 1, sizeof *acc);
         cnt = calloc(doc.num_points ? (size_t)doc.num_points : 1, sizeof *cnt);
@@ -927,29 +1161,111 @@ clvr_status clvr_mesh_parse_vtk(const void *data, size_t size, const char *name,
             goto done;
         }
     }
-    s = fill_cells(&in, &doc, types, out, sc->cell ? sc : NULL, acc, cnt);
+    if (flat) {
+        /* --cell-data flat: each element's own value, per type; polyhedron pieces in poly.tv/pv. */
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t)
+            if (!(cellv[t] = malloc(counts[t] ? (size_t)counts[t] * sizeof(float) : sizeof(float))))
+                s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the cell values", name);
+        if (s != CLVR_OK) goto done;
+    }
+    s = fill_cells(&in, &doc, types, out, sc->cell ? sc : NULL, comp, acc, cnt, &poly, cellv);
     if (s != CLVR_OK) goto done;
-    if (sc->cell) {
+    if (poly.num_tets || poly.num_pyrs) {
+        /* The pieces go after the file's own tets and pyramids. */
+        const uint64_t add[2] = {poly.num_tets, poly.num_pyrs};
+        const uint32_t *src[2] = {poly.tets, poly.pyrs};
+        for (uint32_t t = 0; t < 2; ++t) {
+            uint64_t total, bytes;
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            if (!add[t]) continue;
+            if (clvr_add_u64(out->num_cells[t], add[t], &total) || clvr_mul_u64(total, nv * sizeof(uint32_t), &bytes) ||
+                bytes > SIZE_MAX) {
+                s = clvr_error_set(err, CLVR_ERR_OVERFLOW, "%s: decomposed polyhedra overflow the %s list", name,
+                                   clvr_cell_type_name(t));
+                goto done;
+            }
+            uint32_t *q = realloc(out->indices[t], (size_t)bytes);
+            if (!q) {
+                s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: out of memory for decomposed polyhedra", name);
+                goto done;
+            }
+            memcpy(q + out->num_cells[t] * nv, src[t], (size_t)(add[t] * nv * sizeof(uint32_t)));
+            out->indices[t] = q;
+            out->num_cells[t] = total;
+        }
+    }
+    out->decomposed_cells = poly.cells;
+    if (flat) {
+        /* One value per element in mesh order: each type's file cells, then its polyhedron pieces. */
+        uint64_t ne = clvr_mesh_num_elements(out), e = 0;
+        float *all = ne <= SIZE_MAX / sizeof(float) ? malloc(ne ? (size_t)ne * sizeof(float) : 1) : NULL;
+        if (!all) {
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the cell values", name);
+            goto done;
+        }
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            memcpy(all + e, cellv[t], (size_t)counts[t] * sizeof(float));
+            e += counts[t];
+            const float *extra = t == 0 ? poly.tv : t == 1 ? poly.pv : NULL;
+            const uint64_t n_extra = t == 0 ? poly.num_tets : t == 1 ? poly.num_pyrs : 0;
+            if (n_extra) memcpy(all + e, extra, (size_t)n_extra * sizeof(float));
+            e += n_extra;
+        }
+        s = clvr_mesh_flatten_cells(out, all, name, err);
+        free(all);
+        if (s != CLVR_OK) goto done;
+    }
+    if (flat) {
+        /* scalars set by clvr_mesh_flatten_cells */
+    } else if (sc->cell) {
         for (uint64_t i = 0; i < doc.num_points; ++i) out->scalars[i] = cnt[i] ? (float)(acc[i] / cnt[i]) : 0.0f;
     } else {
         vit it;
         vit_init(&it, &in, &sc->a, sc->name);
         for (uint64_t i = 0; i < doc.num_points; ++i) {
-            double sum2 = 0.0, x = 0.0;
+            double sum2 = 0.0, x = 0.0, pick = 0.0;
             for (uint32_t k = 0; k < sc->ncomp; ++k) {
                 if ((s = vit_f64(&it, &x)) != CLVR_OK) goto done;
                 sum2 += x * x;
+                if (comp < 0 || (uint32_t)comp == k) pick = x;
             }
-            out->scalars[i] = (float)(sc->ncomp > 1 ? sqrt(sum2) : x);
+            out->scalars[i] = (float)(sc->ncomp > 1 && comp < 0 ? sqrt(sum2) : pick);
         }
     }
     clvr_mesh_update_ranges(out);
+    /* The field table for --info: ranges of every array on request, the
+     * chosen point array's from the scalars. */
+    for (size_t i = 0; i < doc.cands.n && s == CLVR_OK && opt && opt->field_ranges; ++i)
+        s = cand_range(&in, &doc.cands.v[i], &fields[i]);
+    if (s != CLVR_OK) goto done;
+    {
+        uint32_t fi = (uint32_t)(sc - doc.cands.v);
+        if (!sc->cell && (comp < 0 || sc->ncomp == 1)) {
+            fields[fi].has_range = 1;
+            fields[fi].min = out->scalar_min;
+            fields[fi].max = out->scalar_max;
+        }
+        if (comp >= 0 && sc->ncomp > 1) {
+            char label[CLVR_SCALAR_NAME_MAX + 16];
+            if (comp < 3) snprintf(label, sizeof label, "%s:%c", fields[fi].name, "xyz"[comp]);
+            else snprintf(label, sizeof label, "%s:%d", fields[fi].name, comp);
+            clvr_mesh_set_scalar_name(out, label, strlen(label));
+        }
+        out->fields = fields;
+        out->num_fields = (uint32_t)doc.cands.n;
+        out->scalar_field = fi;
+        out->scalar_component = comp;
+        fields = NULL;
+    }
     if (!(opt && opt->skip_validation)) s = clvr_mesh_validate(out, name, err);
 done:
     if (s != CLVR_OK) clvr_mesh_free(out);
     free(types);
     free(acc);
     free(cnt);
+    free(fields);
+    poly_free(&poly);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(cellv[t]);
     free(doc.cands.v);
     return s;
 }

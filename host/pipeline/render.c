@@ -7,6 +7,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The frame fields the urm light grid depends on (besides the transfer
+ * function), compared byte for byte. */
+typedef struct light_key {
+    float vol[6], grid[6], light_dir[3], urm_kappa;
+    uint32_t u[8];
+} light_key;
+
 struct clvr_renderer {
     clvr_cl *cl;
     const clvr_clustered *mesh;
@@ -20,6 +27,7 @@ struct clvr_renderer {
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
     cl_mem light_buf;          /* urm with shadows: the light grid (frame.light_res^3) */
     int light_valid;           /* light_buf matches the frame and transfer function */
+    light_key light_key;       /* the frame fields light_buf was made for */
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
     uint32_t accum_w, accum_h; /* size of accum buffers */
     uint64_t frames;
@@ -181,7 +189,23 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
     f->light_res = CLVR_URM_LIGHT_RES;
-    r->light_valid = 0;
+    {
+        /* The light grid depends on these fields only (and on the transfer
+         * function): a new image size, exposure, sampler or a shadows toggle
+         * keeps it, so the viewer does not pay for it again. */
+        light_key k;
+        memset(&k, 0, sizeof k);
+        memcpy(k.vol, f->vol_lo, sizeof f->vol_lo);
+        memcpy(k.vol + 3, f->vol_hi, sizeof f->vol_hi);
+        memcpy(k.grid, f->grid_lo, sizeof f->grid_lo);
+        memcpy(k.grid + 3, f->grid_hi, sizeof f->grid_hi);
+        memcpy(k.light_dir, f->light_dir, sizeof f->light_dir);
+        k.urm_kappa = f->urm_kappa;
+        k.u[0] = f->urm_steps; k.u[1] = f->seed_lo; k.u[2] = f->seed_hi; k.u[3] = f->method;
+        k.u[4] = f->grid_res; k.u[5] = f->bins; k.u[6] = f->segments; k.u[7] = f->light_res;
+        if (memcmp(&k, &r->light_key, sizeof k) != 0) r->light_valid = 0;
+        r->light_key = k;
+    }
     CLVR_TRY(alloc_image(r, err));
     /* A new grid resolution or domain needs the elements rasterized again. */
     CLVR_TRY(update_majorants(r, 0, err));
@@ -302,7 +326,8 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     } vol = {.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
              .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = maj.cells,
              .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
-             .cluster_majorants = maj.clusters, .light = r->light_buf};
+             .cluster_majorants = maj.clusters, .light = r->light_buf,
+             .ebox = b->two_level.ebox};
 #define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
     if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
         r->frame.method != CLVR_RENDER_MARCH) {

@@ -25,6 +25,37 @@ def mixed():
     }, "mixed")
 
 
+def bin2_bytes(m, fields):
+    """clvr .bin version 2 (docs/bin-format.md): positions, index lists, the field
+    table and the fields. fields: [(name, association 0/1, components, flat values)]."""
+    nv = len(m["positions"])
+    counts = [len(m["cells"][t]) for t in mg.CELL_TYPES]
+    h = bytearray(256)
+    h[0:8] = b"CLVRMESH"
+    struct.pack_into("<IIQ4Q", h, 8, 2, 256, nv, *counts)
+    if nv:
+        lo = [min(p[k] for p in m["positions"]) for k in range(3)]
+        hi = [max(p[k] for p in m["positions"]) for k in range(3)]
+        struct.pack_into("<3f3f", h, 56, *lo, *hi)
+    if fields:
+        h[88:88 + len(fields[0][0])] = fields[0][0].encode()
+    struct.pack_into("<I", h, 156, len(fields))
+    body = bytearray()
+    for p in m["positions"]:
+        body += struct.pack("<3f", *p)
+    for t in mg.CELL_TYPES:
+        for c in m["cells"][t]:
+            body += struct.pack("<%dI" % len(c), *c)
+    for name, assoc, nc, vals in fields:
+        e = bytearray(128)
+        e[0:len(name)] = name.encode()
+        struct.pack_into("<IIff", e, 64, assoc, nc, min(vals), max(vals))
+        body += e
+    for _, _, _, vals in fields:
+        body += struct.pack("<%df" % len(vals), *vals)
+    return bytes(h) + bytes(body)
+
+
 def write(target, name, data):
     d = os.path.join(HERE, "seeds", target)
     os.makedirs(d, exist_ok=True)
@@ -41,6 +72,16 @@ def main():
     write("bin", "mixed.bin", mg.bin_bytes(mix))
     write("bin", "tet_grid.bin", mg.bin_bytes(tgrid))
     write("bin", "empty.bin", mg.bin_bytes(mg.mesh([], [], {}, "")))
+    # .bin version 2: point, cell and vector fields, a shared name, no fields
+    ne = sum(len(mix["cells"][t]) for t in mg.CELL_TYPES)
+    nv = len(mix["positions"])
+    write("bin", "mixed_fields_v2.bin", bin2_bytes(mix, [
+        ("s", 0, 1, list(mix["scalars"])),
+        ("s", 1, 1, [float(10 * i) for i in range(ne)]),
+        ("vel", 0, 3, [float(i % 5) for i in range(3 * nv)]),
+        ("stress", 1, 6, [float(i % 7) - 3 for i in range(6 * ne)])]))
+    write("bin", "tet_cell_v2.bin", bin2_bytes(tet, [("c", 1, 1, [2.5])]))
+    write("bin", "grid_nofields_v2.bin", bin2_bytes(grid, []))
     # .umesh, every version the reader takes
     write("umesh", "mixed_566.umesh", mg.umesh_bytes(mix, 0x566))
     write("umesh", "mixed_567.umesh", mg.umesh_bytes(mix, 0x567))
@@ -64,6 +105,16 @@ def main():
              b"FIELD attrs 2\nrho 1 10 float\n0 1 2 3 4 5 6 7 8 9\nuvw 3 10 double\n" + b"0 1 2 " * 10 + b"\n"
              b"CELL_DATA 1\nSCALARS id int\nLOOKUP_TABLE default\n7\n")
     write("vtk", "quadratic_field.vtk", field)
+    # a polyhedron (type 42: a hexagonal prism's face stream) beside a tet, classic and 5.1 cells
+    poly = ("\n".join(['# vtk DataFile Version 4.2', 'polyhedra', 'ASCII', 'DATASET UNSTRUCTURED_GRID', 'POINTS 13 float', '1.0 0.0 0', '0.5 0.866025 0', '-0.5 0.866025 0', '-1.0 0.0 0', '-0.5 -0.866025 0', '0.5 -0.866025 0', '1.0 0.0 1', '0.5 0.866025 1', '-0.5 0.866025 1', '-1.0 0.0 1', '-0.5 -0.866025 1', '0.5 -0.866025 1', '0 0 2', 'CELLS 2 51', '45 8 6 5 4 3 2 1 0 6 6 7 8 9 10 11 4 0 1 7 6 4 1 2 8 7 4 2 3 9 8 4 3 4 10 9 4 4 5 11 10 4 5 0 6 11', '4 6 7 8 12', 'CELL_TYPES 2', '42 10', 'POINT_DATA 13', 'SCALARS s float', 'LOOKUP_TABLE default', '0 1 2 3 4 5 6 7 8 9 10 11 12', 'CELL_DATA 2', 'SCALARS c float', 'LOOKUP_TABLE default', '10 20']) + "\n").encode()
+    write("vtk", "polyhedron_ascii.vtk", poly)
+    stream = "8 6 5 4 3 2 1 0 6 6 7 8 9 10 11 4 0 1 7 6 4 1 2 8 7 4 2 3 9 8 4 3 4 10 9 4 4 5 11 10 4 5 0 6 11"
+    poly51 = poly.replace(b"4.2", b"5.1").replace(
+        b"CELLS 2 51\n45 " + stream.encode() + b"\n4 6 7 8 12\n",
+        b"CELLS 3 49\nOFFSETS vtktypeint64\n0 45 49\nCONNECTIVITY vtktypeint64\n" + stream.encode() +
+        b" 6 7 8 12\n")
+    assert poly51 != poly
+    write("vtk", "polyhedron_51_ascii.vtk", poly51)
     # transfer functions: the text format and ParaView JSON
     write("tf", "ramp.tf", b"# soft ramp\ncolormap viridis\nopacity 0 0\nopacity 0.3 0 0.5 0.2\nopacity 1 0.8\n"
                            b"range -1.5 2.5\ndensity 2\ntable 512\n")
