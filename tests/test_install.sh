@@ -55,5 +55,81 @@ else
   echo "note: no OpenCL device; the installed clvr's render is not tried"
 fi
 
+# libclvr (issue 18): the library with its soname links, clvr.h, the
+# pkg-config and CMake package files, the Python module and the example.
+for f in lib/libclvr.so lib/libclvr.so.1 include/clvr.h lib/pkgconfig/clvr.pc lib/cmake/clvr/clvrConfig.cmake \
+  lib/cmake/clvr/clvrConfigVersion.cmake lib/cmake/clvr/clvrTargets.cmake lib/python3/dist-packages/clvr/__init__.py \
+  lib/python3/dist-packages/clvr/_config.py share/doc/clvr/examples/clvr_turntable.py; do
+  [ -e "$P/$f" ] && ok || bad "$f missing"
+done
+objdump -p "$P/lib/libclvr.so.1" 2>/dev/null | grep -q 'SONAME *libclvr.so.1' && ok || bad "libclvr.so.1 has no soname libclvr.so.1"
+# An ASan+UBSan build's library needs the sanitizer runtimes in its users.
+san=()
+grep -q '^CLVR_SANITIZE:BOOL=ON' "$BUILD/CMakeCache.txt" 2>/dev/null && san=(-fsanitize=address,undefined)
+cat >"$tmp/use.c" <<'EOC'
+#include <clvr.h>
+#include <stdio.h>
+int main(void)
+{
+    clvr_message msg;
+    clvr_dataset *ds = NULL;
+    float xyz[3] = {0, 0, 0};
+    if (clvr_api_version() != CLVR_API_VERSION) return 1;
+    if (clvr_dataset_create(1, xyz, CLVR_COPY, &ds, &msg) != CLVR_RESULT_OK) return 2;
+    if (clvr_dataset_add_cells(ds, "tetra", 0, NULL, CLVR_COPY, &msg) != CLVR_RESULT_OK) return 3;
+    clvr_dataset_destroy(ds);
+    printf("clvr %s API %u\n", clvr_version_string(), clvr_api_version());
+    return 0;
+}
+EOC
+# pkg-config: compile, link and run against the installed library only.
+if PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --exact-version=1.0.0 clvr; then
+  ok
+  # shellcheck disable=SC2046
+  cc "${san[@]}" "$tmp/use.c" -o "$tmp/use_pc" $(PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --cflags --libs clvr) &&
+    LD_LIBRARY_PATH="$P/lib" "$tmp/use_pc" | grep -q "^clvr .* API 1000" && ok || bad "a program built with pkg-config clvr"
+else
+  bad "pkg-config does not find clvr 1.0.0 in $P/lib/pkgconfig"
+fi
+# CMake: find_package(clvr 1.0 REQUIRED) and the clvr::clvr target.
+mkdir -p "$tmp/cm"
+cp "$tmp/use.c" "$tmp/cm/use.c"
+cat >"$tmp/cm/CMakeLists.txt" <<EOC
+cmake_minimum_required(VERSION 3.20)
+project(use_clvr C)
+find_package(clvr 1.0 REQUIRED)
+add_executable(use use.c)
+target_compile_options(use PRIVATE ${san[*]})
+target_link_options(use PRIVATE ${san[*]})
+target_link_libraries(use PRIVATE clvr::clvr)
+EOC
+if cmake -S "$tmp/cm" -B "$tmp/cm/b" -DCMAKE_PREFIX_PATH="$P" >"$tmp/cm.log" 2>&1 &&
+  cmake --build "$tmp/cm/b" >>"$tmp/cm.log" 2>&1 && "$tmp/cm/b/use" | grep -q "API 1000"; then
+  ok
+else
+  bad "find_package(clvr): $(grep -m3 -B2 -A3 "error" "$tmp/cm.log")"
+fi
+# The installed Python module finds the installed library (not the build
+# tree's: CLVR_LIBRARY unset, run from $tmp). Not for sanitizer builds.
+if [ ${#san[@]} -eq 0 ] && /usr/bin/python3 -c "import numpy" 2>/dev/null; then
+  out=$(env -u CLVR_LIBRARY PYTHONPATH="$P/lib/python3/dist-packages" /usr/bin/python3 -c '
+import clvr, os, sys
+print(os.path.realpath(clvr._lib._name))
+' 2>&1)
+  case $out in
+    "$(realpath "$P")"/lib/libclvr.so*) ok ;;
+    *) bad "installed module loads $out, not $P/lib/libclvr.so.1" ;;
+  esac
+  if "$P/bin/clvr" --list-devices >/dev/null 2>&1; then
+    PYTHONPATH="$P/lib/python3/dist-packages" CLVR_SHARED_DATA="$SRC/tests/data" CLVR_BUILD_DIR="$BUILD" \
+      /usr/bin/python3 "$SRC/tests/test_python.py" --quick && ok || bad "the installed Python module (test_python.py --quick)"
+    if /usr/bin/python3 -c "import meshio" 2>/dev/null; then
+      PYTHONPATH="$P/lib/python3/dist-packages" /usr/bin/python3 "$P/share/doc/clvr/examples/clvr_turntable.py" \
+        "$SRC/tests/data/vtk/fire_ug.vtu" -o "$tmp/turn" --frames 8 --spp 1 --size 32x24 2>"$tmp/turn.log" &&
+        [ "$(ls "$tmp"/turn.00*.png | wc -l)" -eq 8 ] && ok || bad "the installed turntable example: $(tail -3 "$tmp/turn.log")"
+    fi
+  fi
+fi
+
 echo "test_install: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

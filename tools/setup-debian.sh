@@ -7,7 +7,8 @@
 #            pkg-config (what tools/demo.sh installs)
 #   convert  run + tools/clvr-convert's VTK and NumPy
 #   test     convert + what tools/test.sh needs: test meshes, benchmarks' Embree and VTK,
-#            the headless viewer tests, fuzzing (clang), the man page (help2man)
+#            the headless viewer tests, fuzzing (clang), the man page (help2man), the
+#            Python module's tests (meshio, venv)
 #   all      everything (= test)
 #
 # Idempotent and quiet: when every package of the group is already installed it does
@@ -41,6 +42,9 @@ TEST_PACKAGES=(
   clang libclang-rt-14-dev
   # clvr.1 from clvr --help at build time (the install test checks it).
   help2man
+  # The Python module's tests (issue 18): meshes from meshio, `pip install .` into a venv
+  # (numpy and VTK come with the convert group).
+  python3-meshio python3-venv
 )
 
 list_only=0

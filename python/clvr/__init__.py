@@ -1,0 +1,645 @@
+"""clvr: render unstructured volume meshes held in memory (issue 18).
+
+A thin ctypes layer over libclvr's C API (clvr.h); no compiled extension.
+
+    import clvr, meshio
+    mesh = clvr.Mesh.from_meshio(meshio.read("fire.vtu"))
+    r = clvr.Renderer(mesh, device="pocl", width=512, height=512)
+    img = r.render(spp=64, camera={"azimuth": 30}, tf={"colormap": "viridis"})
+    clvr.save_image("fire.png", img)          # the clvr program's writers
+
+Images are numpy float32 arrays of shape (height, width, 4): linear r, g, b
+(the background seen through the volume included) and a = opacity along the
+ray, rows top to bottom.
+
+Arrays are checked here before any device work (dtype, shape, index range,
+NaN) and then copied by libclvr (CLVR_COPY): nothing the caller passes is
+modified or kept. Failures raise clvr.Error (or its subclass
+clvr.InputError, also a ValueError, for bad arguments and data) carrying
+clvr's one-line message.
+
+libclvr is found, in this order: $CLVR_LIBRARY; next to this package (pip
+install); the path recorded by the build tree or `cmake --install`
+(_config.py); the system's loader (libclvr.so.1).
+"""
+import ctypes
+import math
+import os
+import warnings
+
+import numpy as np
+
+__all__ = ["Error", "InputError", "Context", "Mesh", "Renderer", "save_image", "list_devices",
+           "api_version", "version", "CELL_TYPES"]
+
+API_VERSION_MAJOR = 1
+
+# --------------------------------------------------------------------------- library
+
+
+def _find_library():
+    here = os.path.dirname(os.path.abspath(__file__))
+    names = ["libclvr.so.%d" % API_VERSION_MAJOR, "libclvr.so"]
+    candidates = []
+    env = os.environ.get("CLVR_LIBRARY")
+    if env:
+        candidates.append(env)
+    candidates += [os.path.join(here, n) for n in names]
+    try:
+        from . import _config  # written by CMake (build tree, install)
+        for d in _config.LIBRARY_DIRS:
+            d = d if os.path.isabs(d) else os.path.normpath(os.path.join(here, d))
+            candidates += [os.path.join(d, n) for n in names]
+    except ImportError:
+        pass
+    errors = []
+    for c in candidates:
+        if os.path.exists(c):
+            try:
+                return ctypes.CDLL(c)
+            except OSError as e:
+                errors.append(str(e))
+    for n in names:  # the system's loader: ldconfig, LD_LIBRARY_PATH
+        try:
+            return ctypes.CDLL(n)
+        except OSError as e:
+            errors.append(str(e))
+    raise ImportError("clvr: cannot load libclvr (tried %s): %s; build it (cmake --build build) and set "
+                      "CLVR_LIBRARY=/path/to/libclvr.so.%d" % (", ".join(candidates) or "no path",
+                                                                "; ".join(errors[-2:]), API_VERSION_MAJOR))
+
+
+_lib = _find_library()
+
+_c_float3 = ctypes.c_float * 3
+_P = ctypes.c_void_p
+_S = ctypes.c_char_p
+_U32 = ctypes.c_uint32
+_U64 = ctypes.c_uint64
+_F = ctypes.c_float
+
+
+class _Message(ctypes.Structure):
+    _fields_ = [("result", ctypes.c_int), ("text", ctypes.c_char * 1024)]
+
+
+_M = ctypes.POINTER(_Message)
+_PROTOS = {
+    "clvr_api_version": (ctypes.c_uint, []),
+    "clvr_version_string": (_S, []),
+    "clvr_result_name": (_S, [ctypes.c_int]),
+    "clvr_list_devices": (ctypes.c_int, [ctypes.c_char_p, ctypes.c_size_t, _M]),
+    "clvr_context_create": (ctypes.c_int, [_S, ctypes.POINTER(_P), _M]),
+    "clvr_context_destroy": (None, [_P]),
+    "clvr_context_describe": (ctypes.c_int, [_P, ctypes.c_char_p, ctypes.c_size_t, ctypes.c_char_p,
+                                             ctypes.c_size_t, _M]),
+    "clvr_dataset_create": (ctypes.c_int, [_U64, _P, ctypes.c_int, ctypes.POINTER(_P), _M]),
+    "clvr_dataset_add_cells": (ctypes.c_int, [_P, _S, _U64, _P, ctypes.c_int, _M]),
+    "clvr_dataset_add_field": (ctypes.c_int, [_P, _S, _P, ctypes.c_int, _M]),
+    "clvr_dataset_load": (ctypes.c_int, [_S, _S, ctypes.POINTER(_P), _M]),
+    "clvr_dataset_destroy": (None, [_P]),
+    "clvr_dataset_counts": (ctypes.c_int, [_P, ctypes.POINTER(_U64), ctypes.POINTER(_U64),
+                                           ctypes.POINTER(_U32), _M]),
+    "clvr_dataset_field_name": (ctypes.c_int, [_P, _U32, ctypes.c_char_p, ctypes.c_size_t, _M]),
+    "clvr_dataset_bounds": (ctypes.c_int, [_P, _c_float3, _c_float3, _M]),
+    "clvr_dataset_field_range": (ctypes.c_int, [_P, _S, ctypes.POINTER(_F), ctypes.POINTER(_F), _M]),
+    "clvr_tracer_create": (ctypes.c_int, [_P, _P, _S, _U32, _U32, ctypes.POINTER(_P), _M]),
+    "clvr_tracer_destroy": (None, [_P]),
+    "clvr_tracer_set_camera": (ctypes.c_int, [_P, _c_float3, _c_float3, _c_float3, _F, _M]),
+    "clvr_tracer_frame": (ctypes.c_int, [_P, _P, _F, _F, _F, _F, _M]),
+    "clvr_tracer_get_camera": (ctypes.c_int, [_P, _c_float3, _c_float3, _c_float3, _M]),
+    "clvr_tracer_set_tf": (ctypes.c_int, [_P, _S, _S, _F, _F, _F, ctypes.c_int, _M]),
+    "clvr_tracer_set_tf_table": (ctypes.c_int, [_P, _P, _U32, _F, _F, _F, _M]),
+    "clvr_tracer_set_light": (ctypes.c_int, [_P, _c_float3, _F, _F, ctypes.c_int, _M]),
+    "clvr_tracer_set_background": (ctypes.c_int, [_P, _c_float3, _M]),
+    "clvr_tracer_set_method": (ctypes.c_int, [_P, _S, _S, _M]),
+    "clvr_tracer_set_seed": (ctypes.c_int, [_P, _U64, _M]),
+    "clvr_tracer_render": (ctypes.c_int, [_P, _U32, _M]),
+    "clvr_tracer_size": (ctypes.c_int, [_P, ctypes.POINTER(_U32), ctypes.POINTER(_U32), _M]),
+    "clvr_tracer_read_image": (ctypes.c_int, [_P, _P, ctypes.c_size_t, _M]),
+    "clvr_tracer_stat": (ctypes.c_int, [_P, _S, ctypes.POINTER(ctypes.c_double), _M]),
+    "clvr_image_save": (ctypes.c_int, [_S, _U32, _U32, _P, _F, _S, ctypes.c_int, _M]),
+}
+for _name, (_res, _args) in _PROTOS.items():
+    _fn = getattr(_lib, _name)
+    _fn.restype = _res
+    _fn.argtypes = _args
+
+if _lib.clvr_api_version() // 1000 != API_VERSION_MAJOR:
+    raise ImportError("clvr: libclvr has API version %d.%d; this module needs %d.x"
+                      % (_lib.clvr_api_version() // 1000, _lib.clvr_api_version() % 1000, API_VERSION_MAJOR))
+
+_COPY = 0
+_INPUT_RESULTS = {"ERR_USAGE", "ERR_BAD_INDEX", "ERR_BAD_VALUE", "ERR_BAD_FIELD", "ERR_EMPTY", "ERR_OVERFLOW"}
+
+
+class Error(Exception):
+    """A libclvr failure: str(e) is clvr's one-line message, e.result its
+    name ("ERR_NO_DEVICE", ...)."""
+
+    def __init__(self, message, result="ERR_INTERNAL"):
+        super().__init__(message)
+        self.result = result
+
+
+class InputError(Error, ValueError):
+    """A bad argument or bad data (shape, dtype, index, NaN, unknown name)."""
+
+    def __init__(self, message, result="ERR_USAGE"):
+        super().__init__(message, result)
+
+
+def _call(fn, *args):
+    msg = _Message()
+    rc = fn(*args, ctypes.byref(msg))
+    if rc != 0:
+        name = _lib.clvr_result_name(rc).decode()
+        text = msg.text.decode("utf-8", "replace")
+        raise (InputError if name in _INPUT_RESULTS else Error)(text, name)
+
+
+def _b(s):
+    return None if s is None else os.fsencode(s) if isinstance(s, os.PathLike) else str(s).encode()
+
+
+def api_version():
+    """libclvr's CLVR_API_VERSION (major * 1000 + minor)."""
+    return _lib.clvr_api_version()
+
+
+def version():
+    """The clvr release, e.g. "0.1.0"."""
+    return _lib.clvr_version_string().decode()
+
+
+def list_devices():
+    """The OpenCL platforms and devices, as text."""
+    buf = ctypes.create_string_buffer(1 << 16)
+    _call(_lib.clvr_list_devices, buf, len(buf))
+    return buf.value.decode("utf-8", "replace")
+
+
+# --------------------------------------------------------------------------- arrays
+
+# clvr's cell types under their meshio / VTK names, with vertex counts and VTK ids.
+CELL_TYPES = {"tetra": (4, 10), "pyramid": (5, 14), "wedge": (6, 13), "hexahedron": (8, 12)}
+_VTK_IDS = {v[1]: k for k, v in CELL_TYPES.items()}
+
+
+def _as_points(points):
+    a = np.asarray(points)
+    if a.dtype.kind not in "fiu":
+        raise InputError("points has dtype %s; give real numbers (float32 is used)" % a.dtype)
+    if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] < 1:
+        raise InputError("points has shape %s; it must be (N, 3) with N >= 1" % (a.shape,))
+    with np.errstate(over="ignore", invalid="ignore"):
+        p = np.ascontiguousarray(a, dtype=np.float32)
+    bad = ~np.isfinite(p)
+    if bad.any():
+        i, k = np.argwhere(bad)[0]
+        raise InputError("points[%d, %d] is %r; coordinates must be finite (and fit in float32)"
+                         % (i, k, a[i, k].item()), "ERR_BAD_VALUE")
+    return p
+
+
+def _as_cells(name, cells, num_points):
+    if name not in CELL_TYPES:
+        raise InputError("cells[%r]: unknown cell type; clvr renders %s" % (name, ", ".join(CELL_TYPES)))
+    nv = CELL_TYPES[name][0]
+    a = np.asarray(cells)
+    if a.dtype.kind not in "iu":
+        raise InputError("cells[%r] has dtype %s; indices must be integers" % (name, a.dtype))
+    if a.size == 0:
+        return np.zeros((0, nv), np.uint32)
+    if a.ndim != 2 or a.shape[1] != nv:
+        raise InputError("cells[%r] has shape %s; it must be (M, %d)" % (name, a.shape, nv))
+    bad = (a < 0) | (a >= num_points)
+    if bad.any():
+        i, k = np.argwhere(bad)[0]
+        raise InputError("cells[%r][%d, %d] is %d but there are %d points (indices run from 0 to %d)"
+                         % (name, i, k, a[i, k], num_points, num_points - 1), "ERR_BAD_INDEX")
+    return np.ascontiguousarray(a, dtype=np.uint32)
+
+
+def _as_field(name, values, num_points):
+    if not isinstance(name, str) or not name:
+        raise InputError("point_data key %r: field names are non-empty strings" % (name,))
+    a = np.asarray(values)
+    if a.dtype.kind not in "fiu":
+        raise InputError("point_data[%r] has dtype %s; give real numbers" % (name, a.dtype))
+    if a.ndim == 2 and a.shape[1] == 1:
+        a = a[:, 0]
+    if a.ndim != 1 or a.shape[0] != num_points:
+        raise InputError("point_data[%r] has shape %s; it must be (%d,): one scalar per point"
+                         % (name, a.shape, num_points))
+    with np.errstate(over="ignore", invalid="ignore"):
+        f = np.ascontiguousarray(a, dtype=np.float32)
+    bad = ~np.isfinite(f)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError("point_data[%r][%d] is %r; values must be finite (and fit in float32)"
+                         % (name, i, a[i].item()), "ERR_BAD_VALUE")
+    return f
+
+
+def _ptr(a):
+    return a.ctypes.data_as(ctypes.c_void_p)
+
+
+# --------------------------------------------------------------------------- objects
+
+
+class Context:
+    """An OpenCL device: "pocl", "cpu", "gpu", "P:D" or part of a name
+    (None: the first GPU, else PoCL). Renderers may share one."""
+
+    def __init__(self, device=None):
+        self._h = _P()
+        _call(_lib.clvr_context_create, _b(device), ctypes.byref(self._h))
+        dev, plat = ctypes.create_string_buffer(256), ctypes.create_string_buffer(256)
+        _call(_lib.clvr_context_describe, self._h, dev, 256, plat, 256)
+        self.device_name = dev.value.decode("utf-8", "replace")
+        self.platform_name = plat.value.decode("utf-8", "replace")
+        self._renderers = 0
+
+    # Bound here: module globals may be gone when __del__ runs at exit.
+    _destroy = staticmethod(_lib.clvr_context_destroy)
+
+    def close(self):
+        if getattr(self, "_h", None) and self._h.value:
+            self._destroy(self._h)
+            self._h = _P()
+
+    def __del__(self):
+        self.close()
+
+    def __repr__(self):
+        return "clvr.Context(%r on %r)" % (self.device_name, self.platform_name)
+
+
+class Mesh:
+    """An unstructured mesh on the host: points, cells of the four types and
+    named scalars per point. Build it with from_arrays, from_meshio,
+    from_vtk or load; libclvr holds its own copy."""
+
+    def __init__(self, _handle):
+        self._h = _handle
+
+    @classmethod
+    def from_arrays(cls, points, cells, point_data=None):
+        """points (N, 3) reals; cells {"tetra": (M, 4), "pyramid": (M, 5),
+        "wedge": (M, 6), "hexahedron": (M, 8)} integer arrays (VTK vertex
+        order); point_data {name: (N,) reals}. Everything is checked first
+        (InputError names the array, the position and the fix); nothing is
+        modified."""
+        p = _as_points(points)
+        n = p.shape[0]
+        if isinstance(cells, (list, tuple)):  # meshio's [(type, array), ...]
+            merged = {}
+            for item in cells:
+                if not (isinstance(item, (list, tuple)) and len(item) == 2):
+                    raise InputError("cells as a list must hold (type, array) pairs")
+                merged.setdefault(item[0], []).append(np.asarray(item[1]))
+            cells = {k: np.concatenate(v) if len(v) > 1 else v[0] for k, v in merged.items()}
+        if not isinstance(cells, dict):
+            raise InputError("cells must be a dict like {'tetra': (M, 4) array}; got %s" % type(cells).__name__)
+        cs = {name: _as_cells(name, c, n) for name, c in cells.items()}
+        if not any(c.shape[0] for c in cs.values()):
+            raise InputError("the mesh has no cells: give at least one of %s" % ", ".join(CELL_TYPES), "ERR_EMPTY")
+        point_data = point_data or {}
+        if not isinstance(point_data, dict):
+            raise InputError("point_data must be a dict {name: (N,) array}")
+        fs = {name: _as_field(name, v, n) for name, v in point_data.items()}
+        if not fs:
+            raise InputError("point_data is empty: clvr renders a scalar per point; give one")
+        h = _P()
+        _call(_lib.clvr_dataset_create, n, _ptr(p), _COPY, ctypes.byref(h))
+        mesh = cls(h)
+        for name, c in cs.items():
+            _call(_lib.clvr_dataset_add_cells, h, name.encode(), c.shape[0], _ptr(c), _COPY)
+        for name, f in fs.items():
+            _call(_lib.clvr_dataset_add_field, h, name.encode(), _ptr(f), _COPY)
+        return mesh
+
+    @classmethod
+    def from_meshio(cls, m, fields=None):
+        """A meshio.Mesh: its tetra, pyramid, wedge and hexahedron blocks
+        (other cell types are left out with a warning) and its scalar point
+        data (vector arrays are left out), or only `fields` (names)."""
+        cells, skipped = {}, {}
+        for block in m.cells:
+            if block.type in CELL_TYPES:
+                cells.setdefault(block.type, []).append(np.asarray(block.data))
+            else:
+                skipped[block.type] = skipped.get(block.type, 0) + len(block.data)
+        if skipped:
+            warnings.warn("clvr: left out %s; clvr renders %s" % (
+                ", ".join("%d %s" % (v, k) for k, v in skipped.items()), ", ".join(CELL_TYPES)))
+        cells = {k: np.concatenate(v) if len(v) > 1 else v[0] for k, v in cells.items()}
+        return cls.from_arrays(m.points, cells, _scalars(m.point_data, fields))
+
+    @classmethod
+    def from_vtk(cls, ugrid, fields=None):
+        """A vtkUnstructuredGrid (python3-vtk9), as from_meshio."""
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        if ugrid.GetPoints() is None:
+            raise InputError("the vtkUnstructuredGrid has no points")
+        points = vtk_to_numpy(ugrid.GetPoints().GetData())
+        types = vtk_to_numpy(ugrid.GetCellTypesArray()) if ugrid.GetNumberOfCells() else np.zeros(0, np.uint8)
+        ca = ugrid.GetCells()
+        conn = vtk_to_numpy(ca.GetConnectivityArray())
+        offs = vtk_to_numpy(ca.GetOffsetsArray())
+        cells, skipped = {}, 0
+        for vid in np.unique(types):
+            sel = np.nonzero(types == vid)[0]
+            name = _VTK_IDS.get(int(vid))
+            if name is None:
+                skipped += len(sel)
+                continue
+            nv = CELL_TYPES[name][0]
+            if not np.all(offs[sel + 1] - offs[sel] == nv):
+                raise InputError("VTK cells of type %d (%s) with a vertex count other than %d" % (vid, name, nv))
+            cells[name] = conn[offs[sel][:, None] + np.arange(nv)[None, :]]
+        if skipped:
+            warnings.warn("clvr: left out %d cells of other types; clvr renders %s" % (skipped, ", ".join(CELL_TYPES)))
+        pd = ugrid.GetPointData()
+        data = {}
+        for i in range(pd.GetNumberOfArrays()):
+            arr = pd.GetArray(i)
+            if arr is not None and arr.GetName():
+                data[arr.GetName()] = vtk_to_numpy(arr)
+        return cls.from_arrays(points, cells, _scalars(data, fields))
+
+    @classmethod
+    def load(cls, path, field=None):
+        """A mesh file: clvr .bin, .umesh and legacy .vtk through libclvr's
+        readers; anything else (.vtu, .msh, ...) through meshio."""
+        ext = os.path.splitext(os.fspath(path))[1].lower()
+        if ext in (".bin", ".umesh", ".vtk"):
+            h = _P()
+            _call(_lib.clvr_dataset_load, _b(path), _b(field), ctypes.byref(h))
+            return cls(h)
+        import meshio
+        return cls.from_meshio(meshio.read(os.fspath(path)), None if field is None else [field])
+
+    _destroy = staticmethod(_lib.clvr_dataset_destroy)
+
+    def close(self):
+        """Releases the mesh (a Renderer made from it keeps libclvr's copy alive)."""
+        if getattr(self, "_h", None) and self._h.value:
+            self._destroy(self._h)
+            self._h = _P()
+
+    def __del__(self):
+        self.close()
+
+    def _counts(self):
+        n, nf = _U64(), _U32()
+        nc = (_U64 * 4)()
+        _call(_lib.clvr_dataset_counts, self._h, ctypes.byref(n), nc, ctypes.byref(nf))
+        return n.value, list(nc), nf.value
+
+    @property
+    def num_points(self):
+        return self._counts()[0]
+
+    @property
+    def num_cells(self):
+        """{"tetra": count, ...} (every type, zero included)."""
+        return dict(zip(CELL_TYPES, self._counts()[1]))
+
+    @property
+    def field_names(self):
+        names = []
+        for i in range(self._counts()[2]):
+            buf = ctypes.create_string_buffer(64)
+            _call(_lib.clvr_dataset_field_name, self._h, i, buf, 64)
+            names.append(buf.value.decode())
+        return names
+
+    @property
+    def bounds(self):
+        """((xmin, ymin, zmin), (xmax, ymax, zmax))."""
+        lo, hi = _c_float3(), _c_float3()
+        _call(_lib.clvr_dataset_bounds, self._h, lo, hi)
+        return tuple(lo), tuple(hi)
+
+    def field_range(self, field=None):
+        lo, hi = _F(), _F()
+        _call(_lib.clvr_dataset_field_range, self._h, _b(field), ctypes.byref(lo), ctypes.byref(hi))
+        return lo.value, hi.value
+
+    def __repr__(self):
+        n, nc, _ = self._counts()
+        return "clvr.Mesh(%d points, %s, fields %s)" % (
+            n, ", ".join("%d %s" % (c, t) for t, c in zip(CELL_TYPES, nc) if c), self.field_names)
+
+
+def _scalars(data, fields):
+    out = {}
+    for name, v in data.items():
+        a = np.asarray(v)
+        if fields is not None and name not in fields:
+            continue
+        if a.ndim == 1 or (a.ndim == 2 and a.shape[1] == 1):
+            out[str(name)] = a
+    if fields is not None:
+        missing = [f for f in fields if f not in out]
+        if missing:
+            raise InputError("no scalar point field %s; the mesh has %s" % (missing, sorted(out) or "none"),
+                             "ERR_BAD_FIELD")
+    return out
+
+
+def _vec3(name, v):
+    a = np.asarray(v, dtype=np.float64).reshape(-1)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise InputError("%s must be 3 finite numbers, got %r" % (name, v))
+    return _c_float3(*a)
+
+
+class Renderer:
+    """The clvr path tracer over one mesh: preprocesses it on the device
+    (Quick Clusters) once, then renders progressively.
+
+    mesh: a clvr.Mesh; device: a device string (see Context) or a Context;
+    field: the scalar to render (None: the mesh's first)."""
+
+    def __init__(self, mesh, device="pocl", width=512, height=512, field=None):
+        if not isinstance(mesh, Mesh):
+            raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load)")
+        for what, v in (("width", width), ("height", height)):
+            if not isinstance(v, (int, np.integer)) or not 1 <= v <= 65536:
+                raise InputError("%s must be a whole number in [1, 65536], got %r" % (what, v))
+        self.context = device if isinstance(device, Context) else Context(device)
+        self.mesh = mesh
+        self._h = _P()
+        _call(_lib.clvr_tracer_create, self.context._h, mesh._h, _b(field), int(width), int(height),
+              ctypes.byref(self._h))
+        self.width, self.height = int(width), int(height)
+        self._seed = 1  # the renderer's default, as the program's --seed
+
+    _destroy = staticmethod(_lib.clvr_tracer_destroy)
+
+    def close(self):
+        """Releases the device memory now (also done when the object goes away)."""
+        if getattr(self, "_h", None) and self._h.value:
+            self._destroy(self._h)
+            self._h = _P()
+
+    def __del__(self):
+        self.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # settings: each restarts the accumulation
+
+    def set_camera(self, camera):
+        """camera: {"eye": xyz, "target": xyz, "up": xyz (default +y), "fovy": deg (30)}
+        or the automatic framing {"azimuth": deg, "elevation": deg, "zoom": f,
+        "up": xyz, "fovy": deg} (all optional: the program's defaults)."""
+        if not isinstance(camera, dict):
+            raise InputError("camera must be a dict: {'eye', 'target', 'up', 'fovy'} or "
+                             "{'azimuth', 'elevation', 'zoom', 'up', 'fovy'}")
+        known = {"eye", "target", "up", "fovy", "azimuth", "elevation", "zoom"}
+        unknown = set(camera) - known
+        if unknown:
+            raise InputError("camera: unknown key(s) %s; use %s" % (sorted(unknown), sorted(known)))
+        up = camera.get("up", (0, 1, 0))
+        fovy = float(camera.get("fovy", 30.0))
+        if "eye" in camera or "target" in camera:
+            if "eye" not in camera or "target" not in camera:
+                raise InputError("camera: give both 'eye' and 'target' (or neither, for the automatic framing)")
+            _call(_lib.clvr_tracer_set_camera, self._h, _vec3("camera['eye']", camera["eye"]),
+                  _vec3("camera['target']", camera["target"]), _vec3("camera['up']", up), fovy)
+        else:
+            u = _vec3("camera['up']", up)
+            _call(_lib.clvr_tracer_frame, self._h, ctypes.cast(u, _P), float(camera.get("azimuth", 0.0)),
+                  float(camera.get("elevation", 0.0)), float(camera.get("zoom", 1.0)), fovy)
+
+    @property
+    def camera(self):
+        e, t, u = _c_float3(), _c_float3(), _c_float3()
+        _call(_lib.clvr_tracer_get_camera, self._h, e, t, u)
+        return {"eye": tuple(e), "target": tuple(t), "up": tuple(u)}
+
+    def set_tf(self, tf):
+        """tf: a colour-map name; or {"colormap": name, "file": path,
+        "range": (lo, hi), "density": d (None: automatic), "ramp": bool};
+        or {"table": (n, 4) array of linear r, g, b, opacity in [0, 1],
+        "range": (lo, hi), "density": d (default 1)}."""
+        if isinstance(tf, str):
+            tf = {"colormap": tf}
+        if not isinstance(tf, dict):
+            raise InputError("tf must be a colour-map name or a dict (see Renderer.set_tf)")
+        rng = tf.get("range")
+        if rng is not None:
+            rng = tuple(float(x) for x in rng)
+            if len(rng) != 2:
+                raise InputError("tf['range'] must be (lo, hi)")
+        if "table" in tf:
+            t = np.asarray(tf["table"])
+            if t.dtype.kind not in "fiu" or t.ndim != 2 or t.shape[1] != 4 or t.shape[0] < 2:
+                raise InputError("tf['table'] must be an (n >= 2, 4) array of reals (r, g, b, opacity); "
+                                 "got shape %s dtype %s" % (t.shape, t.dtype))
+            t = np.ascontiguousarray(t, dtype=np.float32)
+            if rng is None:
+                rng = self.mesh.field_range()
+            _call(_lib.clvr_tracer_set_tf_table, self._h, _ptr(t), t.shape[0], rng[0], rng[1],
+                  float(tf.get("density", 1.0)))
+            return
+        unknown = set(tf) - {"colormap", "file", "range", "density", "ramp"}
+        if unknown:
+            raise InputError("tf: unknown key(s) %s; use colormap, file, range, density, ramp (or table)"
+                             % sorted(unknown))
+        d = tf.get("density")
+        if d is not None and not float(d) > 0:
+            raise InputError("tf['density'] must be > 0, or None for automatic")
+        lo, hi = rng if rng is not None else (math.nan, math.nan)
+        _call(_lib.clvr_tracer_set_tf, self._h, _b(tf.get("colormap")), _b(tf.get("file")), lo, hi,
+              0.0 if d is None else float(d), 1 if tf.get("ramp") else 0)
+
+    def set_light(self, direction=(1, 2, 1.5), intensity=1.0, ambient=0.3, shadows=True):
+        _call(_lib.clvr_tracer_set_light, self._h, _vec3("light direction", direction), float(intensity),
+              float(ambient), 1 if shadows else 0)
+
+    def set_background(self, rgb):
+        _call(_lib.clvr_tracer_set_background, self._h, _vec3("background", rgb))
+
+    def set_method(self, method=None, estimator=None):
+        _call(_lib.clvr_tracer_set_method, self._h, _b(method), _b(estimator))
+
+    def set_seed(self, seed):
+        _call(_lib.clvr_tracer_set_seed, self._h, int(seed))
+        self._seed = int(seed)
+
+    def render(self, spp=16, camera=None, tf=None, light=None, background=None, method=None, estimator=None,
+               seed=None, accumulate=False):
+        """Renders spp samples per pixel and returns the image, float32
+        (height, width, 4). Settings given here are applied first (each
+        restarts the image); accumulate=True with no settings adds spp more
+        samples to the previous image."""
+        if camera is not None:
+            self.set_camera(camera)
+        if tf is not None:
+            self.set_tf(tf)
+        if light is not None:
+            self.set_light(**light) if isinstance(light, dict) else self.set_light(light)
+        if background is not None:
+            self.set_background(background)
+        if method is not None or estimator is not None:
+            self.set_method(method, estimator)
+        if seed is not None:
+            self.set_seed(seed)
+        changed = any(x is not None for x in (camera, tf, light, background, method, estimator, seed))
+        if int(spp) < 1:
+            raise InputError("spp must be >= 1, got %r" % spp)
+        if not accumulate and not changed:
+            self.set_seed(self._seed)  # the same seed again restarts the image
+        _call(_lib.clvr_tracer_render, self._h, int(spp))
+        return self.image()
+
+    def image(self):
+        """The running mean image, float32 (height, width, 4)."""
+        img = np.empty((self.height, self.width, 4), np.float32)
+        _call(_lib.clvr_tracer_read_image, self._h, _ptr(img), img.size)
+        return img
+
+    _STATS = ("frames", "rays", "samples", "null_collisions", "kernel_s", "last_frame_s", "preprocess_s",
+              "kernel_build_s", "elements", "points", "instances", "leaves", "sampling_clusters", "device_bytes",
+              "density", "range_lo", "range_hi")
+
+    def stat(self, name):
+        v = ctypes.c_double()
+        _call(_lib.clvr_tracer_stat, self._h, _b(name), ctypes.byref(v))
+        return v.value
+
+    @property
+    def stats(self):
+        """Every figure of clvr_tracer_stat as a dict."""
+        return {k: self.stat(k) for k in self._STATS}
+
+
+def save_image(path, image, exposure=0.0, tonemap="aces", transparent=False):
+    """Writes a (height, width, 4) image with the clvr program's writers,
+    by extension: .png (8-bit sRGB after 2^exposure and the tone curve
+    "aces", "filmic" or "none"; transparent: RGBA), .exr (float RGBA), .pfm."""
+    a = np.asarray(image)
+    if a.ndim != 3 or a.shape[2] != 4 or a.dtype.kind not in "fiu":
+        raise InputError("image must be a (height, width, 4) array of reals; got shape %s dtype %s"
+                         % (a.shape, a.dtype))
+    a = np.ascontiguousarray(a, dtype=np.float32)
+    _call(_lib.clvr_image_save, _b(path), a.shape[1], a.shape[0], _ptr(a), float(exposure), _b(tonemap),
+          1 if transparent else 0)
+
+
+def save_png(path, image, **kw):
+    save_image(path, image, **kw)
+
+
+def save_exr(path, image):
+    save_image(path, image)

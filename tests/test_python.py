@@ -1,0 +1,269 @@
+#!/usr/bin/python3
+"""test_python.py: the clvr Python module (python/clvr over libclvr), run by
+ctest with PYTHONPATH=<build>/python (or, from tests/test_install.sh, the
+installed copy). Proves:
+  - Mesh.from_arrays, Mesh.from_meshio and Mesh.from_vtk of the same mesh
+    (tests/data/vtk/fire_ug.vtu, hexahedra, field t) render the same image
+    in distribution, and so do Mesh.load of a clvr-gen .bin with every cell
+    type and from_arrays / from_meshio of its arrays (per 4x4 block and
+    channel, K_SIGMA standard errors from independent batches); the
+    comparison has power: another field of the same mesh is told apart;
+  - bad inputs raise clvr.InputError (a ValueError) naming the array and
+    the fix before any device work: wrong dtype, shape, an index out of
+    range or negative, NaN in points or fields, unknown cell types and
+    names; a bad device raises clvr.Error (ERR_NO_DEVICE); nothing the
+    caller passed is modified (values, dtype, writeable flag);
+  - render returns float32 (H, W, 4); save_image writes PNG and EXR through
+    the program's writers and reports a bad path;
+  - the clvr program and the module write the same pixels for the same
+    mesh, defaults and seed (one pipeline, no drift).
+Exit 77 (skipped) without numpy/meshio/vtk or an OpenCL device."""
+import os
+import subprocess
+import sys
+import tempfile
+import warnings
+
+try:
+    import numpy as np
+    import meshio
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+except ImportError as e:
+    print("test_python: %s: skipped (tools/setup-debian.sh test installs python3-numpy, python3-meshio, "
+          "python3-vtk9)" % e, file=sys.stderr)
+    sys.exit(77)
+
+import clvr
+
+DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(os.path.dirname(__file__), "data"))
+BUILD = os.environ.get("CLVR_BUILD_DIR", "build")
+# 6 SE, not 5: the variances come from 8 batches (Student-t tails) and 1024
+# blocks are compared; the broken cases differ by tens to hundreds of SE.
+W, H, BATCHES, FRAMES, K_SIGMA = 32, 32, 8, 4, 6.0
+failures = 0
+
+
+def check(cond, what):
+    global failures
+    if not cond:
+        failures += 1
+        print("FAILED: %s" % what, file=sys.stderr)
+
+
+def raises(fn, exc, part, what):
+    try:
+        fn()
+    except exc as e:
+        check(part in str(e), "%s: message %r lacks %r" % (what, str(e), part))
+        return e
+    except Exception as e:  # noqa: BLE001 - a wrong exception type is a failure
+        check(False, "%s: raised %s(%s), expected %s" % (what, type(e).__name__, e, exc.__name__))
+        return None
+    check(False, "%s: did not raise" % what)
+    return None
+
+
+def batches(r, base):
+    """Mean image and variance of the mean over BATCHES independent batches."""
+    imgs = np.stack([r.render(spp=FRAMES, seed=base + b) for b in range(BATCHES)]).astype(np.float64)
+    return imgs.mean(0), imgs.var(0, ddof=1) / BATCHES
+
+
+def differing_blocks(a, b, what):
+    (ma, va), (mb, vb) = a, b
+    d = (ma - mb).reshape(H // 4, 4, W // 4, 4, 4).sum((1, 3))
+    v = (va + vb).reshape(H // 4, 4, W // 4, 4, 4).sum((1, 3))
+    se = np.sqrt(v)
+    bad = np.abs(d) > K_SIGMA * se + 1e-4
+    z = np.where(se > 0, np.abs(d) / np.maximum(se, 1e-30), 0)
+    print("  %s: %d of %d blocks differ by more than %g SE (worst %.1f SE)"
+          % (what, bad.sum(), bad.size, K_SIGMA, z.max()), file=sys.stderr)
+    return int(bad.sum())
+
+
+def render_stats(mesh, ctx, field, base):
+    r = clvr.Renderer(mesh, device=ctx, width=W, height=H, field=field)
+    img = r.render(spp=1)
+    check(img.dtype == np.float32 and img.shape == (H, W, 4), "render returns float32 (H, W, 4), got %s %s"
+          % (img.dtype, img.shape))
+    out = batches(r, base)
+    r.close()
+    return out
+
+
+def read_vtk(path):
+    rd = vtkXMLUnstructuredGridReader()
+    rd.SetFileName(path)
+    rd.Update()
+    return rd.GetOutput()
+
+
+def read_bin(path):
+    """A .bin by hand (docs/bin-format.md), not through clvr."""
+    raw = open(path, "rb").read()
+    nv, nt, npy, nw, nh = (int(x) for x in np.frombuffer(raw, "<u8", 5, 16))
+    off = 256
+    xyz = np.frombuffer(raw, "<f4", 3 * nv, off).reshape(-1, 3)
+    off += 12 * int(nv)
+    s = np.frombuffer(raw, "<f4", nv, off)
+    off += 4 * int(nv)
+    cells = {}
+    for name, n, k in (("tetra", nt, 4), ("pyramid", npy, 5), ("wedge", nw, 6), ("hexahedron", nh, 8)):
+        cells[name] = np.frombuffer(raw, "<u4", int(n) * k, off).reshape(-1, k)
+        off += 4 * k * int(n)
+    return xyz, cells, s
+
+
+def test_same_image(ctx):
+    fire = os.path.join(DATA, "vtk", "fire_ug.vtu")
+    m = meshio.read(fire)
+    pts, hexes, t = m.points.copy(), m.cells_dict["hexahedron"].copy(), m.point_data["t"].copy()
+    a = clvr.Mesh.from_arrays(m.points, {"hexahedron": m.cells_dict["hexahedron"]}, {"t": m.point_data["t"]})
+    b = clvr.Mesh.from_meshio(m)
+    c = clvr.Mesh.from_vtk(read_vtk(fire))
+    check(np.array_equal(m.points, pts) and np.array_equal(m.cells_dict["hexahedron"], hexes)
+          and np.array_equal(m.point_data["t"], t), "from_arrays/from_meshio modified the caller's arrays")
+    check(a.num_points == 12323 and a.num_cells["hexahedron"] == 10462, "fire counts: %r" % a)
+    check({"t", "u", "v", "w", "mfrac"} <= set(b.field_names) and "uvw" not in b.field_names,
+          "from_meshio keeps the scalar fields only: %s" % b.field_names)
+    check(set(b.field_names) == set(c.field_names), "from_vtk fields %s vs from_meshio %s"
+          % (c.field_names, b.field_names))
+    lo, hi = a.bounds
+    check(np.allclose(lo, m.points.min(0), atol=1e-5) and np.allclose(hi, m.points.max(0), atol=1e-5), "bounds")
+    sa = render_stats(a, ctx, "t", 100)
+    sb = render_stats(b, ctx, "t", 200)
+    sc = render_stats(c, ctx, "t", 300)
+    su = render_stats(b, ctx, "mfrac", 400)
+    print("test_python: fire_ug.vtu:", file=sys.stderr)
+    check(differing_blocks(sa, sb, "from_arrays vs from_meshio") == 0, "from_arrays and from_meshio differ")
+    check(differing_blocks(sa, sc, "from_arrays vs from_vtk") == 0, "from_arrays and from_vtk differ")
+    check(differing_blocks(sa, su, "field t vs field mfrac (must differ)") > 5, "the comparison has no power")
+    check(sa[0][..., 3].max() > 0.1, "the fire image is empty")
+
+    # Every cell type: a clvr-gen .bin through libclvr's reader and its arrays.
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "mixed.bin")
+        subprocess.run([os.path.join(BUILD, "clvr-gen"), "mixed", path, "--elements", "3000", "--seed", "5",
+                        "--quiet"], check=True)
+        xyz, cells, s = read_bin(path)
+        check(all(len(v) for v in cells.values()), "clvr-gen mixed has every type")
+        loaded = clvr.Mesh.load(path)
+        arrays = clvr.Mesh.from_arrays(xyz, cells, {"scalar": s})
+        mio = clvr.Mesh.from_meshio(meshio.Mesh(xyz, [(k, v) for k, v in cells.items()], point_data={"s": s}))
+    sl = render_stats(loaded, ctx, None, 500)
+    sa = render_stats(arrays, ctx, None, 600)
+    sm = render_stats(mio, ctx, None, 700)
+    print("test_python: clvr-gen mixed:", file=sys.stderr)
+    check(differing_blocks(sl, sa, "load(.bin) vs from_arrays") == 0, ".bin and from_arrays differ")
+    check(differing_blocks(sl, sm, "load(.bin) vs from_meshio") == 0, ".bin and from_meshio differ")
+
+
+def test_program_matches_module(ctx):
+    """The clvr program and the module share one pipeline: with the same
+    defaults, seed and device they write the same pixels (a drift of any
+    default, camera, transfer function or setting shows here)."""
+    vtk = os.path.join(DATA, "vtk", "notch_stress.vtk")
+    with tempfile.TemporaryDirectory() as tmp:
+        pfm = os.path.join(tmp, "cli.pfm")
+        subprocess.run([os.path.join(BUILD, "clvr"), vtk, "--device", "pocl", "--size", "40x32", "--spp", "4",
+                        "--seed", "7", "--quiet", "-o", pfm], check=True)
+        raw = open(pfm, "rb").read()
+    magic, size, scale, data = raw.split(b"\n", 3)
+    w, h = (int(x) for x in size.split())
+    cli = np.frombuffer(data, "<f4").reshape(h, w, 3)[::-1]  # PFM rows run bottom to top
+    r = clvr.Renderer(clvr.Mesh.load(vtk), device=ctx, width=40, height=32)
+    img = r.render(spp=4, seed=7)
+    d = np.abs(img[..., :3] - cli).max()
+    print("test_python: clvr program vs module, same seed: largest difference %g" % d, file=sys.stderr)
+    check(d <= 1e-6 and cli.mean() > 0.01, "the program and the module render differently (%g)" % d)
+
+
+def test_bad_inputs(ctx):
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float64)
+    tet = np.array([[0, 1, 2, 3]], np.int64)
+    f = np.array([0.0, 1.0, 2.0, 3.0])
+    keep = [x.copy() for x in (pts, tet, f)]
+    mk = clvr.Mesh.from_arrays
+    E = clvr.InputError
+    raises(lambda: mk(pts.astype(str), {"tetra": tet}, {"f": f}), E, "dtype", "string points")
+    raises(lambda: mk(pts.astype(complex), {"tetra": tet}, {"f": f}), E, "dtype", "complex points")
+    raises(lambda: mk(pts[:, :2], {"tetra": tet}, {"f": f}), E, "(N, 3)", "points of shape (4, 2)")
+    raises(lambda: mk(pts, {"tetra": tet.astype(float)}, {"f": f}), E, "integers", "float indices")
+    raises(lambda: mk(pts, {"tetra": tet[:, :3]}, {"f": f}), E, "(M, 4)", "3 indices per tetra")
+    raises(lambda: mk(pts, {"tetra": tet + 1}, {"f": f}), E, "is 4 but there are 4 points", "index out of range")
+    raises(lambda: mk(pts, {"tetra": tet - 1}, {"f": f}), E, "[0, 0] is -1", "negative index")
+    raises(lambda: mk(pts, {"tet": tet}, {"f": f}), E, "hexahedron", "unknown cell type")
+    raises(lambda: mk(pts, {"tetra": tet[:0]}, {"f": f}), E, "no cells", "no cells")
+    raises(lambda: mk(pts, {"tetra": tet}, {}), E, "point_data", "no field")
+    raises(lambda: mk(pts, {"tetra": tet}, {"f": f[:3]}), E, "(4,)", "short field")
+    bad = pts.copy()
+    bad[2, 1] = np.nan
+    raises(lambda: mk(bad, {"tetra": tet}, {"f": f}), E, "points[2, 1]", "NaN point")
+    raises(lambda: mk(pts * 1e39, {"tetra": tet}, {"f": f}), E, "float32", "points overflowing float32")
+    badf = f.copy()
+    badf[3] = np.inf
+    e = raises(lambda: mk(pts, {"tetra": tet}, {"f": badf}), E, "point_data['f'][3]", "infinite field")
+    check(e is None or e.result == "ERR_BAD_VALUE", "NaN's result name")
+    check(isinstance(e, ValueError), "InputError is a ValueError")
+    pairs = mk(pts, [("tetra", tet), ("tetra", tet)], {"f": f})  # meshio's list of (type, array)
+    check(pairs.num_cells["tetra"] == 2 and pairs.field_names == ["f"], "cells as (type, array) pairs: %r" % pairs)
+    raises(lambda: mk(pts, [tet], {"f": f}), E, "pairs", "cells list without types")
+    ro = pts.copy()
+    ro.flags.writeable = False
+    good = mk(ro, {"tetra": tet}, {"f": f})
+    check(not ro.flags.writeable, "writeable flag changed")
+    check(all(np.array_equal(a, b) and a.dtype == b.dtype for a, b in zip(keep, (pts, tet, f))),
+          "inputs were modified")
+    raises(lambda: clvr.Renderer(good, device=ctx, width=8, height=8, field="nope"), E, "'f'", "unknown field")
+    raises(lambda: clvr.Renderer(good, device=ctx, width=0, height=8), E, "width", "width 0")
+    raises(lambda: clvr.Renderer("mesh.vtu", device=ctx), E, "clvr.Mesh", "not a Mesh")
+    e = raises(lambda: clvr.Context("no-such-device-xyz"), clvr.Error, "no-such-device-xyz", "bad device")
+    check(e is None or e.result == "ERR_NO_DEVICE", "bad device's result name: %s" % getattr(e, "result", None))
+    raises(lambda: clvr.Mesh.load(os.path.join(DATA, "nope.bin")), clvr.Error, "nope.bin", "missing file")
+    r = clvr.Renderer(good, device=ctx, width=8, height=8)
+    raises(lambda: r.render(spp=1, camera={"eye": (1, 1, 1)}), E, "target", "eye without target")
+    raises(lambda: r.render(spp=1, camera={"azimut": 3}), E, "azimut", "camera typo")
+    raises(lambda: r.render(spp=1, camera={"eye": (1, 1, 1), "target": (1, 1, 1)}), E, "", "eye == target")
+    raises(lambda: r.render(spp=1, tf="rainbow"), E, "viridis", "unknown colour map")
+    raises(lambda: r.render(spp=1, method="magic"), E, "dda", "unknown method")
+    raises(lambda: r.render(spp=0), E, "spp", "spp 0")
+    raises(lambda: r.stat("speed"), E, "frames", "unknown stat")
+    img = r.render(spp=2, camera={"eye": (2, 2, 3), "target": (0.3, 0.3, 0.3)}, tf={"colormap": "viridis",
+                   "range": (0, 3), "density": 2.0}, light={"direction": (1, 1, 1), "shadows": False},
+                   background=(0, 0, 0), method="track", estimator="delta")
+    check(r.stat("frames") == 2 and img.shape == (8, 8, 4), "settings then frames")
+    img2 = r.render(spp=2, accumulate=True)
+    check(r.stat("frames") == 4 and np.isfinite(img2).all(), "accumulate adds frames")
+    r.render(spp=1, tf={"table": np.array([[0, 0, 0, 0], [1, 1, 1, 1]]), "range": (0, 3)})
+    check(r.stats["frames"] == 1, "stats dict")
+    with tempfile.TemporaryDirectory() as tmp:
+        for ext in ("png", "exr"):
+            p = os.path.join(tmp, "x." + ext)
+            clvr.save_image(p, img)
+            check(os.path.getsize(p) > 0, "save_image " + ext)
+        raises(lambda: clvr.save_image(os.path.join(tmp, "no", "x.png"), img), clvr.Error, "x.png", "bad dir")
+        raises(lambda: clvr.save_image(os.path.join(tmp, "x.jpg"), img), E, "x.jpg", "bad extension")
+        raises(lambda: clvr.save_image(os.path.join(tmp, "x.png"), img[..., :3]), E, "(height, width, 4)", "RGB")
+    r.close()
+
+
+def main():
+    try:
+        ctx = clvr.Context("pocl")
+    except clvr.Error as e:
+        print("test_python: no OpenCL device (%s): skipped" % e, file=sys.stderr)
+        return 77
+    print("test_python: clvr %s, API %d, %r, module %s" % (clvr.version(), clvr.api_version(), ctx,
+                                                          clvr.__file__), file=sys.stderr)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        test_bad_inputs(ctx)
+    if "--quick" not in sys.argv:
+        test_program_matches_module(ctx)
+        test_same_image(ctx)
+    print("test_python: %s" % ("all passed" if not failures else "%d failure(s)" % failures), file=sys.stderr)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
