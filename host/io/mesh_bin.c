@@ -807,6 +807,7 @@ clvr_status clvr_mesh_peek_bin(const char *path, uint64_t *num_vertices, uint64_
     if (s == CLVR_OK) {
         *num_vertices = hd.num_vertices;
         memcpy(num_cells, hd.num_cells, sizeof hd.num_cells);
+        bin_header_free(&hd); /* version 2: the field table */
     }
 done:
     close(fd);
