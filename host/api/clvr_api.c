@@ -719,8 +719,7 @@ clvr_status clvr_tracer_create_setup(clvr_context *ctx, clvr_dataset *ds, const 
     /* A mesh or image the device cannot hold fails now, with the numbers,
      * not minutes into preprocessing. */
     const uint64_t n = clvr_mesh_num_elements(&m);
-    const uint64_t part = setup->partitions ? (n + setup->partitions - 1) / setup->partitions
-                                            : (n > CLVR_PARTITION_DEFAULT_ELEMENTS ? CLVR_PARTITION_DEFAULT_ELEMENTS : n);
+    const uint64_t part = clvr_partition_elements(n, setup->partitions);
     s = clvr_limits_check_parts(&ctx->cl, &m, setup->name ? setup->name : "dataset", &setup->po, part, width, height,
                                 err);
     /* Preprocessing in partitions (partition.h). A loaded file's mesh that

@@ -68,8 +68,7 @@ static clvr_status load_mesh(const clvr_options *o, clvr_mesh *m, clvr_error *er
  * over --partitions K, or partition.h's default bound. */
 static uint64_t part_elements(const clvr_options *o, uint64_t n)
 {
-    if (o->partitions) return (n + o->partitions - 1) / o->partitions;
-    return n > CLVR_PARTITION_DEFAULT_ELEMENTS ? CLVR_PARTITION_DEFAULT_ELEMENTS : n;
+    return clvr_partition_elements(n, o->partitions);
 }
 
 int main(int argc, char **argv)

@@ -446,24 +446,6 @@ cleanup:
     return s;
 }
 
-static void fill_stats(clvr_clustered *c, const clvr_mesh *m)
-{
-    c->bytes_vertices_before = m->num_vertices * 16ull;
-    c->bytes_vertices_after = c->num_vertices * 16ull;
-    c->bytes_indices_before = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
-        c->bytes_indices_before += m->num_cells[t] * clvr_cell_vertex_count(t) * 4ull;
-    c->bytes_indices_after = c->num_idx16 * 2ull + c->num_idx32 * 4ull;
-    c->bytes_leaf_boxes = c->num_leaves * sizeof(clvr_box);
-    c->bytes_instances = c->num_instances * sizeof(clvr_instance);
-    c->bytes_sampling = c->num_sampling * sizeof(clvr_sampling_cluster);
-    c->num_instances16 = 0;
-    for (uint64_t i = 0; i < c->num_instances; ++i) c->num_instances16 += c->host_instances[i].index_bits == 16;
-    c->avg_instance_elements = c->num_instances ? (double)c->num_elements / (double)c->num_instances : 0.0;
-    c->avg_instance_vertices = c->num_instances ? (double)c->num_vertices / (double)c->num_instances : 0.0;
-    c->avg_leaf_elements = c->num_leaves ? (double)c->num_elements / (double)c->num_leaves : 0.0;
-}
-
 /* Gives the pages of type lists' indices before each partition's end back
  * to the OS (consume mode): released[t] bytes of list t are gone already. */
 static void release_gathered(clvr_mesh *m, const clvr_partition *q, uint64_t released[CLVR_CELL_TYPE_COUNT])
@@ -653,7 +635,7 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         }
         out->stage_s[CLVR_PP_STAGE_MERGE] += clvr_clock_monotonic_s() - t0;
     }
-    fill_stats(out, m);
+    clvr_clustered_fill_stats(out, m);
     if (num_partitions) *num_partitions = plan.count;
 #ifdef __GLIBC__
     /* The partitions' smaller arrays (below glibc's mmap threshold) were

@@ -44,6 +44,15 @@
  * to be partitioned. */
 #define CLVR_PARTITION_DEFAULT_ELEMENTS (4u << 20)
 
+/* Elements per partition of an n-element mesh in `count` partitions (0:
+ * automatic, at most CLVR_PARTITION_DEFAULT_ELEMENTS): what the memory
+ * checks budget one partition's scratch for. */
+static inline uint64_t clvr_partition_elements(uint64_t n, uint32_t count)
+{
+    if (count) return (n + count - 1) / count;
+    return n > CLVR_PARTITION_DEFAULT_ELEMENTS ? CLVR_PARTITION_DEFAULT_ELEMENTS : n;
+}
+
 typedef struct clvr_partition {
     uint32_t id;                                /* 0 .. count - 1, in curve order */
     uint32_t bin_lo, bin_hi;                    /* coarse key bins [bin_lo, bin_hi) */

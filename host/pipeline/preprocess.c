@@ -494,8 +494,7 @@ void clvr_clustered_release(clvr_cl *cl, clvr_clustered *c)
     memset(c, 0, sizeof *c);
 }
 
-/* Fills the byte and average figures from the counts. */
-static void fill_stats(clvr_clustered *c, const clvr_mesh *m)
+void clvr_clustered_fill_stats(clvr_clustered *c, const clvr_mesh *m)
 {
     c->bytes_vertices_before = m->num_vertices * 16ull;
     c->bytes_vertices_after = c->num_vertices * 16ull;
@@ -888,7 +887,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
             goto cleanup;
         }
     }
-    fill_stats(out, m);
+    clvr_clustered_fill_stats(out, m);
 
 cleanup:
     clvr_cl_release(cl, &pos);

@@ -111,6 +111,9 @@ typedef struct clvr_clustered {
  * at its peak; each buffer is checked against the device limits. */
 clvr_status clvr_preprocess(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o, clvr_clustered *out,
                             clvr_error *err);
+/* Fills c's byte and average figures (bytes_*, avg_*, num_instances16)
+ * from its counts and those of the input mesh m. */
+void clvr_clustered_fill_stats(clvr_clustered *c, const clvr_mesh *m);
 /* Releases every buffer and the host copy; accepts NULL and half-built results; leaves *c zeroed. */
 void clvr_clustered_release(clvr_cl *cl, clvr_clustered *c);
 
