@@ -352,14 +352,33 @@ CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float p
     return 1;
 }
 
-/* Quick reject: 1 when p is inside the element's vertex box padded like the
- * BVH's boxes (CLVR_BVH_BOX_PAD_REL of its largest extent). */
-CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz)
+/* The element's vertex box (lo, hi) and the padding clvr_element_box_test
+ * grows it by: CLVR_BVH_BOX_PAD_REL of its largest extent plus a few ulps of
+ * its coordinates. */
+CLVR_INLINE float clvr_element_vertex_box(clvr_u32 type, const clvr_vec4 *vtx, float *lo, float *hi)
 {
     const clvr_u32 nv = clvr_cell_vertex_count(type);
+    lo[0] = hi[0] = vtx[0].x;
+    lo[1] = hi[1] = vtx[0].y;
+    lo[2] = hi[2] = vtx[0].z;
+    for (clvr_u32 i = 1; i < nv; ++i) {
+        lo[0] = fmin(lo[0], vtx[i].x); lo[1] = fmin(lo[1], vtx[i].y); lo[2] = fmin(lo[2], vtx[i].z);
+        hi[0] = fmax(hi[0], vtx[i].x); hi[1] = fmax(hi[1], vtx[i].y); hi[2] = fmax(hi[2], vtx[i].z);
+    }
+    const float ext = fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]);
+    const float mag = fmax(fmax(fmax(fabs(lo[0]), fabs(hi[0])), fmax(fabs(lo[1]), fabs(hi[1]))),
+                           fmax(fabs(lo[2]), fabs(hi[2])));
+    return CLVR_BVH_BOX_PAD_REL * ext + 4.0f * 1.1920929e-7f * mag;
+}
+
+/* Quick reject: 1 when p is inside the element's vertex box padded like the
+ * BVH's boxes (clvr_element_vertex_box). */
+CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz)
+{
 #ifdef __OPENCL_VERSION__
     /* The same test on float3 lanes: a third of the instructions (point
      * location runs it on every candidate element). */
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
     float3 lo = vtx[0].xyz, hi = lo;
     for (clvr_u32 i = 1; i < nv; ++i) {
         lo = fmin(lo, vtx[i].xyz);
@@ -370,16 +389,12 @@ CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float
     const float3 p3 = (float3)(px, py, pz);
     const int3 in = (p3 >= lo - pad4) & (p3 <= hi + pad4);
     return in.x & in.y & in.z & 1;
+#else
+    float lo[3], hi[3];
+    const float pad = clvr_element_vertex_box(type, vtx, lo, hi);
+    return px >= lo[0] - pad && px <= hi[0] + pad && py >= lo[1] - pad && py <= hi[1] + pad && pz >= lo[2] - pad &&
+           pz <= hi[2] + pad;
 #endif
-    float lx = vtx[0].x, ly = vtx[0].y, lz = vtx[0].z, hx = lx, hy = ly, hz = lz;
-    for (clvr_u32 i = 1; i < nv; ++i) {
-        lx = fmin(lx, vtx[i].x); ly = fmin(ly, vtx[i].y); lz = fmin(lz, vtx[i].z);
-        hx = fmax(hx, vtx[i].x); hy = fmax(hy, vtx[i].y); hz = fmax(hz, vtx[i].z);
-    }
-    const float ext = fmax(fmax(hx - lx, hy - ly), hz - lz);
-    const float mag = fmax(fmax(fmax(fabs(lx), fabs(hx)), fmax(fabs(ly), fabs(hy))), fmax(fabs(lz), fabs(hz)));
-    const float pad = CLVR_BVH_BOX_PAD_REL * ext + 4.0f * 1.1920929e-7f * mag;
-    return px >= lx - pad && px <= hx + pad && py >= ly - pad && py <= hy + pad && pz >= lz - pad && pz <= hz + pad;
 }
 
 #endif /* CLVR_ELEMENTS_H */

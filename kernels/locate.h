@@ -35,6 +35,17 @@ typedef struct clvr_mesh_view {
     CLVR_GLOBAL const clvr_u8 *ebox;
 } clvr_mesh_view;
 
+/* Global sorted ids of leaf cluster `leaf`'s elements: first (returned) ..
+ * *end - 1; an instance's last leaf may hold fewer than leaf_size. */
+CLVR_INLINE clvr_u32 clvr_leaf_elements(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf,
+                                        clvr_u32 *end)
+{
+    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * m->leaf_size;
+    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
+    *end = end_inst - first < m->leaf_size ? end_inst : first + m->leaf_size;
+    return first;
+}
+
 /* Loads the vertices of element e (global sorted id, inside instance
  * `inst`) into v[0 .. vertex_count(inst->type) - 1]. */
 CLVR_INLINE void clvr_load_element(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 e, clvr_vec4 *v)
@@ -97,12 +108,10 @@ CLVR_INLINE void clvr_prefetch_leaf_vertices(const clvr_mesh_view *m, const clvr
         clvr_prefetch_leaf(m, inst, leaf);
         return;
     }
-    const clvr_u32 leaf_size = m->leaf_size;
     CLVR_GLOBAL const clvr_u16 *idx16 = m->idx16;
     CLVR_GLOBAL const clvr_u32 *idx32 = m->idx32;
-    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
-    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
-    const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
+    clvr_u32 end;
+    const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
     CLVR_GLOBAL const clvr_vec4 *vb = m->vertices + inst->first_vertex;
     const clvr_u64 base = inst->first_index + (clvr_u64)(first - inst->first_element) * 4u;
     for (clvr_u32 i = 0; i < 4u * (end - first); ++i)
@@ -153,27 +162,17 @@ CLVR_INLINE float clvr_ebox_pos(float x, float lo, float scale)
 CLVR_INLINE void clvr_ebox_build_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf,
                                       const float *lo, const float *hi, CLVR_GLOBAL clvr_u8 *ebox)
 {
-    const clvr_u32 leaf_size = m->leaf_size;
-    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
-    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
-    const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
-    const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
+    clvr_u32 end;
+    const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
     float scale[3];
     for (int k = 0; k < 3; ++k) scale[k] = clvr_ebox_scale(lo[k], hi[k]);
     clvr_vec4 v[CLVR_CELL_MAX_VERTS];
     for (clvr_u32 e = first; e < end; ++e) {
         clvr_load_element(m, inst, e, v);
-        float elo[3] = {v[0].x, v[0].y, v[0].z}, ehi[3] = {v[0].x, v[0].y, v[0].z};
-        for (clvr_u32 i = 1; i < nv; ++i) {
-            elo[0] = fmin(elo[0], v[i].x); elo[1] = fmin(elo[1], v[i].y); elo[2] = fmin(elo[2], v[i].z);
-            ehi[0] = fmax(ehi[0], v[i].x); ehi[1] = fmax(ehi[1], v[i].y); ehi[2] = fmax(ehi[2], v[i].z);
-        }
-        /* clvr_element_box_test's padding, plus a little: this box must
-         * hold every point that test accepts. */
-        const float ext = fmax(fmax(ehi[0] - elo[0], ehi[1] - elo[1]), ehi[2] - elo[2]);
-        const float mag = fmax(fmax(fmax(fabs(elo[0]), fabs(ehi[0])), fmax(fabs(elo[1]), fabs(ehi[1]))),
-                               fmax(fabs(elo[2]), fabs(ehi[2])));
-        const float pad = 2.0f * (CLVR_BVH_BOX_PAD_REL * ext + 4.0f * 1.1920929e-7f * mag);
+        float elo[3], ehi[3];
+        /* Twice clvr_element_box_test's padding: this box must hold every
+         * point that test accepts. */
+        const float pad = 2.0f * clvr_element_vertex_box(inst->type, v, elo, ehi);
         CLVR_GLOBAL clvr_u8 *out = ebox + (clvr_u64)e * CLVR_EBOX_BYTES;
         for (int k = 0; k < 3; ++k) {
             const float a = floor(clvr_ebox_pos(elo[k] - pad, lo[k], scale[k])) - 1.0f;
@@ -194,10 +193,8 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance
                                     CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 c, float px, float py, float pz,
                                     float *scalar, clvr_u32 *element_id)
 {
-    const clvr_u32 leaf_size = m->leaf_size;
-    const clvr_u32 first = inst->first_element + (leaf - inst->first_leaf) * leaf_size;
-    const clvr_u32 end_inst = inst->first_element + inst->num_elements;
-    const clvr_u32 end = end_inst - first < leaf_size ? end_inst : first + leaf_size;
+    clvr_u32 end;
+    const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
     CLVR_GLOBAL const clvr_u8 *eb = m->ebox;
     /* p's step on each axis of the leaf box (floor: a step test that is
      * at least as permissive as the float one). */
@@ -285,9 +282,10 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
         if (!((mask >> c) & 1u)) continue;
         const clvr_u32 ch = n->child[c];
         if (ch & CLVR_BVH_LEAF_BIT) {
+            clvr_u32 end;
             if (m->ebox) /* the scan reads its boxes first, then a few survivors */
-                CLVR_PREFETCH(m->ebox + (clvr_u64)(inst->first_element + ((ch & CLVR_BVH_MAX_PRIMS) - inst->first_leaf) *
-                                                                            m->leaf_size) * CLVR_EBOX_BYTES);
+                CLVR_PREFETCH(m->ebox +
+                              (clvr_u64)clvr_leaf_elements(m, inst, ch & CLVR_BVH_MAX_PRIMS, &end) * CLVR_EBOX_BYTES);
             else
                 clvr_prefetch_leaf_vertices(m, inst, ch & CLVR_BVH_MAX_PRIMS);
             continue;
