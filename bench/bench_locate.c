@@ -12,7 +12,7 @@
  * to other jobs than wall time).
  *
  *   bench_locate [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
- *                [--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent]
+ *                [--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent]
  *                [--ebox on|off]
  *
  * --ebox: quantized element boxes (kernels/locate.h), on by default as in
@@ -44,6 +44,7 @@ static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 static cl_uint g_hints = CLVR_LOCATE_INCOHERENT; /* query hint of the kernel (--order, --hint) */
+static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples) */
 #define NRUNS 5
 
 static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh *m, uint32_t leaf,
@@ -94,13 +95,15 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 12, sizeof(cl_uint), &g_hints));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 13, sizeof(cl_mem), g_ebox ? &db.ebox : &c.vertices));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 14, sizeof(cl_uint), &g_ebox));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 15, sizeof(cl_uint), &g_chain));
+    const size_t items = (nq + g_chain - 1) / g_chain;
     /* warm-up, then the median of NRUNS timed runs */
-    CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, g_local, NULL, err));
+    CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, items, g_local, NULL, err));
     CLVR_CL_CHECK(clFinish(cl->queue));
     double t[NRUNS], tc[NRUNS], ld[NRUNS];
     for (int r = 0; r < NRUNS; ++r) {
         const double c0 = clvr_clock_cpu_s();
-        CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, g_local, &evt, err));
+        CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, items, g_local, &evt, err));
         CLVR_CL_CHECK(clWaitForEvents(1, &evt));
         tc[r] = clvr_clock_cpu_s() - c0;
         t[r] = clvr_cl_event_seconds(evt);
@@ -146,12 +149,18 @@ int main(int argc, char **argv)
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted] [--local L] [--hint coherent|incoherent] [--ebox on|off]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off]\n",
                     argv[0]);
             return 2;
         }
     }
-    if (bench_query_hint(hint, !strcmp(order, "sorted"), &hint, &g_hints)) {
+    const int order_id = bench_order_from_name(order);
+    if (order_id < 0) {
+        fprintf(stderr, "bench_locate: --order must be random, sorted or rays\n");
+        return 2;
+    }
+    g_chain = bench_order_chain(order_id);
+    if (bench_query_hint(hint, order_id, &hint, &g_hints)) {
         fprintf(stderr, "bench_locate: --hint must be coherent or incoherent\n");
         return 2;
     }
@@ -178,7 +187,7 @@ int main(int argc, char **argv)
         return 1;
     }
     const uint64_t ne = clvr_mesh_num_elements(&m);
-    float (*pts)[4] = bench_make_points(&m, nq, !strcmp(order, "sorted"));
+    float (*pts)[4] = bench_make_points(&m, nq, order_id);
     if (!pts) {
         fprintf(stderr, "bench_locate: no memory for %u points\n", nq);
         return 1;

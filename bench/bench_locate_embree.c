@@ -11,7 +11,7 @@
  * shared), build time and memory of tree + indices.
  *
  *   bench_locate_embree [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
- *                       [--queries Q] [--leaf N] [--order random|sorted] [--threads T] [--local L]
+ *                       [--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L]
  *   defaults: 56^3 cubes cut into 6 Kuhn tets (1,053,696 tets), 1M random points, leaf clusters of 8,
  *   2 threads, work-group 64
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
@@ -50,6 +50,7 @@
 /* ------------------------------------------------------------ clvr */
 
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
+static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples, bench_points.h) */
 
 typedef struct result {
     double qps, qps_cpu, load, build_s, sort_s, found;
@@ -115,12 +116,14 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 12, sizeof(cl_uint), &hints));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 13, sizeof(cl_mem), g_ebox ? &db.ebox : &args[4]));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 14, sizeof(cl_uint), &g_ebox));
-    CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, nq, local, NULL, err)); /* warm-up */
+    CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 15, sizeof(cl_uint), &g_chain));
+    const size_t items = (nq + g_chain - 1) / g_chain;
+    CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, items, local, NULL, err)); /* warm-up */
     CLVR_CL_CHECK(clFinish(cl->queue));
     double t[NRUNS], tc[NRUNS], ld[NRUNS];
     for (int i = 0; i < NRUNS; ++i) {
         const double c0 = clvr_clock_cpu_s();
-        CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, nq, local, &evt, err));
+        CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, items, local, &evt, err));
         CLVR_CL_CHECK(clWaitForEvents(1, &evt));
         tc[i] = clvr_clock_cpu_s() - c0;
         t[i] = clvr_cl_event_seconds(evt);
@@ -450,14 +453,20 @@ int main(int argc, char **argv)
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted] [--threads T] [--local L] [--dump FILE] "
+                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L] [--dump FILE] "
                     "[--hint coherent|incoherent] [--ebox on|off]\n",
                     argv[0]);
             return 2;
         }
     }
     cl_uint hints;
-    if (bench_query_hint(hint, !strcmp(order, "sorted"), &hint, &hints)) {
+    const int order_id = bench_order_from_name(order);
+    if (order_id < 0) {
+        fprintf(stderr, "bench_locate_embree: --order must be random, sorted or rays\n");
+        return 2;
+    }
+    g_chain = bench_order_chain(order_id);
+    if (bench_query_hint(hint, order_id, &hint, &hints)) {
         fprintf(stderr, "bench_locate_embree: --hint must be coherent or incoherent\n");
         return 2;
     }
@@ -480,7 +489,7 @@ int main(int argc, char **argv)
         return 1;
     }
     const uint64_t ne = clvr_mesh_num_elements(&m);
-    float (*pts)[4] = bench_make_points(&m, nq, !strcmp(order, "sorted"));
+    float (*pts)[4] = bench_make_points(&m, nq, order_id);
     if (!pts) {
         fprintf(stderr, "bench_locate_embree: no memory for %u points\n", nq);
         return 1;

@@ -4,7 +4,8 @@
 # the same element count (tools/make-graded-meshes.sh builds them all):
 #   1. cell-size statistics (tools/cell-stats.py)
 #   2. point location vs Embree 3 (and VTK): bench/locate-vs-embree.sh --mesh, random
-#      and sorted (renderer-like coherent) points
+#      sorted (Morton order) and rays (24 stratified samples per random chord, a work item
+#      carrying one ray's hint through them, as the renderer does) points
 #   2b. REPEATS more runs of bench_locate_embree alone (no VTK) per graded mesh and
 #      order: the summary's goal column uses their median (single runs on a shared
 #      machine disagree by up to 2.6x)
@@ -99,7 +100,7 @@ if ! skip locate; then
   echo "## Point location vs Embree 3 (bench/locate-vs-embree.sh --mesh, $QUERIES queries, leaf 8, 2 threads)" >>"$MD"
   echo >>"$MD"
   for m in "${LOCATE[@]}"; do
-    for order in random sorted; do
+    for order in random sorted rays; do
       say "locate-vs-embree $m $order"
       { echo "### $m, $order points"; echo; echo '```'
         nice "$ROOT/bench/locate-vs-embree.sh" --no-install --build "$BUILD" -- --mesh "$DIR/$m.bin" --order "$order" \
@@ -112,7 +113,7 @@ fi
 if ! skip repeats; then
   for ((r = 1; r <= REPEATS; r++)); do
     for m in "${GRADED[@]}" "${REAL[@]}"; do
-      for order in random sorted; do
+      for order in random sorted rays; do
         say "repeat $r: bench_locate_embree $m $order"
         nice "$BUILD/bench_locate_embree" --mesh "$DIR/$m.bin" --order "$order" --queries "$QUERIES" \
           --json "$RAW/rep-$m-$order-$r.json" >/dev/null 2>&1 || echo "repeat $r $m $order FAILED" >>"$MD"

@@ -27,24 +27,43 @@ __kernel void clvr_bvh_build_level(__global clvr_bvh_node *nodes, __global const
 
 /* Point location for n points (xyz, w ignored): scalar and element id
  * (CLVR_BVH_NOT_FOUND when outside). hints: CLVR_LOCATE_COHERENT or
- * CLVR_LOCATE_INCOHERENT (speed only, same results). */
+ * CLVR_LOCATE_INCOHERENT (speed only, same results). chain > 1: each work
+ * item takes `chain` consecutive points (the samples of one ray, as a
+ * renderer produces them) and carries a ray's hint from one to the next
+ * (clvr_locate_hinted): the element found may then differ from the full
+ * walk's only where two elements share the point, with the same value. */
 __kernel void clvr_locate_points(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
                                  uint tlas_root, __global const clvr_bvh_node *blas,
                                  __global const clvr_instance *instances, __global const float4 *vertices,
                                  __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
                                  __global float *scalars, __global uint *element_ids, uint hints,
-                                 __global const uchar *ebox, uint use_ebox)
+                                 __global const uchar *ebox, uint use_ebox, uint chain)
 {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    const float4 p = points[i];
-    float s = 0.0f;
-    uint e;
+    const uint g = get_global_id(0);
     const clvr_mesh_view m = {tlas, blas, instances, vertices, idx16, idx32, tlas_root, leaf_size,
                               use_ebox ? ebox : NULL};
-    clvr_locate(&m, p.x, p.y, p.z, hints, &s, &e);
-    scalars[i] = s;
-    element_ids[i] = e;
+    if (chain <= 1u) {
+        if (g >= n) return;
+        const float4 p = points[g];
+        float s = 0.0f;
+        uint e;
+        clvr_locate(&m, p.x, p.y, p.z, hints, &s, &e);
+        scalars[g] = s;
+        element_ids[g] = e;
+        return;
+    }
+    const ulong first = (ulong)g * chain;
+    if (first >= n) return;
+    const uint end = (uint)min((ulong)n, first + chain);
+    clvr_locate_hint h = clvr_locate_hint_none();
+    for (uint i = (uint)first; i < end; ++i) {
+        const float4 p = points[i];
+        float s = 0.0f;
+        uint e = CLVR_BVH_NOT_FOUND;
+        if (!clvr_locate_hinted(&m, p.x, p.y, p.z, &h, &s, &e)) e = CLVR_BVH_NOT_FOUND;
+        scalars[i] = s;
+        element_ids[i] = e;
+    }
 }
 
 /* Quantized element boxes (locate.h), one work item per leaf cluster.

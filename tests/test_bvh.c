@@ -491,6 +491,8 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 12, sizeof(cl_uint), &hints));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 13, sizeof(cl_mem), &db.ebox));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 14, sizeof(cl_uint), &use_ebox));
+    cl_uint chain = 1;
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 15, sizeof(cl_uint), &chain));
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, 64, NULL, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dsc, CL_TRUE, 0, nq * sizeof(float), dscal, 0, NULL, NULL));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, nq * sizeof(uint32_t), delem, 0, NULL, NULL));
@@ -508,6 +510,83 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         int host_dev_diff = 0;
         for (uint32_t i = 0; i < nq; ++i) host_dev_diff += delem[i] != host_e[i];
         TU_CHECK_EQ_U64(host_dev_diff, 0);
+    }
+    /* Chains (a ray's hint carried from point to point inside a work item)
+     * against the same kernel without hints (chain 1, checked against brute
+     * force above; the same device arithmetic, since the host's may round
+     * differently at element borders): 7 random points per item (mostly
+     * misses of the hinted subtree; nq is not a multiple of 7 in the
+     * fixtures), then walks of 25 points between pairs of query points, as
+     * a renderer's samples go. Same found flag; the same element with the
+     * same bits, or another element that holds the point with its value. */
+    for (int pass = 0; pass < 2; ++pass) {
+        const cl_uint len = pass == 0 ? 7u : 25u;
+        const uint32_t np = pass == 0 ? nq : (nq / 2) * 25u;
+        float (*walk)[4] = malloc(((size_t)np + 1) * sizeof *walk);
+        float *ws = malloc(((size_t)np + 1) * 2 * sizeof *ws);
+        uint32_t *we = malloc(((size_t)np + 1) * 2 * sizeof *we);
+        cl_mem dw = NULL, dws = NULL, dwe = NULL;
+        if (!walk || !ws || !we) s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "chain points");
+        if (s == CLVR_OK && pass == 0) memcpy(walk, q.p, (size_t)nq * sizeof *walk);
+        for (uint32_t j = 0; s == CLVR_OK && pass == 1 && j < nq / 2; ++j)
+            for (uint32_t st = 0; st < 25u; ++st) {
+                const float w = (float)st / 24.0f;
+                for (int a = 0; a < 3; ++a)
+                    walk[25u * j + st][a] = q.p[2 * j][a] + w * (q.p[2 * j + 1][a] - q.p[2 * j][a]);
+                walk[25u * j + st][3] = 0.0f;
+            }
+        cl_uint nn = np;
+        if (s == CLVR_OK)
+            s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ((size_t)np + 1) * sizeof *walk, walk,
+                               "chain points", &dw, err);
+        if (s == CLVR_OK)
+            s = clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, ((size_t)np + 1) * sizeof(float), NULL, "chain scalars", &dws, err);
+        if (s == CLVR_OK)
+            s = clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, ((size_t)np + 1) * sizeof(uint32_t), NULL, "chain ids", &dwe, err);
+        for (int run = 0; s == CLVR_OK && run < 2; ++run) {
+            const cl_uint cl_len = run == 0 ? 1u : len;
+            CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 0, sizeof(cl_mem), &dw));
+            CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 1, sizeof(cl_uint), &nn));
+            CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 10, sizeof(cl_mem), &dws));
+            CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 11, sizeof(cl_mem), &dwe));
+            CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 15, sizeof(cl_uint), &cl_len));
+            s = clvr_cl_run1d(cl, k->locate_points, (np + cl_len - 1) / cl_len, 64, NULL, err);
+            if (s != CLVR_OK) break;
+            CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dws, CL_TRUE, 0, (size_t)np * sizeof(float), ws + run * (np + 1),
+                                              0, NULL, NULL));
+            CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dwe, CL_TRUE, 0, (size_t)np * sizeof(uint32_t),
+                                              we + run * (np + 1), 0, NULL, NULL));
+        }
+        if (s == CLVR_OK) {
+            int chain_bad = 0, same = 0;
+            const float *s1 = ws, *s2 = ws + np + 1;
+            const uint32_t *e1 = we, *e2 = we + np + 1;
+            for (uint32_t i = 0; i < np; ++i) {
+                int ok = (e1[i] == CLVR_BVH_NOT_FOUND) == (e2[i] == CLVR_BVH_NOT_FOUND);
+                if (ok && e1[i] != CLVR_BVH_NOT_FOUND) {
+                    if (e1[i] == e2[i]) ok = memcmp(&s1[i], &s2[i], sizeof(float)) == 0, ++same;
+                    else /* a neighbour on a shared face, or an overlapping element (curved faces of mixed
+                          * meshes) that contains the point by the host's test (judge) */
+                        ok = e2[i] < c.num_elements && (fabsf(s1[i] - s2[i]) <= 1e-5f * fmaxf(1.0f, fabsf(s1[i])) ||
+                                                        judge(&c, walk[i], e2[i], s2[i], e1[i], s1[i]));
+                }
+                if (!ok) {
+                    if (chain_bad < 5)
+                        fprintf(stderr, "%s N=%u chain %u: point (%.9g %.9g %.9g): got %u (%.9g), without hint %u (%.9g)\n",
+                                name, leaf_size, len, walk[i][0], walk[i][1], walk[i][2], e2[i], s2[i], e1[i], s1[i]);
+                    ++chain_bad;
+                }
+            }
+            TU_CHECK_EQ_U64(chain_bad, 0);
+            TU_CHECK(same > 0 || np == 0 || nq < 4);
+        }
+        clvr_cl_release(cl, &dw);
+        clvr_cl_release(cl, &dws);
+        clvr_cl_release(cl, &dwe);
+        free(walk);
+        free(ws);
+        free(we);
+        if (s != CLVR_OK) goto cleanup;
     }
 cleanup:
     if (s != CLVR_OK) {
