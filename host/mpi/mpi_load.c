@@ -1,0 +1,747 @@
+/* mpi_load.c: a rank's share of a .bin mesh, read with offsets (see
+ * mpi_load.h and docs/mpi-loading.md).
+ *
+ * Every step that can fail on one rank ends with clvr_mpi_agree before the
+ * next collective, so a failure anywhere becomes the same error everywhere
+ * and no rank waits in a collective that another has left. All sizes are
+ * 64-bit; MPI's int counts only ever see one bounded round of an exchange
+ * (xchg below). */
+#include "mpi_load.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define LOAD_SAMPLE_MAX 65536u                 /* centroids bisected for the regions */
+#define LOAD_CHUNK_DEFAULT ((uint64_t)64 << 20) /* bytes per exchange round and side */
+#define LOAD_CHUNK_MAX ((uint64_t)1 << 30)      /* keeps a round's byte counts below INT_MAX */
+#define LOAD_IO_CHUNK ((uint64_t)1 << 30)       /* largest single pread */
+#define LOAD_TUPLE_CHUNK 65536u                 /* tuples per read of a multi-component field */
+#define REC_HEAD 3u                             /* element record: type, global id low, high, then indices */
+
+clvr_status clvr_mpi_agree(MPI_Comm comm, clvr_status local, clvr_error *err)
+{
+    int rank, size;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &size);
+    int mine[2] = {local == CLVR_OK ? INT_MAX : rank, local == CLVR_OK ? 0 : 1}, all[2];
+    MPI_Allreduce(&mine[0], &all[0], 1, MPI_INT, MPI_MIN, comm);
+    MPI_Allreduce(&mine[1], &all[1], 1, MPI_INT, MPI_SUM, comm);
+    if (all[0] == INT_MAX) return CLVR_OK;
+    struct {
+        int status;
+        char msg[sizeof err->msg];
+    } b;
+    memset(&b, 0, sizeof b);
+    if (rank == all[0]) {
+        b.status = (int)local;
+        if (err && err->msg[0]) memcpy(b.msg, err->msg, sizeof b.msg - 1);
+        else snprintf(b.msg, sizeof b.msg, "%s", clvr_status_text(local));
+    }
+    MPI_Bcast(&b, (int)sizeof b, MPI_BYTE, all[0], comm);
+    b.msg[sizeof b.msg - 1] = '\0';
+    char others[64] = "";
+    if (all[1] > 1) snprintf(others, sizeof others, " (and %d other rank%s)", all[1] - 1, all[1] > 2 ? "s" : "");
+    return clvr_error_set(err, (clvr_status)b.status, "rank %d of %d%s: %s", all[0], size, others, b.msg);
+}
+
+/* ------------------------------------------------------------ helpers */
+
+/* Rank r's contiguous part of n items: the first n % size ranks get one
+ * more. No product of n and r, so no overflow at any count. */
+static void slice_of(uint64_t n, int r, int size, uint64_t *first, uint64_t *count)
+{
+    const uint64_t q = n / (uint64_t)size, rem = n % (uint64_t)size, ur = (uint64_t)r;
+    *first = q * ur + (ur < rem ? ur : rem);
+    *count = q + (ur < rem ? 1u : 0u);
+}
+
+static int slice_owner(uint64_t i, uint64_t n, int size)
+{
+    const uint64_t q = n / (uint64_t)size, rem = n % (uint64_t)size, big = rem * (q + 1);
+    if (i < big) return (int)(i / (q + 1));
+    return (int)(rem + (i - big) / q); /* q > 0 here: i < n and i >= big = n when q = 0 */
+}
+
+/* LSD radix sort of u32 keys (11 bits a pass) with scratch of n; then
+ * duplicates removed. Returns the unique count. */
+static uint64_t sort_unique_u32(uint32_t *a, uint32_t *tmp, uint64_t n)
+{
+    uint32_t *src = a, *dst = tmp;
+    for (int shift = 0; shift < 32; shift += 11) {
+        uint64_t count[2048] = {0};
+        for (uint64_t i = 0; i < n; ++i) ++count[(src[i] >> shift) & 2047u];
+        uint64_t sum = 0;
+        for (int b = 0; b < 2048; ++b) {
+            uint64_t c = count[b];
+            count[b] = sum;
+            sum += c;
+        }
+        for (uint64_t i = 0; i < n; ++i) dst[count[(src[i] >> shift) & 2047u]++] = src[i];
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+    }
+    /* Three passes: the sorted keys are in tmp. */
+    uint64_t u = 0;
+    for (uint64_t i = 0; i < n; ++i)
+        if (u == 0 || src[i] != a[u - 1]) a[u++] = src[i];
+    return u;
+}
+
+/* Index of key in sorted unique ids[0..n) (present by construction). */
+static uint64_t find_id(const uint32_t *ids, uint64_t n, uint32_t key)
+{
+    uint64_t lo = 0, hi = n;
+    while (hi - lo > 1) {
+        uint64_t mid = lo + (hi - lo) / 2;
+        if (ids[mid] <= key) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+static void *alloc_items(uint64_t n, size_t item)
+{
+    if (n > SIZE_MAX / item) return NULL;
+    return malloc(n ? (size_t)(n * item) : 1);
+}
+
+typedef struct load_ctx {
+    MPI_Comm comm;
+    int rank, size;
+    const char *path;
+    int fd;
+    clvr_bin_layout lay;
+    uint64_t chunk_bytes;
+    clvr_mpi_load_stats st;
+    uint64_t num_elements;
+    uint64_t type_first[CLVR_CELL_TYPE_COUNT]; /* global id of each type's first element */
+    clvr_error e;                              /* this rank's own message until agreed */
+} load_ctx;
+
+static clvr_status read_at(load_ctx *c, uint64_t off, void *dst, uint64_t n, const char *what)
+{
+    uint8_t *p = (uint8_t *)dst;
+    while (n > 0) {
+        size_t want = (size_t)(n < LOAD_IO_CHUNK ? n : LOAD_IO_CHUNK);
+        if (off > (uint64_t)INT64_MAX)
+            return clvr_error_set(&c->e, CLVR_ERR_IO, "%s: offset %llu of %s is beyond what the OS can address",
+                                  c->path, (unsigned long long)off, what);
+        ssize_t got = pread(c->fd, p, want, (off_t)off);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) return clvr_error_set(&c->e, CLVR_ERR_IO, "%s: cannot read %s: %s", c->path, what, strerror(errno));
+        if (got == 0)
+            return clvr_error_set(&c->e, CLVR_ERR_TRUNCATED, "%s: truncated while reading %s (the file shrank?)",
+                                  c->path, what);
+        p += got;
+        n -= (uint64_t)got;
+        off += (uint64_t)got;
+        c->st.bytes_read += (uint64_t)got;
+    }
+    return CLVR_OK;
+}
+
+static clvr_status agree(load_ctx *c, clvr_status s)
+{
+    return clvr_mpi_agree(c->comm, s, &c->e);
+}
+
+/* ------------------------------------------------------------ exchange */
+
+/* MPI_Alltoall of 64-bit counts. */
+static void xchg_counts(load_ctx *c, const uint64_t *send, uint64_t *recv)
+{
+    MPI_Alltoall((void *)send, 1, MPI_UINT64_T, recv, 1, MPI_UINT64_T, c->comm);
+}
+
+/* Alltoallv of items of `item` bytes with 64-bit counts: scount[d] items
+ * for rank d, packed in rank order in sendbuf; rcount[s] from rank s into
+ * recvbuf in rank order (the caller sized it and agreed). Rounds of at
+ * most max(1, chunk / item / size) items per peer, packed into bounded
+ * scratch, so int counts and displacements never overflow. Collective;
+ * allocates scratch and agrees before the first round. */
+static clvr_status xchg(load_ctx *c, const void *sendbuf, const uint64_t *scount, void *recvbuf,
+                        const uint64_t *rcount, size_t item)
+{
+    const int n = c->size;
+    uint64_t per = c->chunk_bytes / item / (uint64_t)n;
+    if (per == 0) per = 1;
+    uint64_t rounds = 0, mine = 0;
+    for (int d = 0; d < n; ++d) {
+        uint64_t a = (scount[d] + per - 1) / per, b = (rcount[d] + per - 1) / per;
+        if (a > mine) mine = a;
+        if (b > mine) mine = b;
+    }
+    MPI_Allreduce(&mine, &rounds, 1, MPI_UINT64_T, MPI_MAX, c->comm);
+    uint64_t *sdisp = calloc((size_t)n, sizeof *sdisp), *rdisp = calloc((size_t)n, sizeof *rdisp);
+    int *sc = calloc((size_t)n, sizeof *sc), *rc = calloc((size_t)n, sizeof *rc);
+    int *sd = calloc((size_t)n, sizeof *sd), *rd = calloc((size_t)n, sizeof *rd);
+    uint64_t sbytes = 0, rbytes = 0;
+    for (int d = 0; d < n; ++d) {
+        uint64_t a = scount[d] < per ? scount[d] : per, b = rcount[d] < per ? rcount[d] : per;
+        sbytes += a * item;
+        rbytes += b * item;
+    }
+    uint8_t *stmp = malloc(sbytes ? (size_t)sbytes : 1), *rtmp = malloc(rbytes ? (size_t)rbytes : 1);
+    clvr_status s = CLVR_OK;
+    if (!sdisp || !rdisp || !sc || !rc || !sd || !rd || !stmp || !rtmp)
+        s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu bytes of exchange buffers", c->path,
+                           (unsigned long long)(sbytes + rbytes));
+    s = agree(c, s);
+    if (s == CLVR_OK) {
+        for (int d = 1; d < n; ++d) {
+            sdisp[d] = sdisp[d - 1] + scount[d - 1];
+            rdisp[d] = rdisp[d - 1] + rcount[d - 1];
+        }
+        for (uint64_t k = 0; k < rounds; ++k) {
+            const uint64_t base = k * per;
+            int so = 0, ro = 0;
+            for (int d = 0; d < n; ++d) {
+                uint64_t a = scount[d] > base ? scount[d] - base : 0, b = rcount[d] > base ? rcount[d] - base : 0;
+                if (a > per) a = per;
+                if (b > per) b = per;
+                if (a) memcpy(stmp + so, (const uint8_t *)sendbuf + (sdisp[d] + base) * item, (size_t)(a * item));
+                sc[d] = (int)(a * item);
+                sd[d] = so;
+                so += sc[d];
+                rc[d] = (int)(b * item);
+                rd[d] = ro;
+                ro += rc[d];
+            }
+            MPI_Alltoallv(stmp, sc, sd, MPI_BYTE, rtmp, rc, rd, MPI_BYTE, c->comm);
+            for (int d = 0; d < n; ++d)
+                if (rc[d]) memcpy((uint8_t *)recvbuf + (rdisp[d] + base) * item, rtmp + rd[d], (size_t)rc[d]);
+        }
+        c->st.exchange_rounds += rounds;
+    }
+    free(sdisp);
+    free(rdisp);
+    free(sc);
+    free(rc);
+    free(sd);
+    free(rd);
+    free(stmp);
+    free(rtmp);
+    return s;
+}
+
+/* The vertex slice this rank read: global ids [v0, v0 + nv). */
+typedef struct vslice {
+    uint64_t v0, nv;
+    float *pos; /* 3 nv */
+    float *sc;  /* nv */
+} vslice;
+
+/* Collective: positions and scalars (4 floats per id, xyz s) of the sorted
+ * unique global ids[0..n) from the ranks whose vertex slice holds them.
+ * The caller agreed before; *out is this rank's (NULL on failure). */
+static clvr_status fetch_vertices(load_ctx *c, const vslice *vs, const uint32_t *ids, uint64_t n, float **out)
+{
+    const int size = c->size;
+    const uint64_t V = c->lay.num_vertices;
+    uint64_t *scount = calloc((size_t)size, sizeof *scount), *rcount = calloc((size_t)size, sizeof *rcount);
+    uint32_t *req = NULL;
+    float *reply = NULL, *got = NULL;
+    uint64_t nreq = 0;
+    *out = NULL;
+    clvr_status s = CLVR_OK;
+    if (!scount || !rcount) s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate request counts", c->path);
+    s = agree(c, s);
+    if (s != CLVR_OK) goto done;
+    for (uint64_t i = 0; i < n; ++i) ++scount[slice_owner(ids[i], V, size)];
+    xchg_counts(c, scount, rcount);
+    for (int d = 0; d < size; ++d) nreq += rcount[d];
+    req = alloc_items(nreq, sizeof *req);
+    got = alloc_items(n, 4 * sizeof *got);
+    if (!req || !got)
+        s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex requests", c->path,
+                           (unsigned long long)(nreq + n));
+    s = agree(c, s);
+    if (s == CLVR_OK) s = xchg(c, ids, scount, req, rcount, sizeof *req);
+    if (s != CLVR_OK) goto done;
+    reply = alloc_items(nreq, 4 * sizeof *reply);
+    if (!reply)
+        s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate replies for %llu vertices", c->path,
+                           (unsigned long long)nreq);
+    for (uint64_t i = 0; i < nreq && s == CLVR_OK; ++i) {
+        const uint64_t l = (uint64_t)req[i] - vs->v0; /* in this slice: slice_owner sent it here */
+        memcpy(reply + 4 * i, vs->pos + 3 * l, 3 * sizeof(float));
+        reply[4 * i + 3] = vs->sc[l];
+    }
+    free(req);
+    req = NULL;
+    s = agree(c, s);
+    if (s == CLVR_OK) s = xchg(c, reply, rcount, got, scount, 4 * sizeof(float));
+    if (s == CLVR_OK) {
+        *out = got;
+        got = NULL;
+    }
+done:
+    free(scount);
+    free(rcount);
+    free(req);
+    free(reply);
+    free(got);
+    return s;
+}
+
+/* ------------------------------------------------------------ reading */
+
+static clvr_status read_vertex_slice(load_ctx *c, vslice *vs)
+{
+    const clvr_bin_layout *L = &c->lay;
+    slice_of(L->num_vertices, c->rank, c->size, &vs->v0, &vs->nv);
+    vs->pos = alloc_items(vs->nv, 3 * sizeof(float));
+    vs->sc = alloc_items(vs->nv, sizeof(float));
+    if (!vs->pos || !vs->sc)
+        return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertices of this rank's slice",
+                              c->path, (unsigned long long)vs->nv);
+    clvr_status s = read_at(c, L->positions_offset + 12u * vs->v0, vs->pos, 12u * vs->nv, "positions");
+    if (s != CLVR_OK) return s;
+    const uint32_t nc = L->scalar_components;
+    if (!L->has_scalar) {
+        memset(vs->sc, 0, (size_t)vs->nv * sizeof(float));
+    } else if (nc == 1) {
+        s = read_at(c, L->scalar_offset + 4u * vs->v0, vs->sc, 4u * vs->nv, L->scalar_label);
+    } else {
+        float *buf = alloc_items(LOAD_TUPLE_CHUNK, (size_t)nc * sizeof(float));
+        if (!buf) return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate field scratch", c->path);
+        for (uint64_t i0 = 0; i0 < vs->nv && s == CLVR_OK; i0 += LOAD_TUPLE_CHUNK) {
+            uint64_t k = vs->nv - i0 < LOAD_TUPLE_CHUNK ? vs->nv - i0 : LOAD_TUPLE_CHUNK;
+            s = read_at(c, L->scalar_offset + (vs->v0 + i0) * nc * 4u, buf, k * nc * 4u, L->scalar_label);
+            for (uint64_t j = 0; j < k && s == CLVR_OK; ++j)
+                vs->sc[i0 + j] = clvr_bin_tuple_value(buf + j * nc, nc, L->scalar_component);
+        }
+        free(buf);
+    }
+    if (s != CLVR_OK) return s;
+    /* clvr_mesh_validate's checks and messages, with global vertex ids. */
+    for (uint64_t i = 0; i < vs->nv; ++i) {
+        const float *p = vs->pos + 3 * i;
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+            return clvr_error_set(&c->e, CLVR_ERR_BAD_VALUE,
+                                  "%s: vertex %llu has a non-finite coordinate (%g, %g, %g); fix or remove it",
+                                  c->path, (unsigned long long)(vs->v0 + i), p[0], p[1], p[2]);
+        if (!isfinite(vs->sc[i]))
+            return clvr_error_set(&c->e, CLVR_ERR_BAD_VALUE,
+                                  "%s: scalar '%s' at vertex %llu is %g; replace NaN/Inf values before rendering",
+                                  c->path, L->scalar_label, (unsigned long long)(vs->v0 + i), vs->sc[i]);
+    }
+    return CLVR_OK;
+}
+
+/* This rank's element slice, per type: elements [first[t], first[t] +
+ * count[t]) of type t, their indices in idx[t]. */
+typedef struct eslice {
+    uint64_t first[CLVR_CELL_TYPE_COUNT], count[CLVR_CELL_TYPE_COUNT];
+    uint32_t *idx[CLVR_CELL_TYPE_COUNT];
+} eslice;
+
+static void eslice_free(eslice *es)
+{
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(es->idx[t]);
+    memset(es, 0, sizeof *es);
+}
+
+static clvr_status read_element_slice(load_ctx *c, eslice *es)
+{
+    const clvr_bin_layout *L = &c->lay;
+    uint64_t e0, ne;
+    slice_of(c->num_elements, c->rank, c->size, &e0, &ne);
+    c->st.slice_elements = ne;
+    const uint64_t e1 = e0 + ne;
+    clvr_status s = CLVR_OK;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t) {
+        const uint64_t t0 = c->type_first[t], t1 = t0 + L->num_cells[t];
+        const uint64_t a = e0 > t0 ? e0 : t0, b = e1 < t1 ? e1 : t1;
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        es->first[t] = a - t0;
+        es->count[t] = b > a ? b - a : 0;
+        es->idx[t] = alloc_items(es->count[t], nv * sizeof(uint32_t));
+        if (!es->idx[t])
+            return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu %s of this rank's slice",
+                                  c->path, (unsigned long long)es->count[t], clvr_cell_type_name(t));
+        s = read_at(c, L->cells_offset[t] + es->first[t] * nv * 4u, es->idx[t], es->count[t] * nv * 4u,
+                    clvr_cell_type_name(t));
+        for (uint64_t j = 0; j < es->count[t] * nv && s == CLVR_OK; ++j)
+            if ((uint64_t)es->idx[t][j] >= L->num_vertices)
+                s = clvr_error_set(&c->e, CLVR_ERR_BAD_INDEX,
+                                   "%s: %s[%llu] vertex %u is index %u but the mesh has %llu vertices", c->path,
+                                   clvr_cell_type_name(t), (unsigned long long)(es->first[t] + j / nv),
+                                   (unsigned)(j % nv), es->idx[t][j], (unsigned long long)L->num_vertices);
+    }
+    return s;
+}
+
+/* ------------------------------------------------------------ ranges */
+
+/* Bounds and scalar range as clvr_mesh_update_ranges scans them: a value
+ * replaces the running one only when strictly smaller (larger), so a tie
+ * such as -0 and +0 keeps the first in file order. The operation is
+ * declared non-commutative, which makes MPI combine the ranks' slices in
+ * rank order, i.e. file order: the result is that of one scan. invec holds
+ * the lower ranks' part. */
+static void ranges_op(void *in, void *inout, int *len, MPI_Datatype *dt)
+{
+    (void)dt;
+    const float *a = (const float *)in;
+    float *b = (float *)inout;
+    for (int i = 0; i < *len; ++i, a += 8, b += 8) {
+        for (int k = 0; k < 3; ++k) {
+            b[k] = b[k] < a[k] ? b[k] : a[k];
+            b[3 + k] = b[3 + k] > a[3 + k] ? b[3 + k] : a[3 + k];
+        }
+        b[6] = b[6] < a[6] ? b[6] : a[6];
+        b[7] = b[7] > a[7] ? b[7] : a[7];
+    }
+}
+
+static void global_ranges(load_ctx *c, const vslice *vs, clvr_mpi_share *out)
+{
+    float r[8] = {FLT_MAX, FLT_MAX, FLT_MAX, -FLT_MAX, -FLT_MAX, -FLT_MAX, FLT_MAX, -FLT_MAX}, g[8];
+    for (uint64_t i = 0; i < vs->nv; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            float v = vs->pos[3 * i + k];
+            r[k] = v < r[k] ? v : r[k];
+            r[3 + k] = v > r[3 + k] ? v : r[3 + k];
+        }
+        r[6] = vs->sc[i] < r[6] ? vs->sc[i] : r[6];
+        r[7] = vs->sc[i] > r[7] ? vs->sc[i] : r[7];
+    }
+    MPI_Datatype t;
+    MPI_Op op;
+    MPI_Type_contiguous(8, MPI_FLOAT, &t);
+    MPI_Type_commit(&t);
+    MPI_Op_create(ranges_op, 0, &op);
+    MPI_Allreduce(r, g, 1, t, op, c->comm);
+    MPI_Op_free(&op);
+    MPI_Type_free(&t);
+    if (c->lay.num_vertices == 0) memset(g, 0, sizeof g); /* as clvr_mesh_update_ranges */
+    memcpy(out->bounds_lo, g, 3 * sizeof(float));
+    memcpy(out->bounds_hi, g + 3, 3 * sizeof(float));
+    out->scalar_min = g[6];
+    out->scalar_max = g[7];
+}
+
+/* ------------------------------------------------------------ elements */
+
+/* Vertex box and centroid of one element from its vertices' positions
+ * (xyzs records, 4 floats each, gathered in vertex order). The centroid is
+ * clamped into the box: the float mean of equal coordinates can round one
+ * ulp outside it, and the owner region must be one the box overlaps. Both
+ * ends compute it from the same bits, so they agree. */
+static void element_geometry(const float *const *v, uint32_t nv, float lo[3], float hi[3], float cen[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        float a = v[0][k], b = v[0][k], sum = v[0][k];
+        for (uint32_t j = 1; j < nv; ++j) {
+            float x = v[j][k];
+            a = x < a ? x : a;
+            b = x > b ? x : b;
+            sum += x;
+        }
+        float m = sum / (float)nv;
+        lo[k] = a;
+        hi[k] = b;
+        cen[k] = m < a ? a : (m > b ? b : m);
+    }
+}
+
+/* ------------------------------------------------------------ the load */
+
+clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const clvr_load_options *lo,
+                                       uint64_t chunk_bytes, clvr_mpi_share *out, clvr_mpi_load_stats *stats,
+                                       clvr_error *err)
+{
+    load_ctx c;
+    memset(&c, 0, sizeof c);
+    memset(out, 0, sizeof *out);
+    if (stats) memset(stats, 0, sizeof *stats);
+    c.comm = comm;
+    c.path = path;
+    c.fd = -1;
+    c.chunk_bytes = chunk_bytes ? (chunk_bytes < LOAD_CHUNK_MAX ? chunk_bytes : LOAD_CHUNK_MAX) : LOAD_CHUNK_DEFAULT;
+    MPI_Comm_rank(comm, &c.rank);
+    MPI_Comm_size(comm, &c.size);
+    const int rank = c.rank, size = c.size;
+    vslice vs = {0, 0, NULL, NULL};
+    eslice es;
+    memset(&es, 0, sizeof es);
+    uint32_t *ids = NULL, *tmp = NULL, *rec = NULL, *recv = NULL;
+    float *xyzs = NULL, *sample = NULL, *regions = NULL;
+    uint64_t *scount = NULL, *rcount = NULL;
+    int *gcount = NULL, *gdisp = NULL;
+    uint64_t nids = 0, nrecv = 0;
+    clvr_status s = CLVR_OK;
+
+    /* 1. Header, slices, validation. */
+    c.fd = open(path, O_RDONLY);
+    if (c.fd < 0) s = clvr_error_set(&c.e, CLVR_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (s == CLVR_OK) s = clvr_mesh_bin_layout(c.fd, path, lo ? lo->scalar_name : NULL, &c.lay, &c.e);
+    if (s == CLVR_OK) c.st.bytes_read += 256u; /* the header (and a v2 field table, uncounted: small) */
+    if (s == CLVR_OK && c.lay.has_scalar && c.lay.scalar_association == CLVR_FIELD_CELL)
+        s = clvr_error_set(&c.e, CLVR_ERR_BAD_FIELD,
+                           "%s: field '%s' is cell data, which MPI mode cannot average onto vertices (each vertex "
+                           "needs the elements of every rank); pick a point field with --scalar point:NAME, or "
+                           "render this field with one process",
+                           path, c.lay.scalar_label);
+    if (s == CLVR_OK) {
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            c.type_first[t] = c.num_elements;
+            c.num_elements += c.lay.num_cells[t]; /* the layout checked the sizes: no overflow */
+        }
+        if (c.num_elements == 0)
+            s = clvr_error_set(&c.e, CLVR_ERR_EMPTY,
+                               "%s: the mesh has no elements (0 tets, pyramids, wedges, hexes)", path);
+    }
+    if (s == CLVR_OK) s = read_vertex_slice(&c, &vs);
+    if (s == CLVR_OK) s = read_element_slice(&c, &es);
+    c.st.slice_vertices = vs.nv;
+    s = agree(&c, s);
+    if (s != CLVR_OK) goto done;
+
+    /* 2. Global bounds and scalar range. */
+    global_ranges(&c, &vs, out);
+    out->global_vertices = c.lay.num_vertices;
+    out->global_elements = c.num_elements;
+
+    /* 3. The slice's vertices from their owners; centroids; the sample. */
+    {
+        uint64_t corners = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) corners += es.count[t] * clvr_cell_vertex_count(t);
+        ids = alloc_items(corners, sizeof *ids);
+        tmp = alloc_items(corners, sizeof *tmp);
+        if (!ids || !tmp)
+            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex ids", path,
+                               (unsigned long long)corners);
+        if (s == CLVR_OK) {
+            uint64_t k = 0;
+            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+                uint64_t n = es.count[t] * clvr_cell_vertex_count(t);
+                if (n) memcpy(ids + k, es.idx[t], (size_t)n * sizeof *ids);
+                k += n;
+            }
+            nids = sort_unique_u32(ids, tmp, corners);
+        }
+        free(tmp);
+        tmp = NULL;
+    }
+    s = agree(&c, s);
+    if (s == CLVR_OK) s = fetch_vertices(&c, &vs, ids, nids, &xyzs);
+    if (s != CLVR_OK) goto done;
+    /* The vertex slice stays: step 5 serves the receivers' requests from it. */
+
+    const uint64_t stride = (c.num_elements + LOAD_SAMPLE_MAX - 1) / LOAD_SAMPLE_MAX;
+    {
+        uint64_t nmine = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+            for (uint64_t j = 0; j < es.count[t]; ++j)
+                if ((c.type_first[t] + es.first[t] + j) % stride == 0) ++nmine;
+        sample = alloc_items(LOAD_SAMPLE_MAX + 1u, 3 * sizeof(float));
+        regions = alloc_items((uint64_t)size, 6 * sizeof(float));
+        gcount = calloc((size_t)size, sizeof *gcount);
+        gdisp = calloc((size_t)size, sizeof *gdisp);
+        float *mine = alloc_items(nmine, 3 * sizeof(float));
+        if (!sample || !regions || !gcount || !gdisp || !mine)
+            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the centroid sample", path);
+        s = agree(&c, s);
+        if (s != CLVR_OK) {
+            free(mine);
+            goto done;
+        }
+        uint64_t m = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            for (uint64_t j = 0; j < es.count[t]; ++j) {
+                if ((c.type_first[t] + es.first[t] + j) % stride != 0) continue;
+                const float *v[CLVR_CELL_MAX_VERTS];
+                float blo[3], bhi[3];
+                for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * find_id(ids, nids, es.idx[t][j * nv + q]);
+                element_geometry(v, nv, blo, bhi, mine + 3 * m++);
+            }
+        }
+        /* At most LOAD_SAMPLE_MAX centroids in all (one per stride of the
+         * global ids), so int counts suffice. Gathered in rank order, which
+         * is file order: the sample depends on the file alone. */
+        int n3 = (int)(3 * nmine);
+        MPI_Allgather(&n3, 1, MPI_INT, gcount, 1, MPI_INT, comm);
+        uint64_t total = 0;
+        for (int r = 0; r < size; ++r) {
+            gdisp[r] = (int)total;
+            total += (uint64_t)gcount[r];
+        }
+        MPI_Allgatherv(mine, n3, MPI_FLOAT, sample, gcount, gdisp, MPI_FLOAT, comm);
+        free(mine);
+        c.st.sample = total / 3;
+        s = clvr_mpi_regions(sample, total / 3, out->bounds_lo, out->bounds_hi, (uint32_t)size, regions, &c.e);
+        s = agree(&c, s);
+        if (s != CLVR_OK) goto done;
+        memcpy(out->region_lo, regions + 6 * rank, 3 * sizeof(float));
+        memcpy(out->region_hi, regions + 6 * rank + 3, 3 * sizeof(float));
+    }
+
+    /* 4. Every element to every rank whose region its box overlaps: records
+     * of REC_HEAD + nv u32 words, in file order per destination. Two passes
+     * (count, fill) so the send buffer is allocated once. */
+    scount = calloc((size_t)size, sizeof *scount);
+    rcount = calloc((size_t)size, sizeof *rcount);
+    if (!scount || !rcount) s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate counts", path);
+    s = agree(&c, s);
+    if (s != CLVR_OK) goto done;
+    {
+        uint64_t *fill = NULL;
+        for (int pass = 0; pass < 2 && s == CLVR_OK; ++pass) {
+            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+                const uint32_t nv = clvr_cell_vertex_count(t);
+                for (uint64_t j = 0; j < es.count[t]; ++j) {
+                    const uint32_t *e = es.idx[t] + j * nv;
+                    const float *v[CLVR_CELL_MAX_VERTS];
+                    float blo[3], bhi[3], cen[3];
+                    for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * find_id(ids, nids, e[q]);
+                    element_geometry(v, nv, blo, bhi, cen);
+                    const uint64_t gid = c.type_first[t] + es.first[t] + j;
+                    for (int d = 0; d < size; ++d) {
+                        if (!clvr_mpi_boxes_overlap(blo, bhi, regions + 6 * d, regions + 6 * d + 3)) continue;
+                        if (pass == 0) {
+                            scount[d] += REC_HEAD + nv;
+                            continue;
+                        }
+                        uint32_t *r = rec + fill[d];
+                        r[0] = t;
+                        r[1] = (uint32_t)gid;
+                        r[2] = (uint32_t)(gid >> 32);
+                        memcpy(r + REC_HEAD, e, nv * sizeof *e);
+                        fill[d] += REC_HEAD + nv;
+                    }
+                }
+            }
+            if (pass == 0) {
+                uint64_t total = 0;
+                for (int d = 0; d < size; ++d) total += scount[d];
+                rec = alloc_items(total, sizeof *rec);
+                fill = calloc((size_t)size, sizeof *fill);
+                if (!rec || !fill)
+                    s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu words of elements to send",
+                                       path, (unsigned long long)total);
+                for (int d = 1; d < size && s == CLVR_OK; ++d) fill[d] = fill[d - 1] + scount[d - 1];
+            }
+        }
+        free(fill);
+    }
+    /* The slice's own arrays are not needed past this point. */
+    eslice_free(&es);
+    free(ids);
+    free(xyzs);
+    ids = NULL;
+    xyzs = NULL;
+    s = agree(&c, s);
+    if (s != CLVR_OK) goto done;
+    xchg_counts(&c, scount, rcount);
+    for (int d = 0; d < size; ++d) nrecv += rcount[d];
+    recv = alloc_items(nrecv, sizeof *recv);
+    if (!recv)
+        s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu words of received elements", path,
+                           (unsigned long long)nrecv);
+    s = agree(&c, s);
+    if (s == CLVR_OK) s = xchg(&c, rec, scount, recv, rcount, sizeof *rec);
+    free(rec);
+    rec = NULL;
+    if (s != CLVR_OK) goto done;
+
+    /* 5. The share: unique vertices by global id, fetched; per-type arrays
+     * in file order (records arrive from ranks in rank order = file order). */
+    {
+        uint64_t ncells[CLVR_CELL_TYPE_COUNT] = {0}, corners = 0, nelem = 0;
+        for (uint64_t w = 0; w < nrecv;) {
+            const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
+            ++ncells[t];
+            ++nelem;
+            corners += nv;
+            w += REC_HEAD + nv;
+        }
+        ids = alloc_items(corners, sizeof *ids);
+        tmp = alloc_items(corners, sizeof *tmp);
+        if (!ids || !tmp)
+            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex ids of the share", path,
+                               (unsigned long long)corners);
+        if (s == CLVR_OK) {
+            uint64_t k = 0;
+            for (uint64_t w = 0; w < nrecv;) {
+                const uint32_t nv = clvr_cell_vertex_count(recv[w]);
+                memcpy(ids + k, recv + w + REC_HEAD, nv * sizeof *ids);
+                k += nv;
+                w += REC_HEAD + nv;
+            }
+            nids = sort_unique_u32(ids, tmp, corners);
+        }
+        free(tmp);
+        tmp = NULL;
+        s = agree(&c, s);
+        if (s == CLVR_OK) s = fetch_vertices(&c, &vs, ids, nids, &xyzs);
+        if (s == CLVR_OK) s = clvr_mesh_alloc(&out->mesh, nids, ncells, &c.e);
+        s = agree(&c, s);
+        if (s != CLVR_OK) goto done;
+        clvr_mesh *m = &out->mesh;
+        for (uint64_t i = 0; i < nids; ++i) {
+            memcpy(m->positions + 3 * i, xyzs + 4 * i, 3 * sizeof(float));
+            m->scalars[i] = xyzs[4 * i + 3];
+        }
+        uint64_t at[CLVR_CELL_TYPE_COUNT] = {0}, owned = 0;
+        for (uint64_t w = 0; w < nrecv;) {
+            const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
+            uint32_t *dst = m->indices[t] + at[t]++ * nv;
+            const float *v[CLVR_CELL_MAX_VERTS];
+            for (uint32_t q = 0; q < nv; ++q) {
+                const uint64_t l = find_id(ids, nids, recv[w + REC_HEAD + q]);
+                dst[q] = (uint32_t)l;
+                v[q] = xyzs + 4 * l;
+            }
+            float blo[3], bhi[3], cen[3];
+            element_geometry(v, nv, blo, bhi, cen);
+            if (clvr_mpi_region_of(regions, (uint32_t)size, cen) == (uint32_t)rank) ++owned;
+            w += REC_HEAD + nv;
+        }
+        clvr_mesh_set_scalar_name(m, c.lay.scalar_label, CLVR_SCALAR_NAME_MAX);
+        clvr_mesh_update_ranges(m);
+        out->owned_elements = owned;
+        c.st.share_elements = nelem;
+        c.st.ghost_elements = nelem - owned;
+    }
+
+done:
+    if (c.fd >= 0) close(c.fd);
+    free(vs.pos);
+    free(vs.sc);
+    eslice_free(&es);
+    free(ids);
+    free(tmp);
+    free(rec);
+    free(recv);
+    free(xyzs);
+    free(sample);
+    free(regions);
+    free(scount);
+    free(rcount);
+    free(gcount);
+    free(gdisp);
+    if (stats) *stats = c.st;
+    if (s != CLVR_OK) {
+        clvr_mpi_share_free(out);
+        if (err) *err = c.e;
+        return s;
+    }
+    return CLVR_OK;
+}
+
+clvr_status clvr_mpi_load_share_bin(MPI_Comm comm, const char *path, const clvr_load_options *lo,
+                                    clvr_mpi_share *out, clvr_error *err)
+{
+    return clvr_mpi_load_share_bin_ex(comm, path, lo, 0, out, NULL, err);
+}
