@@ -23,7 +23,8 @@
 #define LOAD_CHUNK_MAX ((uint64_t)1 << 30)      /* keeps a round's byte counts below INT_MAX */
 #define LOAD_IO_CHUNK ((uint64_t)1 << 30)       /* largest single pread */
 #define LOAD_TUPLE_CHUNK 65536u                 /* tuples per read of a multi-component field */
-#define REC_HEAD 3u                             /* element record: type, global id low, high, then indices */
+#define REC_HEAD 1u                             /* element record: the type, then the global indices; records
+                                                * arrive in file order, so no element id is sent */
 
 clvr_status clvr_mpi_agree(MPI_Comm comm, clvr_status local, clvr_error *err)
 {
@@ -118,6 +119,7 @@ typedef struct load_ctx {
     int rank, size;
     const char *path;
     int fd;
+    int staged; /* exchanges always go through bounded scratch (an explicit chunk size) */
     clvr_bin_layout lay;
     uint64_t chunk_bytes;
     clvr_mpi_load_stats st;
@@ -171,7 +173,10 @@ static clvr_status xchg(load_ctx *c, const void *sendbuf, const uint64_t *scount
                         const uint64_t *rcount, size_t item)
 {
     const int n = c->size;
-    uint64_t per = c->chunk_bytes / item / (uint64_t)n;
+    /* Direct: one datatype of `item` bytes, counts and displacements in
+     * items straight on the caller's buffers, while they fit an int.
+     * Staged (c->staged, or beyond int): bounded scratch per round. */
+    uint64_t per = c->staged ? c->chunk_bytes / item / (uint64_t)n : (uint64_t)INT_MAX / 2;
     if (per == 0) per = 1;
     uint64_t rounds = 0, mine = 0;
     for (int d = 0; d < n; ++d) {
@@ -179,17 +184,39 @@ static clvr_status xchg(load_ctx *c, const void *sendbuf, const uint64_t *scount
         if (a > mine) mine = a;
         if (b > mine) mine = b;
     }
-    MPI_Allreduce(&mine, &rounds, 1, MPI_UINT64_T, MPI_MAX, c->comm);
+    uint64_t stot = 0, rtot = 0;
+    for (int d = 0; d < n; ++d) {
+        stot += scount[d];
+        rtot += rcount[d];
+    }
+    uint64_t need_stage = !c->staged && (stot >= (uint64_t)INT_MAX || rtot >= (uint64_t)INT_MAX), red[2] = {mine, need_stage}, got[2];
+    MPI_Allreduce(red, got, 2, MPI_UINT64_T, MPI_MAX, c->comm);
+    rounds = got[0];
+    const int staged = c->staged || got[1];
+    if (!c->staged && got[1]) { /* some rank's buffers pass INT_MAX items: everyone rounds through scratch */
+        per = c->chunk_bytes / item / (uint64_t)n;
+        if (per == 0) per = 1;
+        mine = 0;
+        for (int d = 0; d < n; ++d) {
+            uint64_t a = (scount[d] + per - 1) / per, b = (rcount[d] + per - 1) / per;
+            if (a > mine) mine = a;
+            if (b > mine) mine = b;
+        }
+        MPI_Allreduce(&mine, &rounds, 1, MPI_UINT64_T, MPI_MAX, c->comm);
+    }
     uint64_t *sdisp = calloc((size_t)n, sizeof *sdisp), *rdisp = calloc((size_t)n, sizeof *rdisp);
     int *sc = calloc((size_t)n, sizeof *sc), *rc = calloc((size_t)n, sizeof *rc);
     int *sd = calloc((size_t)n, sizeof *sd), *rd = calloc((size_t)n, sizeof *rd);
     uint64_t sbytes = 0, rbytes = 0;
-    for (int d = 0; d < n; ++d) {
+    for (int d = 0; d < n && staged; ++d) {
         uint64_t a = scount[d] < per ? scount[d] : per, b = rcount[d] < per ? rcount[d] : per;
         sbytes += a * item;
         rbytes += b * item;
     }
     uint8_t *stmp = malloc(sbytes ? (size_t)sbytes : 1), *rtmp = malloc(rbytes ? (size_t)rbytes : 1);
+    MPI_Datatype type;
+    MPI_Type_contiguous((int)item, MPI_BYTE, &type);
+    MPI_Type_commit(&type);
     clvr_status s = CLVR_OK;
     if (!sdisp || !rdisp || !sc || !rc || !sd || !rd || !stmp || !rtmp)
         s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu bytes of exchange buffers", c->path,
@@ -200,7 +227,18 @@ static clvr_status xchg(load_ctx *c, const void *sendbuf, const uint64_t *scount
             sdisp[d] = sdisp[d - 1] + scount[d - 1];
             rdisp[d] = rdisp[d - 1] + rcount[d - 1];
         }
-        for (uint64_t k = 0; k < rounds; ++k) {
+        for (uint64_t k = 0; k < rounds && !staged; ++k) {
+            const uint64_t base = k * per;
+            for (int d = 0; d < n; ++d) {
+                uint64_t a = scount[d] > base ? scount[d] - base : 0, b = rcount[d] > base ? rcount[d] - base : 0;
+                sc[d] = (int)(a < per ? a : per);
+                rc[d] = (int)(b < per ? b : per);
+                sd[d] = (int)(sdisp[d] + base); /* < stot < INT_MAX */
+                rd[d] = (int)(rdisp[d] + base);
+            }
+            MPI_Alltoallv((void *)sendbuf, sc, sd, type, recvbuf, rc, rd, type, c->comm);
+        }
+        for (uint64_t k = 0; k < rounds && staged; ++k) {
             const uint64_t base = k * per;
             int so = 0, ro = 0;
             for (int d = 0; d < n; ++d) {
@@ -221,6 +259,7 @@ static clvr_status xchg(load_ctx *c, const void *sendbuf, const uint64_t *scount
         }
         c->st.exchange_rounds += rounds;
     }
+    MPI_Type_free(&type);
     free(sdisp);
     free(rdisp);
     free(sc);
@@ -467,6 +506,7 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
     c.comm = comm;
     c.path = path;
     c.fd = -1;
+    c.staged = chunk_bytes != 0;
     c.chunk_bytes = chunk_bytes ? (chunk_bytes < LOAD_CHUNK_MAX ? chunk_bytes : LOAD_CHUNK_MAX) : LOAD_CHUNK_DEFAULT;
     MPI_Comm_rank(comm, &c.rank);
     MPI_Comm_size(comm, &c.size);
@@ -606,7 +646,6 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                     float blo[3], bhi[3], cen[3];
                     for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * find_id(ids, nids, e[q]);
                     element_geometry(v, nv, blo, bhi, cen);
-                    const uint64_t gid = c.type_first[t] + es.first[t] + j;
                     for (int d = 0; d < size; ++d) {
                         if (!clvr_mpi_boxes_overlap(blo, bhi, regions + 6 * d, regions + 6 * d + 3)) continue;
                         if (pass == 0) {
@@ -615,8 +654,6 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                         }
                         uint32_t *r = rec + fill[d];
                         r[0] = t;
-                        r[1] = (uint32_t)gid;
-                        r[2] = (uint32_t)(gid >> 32);
                         memcpy(r + REC_HEAD, e, nv * sizeof *e);
                         fill[d] += REC_HEAD + nv;
                     }
@@ -655,8 +692,12 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
     rec = NULL;
     if (s != CLVR_OK) goto done;
 
-    /* 5. The share: unique vertices by global id, fetched; per-type arrays
-     * in file order (records arrive from ranks in rank order = file order). */
+    /* 5. The share. Its index arrays first receive the global ids (records
+     * arrive from ranks in rank order, which is file order, so each type
+     * keeps file order) and the records are freed; then the distinct ids,
+     * sorted, become the local numbering, their vertices are fetched and
+     * the indices renumbered in place. Peak: the indices, the ids and the
+     * sort's scratch, each one word per corner. */
     {
         uint64_t ncells[CLVR_CELL_TYPE_COUNT] = {0}, corners = 0, nelem = 0;
         for (uint64_t w = 0; w < nrecv;) {
@@ -666,47 +707,70 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
             corners += nv;
             w += REC_HEAD + nv;
         }
-        ids = alloc_items(corners, sizeof *ids);
-        tmp = alloc_items(corners, sizeof *tmp);
-        if (!ids || !tmp)
-            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex ids of the share", path,
-                               (unsigned long long)corners);
+        clvr_mesh *m = &out->mesh;
+        s = clvr_mesh_alloc(m, 0, ncells, &c.e);
         if (s == CLVR_OK) {
-            uint64_t k = 0;
+            uint64_t at[CLVR_CELL_TYPE_COUNT] = {0};
             for (uint64_t w = 0; w < nrecv;) {
-                const uint32_t nv = clvr_cell_vertex_count(recv[w]);
-                memcpy(ids + k, recv + w + REC_HEAD, nv * sizeof *ids);
-                k += nv;
+                const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
+                memcpy(m->indices[t] + at[t]++ * nv, recv + w + REC_HEAD, nv * sizeof(uint32_t));
                 w += REC_HEAD + nv;
             }
+        }
+        free(recv);
+        recv = NULL;
+        if (s == CLVR_OK) {
+            ids = alloc_items(corners, sizeof *ids);
+            tmp = alloc_items(corners, sizeof *tmp);
+            if (!ids || !tmp)
+                s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex ids of the share", path,
+                                   (unsigned long long)corners);
+        }
+        if (s == CLVR_OK) {
+            uint64_t k = 0;
+            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+                const uint64_t n = clvr_mesh_num_indices(m, t);
+                if (n) memcpy(ids + k, m->indices[t], (size_t)n * sizeof *ids);
+                k += n;
+            }
             nids = sort_unique_u32(ids, tmp, corners);
+            uint32_t *shrunk = realloc(ids, nids ? (size_t)nids * sizeof *ids : 1);
+            if (shrunk) ids = shrunk;
         }
         free(tmp);
         tmp = NULL;
         s = agree(&c, s);
         if (s == CLVR_OK) s = fetch_vertices(&c, &vs, ids, nids, &xyzs);
-        if (s == CLVR_OK) s = clvr_mesh_alloc(&out->mesh, nids, ncells, &c.e);
+        if (s == CLVR_OK) {
+            free(m->positions);
+            free(m->scalars);
+            m->num_vertices = nids;
+            m->positions = alloc_items(nids, 3 * sizeof(float));
+            m->scalars = alloc_items(nids, sizeof(float));
+            if (!m->positions || !m->scalars)
+                s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the share's %llu vertices", path,
+                                   (unsigned long long)nids);
+        }
         s = agree(&c, s);
         if (s != CLVR_OK) goto done;
-        clvr_mesh *m = &out->mesh;
         for (uint64_t i = 0; i < nids; ++i) {
             memcpy(m->positions + 3 * i, xyzs + 4 * i, 3 * sizeof(float));
             m->scalars[i] = xyzs[4 * i + 3];
         }
-        uint64_t at[CLVR_CELL_TYPE_COUNT] = {0}, owned = 0;
-        for (uint64_t w = 0; w < nrecv;) {
-            const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
-            uint32_t *dst = m->indices[t] + at[t]++ * nv;
-            const float *v[CLVR_CELL_MAX_VERTS];
-            for (uint32_t q = 0; q < nv; ++q) {
-                const uint64_t l = find_id(ids, nids, recv[w + REC_HEAD + q]);
-                dst[q] = (uint32_t)l;
-                v[q] = xyzs + 4 * l;
+        uint64_t owned = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            for (uint64_t j = 0; j < m->num_cells[t]; ++j) {
+                uint32_t *e = m->indices[t] + j * nv;
+                const float *v[CLVR_CELL_MAX_VERTS];
+                for (uint32_t q = 0; q < nv; ++q) {
+                    e[q] = (uint32_t)find_id(ids, nids, e[q]);
+                    v[q] = xyzs + 4 * (uint64_t)e[q];
+                }
+                float blo[3], bhi[3], cen[3];
+                element_geometry(v, nv, blo, bhi, cen);
+                if (clvr_mpi_region_of(regions, (uint32_t)size, cen) == (uint32_t)rank) ++owned;
             }
-            float blo[3], bhi[3], cen[3];
-            element_geometry(v, nv, blo, bhi, cen);
-            if (clvr_mpi_region_of(regions, (uint32_t)size, cen) == (uint32_t)rank) ++owned;
-            w += REC_HEAD + nv;
         }
         clvr_mesh_set_scalar_name(m, c.lay.scalar_label, CLVR_SCALAR_NAME_MAX);
         clvr_mesh_update_ranges(m);
