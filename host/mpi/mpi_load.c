@@ -569,6 +569,14 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                 k += n;
             }
             nids = sort_unique_u32(ids, tmp, corners);
+            /* The slice's indices become positions in ids (one search per
+             * corner, here only); ids[] turns them back into global ids. */
+            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+                const uint64_t n = es.count[t] * clvr_cell_vertex_count(t);
+                for (uint64_t q = 0; q < n; ++q) es.idx[t][q] = (uint32_t)find_id(ids, nids, es.idx[t][q]);
+            }
+            uint32_t *shrunk = realloc(ids, nids ? (size_t)nids * sizeof *ids : 1);
+            if (shrunk) ids = shrunk;
         }
         free(tmp);
         tmp = NULL;
@@ -603,7 +611,7 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                 if ((c.type_first[t] + es.first[t] + j) % stride != 0) continue;
                 const float *v[CLVR_CELL_MAX_VERTS];
                 float blo[3], bhi[3];
-                for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * find_id(ids, nids, es.idx[t][j * nv + q]);
+                for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * (uint64_t)es.idx[t][j * nv + q];
                 element_geometry(v, nv, blo, bhi, mine + 3 * m++);
             }
         }
@@ -644,7 +652,7 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                     const uint32_t *e = es.idx[t] + j * nv;
                     const float *v[CLVR_CELL_MAX_VERTS];
                     float blo[3], bhi[3], cen[3];
-                    for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * find_id(ids, nids, e[q]);
+                    for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * (uint64_t)e[q];
                     element_geometry(v, nv, blo, bhi, cen);
                     for (int d = 0; d < size; ++d) {
                         if (!clvr_mpi_boxes_overlap(blo, bhi, regions + 6 * d, regions + 6 * d + 3)) continue;
@@ -654,7 +662,7 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                         }
                         uint32_t *r = rec + fill[d];
                         r[0] = t;
-                        memcpy(r + REC_HEAD, e, nv * sizeof *e);
+                        for (uint32_t q = 0; q < nv; ++q) r[REC_HEAD + q] = ids[e[q]];
                         fill[d] += REC_HEAD + nv;
                     }
                 }
