@@ -114,6 +114,63 @@ static void *alloc_items(uint64_t n, size_t item)
     return malloc(n ? (size_t)(n * item) : 1);
 }
 
+/* The distinct values of the index lists idx[t][0..n[t]), sorted, in
+ * *out (malloc, *nout entries). An open-addressing set first (vertex
+ * indices are below 2^32 - 1, so UINT32_MAX marks an empty slot), then a
+ * radix sort of the distinct ids only: each vertex is used by several
+ * elements, so this needs a fraction of the memory that sorting every
+ * corner would. Nonzero when out of memory. */
+static int distinct_ids(uint32_t *const idx[CLVR_CELL_TYPE_COUNT], const uint64_t n[CLVR_CELL_TYPE_COUNT],
+                        uint32_t **out, uint64_t *nout)
+{
+    uint64_t cap = 1u << 12, used = 0;
+    uint32_t *set = malloc((size_t)cap * sizeof *set);
+    *out = NULL;
+    *nout = 0;
+    if (!set) return 1;
+    memset(set, 0xff, (size_t)cap * sizeof *set);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+        for (uint64_t i = 0; i < n[t]; ++i) {
+            const uint32_t v = idx[t][i];
+            uint64_t h = ((uint64_t)v * 0x9e3779b97f4a7c15ull) >> 20 & (cap - 1);
+            while (set[h] != UINT32_MAX && set[h] != v) h = (h + 1) & (cap - 1);
+            if (set[h] == v) continue;
+            set[h] = v;
+            if (++used * 2 <= cap) continue;
+            /* Grow: rehash into twice the slots. */
+            uint64_t ncap = cap * 2;
+            uint32_t *ns = ncap <= SIZE_MAX / sizeof *ns ? malloc((size_t)ncap * sizeof *ns) : NULL;
+            if (!ns) {
+                free(set);
+                return 1;
+            }
+            memset(ns, 0xff, (size_t)ncap * sizeof *ns);
+            for (uint64_t k = 0; k < cap; ++k) {
+                if (set[k] == UINT32_MAX) continue;
+                uint64_t g = ((uint64_t)set[k] * 0x9e3779b97f4a7c15ull) >> 20 & (ncap - 1);
+                while (ns[g] != UINT32_MAX) g = (g + 1) & (ncap - 1);
+                ns[g] = set[k];
+            }
+            free(set);
+            set = ns;
+            cap = ncap;
+        }
+    /* Compact in place, then sort with scratch of the distinct count. */
+    uint64_t k = 0;
+    for (uint64_t i = 0; i < cap; ++i)
+        if (set[i] != UINT32_MAX) set[k++] = set[i];
+    uint32_t *tmp = malloc(k ? (size_t)k * sizeof *tmp : 1);
+    if (!tmp) {
+        free(set);
+        return 1;
+    }
+    *nout = sort_unique_u32(set, tmp, k);
+    free(tmp);
+    uint32_t *shrunk = realloc(set, k ? (size_t)k * sizeof *set : 1);
+    *out = shrunk ? shrunk : set;
+    return 0;
+}
+
 typedef struct load_ctx {
     MPI_Comm comm;
     int rank, size;
@@ -554,32 +611,14 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
 
     /* 3. The slice's vertices from their owners; centroids; the sample. */
     {
-        uint64_t corners = 0;
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) corners += es.count[t] * clvr_cell_vertex_count(t);
-        ids = alloc_items(corners, sizeof *ids);
-        tmp = alloc_items(corners, sizeof *tmp);
-        if (!ids || !tmp)
-            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex ids", path,
-                               (unsigned long long)corners);
-        if (s == CLVR_OK) {
-            uint64_t k = 0;
-            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-                uint64_t n = es.count[t] * clvr_cell_vertex_count(t);
-                if (n) memcpy(ids + k, es.idx[t], (size_t)n * sizeof *ids);
-                k += n;
-            }
-            nids = sort_unique_u32(ids, tmp, corners);
-            /* The slice's indices become positions in ids (one search per
-             * corner, here only); ids[] turns them back into global ids. */
-            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-                const uint64_t n = es.count[t] * clvr_cell_vertex_count(t);
-                for (uint64_t q = 0; q < n; ++q) es.idx[t][q] = (uint32_t)find_id(ids, nids, es.idx[t][q]);
-            }
-            uint32_t *shrunk = realloc(ids, nids ? (size_t)nids * sizeof *ids : 1);
-            if (shrunk) ids = shrunk;
-        }
-        free(tmp);
-        tmp = NULL;
+        uint64_t n[CLVR_CELL_TYPE_COUNT];
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n[t] = es.count[t] * clvr_cell_vertex_count(t);
+        if (distinct_ids(es.idx, n, &ids, &nids))
+            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the vertex ids of this rank's slice", path);
+        /* The slice's indices become positions in ids (one search per
+         * corner, here only); ids[] turns them back into global ids. */
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t)
+            for (uint64_t q = 0; q < n[t]; ++q) es.idx[t][q] = (uint32_t)find_id(ids, nids, es.idx[t][q]);
     }
     s = agree(&c, s);
     if (s == CLVR_OK) s = fetch_vertices(&c, &vs, ids, nids, &xyzs);
@@ -704,8 +743,7 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
      * arrive from ranks in rank order, which is file order, so each type
      * keeps file order) and the records are freed; then the distinct ids,
      * sorted, become the local numbering, their vertices are fetched and
-     * the indices renumbered in place. Peak: the indices, the ids and the
-     * sort's scratch, each one word per corner. */
+     * the indices renumbered in place. */
     {
         uint64_t ncells[CLVR_CELL_TYPE_COUNT] = {0}, corners = 0, nelem = 0;
         for (uint64_t w = 0; w < nrecv;) {
@@ -728,25 +766,11 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
         free(recv);
         recv = NULL;
         if (s == CLVR_OK) {
-            ids = alloc_items(corners, sizeof *ids);
-            tmp = alloc_items(corners, sizeof *tmp);
-            if (!ids || !tmp)
-                s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu vertex ids of the share", path,
-                                   (unsigned long long)corners);
+            uint64_t n[CLVR_CELL_TYPE_COUNT];
+            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n[t] = clvr_mesh_num_indices(m, t);
+            if (distinct_ids(m->indices, n, &ids, &nids))
+                s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the vertex ids of the share", path);
         }
-        if (s == CLVR_OK) {
-            uint64_t k = 0;
-            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-                const uint64_t n = clvr_mesh_num_indices(m, t);
-                if (n) memcpy(ids + k, m->indices[t], (size_t)n * sizeof *ids);
-                k += n;
-            }
-            nids = sort_unique_u32(ids, tmp, corners);
-            uint32_t *shrunk = realloc(ids, nids ? (size_t)nids * sizeof *ids : 1);
-            if (shrunk) ids = shrunk;
-        }
-        free(tmp);
-        tmp = NULL;
         s = agree(&c, s);
         if (s == CLVR_OK) s = fetch_vertices(&c, &vs, ids, nids, &xyzs);
         if (s == CLVR_OK) {
