@@ -454,6 +454,19 @@ int main(int argc, char **argv)
     save(path, &small);
     check_file("two tets", path, NULL, 1);
     clvr_mesh_free(&small);
+    /* Signed zeros: +0 first in file order, -0 in the last rank's slice.
+     * One scan keeps the first of equal minima (+0); a reduction that
+     * combined the slices in another order would give -0. */
+    small_mesh(&small, 5, CLVR_CELL_TET, two, 2);
+    small.positions[0] = 0.0f;
+    small.positions[3 * 4] = -0.0f;
+    for (uint64_t i = 0; i < 5; ++i) small.scalars[i] = i == 4 ? -0.0f : (i == 0 ? 0.0f : (float)i);
+    clvr_mesh_update_ranges(&small);
+    TU_CHECK(!signbit(small.bounds_lo[0]) && !signbit(small.scalar_min));
+    snprintf(path, sizeof path, "%s/zeros.bin", dir);
+    save(path, &small);
+    check_file("signed zeros", path, NULL, 1);
+    clvr_mesh_free(&small);
     const uint32_t hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
     small_mesh(&small, 8, CLVR_CELL_HEX, hex, 1);
     snprintf(path, sizeof path, "%s/one.bin", dir);
@@ -540,7 +553,7 @@ int main(int argc, char **argv)
     MPI_Barrier(MPI_COMM_WORLD);
     if (g_rank == 0) {
         const char *names[] = {"cycle.bin", "tets.bin", "mixed.bin", "two.bin", "one.bin", "three.bin", "v2.bin",
-                               "bad.bin", "empty.bin", "big.bin"};
+                               "bad.bin", "empty.bin", "big.bin", "zeros.bin"};
         for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i) {
             snprintf(path, sizeof path, "%s/%s", dir, names[i]);
             unlink(path);
