@@ -1,5 +1,6 @@
 /* mpi_load_probe.c: the program behind bench/mpi-load.sh (not a bench_* of
- * bench/run-all.sh: it runs under mpirun and takes a mesh file). One line per rank: bytes read,
+ * bench/run-all.sh: it runs under mpirun and takes a mesh file). One line per rank: bytes of
+ * the file regions read and bytes read (re-reads counted),
  * load time, peak RSS, the mesh or share arrays (MiB) and the share's elements (owned, ghosts), from
  * clvr_mpi_load_share_bin; with --single, one process's clvr_mesh_load of
  * the same file instead (the baseline). */
@@ -51,7 +52,8 @@ int main(int argc, char **argv)
             rc = 3;
         } else {
             uint64_t e = clvr_mesh_num_elements(&m);
-            snprintf(line, sizeof line, "single  %4d %14llu %8.2f %8.2f %9.0f %9.0f %9.0f %12llu %12llu %6.2f%%", 0,
+            snprintf(line, sizeof line, "single  %4d %14llu %14llu %8.2f %8.2f %9.0f %9.0f %9.0f %12llu %12llu %6.2f%%", 0,
+                     (unsigned long long)(256 + clvr_mesh_vertex_bytes(&m) + clvr_mesh_index_bytes(&m)),
                      (unsigned long long)(256 + clvr_mesh_vertex_bytes(&m) + clvr_mesh_index_bytes(&m)), t, c,
                      peak_rss_mib(), rss0, (double)(clvr_mesh_vertex_bytes(&m) + clvr_mesh_index_bytes(&m)) / 1048576.0,
                      (unsigned long long)e, 0ull, 0.0);
@@ -67,8 +69,9 @@ int main(int argc, char **argv)
             if (rank == 0) fprintf(stderr, "%s\n", err.msg);
             rc = 3;
         } else {
-            snprintf(line, sizeof line, "mpi/%-3d %4d %14llu %8.2f %8.2f %9.0f %9.0f %9.0f %12llu %12llu %6.2f%%",
-                     size, rank, (unsigned long long)st.bytes_read, t, c, peak_rss_mib(), rss0,
+            snprintf(line, sizeof line, "mpi/%-3d %4d %14llu %14llu %8.2f %8.2f %9.0f %9.0f %9.0f %12llu %12llu %6.2f%%",
+                     size, rank, (unsigned long long)st.slice_bytes, (unsigned long long)st.bytes_read, t, c,
+                     peak_rss_mib(), rss0,
                      (double)(clvr_mesh_vertex_bytes(&sh.mesh) + clvr_mesh_index_bytes(&sh.mesh)) / 1048576.0,
                      (unsigned long long)sh.owned_elements, (unsigned long long)st.ghost_elements,
                      100.0 * (double)st.ghost_elements / (double)(sh.owned_elements ? sh.owned_elements : 1));

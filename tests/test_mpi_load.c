@@ -238,8 +238,12 @@ static void check_share(const char *what, const char *path, const clvr_mesh *ref
     free(bytes);
     uint64_t maxread = 0;
     const uint64_t K = (uint64_t)g_size;
-    MPI_Allreduce(&st->bytes_read, &maxread, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Allreduce(&st->slice_bytes, &maxread, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
     TU_CHECK(maxread <= 256 + (ref->num_vertices + K - 1) / K * 24 + (E + K - 1) / K * 32);
+    /* Reads stay inside those regions: the vertex slice once, the element
+     * slice at most three times (sample, count pass, send pass). */
+    TU_CHECK(st->bytes_read <= 3 * st->slice_bytes);
+    TU_CHECK(st->bytes_read >= st->slice_bytes);
     TU_CHECK_EQ_U64(st->slice_elements, E / K + ((uint64_t)g_rank < E % K));
     TU_CHECK_EQ_U64(st->slice_vertices, ref->num_vertices / K + ((uint64_t)g_rank < ref->num_vertices % K));
     if (g_rank == 0)

@@ -19,7 +19,7 @@
 #include <unistd.h>
 
 #define LOAD_SAMPLE_MAX 65536u                 /* centroids bisected for the regions */
-#define LOAD_CHUNK_DEFAULT ((uint64_t)64 << 20) /* bytes per exchange round and side */
+#define LOAD_CHUNK_DEFAULT ((uint64_t)16 << 20) /* bytes of element records per round, all peers */
 #define LOAD_CHUNK_MAX ((uint64_t)1 << 30)      /* keeps a round's byte counts below INT_MAX */
 #define LOAD_IO_CHUNK ((uint64_t)1 << 30)       /* largest single pread */
 #define LOAD_TUPLE_CHUNK 65536u                 /* tuples per read of a multi-component field */
@@ -157,8 +157,12 @@ static void *alloc_items(uint64_t n, size_t item)
 static int distinct_ids(uint32_t *const idx[CLVR_CELL_TYPE_COUNT], const uint64_t n[CLVR_CELL_TYPE_COUNT],
                         uint32_t **out, uint64_t *nout)
 {
-    uint64_t cap = 1u << 12, used = 0;
-    uint32_t *set = malloc((size_t)cap * sizeof *set);
+    /* Start at a quarter of the corners (hexes share each vertex among up
+     * to 8, tets among ~24), so that most sets never grow. */
+    uint64_t corners = 0, cap = 1u << 12, used = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) corners += n[t];
+    while (cap < corners / 4 && cap < ((uint64_t)1 << 33)) cap *= 2;
+    uint32_t *set = cap <= SIZE_MAX / sizeof *set ? malloc((size_t)cap * sizeof *set) : NULL;
     *out = NULL;
     *nout = 0;
     if (!set) return 1;
@@ -480,33 +484,108 @@ static void eslice_free(eslice *es)
     memset(es, 0, sizeof *es);
 }
 
-static clvr_status read_element_slice(load_ctx *c, eslice *es)
+/* Checks the indices of es's type t (clvr_mesh_validate's message). */
+static clvr_status check_indices(load_ctx *c, const eslice *es, uint32_t t)
+{
+    const uint32_t nv = clvr_cell_vertex_count(t);
+    for (uint64_t j = 0; j < es->count[t] * nv; ++j)
+        if ((uint64_t)es->idx[t][j] >= c->lay.num_vertices)
+            return clvr_error_set(&c->e, CLVR_ERR_BAD_INDEX,
+                                  "%s: %s[%llu] vertex %u is index %u but the mesh has %llu vertices", c->path,
+                                  clvr_cell_type_name(t), (unsigned long long)(es->first[t] + j / nv),
+                                  (unsigned)(j % nv), es->idx[t][j], (unsigned long long)c->lay.num_vertices);
+    return CLVR_OK;
+}
+
+/* Elements [g0, g1) of the file (global ids across the four types), read
+ * and validated into es (es->first[t]: the first one's index within its
+ * type). */
+static clvr_status read_elements(load_ctx *c, uint64_t g0, uint64_t g1, eslice *es)
 {
     const clvr_bin_layout *L = &c->lay;
-    uint64_t e0, ne;
-    slice_of(c->num_elements, c->rank, c->size, &e0, &ne);
-    c->st.slice_elements = ne;
-    const uint64_t e1 = e0 + ne;
     clvr_status s = CLVR_OK;
+    memset(es, 0, sizeof *es);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t) {
         const uint64_t t0 = c->type_first[t], t1 = t0 + L->num_cells[t];
-        const uint64_t a = e0 > t0 ? e0 : t0, b = e1 < t1 ? e1 : t1;
+        const uint64_t a = g0 > t0 ? g0 : t0, b = g1 < t1 ? g1 : t1;
         const uint32_t nv = clvr_cell_vertex_count(t);
-        es->first[t] = a - t0;
+        es->first[t] = a > t0 ? a - t0 : 0;
         es->count[t] = b > a ? b - a : 0;
         es->idx[t] = alloc_items(es->count[t], nv * sizeof(uint32_t));
         if (!es->idx[t])
-            return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu %s of this rank's slice",
-                                  c->path, (unsigned long long)es->count[t], clvr_cell_type_name(t));
+            return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu %s", c->path,
+                                  (unsigned long long)es->count[t], clvr_cell_type_name(t));
         s = read_at(c, L->cells_offset[t] + es->first[t] * nv * 4u, es->idx[t], es->count[t] * nv * 4u,
                     clvr_cell_type_name(t));
-        for (uint64_t j = 0; j < es->count[t] * nv && s == CLVR_OK; ++j)
-            if ((uint64_t)es->idx[t][j] >= L->num_vertices)
-                s = clvr_error_set(&c->e, CLVR_ERR_BAD_INDEX,
-                                   "%s: %s[%llu] vertex %u is index %u but the mesh has %llu vertices", c->path,
-                                   clvr_cell_type_name(t), (unsigned long long)(es->first[t] + j / nv),
-                                   (unsigned)(j % nv), es->idx[t][j], (unsigned long long)L->num_vertices);
+        if (s == CLVR_OK) s = check_indices(c, es, t);
     }
+    return s;
+}
+
+/* The sample's elements in [g0, g1): every one whose global id is a
+ * multiple of stride, read one by one (at most 65536 in the whole job),
+ * into es with first[t] unused. */
+static clvr_status read_sample(load_ctx *c, uint64_t g0, uint64_t g1, uint64_t stride, eslice *es)
+{
+    const clvr_bin_layout *L = &c->lay;
+    clvr_status s = CLVR_OK;
+    memset(es, 0, sizeof *es);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t) {
+        const uint64_t t0 = c->type_first[t], t1 = t0 + L->num_cells[t];
+        const uint64_t a = g0 > t0 ? g0 : t0, b = g1 < t1 ? g1 : t1;
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        uint64_t first = (a + stride - 1) / stride * stride, n = 0;
+        if (first < b) n = (b - 1 - first) / stride + 1;
+        es->idx[t] = alloc_items(n, nv * sizeof(uint32_t));
+        if (!es->idx[t])
+            return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the sample", c->path);
+        es->count[t] = n;
+        if (stride == 1) { /* contiguous: one read */
+            s = read_at(c, L->cells_offset[t] + (a - t0) * nv * 4u, es->idx[t], n * nv * 4u, clvr_cell_type_name(t));
+            es->first[t] = a - t0;
+        } else {
+            for (uint64_t k = 0; k < n && s == CLVR_OK; ++k)
+                s = read_at(c, L->cells_offset[t] + (first + k * stride - t0) * nv * 4u, es->idx[t] + k * nv,
+                            nv * 4u, clvr_cell_type_name(t));
+            es->first[t] = first - t0; /* messages: approximate position only when stride > 1 */
+        }
+        if (s == CLVR_OK && stride == 1) s = check_indices(c, es, t);
+        else if (s == CLVR_OK) /* check each with its own element number */
+            for (uint64_t k = 0; k < n && s == CLVR_OK; ++k) {
+                eslice one;
+                memset(&one, 0, sizeof one);
+                one.first[t] = first + k * stride - t0;
+                one.count[t] = 1;
+                one.idx[t] = es->idx[t] + k * nv;
+                s = check_indices(c, &one, t);
+            }
+    }
+    return s;
+}
+
+/* Collective: the distinct vertices es uses, fetched from their slice
+ * owners into *xyzs (4 floats each, by position in *ids), and es's indices
+ * turned into positions in *ids (one lookup per corner). */
+static clvr_status piece_vertices(load_ctx *c, const vslice *vs, eslice *es, uint32_t **ids, uint64_t *nids,
+                                  float **xyzs)
+{
+    uint64_t n[CLVR_CELL_TYPE_COUNT];
+    clvr_status s = CLVR_OK;
+    *ids = NULL;
+    *xyzs = NULL;
+    *nids = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n[t] = es->count[t] * clvr_cell_vertex_count(t);
+    if (distinct_ids(es->idx, n, ids, nids))
+        s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate vertex ids", c->path);
+    id_index x;
+    memset(&x, 0, sizeof x);
+    if (s == CLVR_OK && id_index_build(&x, *ids, *nids))
+        s = clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the vertex id index", c->path);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t)
+        for (uint64_t q = 0; q < n[t]; ++q) es->idx[t][q] = (uint32_t)id_index_find(&x, es->idx[t][q]);
+    free(x.start);
+    s = agree(c, s);
+    if (s == CLVR_OK) s = fetch_vertices(c, vs, *ids, *nids, xyzs);
     return s;
 }
 
@@ -633,42 +712,39 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                                "%s: the mesh has no elements (0 tets, pyramids, wedges, hexes)", path);
     }
     if (s == CLVR_OK) s = read_vertex_slice(&c, &vs);
-    if (s == CLVR_OK) s = read_element_slice(&c, &es);
     c.st.slice_vertices = vs.nv;
+    uint64_t e0 = 0, ne = 0;
+    slice_of(c.num_elements, rank, size, &e0, &ne);
+    c.st.slice_elements = ne;
+    {
+        uint64_t e1 = e0 + ne, bytes = 256u + vs.nv * 12u;
+        if (c.lay.has_scalar) bytes += vs.nv * 4u * c.lay.scalar_components;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            const uint64_t t0 = c.type_first[t], t1 = t0 + c.lay.num_cells[t];
+            const uint64_t a = e0 > t0 ? e0 : t0, b = e1 < t1 ? e1 : t1;
+            if (b > a) bytes += (b - a) * clvr_cell_vertex_count(t) * 4u;
+        }
+        c.st.slice_bytes = bytes;
+    }
+
+    /* 2. The sample's elements of this slice (validated). */
+    const uint64_t stride = (c.num_elements + LOAD_SAMPLE_MAX - 1) / LOAD_SAMPLE_MAX;
+    if (s == CLVR_OK) s = read_sample(&c, e0, e0 + ne, stride, &es);
     s = agree(&c, s);
     if (s != CLVR_OK) goto done;
 
-    /* 2. Global bounds and scalar range. */
+    /* 3. Global bounds and scalar range. */
     global_ranges(&c, &vs, out);
     out->global_vertices = c.lay.num_vertices;
     out->global_elements = c.num_elements;
 
-    /* 3. The slice's vertices from their owners; centroids; the sample. */
-    {
-        uint64_t n[CLVR_CELL_TYPE_COUNT];
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n[t] = es.count[t] * clvr_cell_vertex_count(t);
-        if (distinct_ids(es.idx, n, &ids, &nids))
-            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the vertex ids of this rank's slice", path);
-        /* The slice's indices become positions in ids (one search per
-         * corner, here only); ids[] turns them back into global ids. */
-        id_index x;
-        if (s == CLVR_OK && id_index_build(&x, ids, nids))
-            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the vertex id index", path);
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t)
-            for (uint64_t q = 0; q < n[t]; ++q) es.idx[t][q] = (uint32_t)id_index_find(&x, es.idx[t][q]);
-        if (s == CLVR_OK) free(x.start);
-    }
-    s = agree(&c, s);
-    if (s == CLVR_OK) s = fetch_vertices(&c, &vs, ids, nids, &xyzs);
+    /* 4. Regions from the sample's centroids, gathered in rank order (file
+     * order): the same sample, and so the same boxes, on every rank. */
+    s = piece_vertices(&c, &vs, &es, &ids, &nids, &xyzs);
     if (s != CLVR_OK) goto done;
-    /* The vertex slice stays: step 5 serves the receivers' requests from it. */
-
-    const uint64_t stride = (c.num_elements + LOAD_SAMPLE_MAX - 1) / LOAD_SAMPLE_MAX;
     {
         uint64_t nmine = 0;
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
-            for (uint64_t j = 0; j < es.count[t]; ++j)
-                if ((c.type_first[t] + es.first[t] + j) % stride == 0) ++nmine;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) nmine += es.count[t];
         sample = alloc_items(LOAD_SAMPLE_MAX + 1u, 3 * sizeof(float));
         regions = alloc_items((uint64_t)size, 6 * sizeof(float));
         gcount = calloc((size_t)size, sizeof *gcount);
@@ -685,17 +761,13 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
             const uint32_t nv = clvr_cell_vertex_count(t);
             for (uint64_t j = 0; j < es.count[t]; ++j) {
-                if ((c.type_first[t] + es.first[t] + j) % stride != 0) continue;
                 const float *v[CLVR_CELL_MAX_VERTS];
                 float blo[3], bhi[3];
                 for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * (uint64_t)es.idx[t][j * nv + q];
                 element_geometry(v, nv, blo, bhi, mine + 3 * m++);
             }
         }
-        /* At most LOAD_SAMPLE_MAX centroids in all (one per stride of the
-         * global ids), so int counts suffice. Gathered in rank order, which
-         * is file order: the sample depends on the file alone. */
-        int n3 = (int)(3 * nmine);
+        int n3 = (int)(3 * nmine); /* at most 3 * 65536 in all: int counts suffice */
         MPI_Allgather(&n3, 1, MPI_INT, gcount, 1, MPI_INT, comm);
         uint64_t total = 0;
         for (int r = 0; r < size; ++r) {
@@ -711,98 +783,190 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
         memcpy(out->region_lo, regions + 6 * rank, 3 * sizeof(float));
         memcpy(out->region_hi, regions + 6 * rank + 3, 3 * sizeof(float));
     }
-
-    /* 4. Every element to every rank whose region its box overlaps: records
-     * of REC_HEAD + nv u32 words, in file order per destination. Two passes
-     * (count, fill) so the send buffer is allocated once. */
-    scount = calloc((size_t)size, sizeof *scount);
-    rcount = calloc((size_t)size, sizeof *rcount);
-    if (!scount || !rcount) s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate counts", path);
-    s = agree(&c, s);
-    if (s != CLVR_OK) goto done;
-    {
-        uint64_t *fill = NULL;
-        for (int pass = 0; pass < 2 && s == CLVR_OK; ++pass) {
-            for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-                const uint32_t nv = clvr_cell_vertex_count(t);
-                for (uint64_t j = 0; j < es.count[t]; ++j) {
-                    const uint32_t *e = es.idx[t] + j * nv;
-                    const float *v[CLVR_CELL_MAX_VERTS];
-                    float blo[3], bhi[3], cen[3];
-                    for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * (uint64_t)e[q];
-                    element_geometry(v, nv, blo, bhi, cen);
-                    for (int d = 0; d < size; ++d) {
-                        if (!clvr_mpi_boxes_overlap(blo, bhi, regions + 6 * d, regions + 6 * d + 3)) continue;
-                        if (pass == 0) {
-                            scount[d] += REC_HEAD + nv;
-                            continue;
-                        }
-                        uint32_t *r = rec + fill[d];
-                        r[0] = t;
-                        for (uint32_t q = 0; q < nv; ++q) r[REC_HEAD + q] = ids[e[q]];
-                        fill[d] += REC_HEAD + nv;
-                    }
-                }
-            }
-            if (pass == 0) {
-                uint64_t total = 0;
-                for (int d = 0; d < size; ++d) total += scount[d];
-                rec = alloc_items(total, sizeof *rec);
-                fill = calloc((size_t)size, sizeof *fill);
-                if (!rec || !fill)
-                    s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu words of elements to send",
-                                       path, (unsigned long long)total);
-                for (int d = 1; d < size && s == CLVR_OK; ++d) fill[d] = fill[d - 1] + scount[d - 1];
-            }
-        }
-        free(fill);
-    }
-    /* The slice's own arrays are not needed past this point. */
     eslice_free(&es);
     free(ids);
     free(xyzs);
     ids = NULL;
     xyzs = NULL;
+
+    /* 5. Every element to every rank whose region its vertex box overlaps,
+     * streamed: the slice is read in pieces of about chunk / (36 N)
+     * elements (a record is at most 9 words), the same number of rounds on
+     * every rank. Pass 0 fetches each piece's vertices, finds each
+     * element's destinations and keeps them compactly (the first in dest0,
+     * one word per element; the others, ghosts, as (element, rank) pairs)
+     * and counts them per destination and type, so that each receiver
+     * allocates its index arrays once and places every sender's elements
+     * at their file-order position. Pass 1 reads the pieces again and
+     * sends the records (type, global vertex ids as in the file) without
+     * fetching anything. No rank holds its whole slice's indices, nor
+     * anything of the size of its share besides the share. */
+    uint64_t piece = c.chunk_bytes / (36u * (uint64_t)size);
+    if (piece == 0) piece = 1;
+    uint64_t rounds = 0, mine_rounds = (ne + piece - 1) / piece;
+    MPI_Allreduce(&mine_rounds, &rounds, 1, MPI_UINT64_T, MPI_MAX, comm);
+    const size_t nt = CLVR_CELL_TYPE_COUNT;
+    uint64_t *tcount = calloc((size_t)size * nt, sizeof *tcount), *rtcount = calloc((size_t)size * nt, sizeof *rtcount);
+    uint64_t *cursor = calloc((size_t)size * nt, sizeof *cursor);
+    scount = calloc((size_t)size, sizeof *scount);
+    rcount = calloc((size_t)size, sizeof *rcount);
+    uint64_t *fill = calloc((size_t)size, sizeof *fill);
+    uint32_t *dest0 = alloc_items(ne, sizeof *dest0);
+    uint64_t *extra = NULL, nextra = 0, capextra = 0; /* pairs: slice element, rank */
+    if (!tcount || !rtcount || !cursor || !scount || !rcount || !fill || !dest0)
+        s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate counts", path);
     s = agree(&c, s);
-    if (s != CLVR_OK) goto done;
-    xchg_counts(&c, scount, rcount);
-    for (int d = 0; d < size; ++d) nrecv += rcount[d];
-    recv = alloc_items(nrecv, sizeof *recv);
-    if (!recv)
-        s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu words of received elements", path,
-                           (unsigned long long)nrecv);
-    s = agree(&c, s);
-    if (s == CLVR_OK) s = xchg(&c, rec, scount, recv, rcount, sizeof *rec);
-    free(rec);
-    rec = NULL;
+    for (int pass = 0; pass < 2 && s == CLVR_OK; ++pass) {
+        uint64_t xi = 0; /* pass 1: next extra pair */
+        for (uint64_t k = 0; k < rounds && s == CLVR_OK; ++k) {
+            const uint64_t g0 = e0 + (k * piece < ne ? k * piece : ne);
+            const uint64_t g1 = e0 + ((k + 1) * piece < ne ? (k + 1) * piece : ne);
+            s = read_elements(&c, g0, g1, &es);
+            if (pass == 0) {
+                s = agree(&c, s);
+                if (s == CLVR_OK) s = piece_vertices(&c, &vs, &es, &ids, &nids, &xyzs);
+                if (s != CLVR_OK) break;
+                uint64_t i = g0 - e0; /* slice element */
+                for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && s == CLVR_OK; ++t) {
+                    const uint32_t nv = clvr_cell_vertex_count(t);
+                    for (uint64_t j = 0; j < es.count[t] && s == CLVR_OK; ++j, ++i) {
+                        const uint32_t *e = es.idx[t] + j * nv;
+                        const float *v[CLVR_CELL_MAX_VERTS];
+                        float blo[3], bhi[3], cen[3];
+                        for (uint32_t q = 0; q < nv; ++q) v[q] = xyzs + 4 * (uint64_t)e[q];
+                        element_geometry(v, nv, blo, bhi, cen);
+                        dest0[i] = UINT32_MAX;
+                        for (int d = 0; d < size; ++d) {
+                            if (!clvr_mpi_boxes_overlap(blo, bhi, regions + 6 * d, regions + 6 * d + 3)) continue;
+                            ++tcount[(size_t)d * nt + t];
+                            if (dest0[i] == UINT32_MAX) {
+                                dest0[i] = (uint32_t)d;
+                                continue;
+                            }
+                            if (nextra == capextra) {
+                                uint64_t ncap = capextra ? 2 * capextra : 4096;
+                                uint64_t *nx = ncap <= SIZE_MAX / (2 * sizeof *nx)
+                                                   ? realloc(extra, (size_t)ncap * 2 * sizeof *nx) : NULL;
+                                if (!nx) {
+                                    s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate ghost lists",
+                                                       path);
+                                    break;
+                                }
+                                extra = nx;
+                                capextra = ncap;
+                            }
+                            extra[2 * nextra] = i;
+                            extra[2 * nextra + 1] = (uint64_t)d;
+                            ++nextra;
+                        }
+                    }
+                }
+                eslice_free(&es);
+                free(ids);
+                free(xyzs);
+                ids = NULL;
+                xyzs = NULL;
+                s = agree(&c, s);
+                continue;
+            }
+            /* Pass 1: records from the file's indices and the destinations
+             * found in pass 0; count, then fill. */
+            memset(scount, 0, (size_t)size * sizeof *scount);
+            const uint64_t xi0 = xi;
+            for (int fillpass = 0; fillpass < 2 && s == CLVR_OK; ++fillpass) {
+                uint64_t i = g0 - e0;
+                xi = xi0;
+                for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+                    const uint32_t nv = clvr_cell_vertex_count(t);
+                    for (uint64_t j = 0; j < es.count[t]; ++j, ++i) {
+                        const uint32_t *e = es.idx[t] + j * nv;
+                        for (int first = 1; first || (xi < nextra && extra[2 * xi] == i); first = 0) {
+                            uint32_t d;
+                            if (first) d = dest0[i];
+                            else d = (uint32_t)extra[2 * xi++ + 1];
+                            if (d == UINT32_MAX) continue;
+                            if (fillpass == 0) {
+                                scount[d] += REC_HEAD + nv;
+                                continue;
+                            }
+                            uint32_t *r = rec + fill[d];
+                            r[0] = t;
+                            memcpy(r + REC_HEAD, e, nv * sizeof *e);
+                            fill[d] += REC_HEAD + nv;
+                        }
+                    }
+                }
+                if (fillpass == 0) {
+                    uint64_t total = 0;
+                    for (int d = 0; d < size; ++d) {
+                        fill[d] = total;
+                        total += scount[d];
+                    }
+                    rec = alloc_items(total, sizeof *rec);
+                    if (!rec)
+                        s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY,
+                                           "%s: cannot allocate %llu words of elements to send", path,
+                                           (unsigned long long)total);
+                }
+            }
+            eslice_free(&es);
+            s = agree(&c, s);
+            if (s != CLVR_OK) break;
+            xchg_counts(&c, scount, rcount);
+            nrecv = 0;
+            for (int d = 0; d < size; ++d) nrecv += rcount[d];
+            recv = alloc_items(nrecv, sizeof *recv);
+            if (!recv)
+                s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %llu words of received elements",
+                                   path, (unsigned long long)nrecv);
+            s = agree(&c, s);
+            if (s == CLVR_OK) s = xchg(&c, rec, scount, recv, rcount, sizeof *rec);
+            free(rec);
+            rec = NULL;
+            /* Each sender's records in its file order, at its place. */
+            clvr_mesh *m = &out->mesh;
+            uint64_t w = 0;
+            for (int src = 0; src < size && s == CLVR_OK; ++src) {
+                const uint64_t end = w + rcount[src];
+                while (w < end) {
+                    const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
+                    uint64_t *cur = &cursor[(size_t)src * nt + t];
+                    memcpy(m->indices[t] + *cur * nv, recv + w + REC_HEAD, nv * sizeof(uint32_t));
+                    ++*cur;
+                    w += REC_HEAD + nv;
+                }
+            }
+            free(recv);
+            recv = NULL;
+        }
+        if (pass == 0 && s == CLVR_OK) {
+            /* Each receiver: how many elements of each type each sender
+             * has for it; the index arrays, and where each sender's go. */
+            MPI_Alltoall(tcount, (int)nt, MPI_UINT64_T, rtcount, (int)nt, MPI_UINT64_T, comm);
+            uint64_t ncells[CLVR_CELL_TYPE_COUNT] = {0};
+            for (int src = 0; src < size; ++src)
+                for (size_t t = 0; t < nt; ++t) {
+                    cursor[(size_t)src * nt + t] = ncells[t];
+                    ncells[t] += rtcount[(size_t)src * nt + t];
+                }
+            s = clvr_mesh_alloc(&out->mesh, 0, ncells, &c.e);
+            s = agree(&c, s);
+        }
+    }
+    free(dest0);
+    free(extra);
+    free(tcount);
+    free(rtcount);
+    free(cursor);
+    free(fill);
     if (s != CLVR_OK) goto done;
 
-    /* 5. The share. Its index arrays first receive the global ids (records
-     * arrive from ranks in rank order, which is file order, so each type
-     * keeps file order) and the records are freed; then the distinct ids,
-     * sorted, become the local numbering, their vertices are fetched and
-     * the indices renumbered in place. */
+    /* 6. The share: its index arrays hold global ids, each type in file
+     * order. The distinct ids, sorted, become the local numbering; their
+     * vertices are fetched and the indices renumbered in place. */
     {
-        uint64_t ncells[CLVR_CELL_TYPE_COUNT] = {0}, corners = 0, nelem = 0;
-        for (uint64_t w = 0; w < nrecv;) {
-            const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
-            ++ncells[t];
-            ++nelem;
-            corners += nv;
-            w += REC_HEAD + nv;
-        }
         clvr_mesh *m = &out->mesh;
-        s = clvr_mesh_alloc(m, 0, ncells, &c.e);
-        if (s == CLVR_OK) {
-            uint64_t at[CLVR_CELL_TYPE_COUNT] = {0};
-            for (uint64_t w = 0; w < nrecv;) {
-                const uint32_t t = recv[w], nv = clvr_cell_vertex_count(t);
-                memcpy(m->indices[t] + at[t]++ * nv, recv + w + REC_HEAD, nv * sizeof(uint32_t));
-                w += REC_HEAD + nv;
-            }
-        }
-        free(recv);
-        recv = NULL;
+        const uint64_t nelem = clvr_mesh_num_elements(m);
         if (s == CLVR_OK) {
             uint64_t n[CLVR_CELL_TYPE_COUNT];
             for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n[t] = clvr_mesh_num_indices(m, t);

@@ -21,7 +21,10 @@ clvr_status clvr_mpi_agree(MPI_Comm comm, clvr_status local, clvr_error *err);
 
 /* What one rank's load did (for benchmarks and tests). */
 typedef struct clvr_mpi_load_stats {
-    uint64_t bytes_read;       /* from the mesh file by this rank, header included */
+    uint64_t bytes_read;       /* from the mesh file by this rank, header included, re-reads counted */
+    uint64_t slice_bytes;      /* of the file regions this rank reads: header, its vertex slice (positions
+                                * and the chosen field) and its element slice; the element slice is read
+                                * twice (count, then send) and the sample's elements a third time */
     uint64_t slice_vertices;   /* vertices of this rank's 1/N slice of the file */
     uint64_t slice_elements;   /* elements of this rank's 1/N slice */
     uint64_t share_elements;   /* elements of the share: owned + ghosts */
