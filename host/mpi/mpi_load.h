@@ -44,7 +44,12 @@ typedef struct clvr_mpi_load_stats {
  *     most 65536, every ceil(E / 65536)-th element) that every rank
  *     bisects identically (clvr_mpi_regions);
  *   - each element goes to every rank whose closed region its vertex box
- *     overlaps, with its vertices fetched from their slice owners.
+ *     overlaps (its vertices fetched from their slice owners to find it),
+ *     streamed in pieces: the element slice is read twice (find the
+ *     destinations, then send), so no rank holds more than its share, its
+ *     vertex slice and one piece's buffers.
+ * The centroid of an element is the float mean of its vertex coordinates
+ * in vertex order, clamped into its vertex box.
  * The share's mesh numbers its vertices by ascending global id and keeps
  * each type's elements in file order. Cell fields are refused (the fix
  * is in the message): averaging them onto vertices needs the elements of
@@ -56,9 +61,12 @@ typedef struct clvr_mpi_load_stats {
 clvr_status clvr_mpi_load_share_bin(MPI_Comm comm, const char *path, const clvr_load_options *lo,
                                     clvr_mpi_share *out, clvr_error *err);
 
-/* The same with the exchange chunk (bytes per MPI_Alltoallv round and rank
- * for each of the send and the receive buffer; 0: 64 MiB; tests use tiny
- * values to run many rounds) and stats (may be NULL). */
+/* The same with the round size and stats (may be NULL). chunk_bytes: 0
+ * gives pieces of about 16 MiB of element records over all peers and
+ * exchanges straight on the buffers while MPI's int counts allow; nonzero
+ * sets the piece size (chunk_bytes / (36 N) elements, at least one) and
+ * sends every exchange through scratch of at most that many bytes per
+ * round (tests use 40 bytes to run hundreds of rounds). */
 clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const clvr_load_options *lo,
                                        uint64_t chunk_bytes, clvr_mpi_share *out, clvr_mpi_load_stats *stats,
                                        clvr_error *err);
