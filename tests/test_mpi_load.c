@@ -267,15 +267,17 @@ static void check_file(const char *what, const char *path, const char *spec, int
     clvr_mesh ref;
     clvr_error err;
     TU_CHECK_STATUS(clvr_mesh_load(path, &lo, &ref, &err), CLVR_OK, &err);
-    const uint64_t chunks[2] = {0, 40};
-    for (int c = 0; c < 1 + tiny_chunks; ++c) {
+    /* Default rounds; 40 bytes (one element per piece, every exchange in
+     * rounds through scratch); 4000 bytes (pieces of 111 / K elements). */
+    const uint64_t chunks[3] = {0, 40, 4000};
+    for (int c = 0; c < (tiny_chunks ? 3 : 1); ++c) {
         clvr_mpi_share sh;
         clvr_mpi_load_stats st;
         clvr_status s = clvr_mpi_load_share_bin_ex(MPI_COMM_WORLD, path, &lo, chunks[c], &sh, &st, &err);
         TU_CHECK_STATUS(s, CLVR_OK, &err);
         if (s == CLVR_OK) {
             char label[128];
-            snprintf(label, sizeof label, "%s%s", what, c ? " (tiny chunks)" : "");
+            snprintf(label, sizeof label, "%s%s", what, c == 1 ? " (40 B rounds)" : c == 2 ? " (4000 B rounds)" : "");
             check_share(label, path, &ref, &sh, &st);
         }
         clvr_mpi_share_free(&sh);
@@ -434,8 +436,15 @@ int main(int argc, char **argv)
     TU_CHECK_STATUS(clvr_scene_box(&p, &big, &err), CLVR_OK, &err);
     snprintf(path, sizeof path, "%s/big.bin", dir);
     save(path, &big);
-    clvr_mesh_free(&big);
     check_file("73k tets, sampled", path, NULL, 0);
+    /* A bad index in an element the sample skips (odd id, stride 2): only
+     * the pass that reads every piece can see it. */
+    TU_CHECK(big.num_cells[CLVR_CELL_TET] % 2 == 0);
+    big.indices[CLVR_CELL_TET][4 * (big.num_cells[CLVR_CELL_TET] - 1) + 2] = (uint32_t)big.num_vertices + 1;
+    snprintf(bad, sizeof bad, "%s/bad.bin", dir);
+    save(bad, &big);
+    clvr_mesh_free(&big);
+    check_bad("bad index, not sampled", bad, NULL, CLVR_ERR_BAD_INDEX, g_size - 1, CLVR_ERR_BAD_INDEX);
 
     /* Mixed (the default scene's mix) at 12^3 cubes. */
     clvr_scene_box_params_init(&p);
