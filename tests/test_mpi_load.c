@@ -493,6 +493,39 @@ int main(int argc, char **argv)
     check_file("3 vertices", path, NULL, 1);
     clvr_mesh_free(&small);
 
+    /* A flat hex whose 8 equal x coordinates (1.00000072f) have a float
+     * mean one ulp above them (1.00000083f): its centroid must be clamped
+     * into its box, or the median split through it leaves the element's
+     * owner without the element (or the regions differ from the test's). */
+    {
+        uint64_t cells[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, 3};
+        clvr_mesh flat;
+        TU_CHECK_STATUS(clvr_mesh_alloc(&flat, 24, cells, &err), CLVR_OK, &err);
+        uint32_t xbits = 0x3f800006u;
+        float x0;
+        memcpy(&x0, &xbits, sizeof x0);
+        const float xs[3][2] = {{0.0f, 0.5f}, {x0, x0}, {2.0f, 3.0f}};
+        for (uint32_t h = 0; h < 3; ++h)
+            for (uint32_t q = 0; q < 8; ++q) {
+                const uint32_t v = 8 * h + q;
+                /* VTK hex order: bottom face 0-3 counter-clockwise, top 4-7. */
+                const int bx = (q == 1 || q == 2 || q == 5 || q == 6), by = (q == 2 || q == 3 || q == 6 || q == 7);
+                flat.positions[3 * v] = xs[h][bx];
+                flat.positions[3 * v + 1] = 0.1f * (float)by;
+                flat.positions[3 * v + 2] = 0.1f * (float)(q >= 4);
+                flat.scalars[v] = (float)v;
+                flat.indices[CLVR_CELL_HEX][v] = v;
+            }
+        clvr_mesh_update_ranges(&flat);
+        volatile float sum = x0;
+        for (int k = 1; k < 8; ++k) sum = sum + x0;
+        TU_CHECK(sum / 8.0f > x0); /* the case this mesh is for */
+        snprintf(path, sizeof path, "%s/flat.bin", dir);
+        save(path, &flat);
+        clvr_mesh_free(&flat);
+        check_file("flat hex, rounding centroid", path, NULL, 1);
+    }
+
     /* Version 2: a vector's magnitude (default), a scalar, a component. */
     snprintf(path, sizeof path, "%s/v2.bin", dir);
     if (g_rank == 0) write_v2(path, &cyc);
@@ -566,7 +599,7 @@ int main(int argc, char **argv)
     MPI_Barrier(MPI_COMM_WORLD);
     if (g_rank == 0) {
         const char *names[] = {"cycle.bin", "tets.bin", "mixed.bin", "two.bin", "one.bin", "three.bin", "v2.bin",
-                               "bad.bin", "empty.bin", "big.bin", "zeros.bin"};
+                               "bad.bin", "empty.bin", "big.bin", "zeros.bin", "flat.bin"};
         for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i) {
             snprintf(path, sizeof path, "%s/%s", dir, names[i]);
             unlink(path);
