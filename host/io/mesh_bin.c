@@ -813,3 +813,110 @@ done:
     close(fd);
     return s;
 }
+
+/* ------------------------------------------------------------ layout */
+
+/* The field selection of bin_load, for clvr_mesh_bin_layout: the same
+ * rules and messages (kept beside it rather than shared so that this
+ * addition leaves bin_load untouched). */
+static clvr_status layout_select(const bin_header *hd, const char *name, const char *spec, uint32_t *fi, int *comp,
+                                 clvr_error *err)
+{
+    *fi = 0;
+    *comp = CLVR_FIELD_MAGNITUDE;
+    if (hd->version == BIN_VERSION) {
+        if (!(spec && spec[0] && strcmp(spec, hd->scalar_name) != 0)) return CLVR_OK;
+        clvr_field_info one;
+        memset(&one, 0, sizeof one);
+        clvr_mesh tmp;
+        clvr_mesh_set_scalar_name(&tmp, hd->scalar_name, CLVR_SCALAR_NAME_MAX);
+        memcpy(one.name, tmp.scalar_name, sizeof one.name);
+        one.components = 1;
+        clvr_status s = clvr_field_select(&one, 1, spec, name, fi, comp, err);
+        if (s == CLVR_OK && *comp >= 1) s = CLVR_ERR_BAD_FIELD;
+        if (s != CLVR_OK)
+            return clvr_error_set(err, CLVR_ERR_BAD_FIELD,
+                                  "%s: no scalar named '%s'; a version 1 .bin holds one scalar, here '%s' "
+                                  "(re-convert with clvr-convert to keep every field)",
+                                  name, spec, hd->scalar_name);
+        return CLVR_OK;
+    }
+    if (hd->num_fields == 0 && !(spec && spec[0])) return CLVR_OK;
+    return clvr_field_select(hd->fields, hd->num_fields, spec, name, fi, comp, err);
+}
+
+clvr_status clvr_mesh_bin_layout(int fd, const char *name, const char *scalar_spec, clvr_bin_layout *out,
+                                 clvr_error *err)
+{
+    struct stat st;
+    bin_header hd;
+    memset(out, 0, sizeof *out);
+    if (fstat(fd, &st) != 0) return clvr_error_set(err, CLVR_ERR_IO, "%s: cannot stat: %s", name, strerror(errno));
+    if (!S_ISREG(st.st_mode))
+        return clvr_error_set(err, CLVR_ERR_IO, "%s: is %s, not a mesh file", name,
+                              S_ISDIR(st.st_mode) ? "a directory" : "not a regular file");
+    const bin_src src = {NULL, fd, (uint64_t)st.st_size, name};
+    clvr_status s = bin_read_header(&src, &hd, err);
+    if (s != CLVR_OK) return s;
+    uint32_t fi = 0;
+    int comp = CLVR_FIELD_MAGNITUDE;
+    s = layout_select(&hd, name, scalar_spec, &fi, &comp, err);
+    if (s == CLVR_OK) {
+        out->version = hd.version;
+        out->file_size = hd.file_size;
+        out->num_vertices = hd.num_vertices;
+        memcpy(out->num_cells, hd.num_cells, sizeof out->num_cells);
+        uint64_t off = BIN_HEADER_SIZE; /* sizes were checked against the file: no overflow below */
+        out->positions_offset = off;
+        off += hd.array_bytes[BIN_ARRAY_POSITIONS];
+        const uint64_t scalars_v1 = off;
+        off += hd.array_bytes[BIN_ARRAY_SCALARS];
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            out->cells_offset[t] = off;
+            off += hd.array_bytes[BIN_ARRAY_CELLS + t];
+        }
+        out->scalar_component = comp;
+        if (hd.version == BIN_VERSION) {
+            out->has_scalar = 1;
+            out->scalar_offset = scalars_v1;
+            out->scalar_association = CLVR_FIELD_POINT;
+            out->scalar_components = 1;
+            clvr_mesh tmp;
+            clvr_mesh_set_scalar_name(&tmp, hd.scalar_name, CLVR_SCALAR_NAME_MAX);
+            memcpy(out->scalar_label, tmp.scalar_name, sizeof out->scalar_label);
+        } else if (hd.num_fields > 0) {
+            const clvr_field_info *f = &hd.fields[fi];
+            out->has_scalar = 1;
+            out->scalar_offset = hd.field_offset[fi];
+            out->scalar_association = f->association;
+            out->scalar_components = f->components;
+            static const char xyz[] = "xyz";
+            char label[CLVR_SCALAR_NAME_MAX + 16];
+            if (comp >= 0 && f->components > 1) {
+                if (comp < 3) snprintf(label, sizeof label, "%s:%c", f->name, xyz[comp]);
+                else snprintf(label, sizeof label, "%s:%d", f->name, comp);
+            } else {
+                snprintf(label, sizeof label, "%s", f->name);
+            }
+            clvr_mesh tmp;
+            clvr_mesh_set_scalar_name(&tmp, label, strlen(label));
+            memcpy(out->scalar_label, tmp.scalar_name, sizeof out->scalar_label);
+        }
+    }
+    bin_header_free(&hd);
+    return s;
+}
+
+float clvr_bin_tuple_value(const float *tuple, uint32_t components, int component)
+{
+    /* The same arithmetic as bin_read_field, so values match it bit for bit. */
+    double v;
+    if (component >= 0) v = tuple[component];
+    else if (components == 1) v = tuple[0];
+    else {
+        double s2 = 0.0;
+        for (uint32_t k = 0; k < components; ++k) s2 += (double)tuple[k] * tuple[k];
+        v = sqrt(s2);
+    }
+    return (float)v;
+}

@@ -62,4 +62,34 @@ clvr_status clvr_bin_writer_cells(clvr_bin_writer *w, uint32_t type, const uint3
 clvr_status clvr_bin_writer_close(clvr_bin_writer *w, clvr_error *err); /* frees w in all cases */
 void clvr_bin_writer_abort(clvr_bin_writer *w);                          /* accepts NULL */
 
+/* Where a .bin file's arrays lie, from its header (and version 2 field
+ * table) validated against the file size exactly as clvr_mesh_load_bin
+ * does, with the --scalar selection resolved: for readers that take a file
+ * in parts with offsets (MPI mode: host/mpi/mpi_load.c). The arrays'
+ * contents are not read or checked. */
+typedef struct clvr_bin_layout {
+    uint32_t version;                                /* 1 or 2 */
+    uint64_t file_size;
+    uint64_t num_vertices;
+    uint64_t num_cells[CLVR_CELL_TYPE_COUNT];
+    uint64_t positions_offset;                       /* 3 f32 per vertex */
+    uint64_t cells_offset[CLVR_CELL_TYPE_COUNT];     /* u32 indices, clvr_cell_vertex_count(t) per cell */
+    int has_scalar;                                  /* 0: version 2 without fields (scalars are 0) */
+    uint64_t scalar_offset;                          /* the chosen array: count x components f32 */
+    uint32_t scalar_association;                     /* CLVR_FIELD_POINT or CLVR_FIELD_CELL */
+    uint32_t scalar_components;
+    int scalar_component;                            /* CLVR_FIELD_MAGNITUDE or a component */
+    char scalar_label[CLVR_SCALAR_NAME_MAX];         /* what clvr_mesh.scalar_name becomes, sanitized */
+} clvr_bin_layout;
+
+/* Reads and validates the header of the open file fd (`name` in messages)
+ * and resolves scalar_spec (clvr_load_options.scalar_name; NULL: the
+ * first). Same statuses and messages as clvr_mesh_load_bin. */
+clvr_status clvr_mesh_bin_layout(int fd, const char *name, const char *scalar_spec, clvr_bin_layout *out,
+                                 clvr_error *err);
+
+/* One tuple of the chosen field as the loader turns it into a vertex
+ * scalar: the component, or the Euclidean norm for CLVR_FIELD_MAGNITUDE. */
+float clvr_bin_tuple_value(const float *tuple, uint32_t components, int component);
+
 #endif /* CLVR_MESH_IO_H */
