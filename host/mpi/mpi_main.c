@@ -11,6 +11,7 @@
 
 #include <math.h>
 #include <mpi.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -105,6 +106,11 @@ static clvr_status check_options(const clvr_options *o, clvr_error *err)
     if (o->mesh_path && clvr_series_is(o->mesh_path))
         return clvr_error_set(err, CLVR_ERR_USAGE, "%s: time series are not available under mpirun; render each step",
                               o->mesh_path);
+    /* One MPI message per rank and frame carries the records (an int count). */
+    if ((uint64_t)o->width * o->height * sizeof(clvr_mpi_record) > (uint64_t)INT32_MAX)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--size %ux%u: too large for MPI mode's per-pixel gather "
+                              "(%zu bytes per pixel, 2 GiB per message); use at most about 44M pixels",
+                              o->width, o->height, sizeof(clvr_mpi_record));
     if (o->legend || o->outline)
         return clvr_error_set(err, CLVR_ERR_USAGE, "--legend and --outline are not available under mpirun yet");
     return CLVR_OK;
