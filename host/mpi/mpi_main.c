@@ -403,6 +403,12 @@ static int run(mpi_run *m, const clvr_options *o)
         MPI_Allreduce(grid, grid_all, (int)ng, MPI_FLOAT, MPI_PROD, m->comm);
         m->comm_s += now() - t;
         m->bytes_sent += (double)ng * sizeof(float);
+        /* Test hook (docs/mpi-compositing.md): G = 1 everywhere, still
+         * unbiased, so that every shadow comes from the correction rays and
+         * the tests see the cross-rank pick at full strength. */
+        const char *lg = getenv("CLVR_MPI_TEST_LIGHT_GRID");
+        if (lg && !strcmp(lg, "one"))
+            for (size_t i = 0; i < ng; ++i) grid_all[i] = 1.0f;
         s = clvr_renderer_set_light_grid(parts.renderer, grid_all, &err);
         s = agree(m, s, &err);
         if (s != CLVR_OK) goto done;
