@@ -9,6 +9,7 @@
  * failure never leaves the others waiting in a collective. */
 #include "mpi_main.h"
 
+#include <malloc.h>
 #include <math.h>
 #include <mpi.h>
 #include <stdint.h>
@@ -279,6 +280,9 @@ static int run(mpi_run *m, const clvr_options *o)
     if (root && o->density_auto && !o->quiet)
         fprintf(stderr, "clvr: automatic density %.3g (--density auto)\n", (double)tfh.auto_density);
     clvr_mesh_free(&whole); /* from here each rank holds its share only */
+#ifdef __GLIBC__
+    malloc_trim(0); /* hand the whole mesh's pages back now, not at exit */
+#endif
 
     /* --- device, Quick Clusters of the share, renderer */
     t = now();
@@ -366,6 +370,9 @@ static int run(mpi_run *m, const clvr_options *o)
                 m->size == 1 ? "" : "s", st.preprocess_s);
     {
         uint64_t cur = 0;
+#ifdef __GLIBC__
+        malloc_trim(0);
+#endif
         clvr_mem_rss(&cur, NULL);
         st.resident = (double)cur;
     }
