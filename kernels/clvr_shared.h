@@ -527,7 +527,11 @@ typedef struct clvr_frame {
     float urm_kappa;          /* urm: at most this majorant optical depth between two points */
     clvr_u32 light_res;       /* urm with shadows: light grid cells per axis over the grid domain */
     clvr_u32 num_clip_planes; /* planes in use, 0..CLVR_MAX_CLIP_PLANES */
-    clvr_u32 pad1, pad2;
+    /* MPI mode (docs/mpi-compositing.md): mixed into the random streams of
+     * the estimator (not of the sub-pixel position, which every rank must
+     * share) so that ranks draw independently; 0 outside MPI mode. */
+    clvr_u32 mpi_rank_key;
+    clvr_u32 pad2;
     /* Half-spaces that clip the medium, (nx, ny, nz, d) with a unit normal:
      * points with n.p <= d are kept (ParaView's Clip with its default
      * "Invert": the side the normal points away from). Every ray, camera
@@ -537,5 +541,18 @@ typedef struct clvr_frame {
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_frame;
 CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 304, "clvr_frame layout");
+
+/* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
+ * rank's urm estimate along a camera ray inside its region is, for rank 0 to
+ * composite front to back (host/mpi/mpi_composite.h). 48 bytes per pixel. */
+typedef struct clvr_mpi_record {
+    float a;       /* entry distance into the rank's region; +inf: the ray misses it */
+    float tau;     /* transmittance estimate across the rank's interval */
+    float wsum;    /* reservoir: total weight of the rank's points */
+    float pick_g;  /* light grid G at the picked point */
+    float e[4];    /* emission (rgb, ambient and light-grid lit term), transmittance inside the interval only */
+    float pick[4]; /* rgb: weighted colour over weight of the pick; [3]: its distance t along the ray */
+} clvr_mpi_record;
+CLVR_STATIC_ASSERT(sizeof(clvr_mpi_record) == 48, "clvr_mpi_record layout");
 
 #endif /* CLVR_SHARED_H */

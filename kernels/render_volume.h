@@ -695,6 +695,41 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     return (float4)(med.xyz * shade, 1.0f);
 }
 
+/* MPI mode, phase 1 (docs/mpi-compositing.md): clvr_render_track's urm
+ * camera ray restricted to this rank's region (the frame's clip box), with
+ * the correction shadow ray left out: its reservoir goes into the record so
+ * that rank 0 can pick one shadow point among all ranks. ld and rng are the
+ * rank's own streams (dimension 2: quadrature offset, 4: the pick). */
+inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
+                                   uint *samples, uint *nulls, __global clvr_mpi_record *rec)
+{
+    const clvr_frame *f = v->f;
+    const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
+    float t0 = 0.0f, t1 = INFINITY;
+    const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
+    const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
+    rec->a = INFINITY;
+    rec->tau = 1.0f;
+    rec->wsum = 0.0f;
+    rec->pick_g = 0.0f;
+    vstore4((float4)(0.0f), 0, rec->e);
+    vstore4((float4)(0.0f), 0, rec->pick);
+    if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return;
+    clvr_urm e;
+    clvr_urm_begin(f, &e, t0, t1, u_primary, u_pick, f->shadows ? 2 : 1, rng);
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
+                          !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
+    const float Tend = clvr_urm_end(&e);
+    const float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum +
+                     (f->shadows ? f->light_intensity : 0.0f) * e.lit;
+    rec->a = t0;
+    rec->tau = Tend;
+    rec->wsum = f->shadows ? e.wsum : 0.0f;
+    rec->pick_g = e.pick_g;
+    vstore4((float4)(c, 0.0f), 0, rec->e);
+    vstore4((float4)(e.pick, e.pick_t), 0, rec->pick);
+}
+
 /* Front-to-back alpha compositing at a fixed step with a random offset per
  * frame (so frames average to the continuous integral); no shadows. ld as in
  * clvr_render_track: dimension 2 gives the offset. */

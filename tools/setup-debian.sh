@@ -4,7 +4,7 @@
 # Usage: tools/setup-debian.sh [run|convert|test|all]   (default: all)
 #        tools/setup-debian.sh --list GROUP             (print the group's packages)
 #   run      build and run clvr: OpenCL (PoCL), OpenEXR, libpng, GLFW, CMake, a compiler,
-#            pkg-config (what tools/demo.sh installs)
+#            pkg-config, Open MPI (the mpirun mode; what tools/demo.sh installs)
 #   convert  run + tools/clvr-convert's VTK and NumPy
 #   test     convert + what tools/test.sh needs: test meshes, benchmarks' Embree and VTK,
 #            the headless viewer tests, fuzzing (clang), the man page (help2man), the
@@ -26,6 +26,8 @@ RUN_PACKAGES=(
   libopenexr-dev libpng-dev libglfw3-dev
   # Build.
   cmake make gcc g++ pkg-config
+  # MPI mode (`mpirun -n N clvr ...`, docs/mpi-compositing.md); optional at build time.
+  libopenmpi-dev openmpi-bin
 )
 CONVERT_PACKAGES=(
   # tools/clvr-convert (runs with /usr/bin/python3).

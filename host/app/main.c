@@ -35,6 +35,9 @@
 #ifdef CLVR_HAVE_VIEWER
 #include "viewer.h"
 #endif
+#ifdef CLVR_HAVE_MPI
+#include "mpi_main.h"
+#endif
 
 /* Set by SIGINT/SIGTERM: the render loop stops after the current frame and
  * the image accumulated so far is written. A signal handler can only talk to
@@ -101,6 +104,10 @@ int main(int argc, char **argv)
         free(list);
         return s == CLVR_OK ? 0 : fail(&err);
     }
+#ifdef CLVR_HAVE_MPI
+    /* Under mpirun (even -n 1): data-parallel rendering (host/mpi). */
+    if (clvr_mpi_launched()) return clvr_mpi_main(argc, argv, &o);
+#endif
     /* A time series: every step through this main, one range and camera. */
     if (o.mesh_path && clvr_series_is(o.mesh_path)) return clvr_series_run(argc, argv, &o, main);
     if (o.kernel_dir) setenv("CLVR_KERNEL_DIR", o.kernel_dir, 1);

@@ -25,6 +25,9 @@ struct clvr_renderer {
     clvr_majorants *maj;       /* cluster majorants and the macrocell grid */
     cl_program prog_render;
     cl_kernel k_render, k_light;
+    cl_kernel k_mpi_record, k_mpi_shadow; /* MPI mode's two phases, made at their first use */
+    cl_mem mpi_rec, mpi_pick, mpi_tau, mpi_counters;
+    size_t mpi_npix;           /* pixels the MPI buffers hold */
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
     cl_mem light_buf;          /* urm with shadows: the light grid (frame.light_res^3) */
     int light_valid;           /* light_buf matches the frame and transfer function */
@@ -274,6 +277,12 @@ void clvr_renderer_destroy(clvr_renderer *r)
     if (!r) return;
     if (r->k_render) clReleaseKernel(r->k_render);
     if (r->k_light) clReleaseKernel(r->k_light);
+    if (r->k_mpi_record) clReleaseKernel(r->k_mpi_record);
+    if (r->k_mpi_shadow) clReleaseKernel(r->k_mpi_shadow);
+    clvr_cl_release(r->cl, &r->mpi_rec);
+    clvr_cl_release(r->cl, &r->mpi_pick);
+    clvr_cl_release(r->cl, &r->mpi_tau);
+    clvr_cl_release(r->cl, &r->mpi_counters);
     clvr_cl_release(r->cl, &r->light_buf);
     if (r->prog_render) clReleaseProgram(r->prog_render);
     clvr_majorants_destroy(r->maj);
@@ -321,6 +330,54 @@ cleanup:
     return s;
 }
 
+/* The device arrays of CLVR_VOLUME_ARRAYS, in its order. */
+typedef struct volume_bufs {
+#define CLVR_VOLUME_HOST(T, name) cl_mem name;
+    CLVR_VOLUME_ARRAYS(CLVR_VOLUME_HOST)
+#undef CLVR_VOLUME_HOST
+} volume_bufs;
+
+static volume_bufs volume_of(const clvr_renderer *r)
+{
+    const clvr_clustered *m = r->mesh;
+    const clvr_accel *b = r->bvh;
+    const clvr_majorant_arrays maj = clvr_majorants_arrays(r->maj);
+    return (volume_bufs){.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
+                         .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas,
+                         .grid = maj.cells, .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes,
+                         .sampling = m->sampling, .cluster_majorants = maj.clusters, .light = r->light_buf,
+                         .ebox = b->two_level.ebox};
+}
+#define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
+
+/* The light grid, once per transfer function, light and settings (urm with
+ * shadows); its time counts as render time (part of the first frame's cost).
+ * Expects the frame uploaded. */
+static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_event evt = NULL;
+    volume_bufs vol = volume_of(r);
+    if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
+        r->frame.method != CLVR_RENDER_MARCH) {
+        const size_t n = r->frame.light_res, gl[3] = {n, n, n};
+        CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf)));
+        cl_int lrc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
+        if (lrc == CL_SUCCESS) lrc = clEnqueueNDRangeKernel(r->cl->queue, r->k_light, 3, NULL, gl, NULL, 0, NULL, &evt);
+        if (lrc != CL_SUCCESS) {
+            s = clvr_cl_fail(err, "clEnqueueNDRangeKernel(clvr_light_grid)", lrc, __FILE__, __LINE__);
+            goto cleanup;
+        }
+        CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+        r->kernel_s += clvr_cl_event_seconds(evt);
+        r->light_valid = 1;
+    }
+cleanup:
+    if (evt) clReleaseEvent(evt);
+    return s;
+}
+
 clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -329,44 +386,12 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "clvr_renderer_frame before a transfer function");
     r->frame.frame_index = (clvr_u32)r->frames;
     CLVR_TRY(upload_frame(r, err));
-    const clvr_clustered *m = r->mesh;
-    const clvr_accel *b = r->bvh;
-    const clvr_majorant_arrays maj = clvr_majorants_arrays(r->maj);
     cl_kernel k = r->k_render;
-    /* The device arrays of CLVR_VOLUME_ARRAYS, in its order. */
-    const struct {
-#define CLVR_VOLUME_HOST(T, name) cl_mem name;
-        CLVR_VOLUME_ARRAYS(CLVR_VOLUME_HOST)
-#undef CLVR_VOLUME_HOST
-    } vol = {.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
-             .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas, .grid = maj.cells,
-             .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes, .sampling = m->sampling,
-             .cluster_majorants = maj.clusters, .light = r->light_buf,
-             .ebox = b->two_level.ebox};
-#define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
-    if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
-        r->frame.method != CLVR_RENDER_MARCH) {
-        /* The light grid, once per transfer function, light and settings; its
-         * time counts as render time (it is part of the first frame's cost). */
-        const size_t n = r->frame.light_res, gl[3] = {n, n, n};
-        CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
-                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf)));
-        cl_int lrc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
-        if (lrc == CL_SUCCESS) lrc = clEnqueueNDRangeKernel(cl->queue, r->k_light, 3, NULL, gl, NULL, 0, NULL, &evt);
-        if (lrc != CL_SUCCESS) {
-            s = clvr_cl_fail(err, "clEnqueueNDRangeKernel(clvr_light_grid)", lrc, __FILE__, __LINE__);
-            goto cleanup;
-        }
-        CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-        r->kernel_s += clvr_cl_event_seconds(evt);
-        clReleaseEvent(evt);
-        evt = NULL;
-        r->light_valid = 1;
-    }
+    volume_bufs vol = volume_of(r);
+    CLVR_TRY(ensure_light(r, err));
     /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
                           CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters)));
-#undef CLVR_VOLUME_ARG
     size_t local[2] = {r->local[0], r->local[1]};
     size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
                         (r->set.height + local[1] - 1) / local[1] * local[1]};
@@ -435,4 +460,129 @@ clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, floa
 {
     if (global_majorant) *global_majorant = r->frame.global_majorant;
     return clvr_majorants_read(r->maj, clusters, cells, blocks, err);
+}
+
+/* ------------------------------------------------------------ MPI mode */
+
+/* The MPI kernels and buffers for the current image size. */
+static clvr_status mpi_prepare(clvr_renderer *r, uint32_t frame, uint32_t rank_key, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const size_t npix = (size_t)r->set.width * r->set.height;
+    if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "MPI phase before a transfer function");
+    if (r->frame.estimator != CLVR_ESTIMATOR_URM || r->frame.method == CLVR_RENDER_MARCH)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "MPI mode composites the urm estimator only");
+    if (!r->k_mpi_record) CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_mpi_record", &r->k_mpi_record, err));
+    if (!r->k_mpi_shadow) CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_mpi_shadow", &r->k_mpi_shadow, err));
+    if (r->mpi_npix != npix) {
+        clvr_cl_release(r->cl, &r->mpi_rec);
+        clvr_cl_release(r->cl, &r->mpi_pick);
+        clvr_cl_release(r->cl, &r->mpi_tau);
+        clvr_cl_release(r->cl, &r->mpi_counters);
+        r->mpi_npix = 0;
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_WRITE, npix * sizeof(clvr_mpi_record), NULL, "MPI records",
+                                &r->mpi_rec, err));
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_ONLY, npix * sizeof(float), NULL, "MPI shadow points",
+                                &r->mpi_pick, err));
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_WRITE, npix * sizeof(float), NULL, "MPI shadow transmittance",
+                                &r->mpi_tau, err));
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_WRITE, npix * 2 * sizeof(cl_uint), NULL, "MPI counters",
+                                &r->mpi_counters, err));
+        r->mpi_npix = npix;
+    }
+    r->frame.frame_index = frame;
+    r->frame.mpi_rank_key = rank_key;
+    CLVR_TRY(upload_frame(r, err));
+cleanup:
+    return s;
+}
+
+static clvr_status mpi_run(clvr_renderer *r, cl_kernel k, const char *name, uint64_t *samples, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_event evt = NULL;
+    cl_uint *cnt = NULL;
+    size_t local[2] = {r->local[0], r->local[1]};
+    size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
+                        (r->set.height + local[1] - 1) / local[1] * local[1]};
+    cl_int rc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
+    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(r->cl->queue, k, 2, NULL, global, local, 0, NULL, &evt);
+    if (rc != CL_SUCCESS) {
+        s = clvr_cl_fail(err, name, rc, __FILE__, __LINE__);
+        goto cleanup;
+    }
+    CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+    r->last_frame_s = clvr_cl_event_seconds(evt);
+    r->kernel_s += r->last_frame_s;
+    if (samples) {
+        cnt = malloc(r->mpi_npix * 2 * sizeof(cl_uint));
+        if (!cnt) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading counters"); goto cleanup; }
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_counters, CL_TRUE, 0, r->mpi_npix * 2 * sizeof(cl_uint),
+                                          cnt, 0, NULL, NULL));
+        uint64_t n = 0;
+        for (size_t i = 0; i < r->mpi_npix; ++i) n += cnt[2 * i];
+        *samples = n;
+    }
+cleanup:
+    free(cnt);
+    if (evt) clReleaseEvent(evt);
+    return s;
+}
+
+clvr_status clvr_renderer_mpi_record(clvr_renderer *r, uint32_t frame, uint32_t rank_key, clvr_mpi_record *rec,
+                                     uint64_t *samples, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    CLVR_TRY(mpi_prepare(r, frame, rank_key, err));
+    CLVR_TRY(ensure_light(r, err));
+    volume_bufs vol = volume_of(r);
+    CLVR_TRY(CLVR_CL_ARGS(r->k_mpi_record, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
+                          CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->mpi_rec), CLVR_ARG(r->mpi_counters)));
+    CLVR_TRY(mpi_run(r, r->k_mpi_record, "clEnqueueNDRangeKernel(clvr_render_mpi_record)", samples, err));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_rec, CL_TRUE, 0, r->mpi_npix * sizeof(clvr_mpi_record), rec,
+                                      0, NULL, NULL));
+cleanup:
+    return s;
+}
+
+clvr_status clvr_renderer_mpi_shadow(clvr_renderer *r, uint32_t frame, uint32_t rank_key, const float *pick_t,
+                                     float *tau, uint64_t *samples, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    CLVR_TRY(mpi_prepare(r, frame, rank_key, err));
+    CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->mpi_pick, CL_TRUE, 0, r->mpi_npix * sizeof(float), pick_t, 0,
+                                       NULL, NULL));
+    volume_bufs vol = volume_of(r);
+    CLVR_TRY(CLVR_CL_ARGS(r->k_mpi_shadow, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
+                          CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->mpi_pick), CLVR_ARG(r->mpi_tau),
+                          CLVR_ARG(r->mpi_counters)));
+    CLVR_TRY(mpi_run(r, r->k_mpi_shadow, "clEnqueueNDRangeKernel(clvr_render_mpi_shadow)", samples, err));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_tau, CL_TRUE, 0, r->mpi_npix * sizeof(float), tau, 0, NULL,
+                                      NULL));
+cleanup:
+    return s;
+}
+
+clvr_status clvr_renderer_light_grid(clvr_renderer *r, float *grid, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const size_t n = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
+    if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "light grid before a transfer function");
+    CLVR_TRY(upload_frame(r, err));
+    CLVR_TRY(ensure_light(r, err));
+    if (!r->light_valid) return clvr_error_set(err, CLVR_ERR_INTERNAL, "no light grid: urm with shadows only");
+    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, n * sizeof(float), grid, 0, NULL, NULL));
+cleanup:
+    return s;
+}
+
+clvr_status clvr_renderer_set_light_grid(clvr_renderer *r, const float *grid, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const size_t n = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
+    CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, n * sizeof(float), grid, 0, NULL,
+                                       NULL));
+    r->light_valid = 1;
+cleanup:
+    return s;
 }

@@ -100,4 +100,23 @@ clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, floa
                                          float *global_majorant, clvr_error *err);
 
 
+/* MPI mode (host/mpi, docs/mpi-compositing.md): the urm estimator split
+ * into the two phases that rank 0 composites. Each runs one kernel over the
+ * image with frame index `frame` and the frame's random streams mixed with
+ * rank_key, and reads its result back (blocking). counters, when not NULL,
+ * receives the extinction lookups of the call. */
+/* Phase 1: one record per pixel (width * height). */
+clvr_status clvr_renderer_mpi_record(clvr_renderer *r, uint32_t frame, uint32_t rank_key, clvr_mpi_record *rec,
+                                     uint64_t *samples, clvr_error *err);
+/* Phase 2: the transmittance inside this rank's region along the shadow ray
+ * from distance pick_t[p] on pixel p's camera ray (< 0: no ray, tau 1). */
+clvr_status clvr_renderer_mpi_shadow(clvr_renderer *r, uint32_t frame, uint32_t rank_key, const float *pick_t,
+                                     float *tau, uint64_t *samples, clvr_error *err);
+/* The light grid (light_res^3 floats, CLVR_URM_LIGHT_RES): computed for the
+ * current frame and transfer function when out of date, then copied out;
+ * and replaced by a given one (the product over ranks), kept until the
+ * settings or transfer function change. */
+clvr_status clvr_renderer_light_grid(clvr_renderer *r, float *grid, clvr_error *err);
+clvr_status clvr_renderer_set_light_grid(clvr_renderer *r, const float *grid, clvr_error *err);
+
 #endif

@@ -1,0 +1,557 @@
+/* mpi_main.c: `mpirun -n N clvr ...`: every rank loads its share of the mesh
+ * (a convex region, mpi_share.h), clusters and renders the medium inside its
+ * region with the urm estimator, and rank 0 composites the ranks' per-pixel
+ * records front to back (mpi_composite.h), picks one shadow-ray origin per
+ * pixel among all ranks, multiplies the ranks' transmittances along it and
+ * writes the image (docs/mpi-compositing.md). Every step that can fail on
+ * one rank ends in agree(): all ranks learn the first failing rank and its
+ * message, rank 0 prints it once, and all return the same exit code, so a
+ * failure never leaves the others waiting in a collective. */
+#include "mpi_main.h"
+
+#include <malloc.h>
+#include <math.h>
+#include <mpi.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "camera.h"
+#include "clock.h"
+#include "clvr.h"
+#include "clvr_bridge.h"
+#include "image.h"
+#include "limits_check.h"
+#include "mesh_io.h"
+#include "mpi_composite.h"
+#include "mpi_share.h"
+#include "mpi_share_mesh.h"
+#include "render.h"
+#include "scene.h"
+#include "series.h"
+#include "tf.h"
+#ifdef CLVR_HAVE_MPI_LOAD_BIN
+#include "mpi_load.h"
+#endif
+
+int clvr_mpi_launched(void)
+{
+    return getenv("OMPI_COMM_WORLD_SIZE") != NULL || getenv("PMI_SIZE") != NULL || getenv("PMIX_RANK") != NULL;
+}
+
+/* The per-rank figures rank 0 gathers for --stats and --stats-json. */
+typedef struct rank_stats {
+    double elements, owned_elements, vertices;
+    double peak_rss, resident;
+    double load_s, preprocess_s, render_s, comm_s, light_s;
+    double bytes_sent, samples;
+    double region[6];
+} rank_stats;
+#define RANK_STATS_DOUBLES (sizeof(rank_stats) / sizeof(double))
+
+typedef struct mpi_run {
+    MPI_Comm comm;
+    int rank, size;
+    double comm_s;      /* seconds inside MPI calls (communication and waiting for other ranks) */
+    double bytes_sent;  /* payload this rank sent */
+} mpi_run;
+
+/* Every rank passes its status; all get the first failing rank's status and
+ * message (rank 0 prints it, naming the rank when there are several). */
+static clvr_status agree(mpi_run *m, clvr_status s, clvr_error *err)
+{
+    const double t0 = clvr_clock_monotonic_s();
+    int mine = s == CLVR_OK ? m->size : m->rank, first = m->size;
+    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, m->comm);
+    if (first < m->size) {
+        struct { int status; char msg[sizeof err->msg]; } b;
+        b.status = (int)s;
+        memcpy(b.msg, err->msg, sizeof b.msg);
+        b.msg[sizeof b.msg - 1] = 0;
+        MPI_Bcast(&b, (int)sizeof b, MPI_BYTE, first, m->comm);
+        err->status = (clvr_status)b.status;
+        if (m->size > 1) snprintf(err->msg, sizeof err->msg, "rank %d: %s", first, b.msg);
+        else memcpy(err->msg, b.msg, sizeof err->msg);
+        s = err->status == CLVR_OK ? CLVR_ERR_INTERNAL : err->status;
+    }
+    m->comm_s += clvr_clock_monotonic_s() - t0;
+    return s;
+}
+
+/* Test hook (docs/mpi-compositing.md): CLVR_MPI_TEST_FAIL_RANK=k makes rank k
+ * fail after loading, as a rank whose input or device fails would. */
+static clvr_status test_fail_hook(int rank, clvr_error *err)
+{
+    const char *e = getenv("CLVR_MPI_TEST_FAIL_RANK");
+    if (e && *e && atoi(e) == rank)
+        return clvr_error_set(err, CLVR_ERR_INTERNAL, "failed on purpose (test hook CLVR_MPI_TEST_FAIL_RANK=%s)", e);
+    return CLVR_OK;
+}
+
+/* Options this mode cannot honour: refused before any work, the same on
+ * every rank (they all parse the same command line). */
+static clvr_status check_options(const clvr_options *o, clvr_error *err)
+{
+    if (o->view) return clvr_error_set(err, CLVR_ERR_USAGE, "--view is not available under mpirun; render to a file with -o");
+    if (o->info) return clvr_error_set(err, CLVR_ERR_USAGE, "--info: run clvr --info without mpirun");
+    if (o->orbit) return clvr_error_set(err, CLVR_ERR_USAGE, "--orbit is not available under mpirun yet; render one view per run");
+    if (o->method == CLVR_RENDER_MARCH)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--method march is not available under mpirun: the ranks' "
+                              "images are composited with the urm estimator; use dda (the default), bins or track");
+    if (o->estimator != CLVR_ESTIMATOR_URM)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--estimator %s is not available under mpirun: MPI mode "
+                              "composites the urm estimator (the default) exactly; drop --estimator",
+                              clvr_render_estimator_name(o->estimator));
+    if (o->mesh_path && clvr_series_is(o->mesh_path))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s: time series are not available under mpirun; render each step",
+                              o->mesh_path);
+    /* One MPI message per rank and frame carries the records (an int count). */
+    if ((uint64_t)o->width * o->height * sizeof(clvr_mpi_record) > (uint64_t)INT32_MAX)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--size %ux%u: too large for MPI mode's per-pixel gather "
+                              "(%zu bytes per pixel, 2 GiB per message); use at most about 44M pixels",
+                              o->width, o->height, sizeof(clvr_mpi_record));
+    if (o->legend || o->outline)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--legend and --outline are not available under mpirun yet");
+    return CLVR_OK;
+}
+
+static clvr_status load_whole(const clvr_options *o, clvr_mesh *m, clvr_error *err)
+{
+    if (!o->mesh_path) return clvr_scene_default(m, err);
+    clvr_load_options lo = {0};
+    lo.scalar_name = o->scalar_name;
+    lo.cell_flat = o->cell_flat;
+    return clvr_mesh_load(o->mesh_path, &lo, m, err);
+}
+
+/* This rank's share: the marked spot where .bin files go to the distributed
+ * loader once it is merged (each rank reads about 1/N of the file); every
+ * other input is loaded whole on every rank and cut (mpi_share_mesh.h).
+ * *whole keeps the whole mesh where there is one (for the transfer function). */
+static clvr_status load_share(mpi_run *m, const clvr_options *o, clvr_mesh *whole, clvr_mpi_share *share,
+                              clvr_error *err)
+{
+#ifdef CLVR_HAVE_MPI_LOAD_BIN /* --- the distributed .bin loader (host/mpi/mpi_load.h) --- */
+    const size_t len = o->mesh_path ? strlen(o->mesh_path) : 0;
+    if (len > 4 && !strcmp(o->mesh_path + len - 4, ".bin")) {
+        clvr_load_options lo = {0};
+        lo.scalar_name = o->scalar_name;
+        lo.cell_flat = o->cell_flat;
+        return clvr_mpi_load_share_bin(m->comm, o->mesh_path, &lo, share, err);
+    }
+#endif
+    clvr_status s = load_whole(o, whole, err);
+    s = agree(m, s, err);
+    if (s != CLVR_OK) return s;
+    return clvr_mpi_share_from_mesh(m->comm, whole, share, err);
+}
+
+static double now(void) { return clvr_clock_monotonic_s(); }
+
+/* Writes the per-rank table (--stats) or JSON (--stats-json, written to a
+ * temporary name and renamed, so a failure leaves no half file). */
+static void print_stats(FILE *out, const rank_stats *rs, int n, uint32_t frames, double wall_s, uint32_t w, uint32_t h)
+{
+    fprintf(out, "MPI mode: %d rank%s, %u frames of %ux%u in %.3f s (%.4f s/frame)\n", n, n == 1 ? "" : "s", frames, w,
+            h, wall_s, frames ? wall_s / frames : 0.0);
+    fprintf(out, "%5s %10s %10s %10s %9s %8s %8s %8s %7s %10s %12s\n", "rank", "elements", "owned", "vertices", "peak MiB",
+            "load s", "prep s", "render s", "comm %", "sent MiB", "lookups");
+    for (int r = 0; r < n; ++r) {
+        const rank_stats *q = rs + r;
+        fprintf(out, "%5d %10.0f %10.0f %10.0f %9.1f %8.3f %8.3f %8.3f %7.1f %10.2f %12.0f\n", r, q->elements,
+                q->owned_elements, q->vertices, q->peak_rss / 1048576.0, q->load_s, q->preprocess_s, q->render_s,
+                q->render_s > 0 ? 100.0 * q->comm_s / q->render_s : 0.0, q->bytes_sent / 1048576.0, q->samples);
+    }
+}
+
+static clvr_status write_stats_json(const char *path, const rank_stats *rs, int n, uint32_t frames, double wall_s,
+                                    uint32_t w, uint32_t h, uint64_t global_elements, clvr_error *err)
+{
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
+    FILE *f = fopen(tmp, "w");
+    if (!f) return clvr_error_set(err, CLVR_ERR_WRITE, "--stats-json %s: cannot write; check the directory", path);
+    fprintf(f, "{\n  \"mode\": \"mpi\",\n  \"ranks\": %d,\n  \"width\": %u,\n  \"height\": %u,\n  \"frames\": %u,\n", n,
+            w, h, frames);
+    fprintf(f, "  \"elements\": %llu,\n  \"render_wall_s\": %.6f,\n  \"frame_s\": %.6f,\n  \"per_rank\": [\n",
+            (unsigned long long)global_elements, wall_s, frames ? wall_s / frames : 0.0);
+    for (int r = 0; r < n; ++r) {
+        const rank_stats *q = rs + r;
+        fprintf(f,
+                "    {\"rank\": %d, \"elements\": %.0f, \"owned_elements\": %.0f, \"vertices\": %.0f, "
+                "\"bytes_peak_rss\": %.0f, \"bytes_resident\": %.0f, \"load_s\": %.6f, \"preprocess_s\": %.6f, "
+                "\"render_s\": %.6f, \"light_grid_s\": %.6f, \"comm_s\": %.6f, \"comm_share\": %.6f, "
+                "\"bytes_sent\": %.0f, \"samples\": %.0f, "
+                "\"region\": [%g, %g, %g, %g, %g, %g]}%s\n",
+                r, q->elements, q->owned_elements, q->vertices, q->peak_rss, q->resident, q->load_s, q->preprocess_s,
+                q->render_s, q->light_s, q->comm_s, q->render_s > 0 ? q->comm_s / q->render_s : 0.0, q->bytes_sent,
+                q->samples, q->region[0], q->region[1], q->region[2], q->region[3], q->region[4], q->region[5],
+                r + 1 < n ? "," : "");
+    }
+    fprintf(f, "  ]\n}\n");
+    if (fclose(f) != 0 || rename(tmp, path) != 0) {
+        remove(tmp);
+        return clvr_error_set(err, CLVR_ERR_WRITE, "--stats-json %s: write failed; check the disk", path);
+    }
+    return CLVR_OK;
+}
+
+static int run(mpi_run *m, const clvr_options *o)
+{
+    clvr_error err = {0};
+    clvr_message msg = {0};
+    clvr_mesh whole = {0};
+    clvr_mpi_share share = {0};
+    clvr_tf tf = {0};
+    clvr_context *ctx = NULL;
+    clvr_dataset *ds = NULL;
+    clvr_tracer *tracer = NULL;
+    float *table = NULL, *pick_t = NULL, *tau = NULL, *tau_all = NULL, *img = NULL, *grid = NULL, *grid_all = NULL;
+    double *sum = NULL;
+    clvr_mpi_record *rec = NULL, *rec_all = NULL;
+    clvr_mpi_shadow_pick *picks = NULL;
+    rank_stats st;
+    memset(&st, 0, sizeof st);
+    const int root = m->rank == 0;
+    const size_t npix = (size_t)o->width * o->height;
+    uint32_t frames = 0;
+    double wall_s = 0.0;
+    clvr_status s = check_options(o, &err);
+
+    /* --- output checked by rank 0 before any work */
+    if (s == CLVR_OK && root) s = clvr_image_check_output(o->output, &err);
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+
+    /* --- the share of the mesh */
+    double t = now();
+    if (root && !o->quiet)
+        fprintf(stderr, "clvr: %d rank%s: loading %s\n", m->size, m->size == 1 ? "" : "s",
+                o->mesh_path ? o->mesh_path : "the built-in scene");
+    s = load_share(m, o, &whole, &share, &err);
+    if (s == CLVR_OK) s = test_fail_hook(m->rank, &err);
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+    st.load_s = now() - t;
+    st.elements = (double)clvr_mesh_num_elements(&share.mesh);
+    st.owned_elements = (double)share.owned_elements;
+    st.vertices = (double)share.mesh.num_vertices;
+    for (int a = 0; a < 3; ++a) { st.region[a] = share.region_lo[a]; st.region[3 + a] = share.region_hi[a]; }
+
+    /* --- the transfer function: built once on rank 0 (from the whole mesh
+     * where every rank has it, else from rank 0's share over the global
+     * scalar range), baked, broadcast: every rank gets the same table. */
+    struct { uint32_t n; float lo, hi, density, auto_density; } tfh = {0, 0, 0, 0, 0};
+    if (root) {
+        const int have_whole = whole.num_vertices > 0;
+        const clvr_mesh *tm = have_whole ? &whole : &share.mesh;
+        const int range_set = o->range_set || !have_whole;
+        const float lo = o->range_set ? o->range_lo : share.scalar_min, hi = o->range_set ? o->range_hi : share.scalar_max;
+        float dens = o->density;
+        s = clvr_api_tf_build(tm, o->colormap, o->tf_file, range_set, lo, hi, o->density, o->density_auto,
+                              o->opacity_ramp, &tf, &dens, &err);
+        if (s == CLVR_OK) {
+            /* Opacity to extinction relative to the whole mesh's diagonal. */
+            clvr_tf_set_extent(&tf, share.bounds_lo, share.bounds_hi);
+            tfh.n = clvr_tf_table_size(&tf);
+            tfh.lo = tf.range_lo;
+            tfh.hi = tf.range_hi;
+            tfh.density = tf.density;
+            tfh.auto_density = dens;
+            table = malloc((size_t)tfh.n * 4 * sizeof(float));
+            if (!table) s = clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
+            else clvr_tf_bake(&tf, table, tfh.n);
+        }
+    }
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+    t = now();
+    MPI_Bcast(&tfh, (int)sizeof tfh, MPI_BYTE, 0, m->comm);
+    if (!root) table = malloc((size_t)tfh.n * 4 * sizeof(float));
+    m->comm_s += now() - t;
+    s = table ? CLVR_OK : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+    t = now();
+    MPI_Bcast(table, (int)(tfh.n * 4), MPI_FLOAT, 0, m->comm);
+    m->comm_s += now() - t;
+    if (root && o->density_auto && !o->quiet)
+        fprintf(stderr, "clvr: automatic density %.3g (--density auto)\n", (double)tfh.auto_density);
+    clvr_mesh_free(&whole); /* from here each rank holds its share only */
+#ifdef __GLIBC__
+    malloc_trim(0); /* hand the whole mesh's pages back now, not at exit */
+#endif
+
+    /* --- device, Quick Clusters of the share, renderer */
+    t = now();
+    s = clvr_bridge_status(clvr_context_create(o->device, &ctx, &msg), &msg, &err);
+    if (s == CLVR_OK) s = clvr_dataset_adopt(&share.mesh, &ds, &err);
+    clvr_tracer_parts parts;
+    memset(&parts, 0, sizeof parts);
+    if (s == CLVR_OK) {
+        clvr_tracer_setup setup;
+        clvr_tracer_setup_default(&setup, o->width, o->height);
+        setup.name = o->mesh_path ? o->mesh_path : "(built-in default scene)";
+        setup.po.leaf_size = o->leaf_size;
+        if (o->sampling_size) setup.po.sampling_size = o->sampling_size;
+        clvr_render_settings *rs = &setup.rs;
+        rs->method = o->method;
+        rs->seed = o->seed;
+        rs->sampler = o->sampler;
+        rs->estimator = o->estimator;
+        rs->urm_steps = o->urm_steps;
+        rs->bins = o->bins;
+        rs->segments = o->segments;
+        rs->macrocells = o->macrocells;
+        memcpy(rs->light_dir, o->light_dir, sizeof rs->light_dir);
+        rs->light_intensity = o->light_intensity;
+        rs->ambient = o->ambient;
+        memcpy(rs->background, o->background, sizeof rs->background);
+        /* The region is one more clip box (intersected with --clip-box):
+         * camera rays, shadow rays and the light grid's rays are all cut to
+         * it (clvr_ray_clip), so the rank contributes exactly the medium
+         * inside its region. An empty intersection is a zero-size box at a
+         * corner: rays meet it in intervals of length 0. The macrocell and
+         * light grids span the whole mesh's bounds on every rank. */
+        int empty = 0;
+        for (int a = 0; a < 3; ++a) {
+            rs->clip_lo[a] = o->clip_box_set ? fmaxf(o->clip_lo[a], share.region_lo[a]) : share.region_lo[a];
+            rs->clip_hi[a] = o->clip_box_set ? fminf(o->clip_hi[a], share.region_hi[a]) : share.region_hi[a];
+            if (rs->clip_lo[a] > rs->clip_hi[a]) empty = 1;
+            rs->grid_lo[a] = share.bounds_lo[a];
+            rs->grid_hi[a] = share.bounds_hi[a];
+        }
+        if (empty)
+            for (int a = 0; a < 3; ++a) rs->clip_lo[a] = rs->clip_hi[a] = share.region_lo[a];
+        rs->num_clip_planes = o->num_clip_planes;
+        memcpy(rs->clip_planes, o->clip_planes, sizeof rs->clip_planes);
+        setup.shadows = o->shadows;
+        setup.partitions = o->partitions;
+        setup.consume = 1;
+        /* A placeholder (the built-in map): the broadcast table replaces it
+         * below, and none is computed from the share's own histogram. */
+        clvr_tf placeholder = {0};
+        s = clvr_tf_init(&placeholder, NULL, &err);
+        setup.tf = &placeholder;
+        if (s == CLVR_OK) s = clvr_tracer_create_setup(ctx, ds, NULL, &setup, &tracer, &err);
+        clvr_tf_free(&placeholder);
+    }
+    if (s == CLVR_OK) {
+        clvr_tracer_parts_of(tracer, &parts);
+        st.preprocess_s = parts.preprocess_s;
+        clvr_tracer_drop_dataset(tracer, &msg);
+        clvr_dataset_destroy(ds);
+        ds = NULL;
+        s = clvr_renderer_set_tf(parts.renderer, table, tfh.n, tfh.lo, tfh.hi, tfh.density, &err);
+    }
+    /* The camera frames the whole mesh's bounds, as one process does. */
+    if (s == CLVR_OK) {
+        clvr_camera cam;
+        if (o->camera_set) {
+            s = clvr_camera_look_at(&cam, o->camera, o->camera + 3, o->camera + 6, o->fovy, o->width, o->height, &err);
+        } else {
+            clvr_camera_view view;
+            clvr_camera_view_default(&view);
+            memcpy(view.up, o->up, sizeof view.up);
+            view.azimuth_deg = o->azimuth;
+            view.elevation_deg = o->elevation;
+            view.zoom = o->zoom;
+            s = clvr_camera_frame_view(&cam, share.bounds_lo, share.bounds_hi, &view, o->fovy, o->width, o->height,
+                                       &err);
+        }
+        if (s == CLVR_OK) s = clvr_renderer_set_camera(parts.renderer, &cam, &err);
+    }
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+    if (root && !o->quiet)
+        fprintf(stderr, "clvr: %d rank%s clustered their shares in %.2f s (rank 0)\n", m->size,
+                m->size == 1 ? "" : "s", st.preprocess_s);
+    {
+        uint64_t cur = 0;
+#ifdef __GLIBC__
+        malloc_trim(0);
+#endif
+        clvr_mem_rss(&cur, NULL);
+        st.resident = (double)cur;
+    }
+
+    /* --- buffers */
+    const int shadows = o->shadows != 0;
+    rec = malloc(npix * sizeof *rec);
+    pick_t = malloc(npix * sizeof(float));
+    tau = malloc(npix * sizeof(float));
+    if (root) {
+        rec_all = malloc((size_t)m->size * npix * sizeof *rec);
+        tau_all = malloc(npix * sizeof(float));
+        picks = malloc(npix * sizeof *picks);
+        img = malloc(npix * 4 * sizeof(float));
+        sum = calloc(npix * 4, sizeof(double));
+    }
+    s = rec && pick_t && tau && (!root || (rec_all && tau_all && picks && img && sum))
+            ? CLVR_OK
+            : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for %ux%u MPI records", o->width, o->height);
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+
+    /* --- the light grid: each rank's grid sees the medium in its region
+     * only; their product is the global one (docs/mpi-compositing.md). */
+    const double render0 = now(), comm0 = m->comm_s;
+    if (shadows) {
+        const size_t ng = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
+        grid = malloc(ng * sizeof(float));
+        grid_all = malloc(ng * sizeof(float));
+        s = grid && grid_all ? clvr_renderer_light_grid(parts.renderer, grid, &err)
+                             : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the light grid");
+        s = agree(m, s, &err);
+        if (s != CLVR_OK) goto done;
+        t = now();
+        MPI_Allreduce(grid, grid_all, (int)ng, MPI_FLOAT, MPI_PROD, m->comm);
+        m->comm_s += now() - t;
+        m->bytes_sent += (double)ng * sizeof(float);
+        /* Test hook (docs/mpi-compositing.md): G = 1 everywhere, still
+         * unbiased, so that every shadow comes from the correction rays and
+         * the tests see the cross-rank pick at full strength. */
+        const char *lg = getenv("CLVR_MPI_TEST_LIGHT_GRID");
+        if (lg && !strcmp(lg, "one"))
+            for (size_t i = 0; i < ng; ++i) grid_all[i] = 1.0f;
+        s = clvr_renderer_set_light_grid(parts.renderer, grid_all, &err);
+        s = agree(m, s, &err);
+        if (s != CLVR_OK) goto done;
+        st.light_s = now() - render0;
+    }
+
+    /* --- frames */
+    clvr_mpi_composite_params cp;
+    memset(&cp, 0, sizeof cp);
+    memcpy(cp.background, o->background, sizeof cp.background);
+    cp.light_intensity = o->light_intensity;
+    cp.shadows = shadows;
+    cp.seed = o->seed ^ 0xC0A1E5CEull;
+    {
+        /* Test hook (docs/mpi-compositing.md): a compositing that is wrong
+         * on purpose, for the tests that must notice it. */
+        const char *b = getenv("CLVR_MPI_TEST_BREAK");
+        if (b && !strcmp(b, "rank0")) cp.broken = CLVR_MPI_BREAK_RANK0;
+        else if (b && !strcmp(b, "order")) cp.broken = CLVR_MPI_BREAK_ORDER;
+    }
+    const uint32_t rank_key = (uint32_t)m->rank + 1u;
+    const int rec_bytes = (int)(npix * sizeof *rec);
+    double last_report = render0;
+    for (frames = 0; frames < o->spp; ++frames) {
+        uint64_t n1 = 0, n2 = 0;
+        s = clvr_renderer_mpi_record(parts.renderer, frames, rank_key, rec, &n1, &err);
+        s = agree(m, s, &err);
+        if (s != CLVR_OK) goto done;
+        t = now();
+        MPI_Gather(rec, rec_bytes, MPI_BYTE, rec_all, rec_bytes, MPI_BYTE, 0, m->comm);
+        m->comm_s += now() - t;
+        if (!root) m->bytes_sent += rec_bytes;
+        if (root) {
+            cp.frame = frames;
+            for (size_t p = 0; p < npix; ++p) {
+                clvr_mpi_composite_pixel(rec_all + p, npix, (uint32_t)m->size, &cp, (uint32_t)p, img + 4 * p, picks + p);
+                pick_t[p] = picks[p].t;
+            }
+        }
+        if (shadows) {
+            t = now();
+            MPI_Bcast(pick_t, (int)npix, MPI_FLOAT, 0, m->comm);
+            m->comm_s += now() - t;
+            if (root) m->bytes_sent += (double)npix * sizeof(float) * (m->size - 1);
+            s = clvr_renderer_mpi_shadow(parts.renderer, frames, rank_key, pick_t, tau, &n2, &err);
+            s = agree(m, s, &err);
+            if (s != CLVR_OK) goto done;
+            t = now();
+            MPI_Reduce(tau, tau_all, (int)npix, MPI_FLOAT, MPI_PROD, 0, m->comm);
+            m->comm_s += now() - t;
+            if (!root) m->bytes_sent += (double)npix * sizeof(float);
+            if (root)
+                for (size_t p = 0; p < npix; ++p)
+                    if (picks[p].t >= 0.0f)
+                        for (int a = 0; a < 3; ++a) img[4 * p + a] += picks[p].factor[a] * (tau_all[p] - picks[p].g);
+        }
+        st.samples += (double)(n1 + n2);
+        if (root) {
+            for (size_t i = 0; i < npix * 4; ++i) sum[i] += img[i];
+            const double tn = now();
+            if (!o->quiet && (tn - last_report > 1.0 || frames + 1 == o->spp)) {
+                const double per = (tn - render0) / (frames + 1);
+                fprintf(stderr, "clvr: frame %u/%u, %.2f s/frame, %.0f s left\n", frames + 1, o->spp, per,
+                        per * (o->spp - frames - 1));
+                last_report = tn;
+            }
+        }
+    }
+    wall_s = now() - render0;
+    st.render_s = wall_s;
+    st.comm_s = m->comm_s - comm0;
+    st.bytes_sent = m->bytes_sent;
+
+    /* --- image */
+    if (root) {
+        for (size_t i = 0; i < npix * 4; ++i) img[i] = (float)(sum[i] / (frames ? frames : 1));
+        clvr_image_display display = {o->exposure, (clvr_tonemap)o->tonemap, o->transparent, NULL};
+        s = clvr_image_write_display(o->output, o->width, o->height, img, &display, &err);
+    }
+    s = agree(m, s, &err);
+    if (s != CLVR_OK) goto done;
+    if (root && !o->quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp, %d ranks)\n", o->output, o->width, o->height,
+                                   frames, m->size);
+
+    /* --- stats */
+    {
+        uint64_t peak = 0;
+        clvr_mem_rss(NULL, &peak);
+        st.peak_rss = (double)peak;
+        rank_stats *all = root ? malloc((size_t)m->size * sizeof *all) : NULL;
+        s = !root || all ? CLVR_OK : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the stats");
+        s = agree(m, s, &err);
+        if (s == CLVR_OK)
+            MPI_Gather(&st, (int)RANK_STATS_DOUBLES, MPI_DOUBLE, all, (int)RANK_STATS_DOUBLES, MPI_DOUBLE, 0, m->comm);
+        if (s == CLVR_OK && root) {
+            if (o->stats) print_stats(stdout, all, m->size, frames, wall_s, o->width, o->height);
+            if (o->stats_json)
+                s = write_stats_json(o->stats_json, all, m->size, frames, wall_s, o->width, o->height,
+                                     share.global_elements, &err);
+        }
+        free(all);
+        s = agree(m, s, &err);
+    }
+
+done:
+    if (s != CLVR_OK && root) fprintf(stderr, "clvr: %s\n", err.msg);
+    free(table);
+    free(pick_t);
+    free(tau);
+    free(tau_all);
+    free(img);
+    free(sum);
+    free(rec);
+    free(rec_all);
+    free(picks);
+    free(grid);
+    free(grid_all);
+    clvr_tracer_destroy(tracer);
+    clvr_dataset_destroy(ds);
+    clvr_context_destroy(ctx);
+    clvr_tf_free(&tf);
+    clvr_mpi_share_free(&share);
+    clvr_mesh_free(&whole);
+    return s == CLVR_OK ? 0 : clvr_status_exit_code(s);
+}
+
+int clvr_mpi_main(int argc, char **argv, const clvr_options *o)
+{
+    int inited = 0;
+    MPI_Initialized(&inited);
+    if (!inited) MPI_Init(&argc, &argv);
+    mpi_run m = {MPI_COMM_WORLD, 0, 1, 0.0, 0.0};
+    MPI_Comm_rank(m.comm, &m.rank);
+    MPI_Comm_size(m.comm, &m.size);
+    if (o->kernel_dir) setenv("CLVR_KERNEL_DIR", o->kernel_dir, 1);
+    int rc = run(&m, o);
+    MPI_Finalize();
+    return rc;
+}
