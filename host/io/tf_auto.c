@@ -7,14 +7,17 @@
 
 #include "scene.h"
 
-void clvr_tf_auto_histogram(const clvr_mesh *m, float lo, float hi, double *hist, uint32_t bins)
+void clvr_tf_auto_histogram_kept(const clvr_mesh *m, const uint8_t *keep, float lo, float hi, double *hist,
+                                  uint32_t bins)
 {
     memset(hist, 0, (size_t)bins * sizeof *hist);
     if (!(hi > lo) || bins == 0) return;
     const double scale = (double)bins / ((double)hi - (double)lo);
+    uint64_t e = 0; /* element number across the types, for keep */
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         const uint32_t nv = clvr_cell_vertex_count(t);
-        for (uint64_t c = 0; c < m->num_cells[t]; ++c) {
+        for (uint64_t c = 0; c < m->num_cells[t]; ++c, ++e) {
+            if (keep && !keep[e]) continue;
             const uint32_t *idx = m->indices[t] + c * nv;
             double share = fabs(clvr_scene_cell_volume(t, m->positions, idx)) / nv;
             if (!(share > 0.0) || !isfinite(share)) continue;
@@ -27,6 +30,11 @@ void clvr_tf_auto_histogram(const clvr_mesh *m, float lo, float hi, double *hist
             }
         }
     }
+}
+
+void clvr_tf_auto_histogram(const clvr_mesh *m, float lo, float hi, double *hist, uint32_t bins)
+{
+    clvr_tf_auto_histogram_kept(m, NULL, lo, hi, hist, bins);
 }
 
 clvr_status clvr_tf_auto_opacity(clvr_tf *tf, const double *hist, uint32_t bins, clvr_error *err)
@@ -105,49 +113,61 @@ static int cmp_float(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-clvr_status clvr_tf_auto_probe(const clvr_mesh *m, const clvr_tf *tf, float *median_depth, clvr_error *err)
+clvr_status clvr_tf_auto_grid_create(const float bounds_lo[3], const float bounds_hi[3], clvr_tf_auto_grid *g,
+                                     clvr_error *err)
 {
-    *median_depth = 0.0f;
-    double lo[3], ext[3], h = 0.0;
+    memset(g, 0, sizeof *g);
+    double h = 0.0;
     for (int a = 0; a < 3; ++a) {
-        lo[a] = m->bounds_lo[a];
-        ext[a] = (double)m->bounds_hi[a] - lo[a];
-        if (ext[a] > h) h = ext[a];
+        g->lo[a] = bounds_lo[a];
+        g->ext[a] = (double)bounds_hi[a] - g->lo[a];
+        if (g->ext[a] > h) h = g->ext[a];
     }
-    if (!(h > 0.0) || !isfinite(h) || m->num_vertices == 0) return CLVR_OK;
+    if (!(h > 0.0) || !isfinite(h)) return CLVR_OK; /* no cells: the median stays 0 */
     h /= PROBE_CELLS;
-    int n[3];
     for (int a = 0; a < 3; ++a) {
-        n[a] = (int)ceil(ext[a] / h);
-        if (n[a] < 1) n[a] = 1;
-        if (n[a] > PROBE_CELLS) n[a] = PROBE_CELLS;
-        if (ext[a] < h) { lo[a] -= 0.5 * (h - ext[a]); ext[a] = h; } /* a flat box gets one cell of thickness h */
+        g->n[a] = (int)ceil(g->ext[a] / h);
+        if (g->n[a] < 1) g->n[a] = 1;
+        if (g->n[a] > PROBE_CELLS) g->n[a] = PROBE_CELLS;
+        if (g->ext[a] < h) { g->lo[a] -= 0.5 * (h - g->ext[a]); g->ext[a] = h; } /* a flat box gets one cell of thickness h */
+        g->cell_h[a] = g->ext[a] / g->n[a];
     }
-    const size_t cells = (size_t)n[0] * n[1] * n[2];
-    double *sigma = calloc(cells, sizeof *sigma), *covered = calloc(cells, sizeof *covered);
-    float *op = malloc(m->num_vertices * sizeof *op);
-    const int rays_per_dir = PROBE_RAYS * PROBE_RAYS, dirs = 7;
-    float *depth = malloc((size_t)rays_per_dir * dirs * sizeof *depth);
-    if (!sigma || !covered || !op || !depth) {
-        free(sigma);
-        free(covered);
-        free(op);
-        free(depth);
+    g->cells = (size_t)g->n[0] * g->n[1] * g->n[2];
+    g->sigma = calloc(2 * g->cells, sizeof *g->sigma);
+    if (!g->sigma) {
+        g->cells = 0;
         return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the automatic density");
     }
+    g->covered = g->sigma + g->cells;
+    return CLVR_OK;
+}
+
+void clvr_tf_auto_grid_free(clvr_tf_auto_grid *g)
+{
+    free(g->sigma);
+    memset(g, 0, sizeof *g);
+}
+
+clvr_status clvr_tf_auto_grid_add(clvr_tf_auto_grid *g, const clvr_mesh *m, const uint8_t *keep, const clvr_tf *tf,
+                                  clvr_error *err)
+{
+    if (g->cells == 0 || m->num_vertices == 0) return CLVR_OK;
+    float *op = malloc(m->num_vertices * sizeof *op);
+    if (!op) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the automatic density");
     const float w = tf->range_hi - tf->range_lo;
     for (uint64_t v = 0; v < m->num_vertices; ++v) {
         float s = m->scalars[v];
         op[v] = isnan(s) ? 0.0f : clvr_tf_opacity(tf, (s - tf->range_lo) / w);
     }
     const double ext_scale = (double)tf->density * clvr_tf_extinction_scale(tf);
-    double cell_h[3];
-    for (int a = 0; a < 3; ++a) cell_h[a] = ext[a] / n[a];
-    const double cell_vol = cell_h[0] * cell_h[1] * cell_h[2];
+    const double *lo = g->lo, *cell_h = g->cell_h;
+    const int *n = g->n;
     /* Each element's extinction x volume, spread over its bounding box's cells. */
+    uint64_t e = 0; /* element number across the types, for keep */
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         const uint32_t nv = clvr_cell_vertex_count(t);
-        for (uint64_t c = 0; c < m->num_cells[t]; ++c) {
+        for (uint64_t c = 0; c < m->num_cells[t]; ++c, ++e) {
+            if (keep && !keep[e]) continue;
             const uint32_t *idx = m->indices[t] + c * nv;
             double vol = fabs(clvr_scene_cell_volume(t, m->positions, idx));
             if (!(vol > 0.0) || !isfinite(vol)) continue;
@@ -174,16 +194,35 @@ clvr_status clvr_tf_auto_probe(const clvr_mesh *m, const clvr_tf *tf, float *med
                 for (int y = i0[1]; y <= i1[1]; ++y)
                     for (int x = i0[0]; x <= i1[0]; ++x) {
                         size_t i = ((size_t)z * n[1] + y) * n[0] + x;
-                        sigma[i] += each;
-                        covered[i] += each_vol;
+                        g->sigma[i] += each;
+                        g->covered[i] += each_vol;
                     }
         }
+    }
+    free(op);
+    return CLVR_OK;
+}
+
+clvr_status clvr_tf_auto_grid_median(const clvr_tf_auto_grid *g, float *median_depth, clvr_error *err)
+{
+    *median_depth = 0.0f;
+    if (g->cells == 0) return CLVR_OK;
+    const double *lo = g->lo, *ext = g->ext, *cell_h = g->cell_h;
+    const int *n = g->n;
+    const size_t cells = g->cells;
+    const int rays_per_dir = PROBE_RAYS * PROBE_RAYS, dirs = 7;
+    double *sigma = malloc(cells * sizeof *sigma);
+    float *depth = malloc((size_t)rays_per_dir * dirs * sizeof *depth);
+    if (!sigma || !depth) {
+        free(sigma);
+        free(depth);
+        return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the automatic density");
     }
     /* Extinction x volume over the cell's volume, or over the elements'
      * volume where they add up to more: overlapping elements (a mesh listed
      * twice) average, as the renderer shows one of them, instead of adding. */
-    for (size_t i = 0; i < cells; ++i) sigma[i] /= fmax(cell_vol, covered[i]);
-    free(covered);
+    const double cell_vol = cell_h[0] * cell_h[1] * cell_h[2];
+    for (size_t i = 0; i < cells; ++i) sigma[i] = g->sigma[i] / fmax(cell_vol, g->covered[i]);
     /* Parallel rays along the axes and the diagonals, midpoint steps of half a cell. */
     static const float dir_list[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {-1, 1, 1}, {1, -1, 1}, {1, 1, -1}};
     const double ctr[3] = {lo[0] + 0.5 * ext[0], lo[1] + 0.5 * ext[1], lo[2] + 0.5 * ext[2]};
@@ -242,9 +281,21 @@ clvr_status clvr_tf_auto_probe(const clvr_mesh *m, const clvr_tf *tf, float *med
         *median_depth = k % 2 ? depth[k / 2] : 0.5f * (depth[k / 2 - 1] + depth[k / 2]);
     }
     free(sigma);
-    free(op);
     free(depth);
     return CLVR_OK;
+}
+
+
+clvr_status clvr_tf_auto_probe(const clvr_mesh *m, const clvr_tf *tf, float *median_depth, clvr_error *err)
+{
+    *median_depth = 0.0f;
+    if (m->num_vertices == 0) return CLVR_OK;
+    clvr_tf_auto_grid g;
+    clvr_status s = clvr_tf_auto_grid_create(m->bounds_lo, m->bounds_hi, &g, err);
+    if (s == CLVR_OK) s = clvr_tf_auto_grid_add(&g, m, NULL, tf, err);
+    if (s == CLVR_OK) s = clvr_tf_auto_grid_median(&g, median_depth, err);
+    clvr_tf_auto_grid_free(&g);
+    return s;
 }
 
 clvr_status clvr_tf_auto_density(const clvr_mesh *m, const clvr_tf *tf, float *density, clvr_error *err)
@@ -254,7 +305,12 @@ clvr_status clvr_tf_auto_density(const clvr_mesh *m, const clvr_tf *tf, float *d
     float med = 0.0f;
     clvr_status s = clvr_tf_auto_probe(m, &unit, &med, err);
     if (s != CLVR_OK) return s;
-    float d = med > 0.0f ? CLVR_TF_AUTO_DEPTH / med : 1.0f;
-    *density = d < 1e-3f ? 1e-3f : d > 1e4f ? 1e4f : d;
+    *density = clvr_tf_auto_density_of_median(med);
     return CLVR_OK;
+}
+
+float clvr_tf_auto_density_of_median(float median_depth)
+{
+    float d = median_depth > 0.0f ? CLVR_TF_AUTO_DEPTH / median_depth : 1.0f;
+    return d < 1e-3f ? 1e-3f : d > 1e4f ? 1e4f : d;
 }

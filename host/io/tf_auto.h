@@ -57,4 +57,32 @@ clvr_status clvr_tf_auto_probe(const clvr_mesh *m, const clvr_tf *tf, float *med
  * medium is invisible everywhere. */
 clvr_status clvr_tf_auto_density(const clvr_mesh *m, const clvr_tf *tf, float *density, clvr_error *err);
 
+/* The same figures from sums that several processes can add up (MPI mode:
+ * each rank sums the elements it owns, keep[e] != 0 for element e counted
+ * across the types in order, NULL for all; the ranks add the arrays; every
+ * rank then finishes the same way). clvr_tf_auto_histogram is
+ * clvr_tf_auto_histogram_kept with keep NULL, and clvr_tf_auto_probe is
+ * grid_create over m's bounds, grid_add, grid_median. */
+void clvr_tf_auto_histogram_kept(const clvr_mesh *m, const uint8_t *keep, float lo, float hi, double *hist,
+                                  uint32_t bins);
+
+typedef struct clvr_tf_auto_grid {
+    int n[3];
+    size_t cells;           /* n[0] n[1] n[2]; 0 for empty or degenerate bounds (median 0) */
+    double lo[3], ext[3], cell_h[3];
+    double *sigma, *covered; /* per cell: extinction x volume, elements' volume (one allocation) */
+} clvr_tf_auto_grid;
+
+/* Cells over [bounds_lo, bounds_hi], zeroed. Errors: CLVR_ERR_NO_MEMORY. */
+clvr_status clvr_tf_auto_grid_create(const float bounds_lo[3], const float bounds_hi[3], clvr_tf_auto_grid *g,
+                                     clvr_error *err);
+/* Adds the kept elements of m with tf's opacity and density. */
+clvr_status clvr_tf_auto_grid_add(clvr_tf_auto_grid *g, const clvr_mesh *m, const uint8_t *keep, const clvr_tf *tf,
+                                  clvr_error *err);
+/* The probe rays' median optical depth through the summed grid. */
+clvr_status clvr_tf_auto_grid_median(const clvr_tf_auto_grid *g, float *median_depth, clvr_error *err);
+void clvr_tf_auto_grid_free(clvr_tf_auto_grid *g);
+/* The automatic density for a probe median at density 1 (clvr_tf_auto_density). */
+float clvr_tf_auto_density_of_median(float median_depth);
+
 #endif /* CLVR_TF_AUTO_H */

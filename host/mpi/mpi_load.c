@@ -991,9 +991,13 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
             memcpy(m->positions + 3 * i, xyzs + 4 * i, 3 * sizeof(float));
             m->scalars[i] = xyzs[4 * i + 3];
         }
-        uint64_t owned = 0;
+        uint64_t owned = 0, elem = 0;
         id_index x;
-        if (id_index_build(&x, ids, nids))
+        memset(&x, 0, sizeof x);
+        out->owned = malloc(nelem ? nelem : 1);
+        if (!out->owned)
+            s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the share's ownership flags", path);
+        else if (id_index_build(&x, ids, nids))
             s = clvr_error_set(&c.e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the vertex id index", path);
         s = agree(&c, s);
         if (s != CLVR_OK) goto done;
@@ -1008,7 +1012,9 @@ clvr_status clvr_mpi_load_share_bin_ex(MPI_Comm comm, const char *path, const cl
                 }
                 float blo[3], bhi[3], cen[3];
                 element_geometry(v, nv, blo, bhi, cen);
-                if (clvr_mpi_region_of(regions, (uint32_t)size, cen) == (uint32_t)rank) ++owned;
+                const int mine = clvr_mpi_region_of(regions, (uint32_t)size, cen) == (uint32_t)rank;
+                out->owned[elem++] = (uint8_t)mine;
+                owned += (uint64_t)mine;
             }
         }
         free(x.start);

@@ -32,6 +32,7 @@
 #include "scene.h"
 #include "series.h"
 #include "tf.h"
+#include "tf_auto.h"
 #ifdef CLVR_HAVE_MPI_LOAD_BIN
 #include "mpi_load.h"
 #endif
@@ -150,6 +151,53 @@ static clvr_status load_share(mpi_run *m, const clvr_options *o, clvr_mesh *whol
 
 static double now(void) { return clvr_clock_monotonic_s(); }
 
+/* The transfer function of a share loaded in parts (no rank holds the
+ * whole mesh): built the same way on every rank from the agreed range and
+ * bounds, with the automatic opacity's histogram and the automatic
+ * density's grid summed over the ranks from the elements each owns, so
+ * that every element counts once and the result is the single process's
+ * (up to the order of floating-point sums). */
+static clvr_status distributed_tf(mpi_run *m, const clvr_options *o, const clvr_mpi_share *share, clvr_tf *tf,
+                                  float *auto_density, clvr_error *err)
+{
+    *auto_density = 1.0f;
+    clvr_status s = clvr_tf_from_options(tf, o->colormap ? o->colormap : "cool-warm", o->tf_file, o->range_set,
+                                         o->range_lo, o->range_hi, o->density_auto ? 1.0f : o->density,
+                                         share->scalar_min, share->scalar_max, err);
+    if (s == CLVR_OK) clvr_tf_set_extent(tf, share->bounds_lo, share->bounds_hi);
+    s = agree(m, s, err);
+    if (s != CLVR_OK) return s;
+    double t = now();
+    if (!o->opacity_ramp && !tf->opacity_set) {
+        double hist[CLVR_TF_AUTO_BINS];
+        clvr_tf_auto_histogram_kept(&share->mesh, share->owned, tf->range_lo, tf->range_hi, hist, CLVR_TF_AUTO_BINS);
+        MPI_Allreduce(MPI_IN_PLACE, hist, (int)CLVR_TF_AUTO_BINS, MPI_DOUBLE, MPI_SUM, m->comm);
+        s = clvr_tf_auto_opacity(tf, hist, CLVR_TF_AUTO_BINS, err);
+    }
+    s = agree(m, s, err);
+    if (s != CLVR_OK) return s;
+    if (o->density_auto) {
+        clvr_tf unit = *tf; /* shallow: the grid only reads the points */
+        unit.density = 1.0f;
+        clvr_tf_auto_grid g;
+        s = clvr_tf_auto_grid_create(share->bounds_lo, share->bounds_hi, &g, err);
+        if (s == CLVR_OK) s = clvr_tf_auto_grid_add(&g, &share->mesh, share->owned, &unit, err);
+        s = agree(m, s, err);
+        if (s == CLVR_OK && g.cells) /* sigma and covered are one array of 2 x cells */
+            MPI_Allreduce(MPI_IN_PLACE, g.sigma, (int)(2 * g.cells), MPI_DOUBLE, MPI_SUM, m->comm);
+        float med = 0.0f;
+        if (s == CLVR_OK) s = clvr_tf_auto_grid_median(&g, &med, err);
+        clvr_tf_auto_grid_free(&g);
+        s = agree(m, s, err);
+        if (s != CLVR_OK) return s;
+        *auto_density = clvr_tf_auto_density_of_median(med);
+        tf->density *= *auto_density;
+    }
+    m->comm_s += now() - t;
+    return CLVR_OK;
+}
+
+
 /* Writes the per-rank table (--stats) or JSON (--stats-json, written to a
  * temporary name and renamed, so a failure leaves no half file). */
 static void print_stats(FILE *out, const rank_stats *rs, int n, uint32_t frames, double wall_s, uint32_t w, uint32_t h)
@@ -244,14 +292,16 @@ static int run(mpi_run *m, const clvr_options *o)
      * where every rank has it, else from rank 0's share over the global
      * scalar range), baked, broadcast: every rank gets the same table. */
     struct { uint32_t n; float lo, hi, density, auto_density; } tfh = {0, 0, 0, 0, 0};
+    const int have_whole = whole.num_vertices > 0;
+    float dens = o->density;
+    if (!have_whole) {
+        s = distributed_tf(m, o, &share, &tf, &dens, &err);
+        if (s != CLVR_OK) goto done;
+    }
     if (root) {
-        const int have_whole = whole.num_vertices > 0;
-        const clvr_mesh *tm = have_whole ? &whole : &share.mesh;
-        const int range_set = o->range_set || !have_whole;
-        const float lo = o->range_set ? o->range_lo : share.scalar_min, hi = o->range_set ? o->range_hi : share.scalar_max;
-        float dens = o->density;
-        s = clvr_api_tf_build(tm, o->colormap, o->tf_file, range_set, lo, hi, o->density, o->density_auto,
-                              o->opacity_ramp, &tf, &dens, &err);
+        if (have_whole)
+            s = clvr_api_tf_build(&whole, o->colormap, o->tf_file, o->range_set, o->range_lo, o->range_hi, o->density,
+                                  o->density_auto, o->opacity_ramp, &tf, &dens, &err);
         if (s == CLVR_OK) {
             /* Opacity to extinction relative to the whole mesh's diagonal. */
             clvr_tf_set_extent(&tf, share.bounds_lo, share.bounds_hi);

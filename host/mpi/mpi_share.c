@@ -1,6 +1,7 @@
 /* mpi_share.c: region bisection and share helpers (no MPI calls; see mpi_share.h). */
 #include "mpi_share.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 /* Partial sort: after it, c[k] (by axis) is the k-th smallest and
@@ -139,5 +140,6 @@ void clvr_mpi_share_free(clvr_mpi_share *s)
 {
     if (!s) return;
     clvr_mesh_free(&s->mesh);
+    free(s->owned);
     memset(s, 0, sizeof *s);
 }

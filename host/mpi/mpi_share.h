@@ -32,6 +32,9 @@ typedef struct clvr_mpi_share {
     uint64_t global_vertices, global_elements;
     uint64_t owned_elements;          /* elements whose centroid this rank owns (clvr_mpi_region_of); sums to
                                        * global_elements over the ranks */
+    uint8_t *owned;                   /* per element of `mesh` (tets, pyramids, wedges, hexes in order): 1 where
+                                       * this rank owns it; sums over the job count every element once (the
+                                       * automatic transfer function's histogram and density grid) */
 } clvr_mpi_share;
 
 /* Regions for `nranks` ranks from `n` centroids (3 floats each, may be a

@@ -68,7 +68,10 @@ clvr_status clvr_mpi_share_cut(const clvr_mesh *whole, uint32_t rank, uint32_t n
             keep[i] = 1;
             ++cells[t];
             element_centroid(whole, t, e, c);
-            if (clvr_mpi_region_of(regions, nranks, c) == rank) ++owned;
+            if (clvr_mpi_region_of(regions, nranks, c) == rank) {
+                keep[i] = 2;
+                ++owned;
+            }
         }
     /* Vertices used, numbered in their original order. */
     for (uint64_t v = 0; v < whole->num_vertices; ++v) vmap[v] = UINT32_MAX;
@@ -83,6 +86,19 @@ clvr_status clvr_mpi_share_cut(const clvr_mesh *whole, uint32_t rank, uint32_t n
     for (uint64_t v = 0; v < whole->num_vertices; ++v)
         if (vmap[v] == 0) vmap[v] = (uint32_t)nvert++;
     CLVR_TRY(clvr_mesh_alloc(&out->mesh, nvert, cells, err));
+    {
+        const uint64_t kept = cells[0] + cells[1] + cells[2] + cells[3];
+        out->owned = malloc(kept ? kept : 1);
+        if (!out->owned) {
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory cutting the mesh into %u shares", nranks);
+            goto cleanup;
+        }
+        /* kept elements keep their type order and their order within it */
+        uint64_t j = 0, k = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+            for (uint64_t e = 0; e < whole->num_cells[t]; ++e, ++k)
+                if (keep[k]) out->owned[j++] = keep[k] == 2;
+    }
     for (uint64_t v = 0; v < whole->num_vertices; ++v)
         if (vmap[v] != UINT32_MAX) {
             memcpy(out->mesh.positions + 3 * (uint64_t)vmap[v], whole->positions + 3 * v, 3 * sizeof(float));
