@@ -21,6 +21,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "camera.h"
+#include "clvr_internal.h"
 #include "image.h"
 
 /* A modifier bit of our own beside GLFW's: "L is held" turns a left drag
@@ -959,9 +961,20 @@ clvr_status clvr_viewer_probe(clvr_error *err)
     return CLVR_OK;
 }
 
-clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clustered *mesh, clvr_renderer *r,
-                            const clvr_render_settings *rs, const clvr_camera *cam, clvr_tf *tf, clvr_error *err)
+clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_error *err)
 {
+    (void)device; /* the status line names the device from the context */
+    clvr_tracer_parts parts;
+    clvr_tracer_parts_of(tr, &parts);
+    if (!parts.tf)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "the viewer edits a transfer function set by options, not a table");
+    clvr_cl *cl = parts.cl;
+    const clvr_clustered *mesh = parts.clustered;
+    clvr_renderer *r = parts.renderer;
+    const clvr_render_settings *rs = parts.rs;
+    const clvr_camera *cam = parts.cam;
+    clvr_tf *tf = parts.tf;
+
     clvr_status s = CLVR_OK;
     int glfw_up = 0;
     viewer *v = calloc(1, sizeof *v);
