@@ -336,6 +336,11 @@ typedef struct clvr_dataset_field {
 } clvr_dataset_field;
 CLVR_API clvr_result clvr_dataset_get_field(const clvr_dataset *ds, uint32_t i, clvr_dataset_field *out,
                                             clvr_message *msg);
+/* The array the dataset reads for `name` ("points", a cell type name or a
+ * field's name) and whether it is the caller's own (borrowed, 1) or the
+ * dataset's copy (0): lets a caller check that CLVR_BORROW kept its array. */
+CLVR_API clvr_result clvr_dataset_get_array(const clvr_dataset *ds, const char *name, const void **data,
+                                            int *borrowed, clvr_message *msg);
 /* Warnings about flaws that render anyway (degenerate, inverted or
  * duplicate elements, a constant field, cells left out), one line each,
  * "clvr: warning: NAME: ..." into buf (NUL-terminated, truncated; "" when

@@ -1546,6 +1546,32 @@ clvr_result clvr_dataset_get_field(const clvr_dataset *ds, uint32_t i, clvr_data
     return finish(versioned_out(fn, "clvr_dataset_field", out, &f, sizeof f, &e), &e, msg);
 }
 
+clvr_result clvr_dataset_get_array(const clvr_dataset *ds, const char *name, const void **data, int *borrowed,
+                                   clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_dataset_get_array";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!name || !data || !borrowed) return finish(NULL_ARG(fn, "name, data or borrowed"), &e, msg);
+    if (!strcmp(name, "points")) {
+        *data = ds->xyz;
+        *borrowed = ds->xyz_owned == NULL && !ds->loaded.positions;
+        return finish(CLVR_OK, &e, msg);
+    }
+    const int t = cell_type_of(name);
+    if (t >= 0) {
+        *data = ds->cells[t];
+        *borrowed = ds->cells[t] && ds->cells_owned[t] == NULL && !ds->loaded.positions;
+        return finish(CLVR_OK, &e, msg);
+    }
+    int i;
+    clvr_status s = lookup_field(ds, fn, name, &i, &e);
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    *data = ds->fields[i].values;
+    *borrowed = ds->fields[i].owned == NULL && !ds->fields[i].from_file;
+    return finish(CLVR_OK, &e, msg);
+}
+
 clvr_result clvr_dataset_warnings(const clvr_dataset *ds, const char *name, char *buf, size_t size, uint32_t *count,
                                   clvr_message *msg)
 {

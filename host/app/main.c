@@ -140,8 +140,7 @@ int main(int argc, char **argv)
         if (o.stats_json) {
             stats.have_mesh = 1;
             clvr_stats_from_dataset(&stats, &info);
-            s = clvr_stats_write_json(o.stats_json, &stats, &err);
-            if (s != CLVR_OK) rc = fail(&err);
+            if (clvr_stats_write_json(o.stats_json, &stats, &msg) != CLVR_RESULT_OK) rc = fail_msg(&msg);
         }
         goto cleanup;
     }
@@ -362,8 +361,7 @@ int main(int argc, char **argv)
     clvr_process_memory(NULL, &stats.bytes_peak_rss);
     if (o.stats) clvr_stats_print(stdout, &stats);
     if (o.stats_json) {
-        s = clvr_stats_write_json(o.stats_json, &stats, &err);
-        if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
+        TRY(clvr_stats_write_json(o.stats_json, &stats, &msg));
     }
     if (g_interrupted) {
         fprintf(stderr, "clvr: interrupted after %u of %u frames; the image holds what was accumulated\n", frame,

@@ -119,12 +119,20 @@ static void jnum(FILE *f, const char *indent, const char *key, double v, int com
         fprintf(f, "%s\"%s\": null%s\n", indent, key, comma ? "," : "");
 }
 
-clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_error *err)
+/* A failed write: msg names the file and the OS error (clvr's ERR_WRITE). */
+static clvr_result write_failed(clvr_message *msg, const char *path, int e)
+{
+    msg->result = CLVR_RESULT_ERR_WRITE;
+    snprintf(msg->text, sizeof msg->text, "cannot write %s: %s", path, strerror(e));
+    return msg->result;
+}
+
+clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_message *msg)
 {
     char tmp[4096];
     snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid());
     FILE *f = fopen(tmp, "w");
-    if (!f) return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(errno));
+    if (!f) return write_failed(msg, path, errno);
     struct { const char *k; double v; } b[] = {
         {"vertices", (double)s->bytes_vertices},
         {"vertices_after", (double)s->bytes_vertices_after},
@@ -195,13 +203,16 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
     fprintf(f, "}\n");
     int bad = ferror(f);
     if (fclose(f) != 0 || bad) {
+        const int e = errno;
         remove(tmp);
-        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(errno));
+        return write_failed(msg, path, e);
     }
     if (rename(tmp, path) != 0) {
         int e = errno;
         remove(tmp);
-        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(e));
+        return write_failed(msg, path, e);
     }
-    return CLVR_OK;
+    msg->result = CLVR_RESULT_OK;
+    msg->text[0] = '\0';
+    return CLVR_RESULT_OK;
 }

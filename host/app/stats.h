@@ -8,7 +8,6 @@
 #include <stdio.h>
 
 #include "clvr.h"
-#include "status.h"
 
 typedef struct clvr_stats {
     int have_mesh, have_clusters, have_render;
@@ -56,6 +55,6 @@ void clvr_stats_print(FILE *out, const clvr_stats *s);
 /* JSON, written to a temporary file and renamed. Nested objects ("bytes":
  * {"vertices": ...}) and, for tools that look keys up flat, the same values
  * under dotted top-level keys ("bytes.vertices"). */
-clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_error *err);
+clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_message *msg);
 
 #endif
