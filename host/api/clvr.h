@@ -423,6 +423,7 @@ typedef struct clvr_scene_stats {
     uint32_t num_stages;
     char stage_name[CLVR_STATS_MAX_STAGES][16];
     double stage_s[CLVR_STATS_MAX_STAGES]; /* device seconds per stage, the trees' build last ("bvh") */
+    float scalar_min, scalar_max;   /* range of the scene's field */
 } clvr_scene_stats;
 CLVR_API clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg);
 /* The scene a tracer renders (borrowed: valid while the tracer lives). */
@@ -490,6 +491,7 @@ typedef struct clvr_tf_info {
     float density;       /* in use (the automatic factor included) */
     float auto_density;  /* the automatic factor of the last clvr_tracer_set_tf with density 0; else 1 */
     uint32_t table_size; /* entries of the baked table */
+    float extinction_scale; /* the table's 4th column is opacity times this (the mesh diagonal's scale) */
 } clvr_tf_info;
 CLVR_API clvr_result clvr_tracer_get_tf(const clvr_tracer *tr, clvr_tf_info *out, clvr_message *msg);
 /* The baked table in use: table_size entries of linear r, g, b and
@@ -498,7 +500,7 @@ CLVR_API clvr_result clvr_tracer_get_tf(const clvr_tracer *tr, clvr_tf_info *out
 CLVR_API clvr_result clvr_tracer_get_tf_table(const clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg);
 /* Edits the transfer function set by clvr_tracer_set_tf, keeping its
  * opacity: colormap (NULL: keep; a built-in name), the window [lo, hi]
- * (both NaN: keep) and the density (> 0; NaN: keep). ERR_USAGE after a
+ * (both NaN: keep) and the density (>= 0; NaN: keep). ERR_USAGE after a
  * table (clvr_tracer_set_tf_table). */
 CLVR_API clvr_result clvr_tracer_edit_tf(clvr_tracer *tr, const char *colormap, float range_lo, float range_hi,
                                          float density, clvr_message *msg);
@@ -549,6 +551,17 @@ CLVR_API int clvr_image_path_is_png(const char *path);
  * "a.0007.png"); ERR_USAGE when out (size bytes) is too small. */
 CLVR_API clvr_result clvr_image_path_numbered(const char *path, uint32_t index, char *out, size_t size,
                                               clvr_message *msg);
+/* 8-bit sRGB pixels of an image (the pixel convention above) as the PNG
+ * writer makes an opaque one: scaled by 2^exposure_ev, tone curve
+ * ("none", "aces", "filmic"; NULL: "aces"), sRGB; rgba8 receives
+ * width * height * 4 bytes, alpha 255. For displays (the viewer). */
+CLVR_API clvr_result clvr_image_to_srgb8(const float *rgba, uint32_t width, uint32_t height, float exposure_ev,
+                                         const char *tonemap, uint8_t *rgba8, clvr_message *msg);
+/* Writes 8-bit sRGB pixels (width * height * 4 bytes, rows top to bottom,
+ * alpha ignored) to path by its extension: a .png gets them as they are,
+ * .exr and .pfm decoded to linear. Atomic as clvr_image_save. */
+CLVR_API clvr_result clvr_image_save_srgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
+                                           clvr_message *msg);
 /* The process's resident and peak resident memory in bytes (Linux; 0
  * where unknown). Either pointer may be NULL. */
 CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);

@@ -730,6 +730,7 @@ struct clvr_tracer {
     clvr_tf tf;         /* the transfer function set by options (clvr_tracer_edit_tf edits it) */
     int tf_state;       /* 0: none yet (the automatic one at first use), 1: options (tf), 2: a table */
     float auto_density; /* the automatic density factor of the last options */
+    float ext_scale;    /* the table's extinction per unit opacity */
     float *table;       /* the baked table in use */
     uint32_t table_n;
     clvr_renderer *renderer;
@@ -824,7 +825,10 @@ static clvr_status upload_tf(clvr_tracer *tr, clvr_tf *tf, clvr_error *e)
         tr->tf = *tf;
         memset(tf, 0, sizeof *tf);
     }
-    if (s == CLVR_OK) tr->tf_state = 1;
+    if (s == CLVR_OK) {
+        tr->tf_state = 1;
+        tr->ext_scale = clvr_tf_extinction_scale(&tr->tf);
+    }
     return s;
 }
 
@@ -1344,6 +1348,7 @@ clvr_result clvr_tracer_set_tf_table(clvr_tracer *tr, const float *rgba, uint32_
     if (s == CLVR_OK) {
         clvr_tf_free(&tr->tf);
         tr->tf_state = 2;
+        tr->ext_scale = k;
         tr->auto_density = 1;
     }
     return finish(s, &e, msg);
@@ -1708,6 +1713,8 @@ clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, cl
         snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "%s", clvr_pp_stage_name(i));
         d.stage_s[d.num_stages++] = c->stage_s[i];
     }
+    d.scalar_min = sc->scalar_lo;
+    d.scalar_max = sc->scalar_hi;
     snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "bvh");
     d.stage_s[d.num_stages++] = a->two_level.build_seconds;
     return finish(versioned_out(fn, "clvr_scene_stats", out, &d, sizeof d, &e), &e, msg);
@@ -1857,6 +1864,7 @@ clvr_result clvr_tracer_get_tf(const clvr_tracer *tr, clvr_tf_info *out, clvr_me
     d.density = tr->density;
     d.auto_density = tr->auto_density;
     d.table_size = tr->table_n;
+    d.extinction_scale = tr->ext_scale;
     return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, &e), &e, msg);
 }
 
@@ -1893,8 +1901,8 @@ clvr_result clvr_tracer_edit_tf(clvr_tracer *tr, const char *colormap, float ran
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: range [%g, %g] must be finite with lo < hi, or both "
                                      "NaN to keep it", fn, (double)range_lo, (double)range_hi),
                       &e, msg);
-    if (!isnan(density) && (!(density > 0) || !isfinite(density)))
-        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: density %g; use a finite value > 0, or NaN to keep it",
+    if (!isnan(density) && (!(density >= 0) || !isfinite(density)))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: density %g; use a finite value >= 0, or NaN to keep it",
                                      fn, (double)density),
                       &e, msg);
     clvr_tf old = tr->tf; /* the colour points are replaced by a colormap change: keep the old ones until it works */
@@ -2024,6 +2032,7 @@ clvr_result clvr_transfer_get_info(const clvr_transfer *tf, clvr_tf_info *out, c
     d.density = tf->tf.density;
     d.auto_density = tf->auto_density;
     d.table_size = clvr_tf_table_size(&tf->tf);
+    d.extinction_scale = clvr_tf_extinction_scale(&tf->tf);
     return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, &e), &e, msg);
 }
 
@@ -2098,6 +2107,48 @@ clvr_result clvr_image_path_numbered(const char *path, uint32_t index, char *out
 }
 
 void clvr_process_memory(uint64_t *resident, uint64_t *peak) { clvr_mem_rss(resident, peak); }
+
+clvr_result clvr_image_to_srgb8(const float *rgba, uint32_t width, uint32_t height, float exposure_ev,
+                                const char *tonemap, uint8_t *rgba8, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_image_to_srgb8";
+    if (!rgba || !rgba8) return finish(NULL_ARG(fn, "rgba or rgba8"), &e, msg);
+    if (!isfinite(exposure_ev))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: exposure_ev must be finite", fn), &e, msg);
+    const clvr_tonemap tm = clvr_tonemap_parse(tonemap ? tonemap : "aces");
+    if (tm >= CLVR_TONEMAP_COUNT)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown tone curve '%.64s'; use none, aces or filmic",
+                                     fn, tonemap),
+                      &e, msg);
+    const float gain = exp2f(exposure_ev);
+    const size_t n = (size_t)width * height * 4;
+    for (size_t i = 0; i < n; i += 4) {
+        for (int k = 0; k < 3; ++k) rgba8[i + k] = clvr_image_srgb_to_u8(clvr_image_tonemap(tm, rgba[i + k] * gain));
+        rgba8[i + 3] = 255;
+    }
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_image_save_srgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
+                                  clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_image_save_srgb8";
+    if (!path || !rgba8) return finish(NULL_ARG(fn, "path or rgba8"), &e, msg);
+    const size_t n = (size_t)width * height;
+    float *img = malloc((n ? n : 1) * 4 * sizeof(float));
+    if (!img) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
+    float dec[256];
+    for (int i = 0; i < 256; ++i) dec[i] = clvr_image_srgb_decode((float)i / 255.0f);
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) img[4 * i + k] = dec[rgba8[4 * i + k]];
+        img[4 * i + 3] = 1.0f;
+    }
+    clvr_status s = clvr_image_write(path, width, height, img, &e);
+    free(img);
+    return finish(s, &e, msg);
+}
 
 /* --- images --------------------------------------------------------------- */
 
