@@ -6,7 +6,6 @@
  * one onto clvr_result (checked at compile time below). */
 #define CLVR_API_BUILD 1
 #include "clvr.h"
-#include "clvr_internal.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -1940,16 +1939,6 @@ clvr_result clvr_tracer_edit_tf(clvr_tracer *tr, const char *colormap, float ran
 
 const char *clvr_colormap_names(void) { return clvr_tf_colormap_names(); }
 
-void clvr_tracer_parts_of(clvr_tracer *tr, clvr_tracer_parts *out)
-{
-    (void)ensure_tf(tr, &(clvr_error){0});
-    out->cl = &tr->ctx->cl;
-    out->clustered = &tr->sc->clustered;
-    out->renderer = tr->renderer;
-    out->rs = &tr->rs;
-    out->cam = &tr->cam;
-    out->tf = tr->tf_state == 1 ? &tr->tf : NULL;
-}
 
 struct clvr_transfer {
     clvr_tf tf;
