@@ -113,7 +113,10 @@ static clvr_result finish(clvr_status s, const clvr_error *err, clvr_message *ms
         }                                                                                                             \
     } while (0)
 
-/* Writes a versioned struct out: as much as the caller's size holds. */
+/* Writes a versioned struct out. These are the 1.1 structs, the smallest
+ * accepted: when a later version appends members, a caller's 1.1-sized
+ * struct must still be filled up to its size (compare with the 1.1 size
+ * then, not with sizeof). */
 static clvr_status versioned_out(const char *fn, const char *type, void *out, const void *local, size_t local_size,
                                  clvr_error *e)
 {

@@ -110,7 +110,8 @@ class _SceneStats(ctypes.Structure):
                 ("bytes_points_after", _U64), ("bytes_indices_before", _U64), ("bytes_indices_after", _U64),
                 ("bytes_bvh", _U64), ("bytes_bvh_one_per_leaf", _U64), ("bytes_sampling", _U64),
                 ("bytes_element_boxes", _U64), ("device_bytes", _U64), ("preprocess_s", ctypes.c_double),
-                ("num_stages", _U32), ("stage_name", (ctypes.c_char * 16) * 16), ("stage_s", ctypes.c_double * 16)]
+                ("num_stages", _U32), ("stage_name", (ctypes.c_char * 16) * 16), ("stage_s", ctypes.c_double * 16),
+                ("scalar_min", _F), ("scalar_max", _F)]
 
 
 class _TracerSettings(ctypes.Structure):
