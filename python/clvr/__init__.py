@@ -330,7 +330,9 @@ class Context:
 class Mesh:
     """An unstructured mesh on the host: points, cells of the four types and
     named scalars per point. Build it with from_arrays, from_meshio,
-    from_vtk or load; libclvr holds its own copy."""
+    from_vtk or load. Ownership is stated per constructor: from_arrays
+    lends libclvr the caller's arrays when their layout allows (see there),
+    load gives libclvr the file's data."""
 
     def __init__(self, _handle):
         self._h = _handle
@@ -390,7 +392,10 @@ class Mesh:
     def from_meshio(cls, m, fields=None):
         """A meshio.Mesh: its tetra, pyramid, wedge and hexahedron blocks
         (other cell types are left out with a warning) and its scalar point
-        data (vector arrays are left out), or only `fields` (names)."""
+        data (vector arrays are left out), or only `fields` (names).
+        Through from_arrays: arrays already in libclvr's layout (float32
+        points or fields) are lent, not copied; meshio's usual float64
+        points and int64 cells are converted."""
         cells, skipped = {}, {}
         for block in m.cells:
             if block.type in CELL_TYPES:
@@ -405,7 +410,9 @@ class Mesh:
 
     @classmethod
     def from_vtk(cls, ugrid, fields=None):
-        """A vtkUnstructuredGrid (python3-vtk9), as from_meshio."""
+        """A vtkUnstructuredGrid (python3-vtk9), as from_meshio: float32
+        points and point arrays are lent from VTK's memory (the numpy views
+        keep the VTK arrays alive), cells are gathered into new arrays."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
         if ugrid.GetPoints() is None:
             raise InputError("the vtkUnstructuredGrid has no points")
