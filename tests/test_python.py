@@ -314,10 +314,11 @@ def test_fields(ctx):
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "fields.vtk")
         pts, hexes, a, b = _write_fields_vtk(path)
-        m = clvr.Mesh.load(path)
+        m = clvr.Mesh.load(path, field_ranges=True)
         names = [(f["name"], f["components"], f["loaded"]) for f in m.fields]
         check(names == [("a", 1, True), ("b", 1, False), ("v", 3, False)], "fields of the file: %r" % names)
         check(m.fields[1]["range"] is not None and abs(m.fields[1]["range"][1] - 1.0) < 1e-6, "b's range decoded")
+        check(abs(m.field_range("b")[1] - 1.0) < 1e-6, "field_range of a field not read yet")
         mb = clvr.Mesh.load(path, scalar="b")
         check(mb.fields[1]["loaded"] and not mb.fields[0]["loaded"], "scalar='b' loads b first")
         arrays = clvr.Mesh.from_arrays(pts, {"hexahedron": hexes}, {"a": a, "b": b})

@@ -172,7 +172,8 @@ CLVR_API clvr_result clvr_dataset_field_name(const clvr_dataset *ds, uint32_t i,
                                              clvr_message *msg);
 /* Bounding box of the points (lo, hi: 3 floats each). */
 CLVR_API clvr_result clvr_dataset_bounds(const clvr_dataset *ds, float lo[3], float hi[3], clvr_message *msg);
-/* Smallest and largest value of a field (NULL: the first). */
+/* Smallest and largest value of a field (NULL: the first); a file's field
+ * not read yet: the range of its table when decoded (clvr_dataset_field). */
 CLVR_API clvr_result clvr_dataset_field_range(const clvr_dataset *ds, const char *field, float *min, float *max,
                                               clvr_message *msg);
 

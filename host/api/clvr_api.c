@@ -678,6 +678,13 @@ clvr_result clvr_dataset_field_range(const clvr_dataset *ds, const char *field, 
     if (!min || !max) return finish(NULL_ARG(fn, "min or max"), &e, msg);
     int i;
     clvr_status s = lookup_field(ds, fn, field, &i, &e);
+    if (s != CLVR_OK && field) /* a file's field not in memory yet: the range its table has */
+        for (uint32_t k = 0; k < ds->loaded.num_fields; ++k)
+            if (!strcmp(ds->loaded.fields[k].name, field) && ds->loaded.fields[k].has_range) {
+                *min = ds->loaded.fields[k].min;
+                *max = ds->loaded.fields[k].max;
+                return finish(CLVR_OK, &e, msg);
+            }
     if (s != CLVR_OK) return finish(s, &e, msg);
     *min = ds->fields[i].lo;
     *max = ds->fields[i].hi;

@@ -443,7 +443,7 @@ class Mesh:
         return cls.from_arrays(points, cells, _scalars(data, fields))
 
     @classmethod
-    def load(cls, path, scalar=None, cell_flat=False, field=None):
+    def load(cls, path, scalar=None, cell_flat=False, field_ranges=False, field=None):
         """A mesh file: clvr .bin, .umesh and legacy .vtk through libclvr's
         readers (the mesh owns what it read: nothing is borrowed); anything
         else (.vtu, .msh, ...) through meshio (see from_meshio).
@@ -453,13 +453,16 @@ class Mesh:
         "NAME:mag" (None: the file's first). Every field of the file is
         listed by `fields`, and Renderer(mesh, field=NAME) renders another
         one (read from the file then). cell_flat: show cell data flat (each
-        element its own value) instead of averaged to the points. field is
-        the old name of scalar."""
+        element its own value) instead of averaged to the points.
+        field_ranges: decode every field now for its range (`fields`,
+        field_range); else only the fields read. field is the old name of
+        scalar."""
         if scalar is None:
             scalar = field
         ext = os.path.splitext(os.fspath(path))[1].lower()
         if ext in (".bin", ".umesh", ".vtk"):
-            ls = _LoadSettings(ctypes.sizeof(_LoadSettings), _b(scalar), 1 if cell_flat else 0, 1)
+            ls = _LoadSettings(ctypes.sizeof(_LoadSettings), _b(scalar), 1 if cell_flat else 0,
+                               1 if field_ranges else 0)
             h = _P()
             _call(_lib.clvr_dataset_load_with, _b(os.fspath(path)), ctypes.byref(ls), ctypes.byref(h))
             return cls(h)
