@@ -22,7 +22,8 @@ installed copy). Proves:
     address), other arrays and copy=True are not, and rendering leaves the
     caller's arrays as they were;
   - a file's fields: Mesh.load(path, scalar=...) and `fields` list every
-    array of a legacy VTK file with two scalars and a vector; another field
+    array of a legacy VTK file with two scalars and a vector, and of its
+    clvr-convert .bin (version 2); another field
     named in Renderer(field=...) renders the same pixels as from_arrays of
     that field, and other pixels than the first field;
   - Scene (the separate, timed preprocessing with leaf and sampling sizes)
@@ -334,6 +335,16 @@ def test_fields(ctx):
         check(m.fields[1]["loaded"], "b in memory after rendering it")
         raises(lambda: clvr.Renderer(m, device=ctx, width=8, height=8, field="nope"), clvr.InputError, "nope",
                "unknown field of a file")
+        # The same file as a clvr .bin version 2 (clvr-convert keeps every array).
+        conv = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "clvr-convert")
+        binpath = os.path.join(tmp, "fields.bin")
+        cp = subprocess.run([sys.executable, conv, "--quiet", path, binpath], capture_output=True, text=True)
+        check(cp.returncode == 0, "clvr-convert: %s" % cp.stderr[-300:])
+        if cp.returncode == 0:
+            mbin = clvr.Mesh.load(binpath)
+            check([f["name"] for f in mbin.fields] == ["a", "b", "v"], ".bin v2 fields: %r" % mbin.fields)
+            with clvr.Renderer(mbin, device=ctx, width=24, height=20, field="b") as r:
+                check(np.array_equal(r.render(spp=4, tf=tf, seed=7), imgs["arrays b"]), ".bin field b == arrays b")
 
 
 def test_scene_settings(ctx):
