@@ -2,9 +2,10 @@
 # test_app_includes.sh SOURCE_DIR: the clvr program reaches libclvr through
 # the public header alone. Every quoted #include of the program's sources
 # (host/app) must name clvr.h or one of the program's own headers; system
-# headers (<...>) are free. The viewer is the one listed exception (it keeps
-# clvr_internal.h and the image/camera/clock helpers for drawing; see
-# docs/library.md). Prints each offending line; exit 1 if there is one.
+# headers (<...>) are free. Checked: main, --stats, --info and the viewer;
+# not the option parser and the series driver (cli.c, series.c), which use
+# clvr's internal parsing helpers (docs/library.md). Prints each offending
+# line; exit 1 if there is one.
 src=${1:?usage: test_app_includes.sh SOURCE_DIR}
 app="$src/host/app"
 allowed='clvr.h cli.h info.h series.h stats.h viewer.h'
