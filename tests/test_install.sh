@@ -74,8 +74,11 @@ int main(void)
     clvr_message msg;
     clvr_dataset *ds = NULL;
     float xyz[3] = {0, 0, 0};
+    clvr_dataset_info info; /* API 1.1: a versioned struct */
     if (clvr_api_version() != CLVR_API_VERSION) return 1;
     if (clvr_dataset_create(1, xyz, CLVR_COPY, &ds, &msg) != CLVR_RESULT_OK) return 2;
+    info.size = sizeof info;
+    if (clvr_dataset_get_info(ds, &info, &msg) != CLVR_RESULT_OK || info.num_points != 1) return 4;
     if (clvr_dataset_add_cells(ds, "tetra", 0, NULL, CLVR_COPY, &msg) != CLVR_RESULT_OK) return 3;
     clvr_dataset_destroy(ds);
     printf("clvr %s API %u\n", clvr_version_string(), clvr_api_version());
@@ -83,31 +86,40 @@ int main(void)
 }
 EOC
 # pkg-config: compile, link and run against the installed library only.
-if PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --exact-version=1.0.0 clvr; then
+if PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --exact-version=1.1.0 clvr; then
   ok
   # shellcheck disable=SC2046
   cc "${san[@]}" "$tmp/use.c" -o "$tmp/use_pc" $(PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --cflags --libs clvr) &&
-    LD_LIBRARY_PATH="$P/lib" "$tmp/use_pc" | grep -q "^clvr .* API 1000" && ok || bad "a program built with pkg-config clvr"
+    LD_LIBRARY_PATH="$P/lib" "$tmp/use_pc" | grep -q "^clvr .* API 1001" && ok || bad "a program built with pkg-config clvr"
 else
-  bad "pkg-config does not find clvr 1.0.0 in $P/lib/pkgconfig"
+  bad "pkg-config does not find clvr 1.1.0 in $P/lib/pkgconfig"
 fi
-# CMake: find_package(clvr 1.0 REQUIRED) and the clvr::clvr target.
+# CMake: find_package(clvr 1.1 REQUIRED) and the clvr::clvr target.
 mkdir -p "$tmp/cm"
 cp "$tmp/use.c" "$tmp/cm/use.c"
 cat >"$tmp/cm/CMakeLists.txt" <<EOC
 cmake_minimum_required(VERSION 3.20)
 project(use_clvr C)
-find_package(clvr 1.0 REQUIRED)
+find_package(clvr 1.1 REQUIRED)
 add_executable(use use.c)
 target_compile_options(use PRIVATE ${san[*]})
 target_link_options(use PRIVATE ${san[*]})
 target_link_libraries(use PRIVATE clvr::clvr)
 EOC
 if cmake -S "$tmp/cm" -B "$tmp/cm/b" -DCMAKE_PREFIX_PATH="$P" >"$tmp/cm.log" 2>&1 &&
-  cmake --build "$tmp/cm/b" >>"$tmp/cm.log" 2>&1 && "$tmp/cm/b/use" | grep -q "API 1000"; then
+  cmake --build "$tmp/cm/b" >>"$tmp/cm.log" 2>&1 && "$tmp/cm/b/use" | grep -q "API 1001"; then
   ok
 else
   bad "find_package(clvr): $(grep -m3 -B2 -A3 "error" "$tmp/cm.log")"
+fi
+# The program's --info and --stats modules compile against the installed
+# header alone (no source tree include paths): the program uses clvr.h only.
+if cc -std=c11 -Wall -Werror -c -I"$P/include" -I"$SRC/host/app" "$SRC/host/app/info.c" -o "$tmp/info.o" &&
+  cc -std=c11 -Wall -Werror -D_POSIX_C_SOURCE=200809L -c -I"$P/include" -I"$SRC/host/app" "$SRC/host/app/stats.c" \
+    -o "$tmp/stats.o"; then
+  ok
+else
+  bad "host/app/info.c or stats.c does not compile against the installed clvr.h alone"
 fi
 # The installed Python module finds the installed library (not the build
 # tree's: CLVR_LIBRARY unset, run from $tmp). Not for sanitizer builds.

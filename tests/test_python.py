@@ -16,7 +16,18 @@ installed copy). Proves:
   - render returns float32 (H, W, 4); save_image writes PNG and EXR through
     the program's writers and reports a bad path;
   - the clvr program and the module write the same pixels for the same
-    mesh, defaults and seed (one pipeline, no drift).
+    mesh, defaults and seed (one pipeline, no drift);
+  - borrowing: float32 points and fields and uint32 cells that are
+    C-contiguous are lent, not copied (libclvr reads the caller's very
+    address), other arrays and copy=True are not, and rendering leaves the
+    caller's arrays as they were;
+  - a file's fields: Mesh.load(path, scalar=...) and `fields` list every
+    array of a legacy VTK file with two scalars and a vector, and of its
+    clvr-convert .bin (version 2); another field
+    named in Renderer(field=...) renders the same pixels as from_arrays of
+    that field, and other pixels than the first field;
+  - Scene (the separate, timed preprocessing with leaf and sampling sizes)
+    and the render settings (get, set, refused with the member's name).
 Exit 77 (skipped) without numpy/meshio/vtk or an OpenCL device."""
 import os
 import subprocess
@@ -247,6 +258,116 @@ def test_bad_inputs(ctx):
     r.close()
 
 
+def test_borrowing(ctx):
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], np.float32)
+    tets = np.array([[0, 1, 2, 3], [1, 2, 3, 4]], np.uint32)
+    f = np.array([0.0, 1.0, 2.0, 3.0, 4.0], np.float32)
+    keep = [x.copy() for x in (pts, tets, f)]
+    m = clvr.Mesh.from_arrays(pts, {"tetra": tets}, {"f": f})
+    for name, a in (("points", pts), ("tetra", tets), ("f", f)):
+        check(m.borrowed(name) and m.array_address(name) == a.ctypes.data, "%s lent, not copied" % name)
+    r = clvr.Renderer(m, device=ctx, width=8, height=8)
+    r.render(spp=2)
+    check(all(np.array_equal(a, b) and a.dtype == b.dtype for a, b in zip(keep, (pts, tets, f))),
+          "borrowed arrays modified by rendering")
+    m.close()  # the renderer keeps the mesh's arrays (and libclvr's dataset) alive
+    check(np.isfinite(r.render(spp=1)).all(), "render after Mesh.close")
+    r.close()
+    conv = clvr.Mesh.from_arrays(pts.astype(np.float64), {"tetra": tets.astype(np.int64)}, {"f": f[::1]})
+    check(conv.array_address("points") != pts.ctypes.data, "a float64 array is converted, not lent")
+    check(conv.borrowed("f") and conv.array_address("f") == f.ctypes.data, "a float32 field is lent")
+    strided = np.ascontiguousarray(np.repeat(f, 2))[::2]
+    sm = clvr.Mesh.from_arrays(pts, {"tetra": tets}, {"f": strided})
+    check(sm.array_address("f") != strided.ctypes.data, "a strided field is copied")
+    cp = clvr.Mesh.from_arrays(pts, {"tetra": tets}, {"f": f}, copy=True)
+    check(not cp.borrowed("points") and not cp.borrowed("tetra") and not cp.borrowed("f"), "copy=True copies")
+    check(cp.array_address("points") != pts.ctypes.data, "copy=True: another address")
+
+
+def _write_fields_vtk(path, n=6):
+    g = np.linspace(0.0, 1.0, n + 1)
+    z, y, x = np.meshgrid(g, g, g, indexing="ij")
+    pts = np.stack([x.ravel(), y.ravel(), z.ravel()], 1).astype(np.float32)
+    idx = np.arange((n + 1) ** 3).reshape(n + 1, n + 1, n + 1)  # [k, j, i]
+    c = idx[:-1, :-1, :-1].ravel()
+    di, dj, dk = 1, n + 1, (n + 1) ** 2
+    hexes = np.stack([c, c + di, c + di + dj, c + dj, c + dk, c + di + dk, c + di + dj + dk, c + dj + dk],
+                     1).astype(np.uint32)
+    a = pts[:, 0].copy()
+    b = (4.0 * (pts[:, 1] - 0.5) ** 2).astype(np.float32)
+    with open(path, "w") as fh:
+        fh.write("# vtk DataFile Version 3.0\nfields\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS %d float\n"
+                 % len(pts))
+        fh.writelines("%.9g %.9g %.9g\n" % tuple(p) for p in pts)
+        fh.write("CELLS %d %d\n" % (len(hexes), 9 * len(hexes)))
+        fh.writelines("8 " + " ".join(map(str, h)) + "\n" for h in hexes)
+        fh.write("CELL_TYPES %d\n" % len(hexes) + "12\n" * len(hexes))
+        fh.write("POINT_DATA %d\nSCALARS a float\nLOOKUP_TABLE default\n" % len(pts))
+        fh.writelines("%.9g\n" % v for v in a)
+        fh.write("SCALARS b float\nLOOKUP_TABLE default\n")
+        fh.writelines("%.9g\n" % v for v in b)
+        fh.write("VECTORS v float\n")
+        fh.writelines("%.9g 0.5 %.9g\n" % (p[2], -p[0]) for p in pts)
+    return pts, hexes, a, b
+
+
+def test_fields(ctx):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "fields.vtk")
+        pts, hexes, a, b = _write_fields_vtk(path)
+        m = clvr.Mesh.load(path, field_ranges=True)
+        names = [(f["name"], f["components"], f["loaded"]) for f in m.fields]
+        check(names == [("a", 1, True), ("b", 1, False), ("v", 3, False)], "fields of the file: %r" % names)
+        check(m.fields[1]["range"] is not None and abs(m.fields[1]["range"][1] - 1.0) < 1e-6, "b's range decoded")
+        check(abs(m.field_range("b")[1] - 1.0) < 1e-6, "field_range of a field not read yet")
+        mb = clvr.Mesh.load(path, scalar="b")
+        check(mb.fields[1]["loaded"] and not mb.fields[0]["loaded"], "scalar='b' loads b first")
+        arrays = clvr.Mesh.from_arrays(pts, {"hexahedron": hexes}, {"a": a, "b": b})
+        tf = {"colormap": "viridis", "range": (0.0, 1.0), "density": 1.0, "ramp": True}
+        imgs = {}
+        for key, mesh, field in (("file b", m, "b"), ("arrays b", arrays, "b"), ("file a", m, "a"),
+                                 ("load b", mb, None)):
+            with clvr.Renderer(mesh, device=ctx, width=24, height=20, field=field) as r:
+                imgs[key] = r.render(spp=4, tf=tf, seed=7)
+        check(np.array_equal(imgs["file b"], imgs["arrays b"]), "field b from the file == from arrays")
+        check(np.array_equal(imgs["load b"], imgs["arrays b"]), "Mesh.load(scalar='b') renders b")
+        check(np.abs(imgs["file b"] - imgs["file a"]).mean() > 1e-3, "field a renders other pixels")
+        check(m.fields[1]["loaded"], "b in memory after rendering it")
+        raises(lambda: clvr.Renderer(m, device=ctx, width=8, height=8, field="nope"), clvr.InputError, "nope",
+               "unknown field of a file")
+        # The same file as a clvr .bin version 2 (clvr-convert keeps every array).
+        conv = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "clvr-convert")
+        binpath = os.path.join(tmp, "fields.bin")
+        cp = subprocess.run([sys.executable, conv, "--quiet", path, binpath], capture_output=True, text=True)
+        check(cp.returncode == 0, "clvr-convert: %s" % cp.stderr[-300:])
+        if cp.returncode == 0:
+            mbin = clvr.Mesh.load(binpath)
+            check([f["name"] for f in mbin.fields] == ["a", "b", "v"], ".bin v2 fields: %r" % mbin.fields)
+            with clvr.Renderer(mbin, device=ctx, width=24, height=20, field="b") as r:
+                check(np.array_equal(r.render(spp=4, tf=tf, seed=7), imgs["arrays b"]), ".bin field b == arrays b")
+
+
+def test_scene_settings(ctx):
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], np.float32)
+    tets = np.array([[0, 1, 2, 3], [1, 2, 3, 4]], np.uint32)
+    m = clvr.Mesh.from_arrays(pts, {"tetra": tets}, {"f": np.arange(5, dtype=np.float32)})
+    sc = clvr.Scene(m, device=ctx, leaf_size=1, sampling_size=1)
+    st = sc.stats
+    check(st["leaf_size"] == 1 and st["leaves"] == 2 and st["elements"] == 2, "scene stats %r" % st)
+    check(st["preprocess_s"] > 0 and list(st["stages"])[-1] == "bvh", "preprocessing timed per stage")
+    r1 = clvr.Renderer(sc, width=8, height=8, method="track", estimator="delta", seed=5)
+    r2 = clvr.Renderer(sc, width=8, height=8)
+    r2.set_settings(method="track", estimator="delta", seed=5)
+    check(r1.settings == r2.settings, "settings at creation == set_settings")
+    check(np.array_equal(r1.render(spp=2), r2.render(spp=2)), "two renderers on one scene, same pixels")
+    raises(lambda: r1.set_settings(bins=99), clvr.InputError, "bins", "bins 99")
+    raises(lambda: r1.set_settings(metod="dda"), clvr.InputError, "metod", "settings typo")
+    check(r1.settings["bins"] != 99 and r1.settings["method"] == "track", "refused settings change nothing")
+    r1.set_settings(clip_lo=(0, 0, 0), clip_hi=(0.5, 0.5, 0.5))
+    check(r1.settings["clip_box"] and r1.settings["clip_hi"] == (0.5, 0.5, 0.5), "clip box set")
+    raises(lambda: clvr.Scene(m, device=ctx, leaf_size=0), clvr.InputError, "leaf_size", "leaf_size 0")
+
+
 def main():
     try:
         ctx = clvr.Context("pocl")
@@ -258,6 +379,9 @@ def main():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         test_bad_inputs(ctx)
+        test_borrowing(ctx)
+        test_fields(ctx)
+        test_scene_settings(ctx)
     if "--quick" not in sys.argv:
         test_program_matches_module(ctx)
         test_same_image(ctx)

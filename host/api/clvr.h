@@ -48,8 +48,9 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 0
-/* major * 1000 + minor: 1000 is 1.0. */
+#define CLVR_API_VERSION_MINOR 1
+/* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
+ * statistics and dataset information as versioned structs, multi-field files). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -171,7 +172,8 @@ CLVR_API clvr_result clvr_dataset_field_name(const clvr_dataset *ds, uint32_t i,
                                              clvr_message *msg);
 /* Bounding box of the points (lo, hi: 3 floats each). */
 CLVR_API clvr_result clvr_dataset_bounds(const clvr_dataset *ds, float lo[3], float hi[3], clvr_message *msg);
-/* Smallest and largest value of a field (NULL: the first). */
+/* Smallest and largest value of a field (NULL: the first); a file's field
+ * not read yet: the range of its table when decoded (clvr_dataset_field). */
 CLVR_API clvr_result clvr_dataset_field_range(const clvr_dataset *ds, const char *field, float *min, float *max,
                                               clvr_message *msg);
 
@@ -263,6 +265,307 @@ CLVR_API clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double 
  * ERR_USAGE (extension, size, tone curve), ERR_WRITE. */
 CLVR_API clvr_result clvr_image_save(const char *path, uint32_t width, uint32_t height, const float *rgba,
                                      float exposure_ev, const char *tonemap, int transparent, clvr_message *msg);
+
+
+/* ======================================================================== *
+ * API 1.1. Every struct below is plain data whose first member is `size`:
+ * set it to sizeof the struct (the clvr_*_init functions do, with the
+ * defaults). A library with a longer struct (a later minor version) then
+ * reads and writes only the members your header knows, so programs built
+ * against 1.1 keep working when members are appended. size smaller than
+ * the 1.1 struct: ERR_USAGE.
+ * ======================================================================== */
+
+/* --- files and datasets (1.1) -------------------------------------------- */
+
+typedef struct clvr_tracer_settings clvr_tracer_settings; /* below */
+
+typedef struct clvr_load_settings {
+    uint32_t size;
+    /* The field to load first: "NAME", "point:NAME", "cell:NAME", a
+     * component "NAME:x" / "NAME:y" / "NAME:z" / "NAME:0".. or "NAME:mag"
+     * (the default for a vector); NULL: the file's first. Other fields load
+     * when a scene asks for them by name (clvr_scene_create). */
+    const char *field;
+    int cell_flat;    /* nonzero: a cell field is shown flat, each element its own value (its own copies
+                         of its vertices); 0: averaged onto the vertices (default) */
+    int field_ranges; /* nonzero: decode every field of the file now for its range (clvr_dataset_field) */
+} clvr_load_settings;
+CLVR_API void clvr_load_settings_init(clvr_load_settings *s);
+
+/* clvr_dataset_load with settings (s NULL: the defaults). A file with
+ * several fields (.bin version 2, legacy VTK with several arrays) lists them
+ * all (clvr_dataset_field); any may be named in clvr_scene_create /
+ * clvr_tracer_create, and is read from the file then (the file must still
+ * be there, unchanged). */
+CLVR_API clvr_result clvr_dataset_load_with(const char *path, const clvr_load_settings *s, clvr_dataset **out,
+                                            clvr_message *msg);
+/* The clvr program's built-in scene (a box of mixed element types with a
+ * smooth field), for examples and tests. */
+CLVR_API clvr_result clvr_dataset_create_demo(clvr_dataset **out, clvr_message *msg);
+
+typedef struct clvr_dataset_info {
+    uint32_t size;
+    uint64_t num_points;
+    uint64_t num_cells[4];      /* tetra, pyramid, wedge, hexahedron */
+    uint64_t num_elements;
+    uint32_t num_fields;        /* as clvr_dataset_counts */
+    uint32_t current_field;     /* the field loaded first (a file's rendered field) */
+    float lo[3], hi[3];         /* bounds of the points */
+    float scalar_min, scalar_max; /* range of the current field */
+    uint64_t bytes_points;      /* host bytes of positions + one scalar per point */
+    uint64_t bytes_indices;     /* host bytes of the cells' indices */
+    uint64_t skipped_cells;     /* a file's cells of other types (surface, line, polyhedron) left out */
+    uint64_t decomposed_cells;  /* a file's polyhedra split into tets and pyramids */
+    int cell_flat;              /* the current field is a cell field shown flat */
+    int current_is_cell;        /* the current field is cell data (averaged, or flat) */
+    char current_name[64];      /* name of the current field ("" when unnamed) */
+    uint32_t file_fields;       /* fields listed from the file's own table (the first ones; 0: none) */
+} clvr_dataset_info;
+CLVR_API clvr_result clvr_dataset_get_info(const clvr_dataset *ds, clvr_dataset_info *info, clvr_message *msg);
+
+/* Field i (< num_fields) of a dataset: a file's arrays as the file has them,
+ * or the fields added with clvr_dataset_add_field. */
+typedef struct clvr_dataset_field {
+    uint32_t size;
+    char name[64];
+    int is_cell;          /* 0: point data, 1: cell data */
+    uint32_t components;  /* 1 (scalar) .. 9; a vector is picked as NAME:x, NAME:mag, ... */
+    int has_range;        /* 0: not decoded yet (clvr_load_settings.field_ranges) */
+    float min, max;       /* range (the magnitude's for vectors) when has_range */
+    int loaded;           /* its values are in memory now */
+} clvr_dataset_field;
+CLVR_API clvr_result clvr_dataset_get_field(const clvr_dataset *ds, uint32_t i, clvr_dataset_field *out,
+                                            clvr_message *msg);
+/* The array the dataset reads for `name` ("points", a cell type name or a
+ * field's name) and whether it is the caller's own (borrowed, 1) or the
+ * dataset's copy (0): lets a caller check that CLVR_BORROW kept its array. */
+CLVR_API clvr_result clvr_dataset_get_array(const clvr_dataset *ds, const char *name, const void **data,
+                                            int *borrowed, clvr_message *msg);
+/* Warnings about flaws that render anyway (degenerate, inverted or
+ * duplicate elements, a constant field, cells left out), one line each,
+ * "clvr: warning: NAME: ..." into buf (NUL-terminated, truncated; "" when
+ * none); *count receives the number of lines (may be NULL). name: the
+ * dataset in messages (NULL: "dataset"). */
+CLVR_API clvr_result clvr_dataset_warnings(const clvr_dataset *ds, const char *name, char *buf, size_t size,
+                                           uint32_t *count, clvr_message *msg);
+/* Host memory check before reading a mesh file: a clvr .bin whose header
+ * says it cannot fit with a width x height image (and partitions, 0:
+ * automatic) fails with the numbers (ERR_NO_MEMORY). Other formats, whose
+ * headers do not give the counts: OK (checked by clvr_dataset_check_memory
+ * once loaded). */
+CLVR_API clvr_result clvr_file_check_memory(const char *path, uint32_t width, uint32_t height, uint32_t partitions,
+                                            clvr_message *msg);
+CLVR_API clvr_result clvr_dataset_check_memory(const clvr_dataset *ds, const char *name, uint32_t width,
+                                               uint32_t height, uint32_t partitions, clvr_message *msg);
+
+/* --- preprocessing as its own step (1.1) --------------------------------- */
+
+typedef struct clvr_scene clvr_scene; /* a preprocessed dataset (clusters and trees) on a device */
+
+typedef struct clvr_preprocess_settings {
+    uint32_t size;
+    uint32_t leaf_size;      /* elements per leaf cluster, 1..128 (paper: 16; default 16) */
+    uint32_t sampling_size;  /* elements per adaptive-sampling cluster (default 16) */
+    uint32_t partitions;     /* preprocess in this many pieces to bound peak memory; 0: automatic */
+    int consume;             /* nonzero: the caller destroys the dataset right after; a loaded file's cell
+                                lists may then be freed piece by piece while preprocessing */
+    const char *name;        /* the dataset in messages (a path); NULL: "dataset" */
+    uint32_t width, height;  /* the image the tracers will render, for the device memory check before
+                                preprocessing (0: checked by clvr_tracer_create_on only) */
+} clvr_preprocess_settings;
+CLVR_API void clvr_preprocess_settings_init(clvr_preprocess_settings *s);
+
+/* Preprocesses ds's field `field` (NULL: the current one; a file's other
+ * field by name or spec as in clvr_load_settings) on ctx's device: Quick
+ * Clusters and both trees. s NULL: defaults. The mesh is checked against
+ * the device's memory first (ERR_DEVICE_MEMORY with the numbers). The scene
+ * keeps ds alive until clvr_scene_drop_dataset or destroy. Its wall time,
+ * kernel compilation excluded, is clvr_scene_stats' preprocess_s. */
+CLVR_API clvr_result clvr_scene_create(clvr_context *ctx, clvr_dataset *ds, const char *field,
+                                       const clvr_preprocess_settings *s, clvr_scene **out, clvr_message *msg);
+/* Tracers made on the scene keep it alive. */
+CLVR_API void clvr_scene_destroy(clvr_scene *sc);
+/* Lets go of the scene's dataset (see clvr_tracer_drop_dataset). */
+CLVR_API clvr_result clvr_scene_drop_dataset(clvr_scene *sc, clvr_message *msg);
+/* A tracer of width x height pixels on a preprocessed scene with settings s
+ * (NULL: the defaults; see clvr_tracer_settings) and, until one is set, the
+ * automatic transfer function of clvr_tracer_create. Several tracers may
+ * share a scene. */
+CLVR_API clvr_result clvr_tracer_create_on(clvr_scene *sc, const clvr_tracer_settings *s, uint32_t width,
+                                           uint32_t height, clvr_tracer **out, clvr_message *msg);
+/* clvr_context_warm_up with the cluster sizes of s. */
+CLVR_API clvr_result clvr_context_warm_up_with(clvr_context *ctx, const clvr_preprocess_settings *s,
+                                               clvr_message *msg);
+/* Kernel compilation so far on ctx (wall seconds in the driver's compiler)
+ * and whether to print a one-line notice on stderr when a compilation takes
+ * long (default off); *notice_shown: one was printed. Pointers may be NULL. */
+CLVR_API clvr_result clvr_context_build_info(clvr_context *ctx, int notices, double *build_s, int *notice_shown,
+                                             clvr_message *msg);
+
+#define CLVR_STATS_MAX_STAGES 16
+typedef struct clvr_scene_stats {
+    uint32_t size;
+    uint64_t elements, points;
+    uint64_t instances, instances16, leaves, sampling_clusters;
+    uint32_t leaf_size, sampling_size, partitions;
+    float lo[3], hi[3];             /* bounds of the mesh */
+    /* device bytes (the paper's Table 1) */
+    uint64_t bytes_points_before;   /* float3 + float per mesh point */
+    uint64_t bytes_points_after;    /* float4 per clustered (duplicated) point */
+    uint64_t bytes_indices_before;  /* 32-bit indices */
+    uint64_t bytes_indices_after;   /* 16/32-bit per instance cluster */
+    uint64_t bytes_bvh;             /* the two-level tree */
+    uint64_t bytes_bvh_one_per_leaf;/* the same tree with one element per leaf (Table 1 "pre") */
+    uint64_t bytes_sampling;        /* sampling clusters and their tree */
+    uint64_t bytes_element_boxes;   /* quantized element boxes of point location */
+    uint64_t device_bytes;          /* all device allocations of the context now */
+    double preprocess_s;            /* wall: upload + clustering + trees, kernel compilation excluded */
+    uint32_t num_stages;
+    char stage_name[CLVR_STATS_MAX_STAGES][16];
+    double stage_s[CLVR_STATS_MAX_STAGES]; /* device seconds per stage, the trees' build last ("bvh") */
+    float scalar_min, scalar_max;   /* range of the scene's field */
+} clvr_scene_stats;
+CLVR_API clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg);
+/* The scene a tracer renders (borrowed: valid while the tracer lives). */
+CLVR_API clvr_scene *clvr_tracer_scene(clvr_tracer *tr);
+
+/* --- every render setting (1.1) ------------------------------------------ */
+
+#define CLVR_MAX_CLIP 6
+struct clvr_tracer_settings {
+    uint32_t size;
+    char method[16];          /* "march", "track", "bins", "dda" */
+    char estimator[16];       /* "delta", "urm" (track, bins, dda) */
+    char sampler[16];         /* "ld" (low discrepancy across frames), "independent" */
+    uint64_t seed;
+    uint32_t urm_steps;       /* urm: minimum quadrature points per ray, >= 1 */
+    float step;               /* march step in world units; 0: automatic */
+    uint32_t bins, segments;  /* bins method: bins <= 32, segments >= 1 */
+    uint32_t macrocells;      /* dda: grid cells per axis, >= 1 */
+    float light_dir[3];       /* toward the light, not all 0 */
+    float light_intensity, ambient;
+    int shadows;
+    float background[3];      /* linear, >= 0 */
+    int clip_box;             /* nonzero: rays see only [clip_lo, clip_hi] */
+    float clip_lo[3], clip_hi[3];
+    uint32_t num_clip_planes; /* 0..CLVR_MAX_CLIP: medium kept where n.p <= d */
+    float clip_planes[CLVR_MAX_CLIP][4];
+};
+/* The defaults of a new tracer. */
+CLVR_API void clvr_tracer_settings_init(clvr_tracer_settings *s);
+CLVR_API clvr_result clvr_tracer_get_settings(const clvr_tracer *tr, clvr_tracer_settings *out, clvr_message *msg);
+/* Checks every member (ERR_USAGE naming it) and applies them all, or none. */
+CLVR_API clvr_result clvr_tracer_set_settings(clvr_tracer *tr, const clvr_tracer_settings *s, clvr_message *msg);
+/* Resizes the image (1..65536 each way); the camera keeps its eye, target
+ * and vertical field of view. */
+CLVR_API clvr_result clvr_tracer_set_size(clvr_tracer *tr, uint32_t width, uint32_t height, clvr_message *msg);
+
+/* Figures of the frames accumulated since the last change. */
+typedef struct clvr_render_stats {
+    uint32_t size;
+    uint64_t frames, rays, samples, null_collisions;
+    double kernel_s, last_frame_s; /* device seconds: all frames, the last one */
+    uint32_t width, height;
+    char method[16];
+} clvr_render_stats;
+CLVR_API clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out, clvr_message *msg);
+
+/* The camera in full: eye, target, up and the vertical field of view. */
+CLVR_API clvr_result clvr_tracer_get_view(const clvr_tracer *tr, float eye[3], float target[3], float up[3],
+                                          float *fovy_deg, clvr_message *msg);
+/* Rotates point p about the line through centre along axis by deg (right
+ * hand): a turntable's eye. Pure arithmetic. */
+CLVR_API void clvr_rotate_about(const float p[3], const float centre[3], const float axis[3], float deg, float out[3]);
+/* Draws the edges of the box [lo, hi], as the current camera sees it, into
+ * rgba (the tracer's size, the pixel convention above) in linear colour rgb,
+ * line_width pixels wide: an outline of the mesh or a clip box. */
+CLVR_API clvr_result clvr_tracer_draw_box(const clvr_tracer *tr, float *rgba, size_t count, const float lo[3],
+                                          const float hi[3], const float rgb[3], float line_width, clvr_message *msg);
+
+/* --- the transfer function in use (1.1) ---------------------------------- */
+
+typedef struct clvr_tf_info {
+    uint32_t size;
+    char colormap[64];   /* the colour map's name (a file's name for --tf files; "table" for a table) */
+    float range_lo, range_hi;
+    float density;       /* in use (the automatic factor included) */
+    float auto_density;  /* the automatic factor of the last clvr_tracer_set_tf with density 0; else 1 */
+    uint32_t table_size; /* entries of the baked table */
+    float extinction_scale; /* the table's 4th column is opacity times this (the mesh diagonal's scale) */
+} clvr_tf_info;
+CLVR_API clvr_result clvr_tracer_get_tf(const clvr_tracer *tr, clvr_tf_info *out, clvr_message *msg);
+/* The baked table in use: table_size entries of linear r, g, b and
+ * extinction (opacity times the density scale), rgba holding count floats
+ * (>= 4 * table_size). */
+CLVR_API clvr_result clvr_tracer_get_tf_table(const clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg);
+/* Edits the transfer function set by clvr_tracer_set_tf, keeping its
+ * opacity: colormap (NULL: keep; a built-in name), the window [lo, hi]
+ * (both NaN: keep) and the density (>= 0; NaN: keep). ERR_USAGE after a
+ * table (clvr_tracer_set_tf_table). */
+CLVR_API clvr_result clvr_tracer_edit_tf(clvr_tracer *tr, const char *colormap, float range_lo, float range_hi,
+                                         float density, clvr_message *msg);
+/* A transfer function built apart from a tracer, from a dataset's field
+ * (NULL: the current one), with the arguments of clvr_tracer_set_tf: it
+ * can be made (and a bad file or name reported) before the device work,
+ * and set on tracers later, after the dataset is gone. */
+typedef struct clvr_transfer clvr_transfer;
+CLVR_API clvr_result clvr_transfer_create(const clvr_dataset *ds, const char *field, const char *colormap,
+                                          const char *tf_path, float range_lo, float range_hi, float density,
+                                          int ramp, clvr_transfer **out, clvr_message *msg);
+CLVR_API void clvr_transfer_destroy(clvr_transfer *tf);
+/* Its colour map, window, density and automatic density factor
+ * (table_size: entries of its baked table). */
+CLVR_API clvr_result clvr_transfer_get_info(const clvr_transfer *tf, clvr_tf_info *out, clvr_message *msg);
+/* Sets tf on tr (copied: tf may be destroyed afterwards), as
+ * clvr_tracer_set_tf would have. */
+CLVR_API clvr_result clvr_tracer_set_transfer(clvr_tracer *tr, const clvr_transfer *tf, clvr_message *msg);
+
+/* "cool-warm, viridis, ...": the built-in colour maps. Static string. */
+CLVR_API const char *clvr_colormap_names(void);
+
+/* --- images and process (1.1) -------------------------------------------- */
+
+typedef struct clvr_image_settings {
+    uint32_t size;
+    float exposure_ev;       /* PNG: scene values times 2^exposure_ev */
+    const char *tonemap;     /* PNG: "none", "aces" (default), "filmic" */
+    int transparent;         /* PNG: RGBA with straight alpha */
+    /* A colour bar drawn into a PNG: legend_table (legend_entries x 4
+     * floats as clvr_tracer_get_tf_table gives), the window it spans and
+     * the field's name. NULL: none. */
+    const float *legend_table;
+    uint32_t legend_entries;
+    float legend_lo, legend_hi;
+    const char *legend_name;
+} clvr_image_settings;
+CLVR_API void clvr_image_settings_init(clvr_image_settings *s);
+/* clvr_image_save with settings (s NULL: the defaults). */
+CLVR_API clvr_result clvr_image_save_with(const char *path, uint32_t width, uint32_t height, const float *rgba,
+                                          const clvr_image_settings *s, clvr_message *msg);
+/* Checks before long work that path has an image extension (ERR_USAGE) and
+ * that its directory is writable (ERR_WRITE). */
+CLVR_API clvr_result clvr_image_check_path(const char *path, clvr_message *msg);
+/* Nonzero when path ends in .png (any case). */
+CLVR_API int clvr_image_path_is_png(const char *path);
+/* path with ".NNNN" inserted before its extension ("a.png", 7 ->
+ * "a.0007.png"); ERR_USAGE when out (size bytes) is too small. */
+CLVR_API clvr_result clvr_image_path_numbered(const char *path, uint32_t index, char *out, size_t size,
+                                              clvr_message *msg);
+/* 8-bit sRGB pixels of an image (the pixel convention above) as the PNG
+ * writer makes an opaque one: scaled by 2^exposure_ev, tone curve
+ * ("none", "aces", "filmic"; NULL: "aces"), sRGB; rgba8 receives
+ * width * height * 4 bytes, alpha 255. For displays (the viewer). */
+CLVR_API clvr_result clvr_image_to_srgb8(const float *rgba, uint32_t width, uint32_t height, float exposure_ev,
+                                         const char *tonemap, uint8_t *rgba8, clvr_message *msg);
+/* Writes 8-bit sRGB pixels (width * height * 4 bytes, rows top to bottom,
+ * alpha ignored) to path by its extension: a .png gets them as they are,
+ * .exr and .pfm decoded to linear. Atomic as clvr_image_save. */
+CLVR_API clvr_result clvr_image_save_srgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
+                                           clvr_message *msg);
+/* The process's resident and peak resident memory in bytes (Linux; 0
+ * where unknown). Either pointer may be NULL. */
+CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);
 
 #ifdef __cplusplus
 }

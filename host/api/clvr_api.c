@@ -6,7 +6,6 @@
  * one onto clvr_result (checked at compile time below). */
 #define CLVR_API_BUILD 1
 #include "clvr.h"
-#include "clvr_bridge.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -20,6 +19,7 @@
 #include "clock.h"
 #include "image.h"
 #include "limits_check.h"
+#include "outline.h"
 #include "mesh.h"
 #include "mesh_io.h"
 #include "partition.h"
@@ -47,6 +47,8 @@ typedef struct dataset_field {
     const float *values;
     float *owned; /* == values when copied, else NULL */
     float lo, hi;
+    int from_file;       /* a field of the loaded file (its table lists it) */
+    uint32_t file_index; /* its index in the file's table */
 } dataset_field;
 
 struct clvr_dataset {
@@ -62,6 +64,9 @@ struct clvr_dataset {
     dataset_field *fields;
     float lo[3], hi[3];
     clvr_mesh loaded; /* a file's mesh, whose arrays the pointers above borrow */
+    char *path;       /* the file, for its other fields (loaded when a scene names them) */
+    int cell_flat;    /* loaded with cell data shown flat */
+    int consumed;     /* a scene took the loaded cell lists apart (clvr_preprocess_settings.consume) */
 };
 
 struct clvr_context {
@@ -69,25 +74,10 @@ struct clvr_context {
     unsigned tracers; /* live tracers; destroying ctx before them is a bug */
 };
 
-struct clvr_tracer {
-    clvr_context *ctx;
-    clvr_dataset *ds; /* NULL after clvr_tracer_drop_dataset */
-    uint32_t field;
-    float lo[3], hi[3]; /* the dataset's bounds */
-    clvr_tf tf;         /* the transfer function set by options (the viewer edits it) */
-    clvr_clustered clustered;
-    clvr_accel accel;
-    clvr_renderer *renderer;
-    clvr_render_settings rs;
-    int shadows; /* asked for; march has none */
-    clvr_camera cam;
-    float up[3];
-    float density, range_lo, range_hi;
-    uint64_t clustered_points; /* the dataset's points */
-    uint64_t frames;
-    double preprocess_s;
-    uint32_t partitions; /* preprocessing partitions used */
-};
+
+static uint32_t table_fields(const clvr_dataset *ds);
+static void table_field(const clvr_dataset *ds, uint32_t i, clvr_dataset_field *f);
+static void dataset_release(clvr_dataset *ds);
 
 /* --- results -------------------------------------------------------------- */
 
@@ -107,6 +97,41 @@ static clvr_result finish(clvr_status s, const clvr_error *err, clvr_message *ms
 }
 
 #define NULL_ARG(fn, arg) clvr_error_set(&e, CLVR_ERR_USAGE, "%s: %s is NULL", fn, arg)
+
+/* Reads a versioned struct: the caller's size must cover this version's. */
+#define VERSIONED_IN(fn, p, type, local)                                                                              \
+    do {                                                                                                              \
+        clvr_##type##_init(&(local));                                                                                 \
+        if (p) {                                                                                                      \
+            if ((p)->size < sizeof(local))                                                                            \
+                return finish(clvr_error_set(&e, CLVR_ERR_USAGE,                                                      \
+                                             "%s: " #type ".size is %u; set it to sizeof(clvr_" #type ") (%zu), "   \
+                                             "e.g. with clvr_" #type "_init",                                        \
+                                             fn, (unsigned)(p)->size, sizeof(local)),                                 \
+                              &e, msg);                                                                               \
+            memcpy(&(local), (p), sizeof(local));                                                                     \
+        }                                                                                                             \
+    } while (0)
+
+/* Writes a versioned struct out. These are the 1.1 structs, the smallest
+ * accepted: when a later version appends members, a caller's 1.1-sized
+ * struct must still be filled up to its size (compare with the 1.1 size
+ * then, not with sizeof). */
+static clvr_status versioned_out(const char *fn, const char *type, void *out, const void *local, size_t local_size,
+                                 clvr_error *e)
+{
+    uint32_t size;
+    memcpy(&size, out, sizeof size);
+    if (size < local_size)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: %s.size is %u; set it to sizeof(%s) (%zu)", fn, type,
+                              (unsigned)size, type, local_size);
+    memcpy(out, local, local_size);
+    memcpy(out, &size, sizeof size);
+    return CLVR_OK;
+}
+
+static int finite3(const float *v) { return v && isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
+
 
 unsigned clvr_api_version(void) { return CLVR_API_VERSION; }
 const char *clvr_version_string(void) { return CLVR_VERSION; }
@@ -142,9 +167,7 @@ void clvr_context_destroy(clvr_context *ctx)
     free(ctx);
 }
 
-clvr_cl *clvr_context_cl(clvr_context *ctx) { return &ctx->cl; }
-
-clvr_status clvr_context_warm_up_setup(clvr_context *ctx, const clvr_preprocess_options *po, clvr_error *err)
+static clvr_status warm_up(clvr_context *ctx, const clvr_preprocess_options *po, clvr_error *err)
 {
     clvr_scene_box_params bp;
     clvr_scene_box_params_init(&bp);
@@ -168,13 +191,7 @@ clvr_result clvr_context_warm_up(clvr_context *ctx, clvr_message *msg)
     if (!ctx) return finish(NULL_ARG("clvr_context_warm_up", "ctx"), &e, msg);
     clvr_preprocess_options po;
     clvr_preprocess_options_default(&po);
-    return finish(clvr_context_warm_up_setup(ctx, &po, &e), &e, msg);
-}
-
-clvr_status clvr_bridge_status(clvr_result r, const clvr_message *msg, clvr_error *err)
-{
-    if (r == CLVR_RESULT_OK) return CLVR_OK;
-    return clvr_error_set(err, (clvr_status)r, "%s", msg->text);
+    return finish(warm_up(ctx, &po, &e), &e, msg);
 }
 
 static void copy_str(char *dst, size_t size, const char *src)
@@ -412,7 +429,7 @@ clvr_result clvr_dataset_add_field(clvr_dataset *ds, const char *name, const flo
     return finish(s, &e, msg);
 }
 
-clvr_status clvr_dataset_adopt(clvr_mesh *m, clvr_dataset **out, clvr_error *err)
+static clvr_status dataset_adopt(clvr_mesh *m, clvr_dataset **out, clvr_error *err)
 {
     clvr_dataset *ds = calloc(1, sizeof *ds);
     if (!ds) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for a dataset");
@@ -429,6 +446,11 @@ clvr_status clvr_dataset_adopt(clvr_mesh *m, clvr_dataset **out, clvr_error *err
     }
     update_bounds(ds);
     clvr_status s = push_field(ds, m->scalar_name[0] ? m->scalar_name : "scalar", m->scalars, NULL, err);
+    if (s == CLVR_OK) {
+        ds->fields[0].from_file = 1;
+        ds->fields[0].file_index = m->scalar_field;
+    }
+    ds->cell_flat = m->cell_flat;
     if (s != CLVR_OK) {
         clvr_mesh_free(&ds->loaded);
         free(ds->fields);
@@ -439,20 +461,64 @@ clvr_status clvr_dataset_adopt(clvr_mesh *m, clvr_dataset **out, clvr_error *err
     return CLVR_OK;
 }
 
+void clvr_load_settings_init(clvr_load_settings *s)
+{
+    if (!s) return;
+    memset(s, 0, sizeof *s);
+    s->size = sizeof *s;
+}
+
+static clvr_status dataset_load(const char *path, const clvr_load_settings *ls, clvr_dataset **out, clvr_error *e)
+{
+    clvr_mesh m = {0};
+    clvr_load_options lo = {0};
+    lo.scalar_name = ls->field;
+    lo.cell_flat = ls->cell_flat;
+    lo.field_ranges = ls->field_ranges;
+    char *copy = strdup(path);
+    if (!copy) return clvr_error_set(e, CLVR_ERR_NO_MEMORY, "out of memory");
+    clvr_status s = clvr_mesh_load(path, &lo, &m, e);
+    if (s == CLVR_OK) {
+        if (!m.scalar_name[0] && ls->field) clvr_mesh_set_scalar_name(&m, ls->field, strlen(ls->field));
+        s = dataset_adopt(&m, out, e);
+    }
+    if (s == CLVR_OK) (*out)->path = copy;
+    else free(copy);
+    clvr_mesh_free(&m);
+    return s;
+}
+
 clvr_result clvr_dataset_load(const char *path, const char *field, clvr_dataset **out, clvr_message *msg)
 {
     clvr_error e = {0};
     static const char fn[] = "clvr_dataset_load";
     if (!path) return finish(NULL_ARG(fn, "path"), &e, msg);
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_load_settings ls;
+    clvr_load_settings_init(&ls);
+    ls.field = field;
+    return finish(dataset_load(path, &ls, out, &e), &e, msg);
+}
+
+clvr_result clvr_dataset_load_with(const char *path, const clvr_load_settings *s, clvr_dataset **out,
+                                   clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_dataset_load_with";
+    if (!path) return finish(NULL_ARG(fn, "path"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_load_settings ls;
+    VERSIONED_IN(fn, s, load_settings, ls);
+    return finish(dataset_load(path, &ls, out, &e), &e, msg);
+}
+
+clvr_result clvr_dataset_create_demo(clvr_dataset **out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!out) return finish(NULL_ARG("clvr_dataset_create_demo", "out"), &e, msg);
     clvr_mesh m = {0};
-    clvr_load_options lo = {0};
-    lo.scalar_name = field;
-    clvr_status s = clvr_mesh_load(path, &lo, &m, &e);
-    if (s == CLVR_OK) {
-        if (!m.scalar_name[0] && field) clvr_mesh_set_scalar_name(&m, field, strlen(field));
-        s = clvr_dataset_adopt(&m, out, &e);
-    }
+    clvr_status s = clvr_scene_default(&m, &e);
+    if (s == CLVR_OK) s = dataset_adopt(&m, out, &e);
     clvr_mesh_free(&m);
     return finish(s, &e, msg);
 }
@@ -465,6 +531,7 @@ static void dataset_release(clvr_dataset *ds)
     for (uint32_t i = 0; i < ds->num_fields; ++i) free(ds->fields[i].owned);
     free(ds->fields);
     clvr_mesh_free(&ds->loaded);
+    free(ds->path);
     free(ds);
 }
 
@@ -477,7 +544,7 @@ clvr_result clvr_dataset_counts(const clvr_dataset *ds, uint64_t *num_points, ui
     if (!ds) return finish(NULL_ARG("clvr_dataset_counts", "ds"), &e, msg);
     if (num_points) *num_points = ds->num_points;
     if (num_cells) memcpy(num_cells, ds->num_cells, sizeof ds->num_cells);
-    if (num_fields) *num_fields = ds->num_fields;
+    if (num_fields) *num_fields = table_fields(ds);
     return finish(CLVR_OK, &e, msg);
 }
 
@@ -487,11 +554,13 @@ clvr_result clvr_dataset_field_name(const clvr_dataset *ds, uint32_t i, char *bu
     static const char fn[] = "clvr_dataset_field_name";
     if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
     if (!buf || !size) return finish(NULL_ARG(fn, "buf (or size 0)"), &e, msg);
-    if (i >= ds->num_fields)
+    if (i >= table_fields(ds))
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: field %u asked but the dataset has %u", fn, i,
-                                     ds->num_fields),
+                                     table_fields(ds)),
                       &e, msg);
-    copy_str(buf, size, ds->fields[i].name);
+    clvr_dataset_field f;
+    table_field(ds, i, &f);
+    copy_str(buf, size, f.name);
     return finish(CLVR_OK, &e, msg);
 }
 
@@ -517,6 +586,89 @@ static clvr_status lookup_field(const clvr_dataset *ds, const char *fn, const ch
                           field_list(ds, names, sizeof names));
 }
 
+/* lookup_field, and for a loaded file's field not in memory yet: reads it
+ * (the file's field table names it; the loader picks the array and the
+ * component, as for the program's --scalar) and keeps it under `field`. */
+static clvr_status resolve_field(clvr_dataset *ds, const char *fn, const char *field, int *out, clvr_error *e)
+{
+    if (!field || !ds->path || !ds->loaded.num_fields) return lookup_field(ds, fn, field, out, e);
+    if ((*out = find_field(ds, field)) >= 0) return CLVR_OK;
+    uint32_t index;
+    int component;
+    clvr_status s = clvr_field_select(ds->loaded.fields, ds->loaded.num_fields, field, ds->path, &index, &component, e);
+    if (s != CLVR_OK) return s;
+    if (index == ds->loaded.scalar_field && component == ds->loaded.scalar_component) {
+        *out = 0; /* the field loaded first, by another spelling */
+        return CLVR_OK;
+    }
+    if (ds->consumed)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: field '%.64s': the dataset's cells were consumed by an earlier "
+                              "scene; load %s again", fn, field, ds->path);
+    clvr_mesh m = {0};
+    clvr_load_options lo = {0};
+    lo.scalar_name = field;
+    lo.cell_flat = ds->cell_flat;
+    s = clvr_mesh_load(ds->path, &lo, &m, e);
+    if (s == CLVR_OK && (m.num_vertices != ds->num_points || m.cell_flat != ds->cell_flat))
+        s = clvr_error_set(e, CLVR_ERR_BAD_FIELD,
+                           "%s: field '%.64s' of %s gives the mesh other points (%llu, not %llu: cell data shown "
+                           "flat); load the file with this field (clvr_load_settings.field)",
+                           fn, field, ds->path, (unsigned long long)m.num_vertices,
+                           (unsigned long long)ds->num_points);
+    if (s == CLVR_OK) s = push_field(ds, field, m.scalars, m.scalars, e);
+    if (s == CLVR_OK) {
+        m.scalars = NULL; /* the dataset owns it now */
+        ds->fields[ds->num_fields - 1].from_file = 1;
+        ds->fields[ds->num_fields - 1].file_index = index;
+        if (m.num_fields == ds->loaded.num_fields) /* the file's range of the array, now decoded */
+            for (uint32_t i = 0; i < m.num_fields; ++i)
+                if (m.fields[i].has_range && !ds->loaded.fields[i].has_range) ds->loaded.fields[i] = m.fields[i];
+        *out = (int)ds->num_fields - 1;
+    }
+    clvr_mesh_free(&m);
+    return s;
+}
+
+/* The fields a caller sees: a loaded file's table (every array, in memory
+ * or not), then the fields added with clvr_dataset_add_field. */
+static uint32_t table_fields(const clvr_dataset *ds)
+{
+    uint32_t n = ds->loaded.num_fields;
+    for (uint32_t i = 0; i < ds->num_fields; ++i) n += !(ds->fields[i].from_file && ds->loaded.num_fields);
+    return n;
+}
+
+/* Field i of the table into f. */
+static void table_field(const clvr_dataset *ds, uint32_t i, clvr_dataset_field *f)
+{
+    memset(f, 0, sizeof *f);
+    f->size = sizeof *f;
+    if (i < ds->loaded.num_fields) {
+        const clvr_field_info *fi = &ds->loaded.fields[i];
+        snprintf(f->name, sizeof f->name, "%s", fi->name);
+        f->is_cell = fi->association == CLVR_FIELD_CELL;
+        f->components = fi->components;
+        f->has_range = fi->has_range;
+        f->min = fi->min;
+        f->max = fi->max;
+        for (uint32_t k = 0; k < ds->num_fields; ++k) f->loaded |= ds->fields[k].from_file && ds->fields[k].file_index == i;
+        return;
+    }
+    i -= ds->loaded.num_fields;
+    for (uint32_t k = 0; k < ds->num_fields; ++k) {
+        if (ds->fields[k].from_file && ds->loaded.num_fields) continue;
+        if (i-- == 0) {
+            snprintf(f->name, sizeof f->name, "%s", ds->fields[k].name);
+            f->components = 1;
+            f->has_range = 1;
+            f->min = ds->fields[k].lo;
+            f->max = ds->fields[k].hi;
+            f->loaded = 1;
+            return;
+        }
+    }
+}
+
 clvr_result clvr_dataset_field_range(const clvr_dataset *ds, const char *field, float *min, float *max,
                                      clvr_message *msg)
 {
@@ -526,6 +678,13 @@ clvr_result clvr_dataset_field_range(const clvr_dataset *ds, const char *field, 
     if (!min || !max) return finish(NULL_ARG(fn, "min or max"), &e, msg);
     int i;
     clvr_status s = lookup_field(ds, fn, field, &i, &e);
+    if (s != CLVR_OK && field) /* a file's field not in memory yet: the range its table has */
+        for (uint32_t k = 0; k < ds->loaded.num_fields; ++k)
+            if (!strcmp(ds->loaded.fields[k].name, field) && ds->loaded.fields[k].has_range) {
+                *min = ds->loaded.fields[k].min;
+                *max = ds->loaded.fields[k].max;
+                return finish(CLVR_OK, &e, msg);
+            }
     if (s != CLVR_OK) return finish(s, &e, msg);
     *min = ds->fields[i].lo;
     *max = ds->fields[i].hi;
@@ -551,19 +710,56 @@ static void mesh_view(const clvr_dataset *ds, uint32_t field, clvr_mesh *m)
     m->scalar_max = ds->fields[field].hi;
 }
 
-clvr_status clvr_dataset_view(const clvr_dataset *ds, const char *field, clvr_mesh *out, clvr_error *err)
-{
-    int i;
-    clvr_status s = lookup_field(ds, "clvr_dataset_view", field, &i, err);
-    if (s != CLVR_OK) return s;
-    if (ds->loaded.positions && i == 0)
-        *out = ds->loaded; /* a file's mesh as its loader left it: its fields, skipped cells, ... */
-    else
-        mesh_view(ds, (uint32_t)i, out);
-    return CLVR_OK;
-}
 
-/* --- tracer --------------------------------------------------------------- */
+/* --- scenes and tracers --------------------------------------------------- */
+
+/* A preprocessed dataset: what every tracer on it shares. */
+struct clvr_scene {
+    unsigned refs; /* the caller's + one per tracer */
+    clvr_context *ctx;
+    clvr_dataset *ds; /* NULL after clvr_scene_drop_dataset */
+    uint32_t field;
+    char field_name[CLVR_SCALAR_NAME_MAX];
+    float lo[3], hi[3];       /* the dataset's bounds */
+    float scalar_lo, scalar_hi;
+    uint64_t points;          /* the dataset's points */
+    uint64_t bytes_points_before, bytes_indices_before;
+    clvr_clustered clustered;
+    clvr_accel accel;
+    double preprocess_s;
+    uint32_t partitions; /* preprocessing partitions used */
+};
+
+struct clvr_tracer {
+    clvr_context *ctx;
+    clvr_scene *sc;
+    clvr_dataset *ds; /* the scene's, held too; NULL after clvr_tracer_drop_dataset */
+    uint32_t field;
+    float lo[3], hi[3]; /* the dataset's bounds */
+    clvr_tf tf;         /* the transfer function set by options (clvr_tracer_edit_tf edits it) */
+    int tf_state;       /* 0: none yet (the automatic one at first use), 1: options (tf), 2: a table */
+    float auto_density; /* the automatic density factor of the last options */
+    float ext_scale;    /* the table's extinction per unit opacity */
+    float *table;       /* the baked table in use */
+    uint32_t table_n;
+    clvr_renderer *renderer;
+    clvr_render_settings rs;
+    int shadows; /* asked for; march has none */
+    clvr_camera cam;
+    float up[3];
+    float density, range_lo, range_hi;
+    uint64_t frames;
+};
+
+static void scene_release(clvr_scene *sc)
+{
+    if (!sc || --sc->refs > 0) return;
+    clvr_accel_release(&sc->ctx->cl, &sc->accel);
+    clvr_clustered_release(&sc->ctx->cl, &sc->clustered);
+    --sc->ctx->tracers;
+    dataset_release(sc->ds);
+    free(sc);
+}
 
 static clvr_status apply_settings(clvr_tracer *tr, clvr_error *e)
 {
@@ -607,6 +803,23 @@ static clvr_status frame_view(clvr_tracer *tr, const float up[3], float az, floa
     return s;
 }
 
+/* Uploads a baked table and keeps it for clvr_tracer_get_tf_table (moved). */
+static clvr_status upload_table(clvr_tracer *tr, float **table, uint32_t n, float lo, float hi, float density,
+                                clvr_error *e)
+{
+    clvr_status s = clvr_renderer_set_tf(tr->renderer, *table, n, lo, hi, density, e);
+    if (s != CLVR_OK) return s;
+    free(tr->table);
+    tr->table = *table;
+    *table = NULL;
+    tr->table_n = n;
+    tr->density = density;
+    tr->range_lo = lo;
+    tr->range_hi = hi;
+    tr->frames = 0;
+    return CLVR_OK;
+}
+
 /* Uploads tf baked, as the program does, and keeps it (moved: *tf zeroed). */
 static clvr_status upload_tf(clvr_tracer *tr, clvr_tf *tf, clvr_error *e)
 {
@@ -614,24 +827,29 @@ static clvr_status upload_tf(clvr_tracer *tr, clvr_tf *tf, clvr_error *e)
     float *table = malloc((size_t)n * 4 * sizeof(float));
     if (!table) return clvr_error_set(e, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
     clvr_tf_bake(tf, table, n);
-    clvr_status s = clvr_renderer_set_tf(tr->renderer, table, n, tf->range_lo, tf->range_hi, tf->density, e);
+    clvr_status s = upload_table(tr, &table, n, tf->range_lo, tf->range_hi, tf->density, e);
     free(table);
-    if (s == CLVR_OK) {
-        tr->density = tf->density;
-        tr->range_lo = tf->range_lo;
-        tr->range_hi = tf->range_hi;
-        tr->frames = 0;
+    if (s == CLVR_OK && &tr->tf != tf) {
         clvr_tf_free(&tr->tf);
         tr->tf = *tf;
         memset(tf, 0, sizeof *tf);
     }
+    if (s == CLVR_OK) {
+        tr->tf_state = 1;
+        tr->ext_scale = clvr_tf_extinction_scale(&tr->tf);
+    }
     return s;
 }
 
-clvr_status clvr_api_tf_build(const clvr_mesh *m, const char *colormap, const char *tf_path, int range_set,
-                              float lo, float hi, float density, int density_auto, int ramp, clvr_tf *tf,
-                              float *auto_density, clvr_error *err)
+/* The transfer function of the program's options over mesh m: built-in
+ * colormap, tf_path over it, the window (range_set: [lo, hi]), automatic
+ * opacity unless ramp or the file gives it, density (density 0: the
+ * automatic density times the file's; *auto_density receives the automatic
+ * factor, 1 otherwise). Fresh tf. */
+static clvr_status tf_build(const clvr_mesh *m, const char *colormap, const char *tf_path, int range_set, float lo,
+                            float hi, float density, int ramp, clvr_tf *tf, float *auto_density, clvr_error *err)
 {
+    const int density_auto = density == 0;
     *auto_density = 1;
     clvr_status s = clvr_tf_from_options(tf, colormap ? colormap : "cool-warm", tf_path, range_set, lo, hi,
                                          density_auto ? 1.0f : density, m->scalar_min, m->scalar_max, err);
@@ -672,63 +890,105 @@ static clvr_status set_tf(clvr_tracer *tr, const char *colormap, const char *tf_
     mesh_view(tr->ds, tr->field, &m);
     clvr_tf tf = {0};
     float auto_density;
-    clvr_status s = clvr_api_tf_build(&m, colormap, tf_path, range_set, lo, hi, density, density == 0, ramp, &tf,
-                                      &auto_density, e);
+    clvr_status s = tf_build(&m, colormap, tf_path, range_set, lo, hi, density, ramp, &tf, &auto_density, e);
     if (s == CLVR_OK) s = upload_tf(tr, &tf, e);
+    if (s == CLVR_OK) tr->auto_density = auto_density;
     clvr_tf_free(&tf);
     return s;
 }
 
-void clvr_tracer_setup_default(clvr_tracer_setup *s, uint32_t width, uint32_t height)
+/* The automatic transfer function of a new tracer, made at its first use
+ * (so that a caller who sets its own never pays for the automatic one's
+ * histogram and probe rays). Without the dataset: a linear ramp over the
+ * field's range. */
+static clvr_status ensure_tf(clvr_tracer *tr, clvr_error *e)
 {
-    memset(s, 0, sizeof *s);
-    clvr_preprocess_options_default(&s->po);
-    clvr_render_settings_default(&s->rs);
-    s->rs.width = width;
-    s->rs.height = height;
-    s->shadows = s->rs.shadows;
+    if (tr->tf_state) return CLVR_OK;
+    if (tr->ds) return set_tf(tr, NULL, NULL, NAN, NAN, 0, 0, e);
+    clvr_tf tf = {0};
+    clvr_status s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, 1.0f, tr->sc->scalar_lo, tr->sc->scalar_hi,
+                                         e);
+    if (s == CLVR_OK) {
+        clvr_tf_set_extent(&tf, tr->lo, tr->hi);
+        s = upload_tf(tr, &tf, e);
+    }
+    clvr_tf_free(&tf);
+    return s;
 }
 
-clvr_status clvr_tracer_create_setup(clvr_context *ctx, clvr_dataset *ds, const char *field,
-                                     clvr_tracer_setup *setup, clvr_tracer **out, clvr_error *err)
+void clvr_preprocess_settings_init(clvr_preprocess_settings *s)
 {
-    static const char fn[] = "clvr_tracer_create";
-    const uint32_t width = setup->rs.width, height = setup->rs.height;
-    if (width < 1 || height < 1 || width > CLVR_IMAGE_MAX_DIM || height > CLVR_IMAGE_MAX_DIM)
-        return clvr_error_set(err, CLVR_ERR_USAGE, "%s: image %ux%u; width and height must be in [1, %u]", fn, width,
-                              height, CLVR_IMAGE_MAX_DIM);
+    if (!s) return;
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    memset(s, 0, sizeof *s);
+    s->size = sizeof *s;
+    s->leaf_size = po.leaf_size;
+    s->sampling_size = po.sampling_size;
+}
+
+static clvr_status check_preprocess(const char *fn, const clvr_preprocess_settings *ps, clvr_preprocess_options *po,
+                                    clvr_error *e)
+{
+    clvr_preprocess_options_default(po);
+    if (ps->leaf_size < 1 || ps->leaf_size > 128)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: leaf_size is %u; use 1 to 128 (the paper's 16 is the default)",
+                              fn, ps->leaf_size);
+    if (ps->sampling_size < 1)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: sampling_size is 0; use >= 1 (default 16)", fn);
+    po->leaf_size = ps->leaf_size;
+    po->sampling_size = ps->sampling_size;
+    return CLVR_OK;
+}
+
+static clvr_status scene_create(clvr_context *ctx, clvr_dataset *ds, const char *field,
+                                const clvr_preprocess_settings *ps, clvr_scene **out, clvr_error *err)
+{
+    static const char fn[] = "clvr_scene_create";
+    clvr_preprocess_options po;
+    clvr_status s = check_preprocess(fn, ps, &po, err);
+    if (s != CLVR_OK) return s;
     int fi;
-    clvr_status s = lookup_field(ds, fn, field, &fi, err);
+    s = resolve_field(ds, fn, field, &fi, err);
     if (s != CLVR_OK) return s;
     clvr_mesh m;
     mesh_view(ds, (uint32_t)fi, &m);
     if (clvr_mesh_num_elements(&m) == 0)
         return clvr_error_set(err, CLVR_ERR_EMPTY, "%s: the dataset has no cells; add some with "
                               "clvr_dataset_add_cells", fn);
-    clvr_tracer *tr = calloc(1, sizeof *tr);
-    if (!tr) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn);
-    tr->ctx = ctx;
-    tr->ds = ds;
-    tr->field = (uint32_t)fi;
-    memcpy(tr->lo, ds->lo, sizeof tr->lo);
-    memcpy(tr->hi, ds->hi, sizeof tr->hi);
-    tr->clustered_points = ds->num_points;
+    if (ds->consumed)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s: the dataset's cells were consumed by an earlier scene "
+                              "(clvr_preprocess_settings.consume); load it again", fn);
+    clvr_scene *sc = calloc(1, sizeof *sc);
+    if (!sc) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn);
+    sc->refs = 1;
+    sc->ctx = ctx;
+    sc->ds = ds;
+    sc->field = (uint32_t)fi;
+    snprintf(sc->field_name, sizeof sc->field_name, "%s", ds->fields[fi].name);
+    memcpy(sc->lo, ds->lo, sizeof sc->lo);
+    memcpy(sc->hi, ds->hi, sizeof sc->hi);
+    sc->scalar_lo = ds->fields[fi].lo;
+    sc->scalar_hi = ds->fields[fi].hi;
+    sc->points = ds->num_points;
+    sc->bytes_points_before = clvr_mesh_vertex_bytes(&m);
+    sc->bytes_indices_before = clvr_mesh_index_bytes(&m);
     ++ds->refs;
     ++ctx->tracers;
 
-    /* A mesh or image the device cannot hold fails now, with the numbers,
-     * not minutes into preprocessing. */
+    /* A mesh the device cannot hold fails now, with the numbers, not
+     * minutes into preprocessing (the image is checked by the tracer). */
     const uint64_t n = clvr_mesh_num_elements(&m);
-    const uint64_t part = clvr_partition_elements(n, setup->partitions);
-    s = clvr_limits_check_parts(&ctx->cl, &m, setup->name ? setup->name : "dataset", &setup->po, part, width, height,
-                                err);
+    const uint64_t part = clvr_partition_elements(n, ps->partitions);
+    s = clvr_limits_check_parts(&ctx->cl, &m, ps->name ? ps->name : "dataset", &po, part,
+                                ps->width ? ps->width : 1, ps->height ? ps->height : 1, err);
     /* Preprocessing in partitions (partition.h). A loaded file's mesh that
-     * only this tracer and the caller hold, when the caller drops it after
-     * (setup->consume), is consumed: its element lists go back to the OS
-     * partition by partition, so the input shrinks while the result grows. */
+     * only this scene and the caller hold, when the caller drops it after
+     * (consume), is consumed: its element lists go back to the OS partition
+     * by partition, so the input shrinks while the result grows. */
     clvr_mesh *pm = &m;
     int consume = 0;
-    if (setup->consume && ds->refs == 2 && ds->loaded.positions && ds->loaded.positions == ds->xyz &&
+    if (ps->consume && ds->refs == 2 && ds->loaded.positions && ds->loaded.positions == ds->xyz &&
         ds->fields[fi].values == ds->loaded.scalars) {
         int borrowed_all = 1;
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
@@ -740,26 +1000,232 @@ clvr_status clvr_tracer_create_setup(clvr_context *ctx, clvr_dataset *ds, const 
     }
     const double build0 = ctx->cl.build_s, t0 = clvr_clock_monotonic_s();
     if (s == CLVR_OK)
-        s = clvr_preprocess_partitioned(&ctx->cl, pm, &setup->po, setup->partitions, 0, consume, &tr->clustered,
-                                        &tr->partitions, err);
-    if (consume) /* the lists are gone (counts kept): nothing may read them again */
+        s = clvr_preprocess_partitioned(&ctx->cl, pm, &po, ps->partitions, 0, consume, &sc->clustered,
+                                        &sc->partitions, err);
+    if (consume) { /* the lists are gone (counts kept): nothing may read them again */
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) ds->cells[t] = NULL;
-    if (s == CLVR_OK) s = clvr_accel_build(&ctx->cl, &tr->clustered, &tr->accel, err);
+        ds->consumed = 1;
+    }
+    if (s == CLVR_OK) s = clvr_accel_build(&ctx->cl, &sc->clustered, &sc->accel, err);
     /* Compiling kernels (seconds on a cold driver cache) is not clustering. */
-    tr->preprocess_s = clvr_clock_monotonic_s() - t0 - (ctx->cl.build_s - build0);
-    tr->rs = setup->rs;
-    tr->shadows = setup->shadows;
-    tr->rs.shadows = tr->shadows && tr->rs.method != CLVR_RENDER_MARCH;
-    if (s == CLVR_OK) s = clvr_renderer_create(&ctx->cl, &tr->clustered, &tr->accel, &tr->rs, &tr->renderer, err);
-    /* The program's defaults: framing, transfer function. */
+    sc->preprocess_s = clvr_clock_monotonic_s() - t0 - (ctx->cl.build_s - build0);
+    if (s != CLVR_OK) {
+        scene_release(sc);
+        return s;
+    }
+    *out = sc;
+    return CLVR_OK;
+}
+
+clvr_result clvr_scene_create(clvr_context *ctx, clvr_dataset *ds, const char *field,
+                              const clvr_preprocess_settings *s, clvr_scene **out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_scene_create";
+    if (!ctx) return finish(NULL_ARG(fn, "ctx"), &e, msg);
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_preprocess_settings ps;
+    VERSIONED_IN(fn, s, preprocess_settings, ps);
+    return finish(scene_create(ctx, ds, field, &ps, out, &e), &e, msg);
+}
+
+void clvr_scene_destroy(clvr_scene *sc) { scene_release(sc); }
+
+clvr_result clvr_scene_drop_dataset(clvr_scene *sc, clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!sc) return finish(NULL_ARG("clvr_scene_drop_dataset", "sc"), &e, msg);
+    dataset_release(sc->ds);
+    sc->ds = NULL;
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_scene *clvr_tracer_scene(clvr_tracer *tr) { return tr ? tr->sc : NULL; }
+
+void clvr_tracer_settings_init(clvr_tracer_settings *s)
+{
+    if (!s) return;
+    clvr_render_settings rs;
+    clvr_render_settings_default(&rs);
+    memset(s, 0, sizeof *s);
+    s->size = sizeof *s;
+    snprintf(s->method, sizeof s->method, "%s", clvr_render_method_name(rs.method));
+    snprintf(s->estimator, sizeof s->estimator, "%s", clvr_render_estimator_name(rs.estimator));
+    snprintf(s->sampler, sizeof s->sampler, "%s", rs.sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
+    s->seed = rs.seed;
+    s->urm_steps = rs.urm_steps;
+    s->step = rs.step > 0 ? rs.step : 0;
+    s->bins = rs.bins;
+    s->segments = rs.segments;
+    s->macrocells = rs.macrocells;
+    memcpy(s->light_dir, rs.light_dir, sizeof s->light_dir);
+    s->light_intensity = rs.light_intensity;
+    s->ambient = rs.ambient;
+    s->shadows = rs.shadows;
+    memcpy(s->background, rs.background, sizeof s->background);
+}
+
+/* The public settings onto render settings rs (width, height, grid kept):
+ * every member checked, rs written only when all are good. */
+static clvr_status settings_to_render(const char *fn, const clvr_tracer_settings *s, clvr_render_settings *rs,
+                                      int *shadows, clvr_error *e)
+{
+    clvr_render_settings r = *rs;
+    r.method = clvr_render_method_from_name(s->method);
+    if (r.method >= CLVR_RENDER_COUNT)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: method '%.16s'; use march, track, bins or dda", fn, s->method);
+    r.estimator = clvr_render_estimator_from_name(s->estimator);
+    if (r.estimator >= CLVR_ESTIMATOR_COUNT)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: estimator '%.16s'; use delta or urm", fn, s->estimator);
+    if (!strcmp(s->sampler, "ld")) r.sampler = CLVR_SAMPLER_LD;
+    else if (!strcmp(s->sampler, "independent")) r.sampler = CLVR_SAMPLER_INDEPENDENT;
+    else return clvr_error_set(e, CLVR_ERR_USAGE, "%s: sampler '%.16s'; use ld or independent", fn, s->sampler);
+    if (s->urm_steps < 1) return clvr_error_set(e, CLVR_ERR_USAGE, "%s: urm_steps is 0; use >= 1", fn);
+    if (!(s->step >= 0) || !isfinite(s->step))
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: step is %g; use > 0, or 0 for automatic", fn, (double)s->step);
+    if (s->bins < 1 || s->bins > CLVR_RENDER_MAX_BINS || s->segments < 1)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: bins %u and segments %u; use 1 to %u bins and >= 1 segments",
+                              fn, s->bins, s->segments, CLVR_RENDER_MAX_BINS);
+    if (s->macrocells < 1) return clvr_error_set(e, CLVR_ERR_USAGE, "%s: macrocells is 0; use >= 1", fn);
+    if (!finite3(s->light_dir) || (s->light_dir[0] == 0 && s->light_dir[1] == 0 && s->light_dir[2] == 0))
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: light_dir must be 3 finite numbers, not all 0", fn);
+    if (!(s->light_intensity >= 0) || !isfinite(s->light_intensity) || !(s->ambient >= 0) || !isfinite(s->ambient))
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: light_intensity %g and ambient %g must be finite and >= 0", fn,
+                              (double)s->light_intensity, (double)s->ambient);
+    if (!finite3(s->background) || s->background[0] < 0 || s->background[1] < 0 || s->background[2] < 0)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: background must be 3 finite numbers >= 0", fn);
+    if (s->clip_box) {
+        if (!finite3(s->clip_lo) || !finite3(s->clip_hi) || !(s->clip_lo[0] <= s->clip_hi[0]) ||
+            !(s->clip_lo[1] <= s->clip_hi[1]) || !(s->clip_lo[2] <= s->clip_hi[2]))
+            return clvr_error_set(e, CLVR_ERR_USAGE, "%s: clip_lo and clip_hi must be finite with lo <= hi on "
+                                  "every axis", fn);
+    }
+    if (s->num_clip_planes > CLVR_MAX_CLIP_PLANES)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: num_clip_planes is %u; at most %u", fn, s->num_clip_planes,
+                              CLVR_MAX_CLIP_PLANES);
+    for (uint32_t i = 0; i < s->num_clip_planes; ++i) {
+        const float *p = s->clip_planes[i];
+        if (!finite3(p) || !isfinite(p[3]) || (p[0] == 0 && p[1] == 0 && p[2] == 0))
+            return clvr_error_set(e, CLVR_ERR_USAGE, "%s: clip plane %u needs a finite, non-zero normal and a finite "
+                                  "d", fn, i);
+    }
+    r.seed = s->seed;
+    r.urm_steps = s->urm_steps;
+    r.step = s->step;
+    r.bins = s->bins;
+    r.segments = s->segments;
+    r.macrocells = s->macrocells;
+    memcpy(r.light_dir, s->light_dir, sizeof r.light_dir);
+    r.light_intensity = s->light_intensity;
+    r.ambient = s->ambient;
+    memcpy(r.background, s->background, sizeof r.background);
+    if (s->clip_box) {
+        memcpy(r.clip_lo, s->clip_lo, sizeof r.clip_lo);
+        memcpy(r.clip_hi, s->clip_hi, sizeof r.clip_hi);
+    } else {
+        clvr_render_settings d;
+        clvr_render_settings_default(&d);
+        memcpy(r.clip_lo, d.clip_lo, sizeof r.clip_lo);
+        memcpy(r.clip_hi, d.clip_hi, sizeof r.clip_hi);
+    }
+    r.num_clip_planes = s->num_clip_planes;
+    memcpy(r.clip_planes, s->clip_planes, sizeof r.clip_planes);
+    *shadows = s->shadows != 0;
+    r.shadows = *shadows && r.method != CLVR_RENDER_MARCH;
+    *rs = r;
+    return CLVR_OK;
+}
+
+static void settings_from_render(const clvr_render_settings *rs, int shadows, clvr_tracer_settings *s)
+{
+    clvr_tracer_settings_init(s);
+    snprintf(s->method, sizeof s->method, "%s", clvr_render_method_name(rs->method));
+    snprintf(s->estimator, sizeof s->estimator, "%s", clvr_render_estimator_name(rs->estimator));
+    snprintf(s->sampler, sizeof s->sampler, "%s", rs->sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
+    s->seed = rs->seed;
+    s->urm_steps = rs->urm_steps;
+    s->step = rs->step > 0 ? rs->step : 0;
+    s->bins = rs->bins;
+    s->segments = rs->segments;
+    s->macrocells = rs->macrocells;
+    memcpy(s->light_dir, rs->light_dir, sizeof s->light_dir);
+    s->light_intensity = rs->light_intensity;
+    s->ambient = rs->ambient;
+    s->shadows = shadows;
+    memcpy(s->background, rs->background, sizeof s->background);
+    s->clip_box = rs->clip_lo[0] <= rs->clip_hi[0] && rs->clip_lo[1] <= rs->clip_hi[1] &&
+                  rs->clip_lo[2] <= rs->clip_hi[2];
+    if (s->clip_box) {
+        memcpy(s->clip_lo, rs->clip_lo, sizeof s->clip_lo);
+        memcpy(s->clip_hi, rs->clip_hi, sizeof s->clip_hi);
+    }
+    s->num_clip_planes = rs->num_clip_planes;
+    memcpy(s->clip_planes, rs->clip_planes, sizeof s->clip_planes);
+}
+
+static clvr_status tracer_create(clvr_scene *sc, const clvr_tracer_settings *ts, uint32_t width, uint32_t height,
+                                 clvr_tracer **out, clvr_error *err)
+{
+    static const char fn[] = "clvr_tracer_create";
+    if (width < 1 || height < 1 || width > CLVR_IMAGE_MAX_DIM || height > CLVR_IMAGE_MAX_DIM)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "%s: image %ux%u; width and height must be in [1, %u]", fn, width,
+                              height, CLVR_IMAGE_MAX_DIM);
+    clvr_render_settings rs;
+    clvr_render_settings_default(&rs);
+    rs.width = width;
+    rs.height = height;
+    int shadows = rs.shadows;
+    clvr_status s = settings_to_render(fn, ts, &rs, &shadows, err);
+    if (s != CLVR_OK) return s;
+    clvr_context *ctx = sc->ctx;
+    /* An image the device cannot hold fails here, with the numbers (the
+     * estimate counts the mesh too: it is the run's total). */
+    if (sc->ds && !sc->ds->consumed) {
+        clvr_mesh m;
+        mesh_view(sc->ds, sc->field, &m);
+        clvr_preprocess_options po;
+        clvr_preprocess_options_default(&po);
+        po.leaf_size = sc->clustered.leaf_size;
+        po.sampling_size = sc->clustered.sampling_size;
+        const uint64_t part = clvr_partition_elements(clvr_mesh_num_elements(&m), sc->partitions);
+        s = clvr_limits_check_parts(&ctx->cl, &m, "dataset", &po, part, width, height, err);
+        if (s != CLVR_OK) return s;
+    }
+    clvr_tracer *tr = calloc(1, sizeof *tr);
+    if (!tr) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn);
+    tr->ctx = ctx;
+    tr->sc = sc;
+    ++sc->refs;
+    tr->ds = sc->ds;
+    if (tr->ds) ++tr->ds->refs;
+    tr->field = sc->field;
+    memcpy(tr->lo, sc->lo, sizeof tr->lo);
+    memcpy(tr->hi, sc->hi, sizeof tr->hi);
+    tr->auto_density = 1;
+    tr->rs = rs;
+    tr->shadows = shadows;
+    s = clvr_renderer_create(&ctx->cl, &sc->clustered, &sc->accel, &tr->rs, &tr->renderer, err);
+    /* The program's default framing; the transfer function at first use. */
     if (s == CLVR_OK) s = frame_view(tr, NULL, 0, 0, 1, 30.0f, err);
-    if (s == CLVR_OK) s = setup->tf ? upload_tf(tr, setup->tf, err) : set_tf(tr, NULL, NULL, NAN, NAN, 0, 0, err);
     if (s != CLVR_OK) {
         clvr_tracer_destroy(tr);
         return s;
     }
     *out = tr;
     return CLVR_OK;
+}
+
+clvr_result clvr_tracer_create_on(clvr_scene *sc, const clvr_tracer_settings *s, uint32_t width, uint32_t height,
+                                  clvr_tracer **out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_create_on";
+    if (!sc) return finish(NULL_ARG(fn, "sc"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_tracer_settings ts;
+    VERSIONED_IN(fn, s, tracer_settings, ts);
+    return finish(tracer_create(sc, &ts, width, height, out, &e), &e, msg);
 }
 
 clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *field, uint32_t width,
@@ -770,20 +1236,29 @@ clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *
     if (!ctx) return finish(NULL_ARG(fn, "ctx"), &e, msg);
     if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
-    clvr_tracer_setup setup;
-    clvr_tracer_setup_default(&setup, width, height);
-    return finish(clvr_tracer_create_setup(ctx, ds, field, &setup, out, &e), &e, msg);
+    if (width < 1 || height < 1 || width > CLVR_IMAGE_MAX_DIM || height > CLVR_IMAGE_MAX_DIM)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: image %ux%u; width and height must be in [1, %u]", fn,
+                                     width, height, CLVR_IMAGE_MAX_DIM),
+                      &e, msg);
+    clvr_preprocess_settings ps;
+    clvr_preprocess_settings_init(&ps);
+    clvr_tracer_settings ts;
+    clvr_tracer_settings_init(&ts);
+    clvr_scene *sc = NULL;
+    clvr_status s = scene_create(ctx, ds, field, &ps, &sc, &e);
+    if (s == CLVR_OK) s = tracer_create(sc, &ts, width, height, out, &e);
+    scene_release(sc); /* the tracer holds it */
+    return finish(s, &e, msg);
 }
 
 void clvr_tracer_destroy(clvr_tracer *tr)
 {
     if (!tr) return;
     clvr_renderer_destroy(tr->renderer);
-    clvr_accel_release(&tr->ctx->cl, &tr->accel);
-    clvr_clustered_release(&tr->ctx->cl, &tr->clustered);
-    --tr->ctx->tracers;
     dataset_release(tr->ds);
+    scene_release(tr->sc);
     clvr_tf_free(&tr->tf);
+    free(tr->table);
     free(tr);
 }
 
@@ -793,22 +1268,12 @@ clvr_result clvr_tracer_drop_dataset(clvr_tracer *tr, clvr_message *msg)
     if (!tr) return finish(NULL_ARG("clvr_tracer_drop_dataset", "tr"), &e, msg);
     dataset_release(tr->ds);
     tr->ds = NULL;
+    if (tr->sc->refs == 1) { /* the scene is this tracer's alone */
+        dataset_release(tr->sc->ds);
+        tr->sc->ds = NULL;
+    }
     return finish(CLVR_OK, &e, msg);
 }
-
-void clvr_tracer_parts_of(clvr_tracer *tr, clvr_tracer_parts *out)
-{
-    out->clustered = &tr->clustered;
-    out->accel = &tr->accel;
-    out->renderer = tr->renderer;
-    out->rs = &tr->rs;
-    out->cam = &tr->cam;
-    out->tf = &tr->tf;
-    out->preprocess_s = tr->preprocess_s;
-    out->partitions = tr->partitions;
-}
-
-static int finite3(const float *v) { return v && isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
 
 clvr_result clvr_tracer_set_camera(clvr_tracer *tr, const float eye[3], const float target[3], const float up[3],
                                    float fovy_deg, clvr_message *msg)
@@ -887,14 +1352,13 @@ clvr_result clvr_tracer_set_tf_table(clvr_tracer *tr, const float *rgba, uint32_
         memcpy(table + 4 * i, rgba + 4 * i, 3 * sizeof(float));
         table[4 * i + 3] = rgba[4 * i + 3] * k;
     }
-    clvr_status s = clvr_renderer_set_tf(tr->renderer, table, n, range_lo, range_hi, density, &e);
+    clvr_status s = upload_table(tr, &table, n, range_lo, range_hi, density, &e);
     free(table);
     if (s == CLVR_OK) {
         clvr_tf_free(&tr->tf);
-        tr->density = density;
-        tr->range_lo = range_lo;
-        tr->range_hi = range_hi;
-        tr->frames = 0;
+        tr->tf_state = 2;
+        tr->ext_scale = k;
+        tr->auto_density = 1;
     }
     return finish(s, &e, msg);
 }
@@ -968,7 +1432,7 @@ clvr_result clvr_tracer_render(clvr_tracer *tr, uint32_t frames, clvr_message *m
     if (frames < 1)
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "clvr_tracer_render: frames is 0; render at least 1"), &e,
                       msg);
-    clvr_status s = CLVR_OK;
+    clvr_status s = ensure_tf(tr, &e);
     for (uint32_t i = 0; i < frames && s == CLVR_OK; ++i) {
         s = clvr_renderer_frame(tr->renderer, &e);
         if (s == CLVR_OK) ++tr->frames;
@@ -1014,10 +1478,10 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
     if (!name || !value) return finish(NULL_ARG(fn, "name or value"), &e, msg);
     clvr_render_counters c = {0};
-    clvr_status s = CLVR_OK;
-    if (tr->frames) s = clvr_renderer_read(tr->renderer, NULL, &c, &e);
+    clvr_status s = ensure_tf(tr, &e);
+    if (s == CLVR_OK && tr->frames) s = clvr_renderer_read(tr->renderer, NULL, &c, &e);
     if (s != CLVR_OK) return finish(s, &e, msg);
-    const clvr_clustered *k = &tr->clustered;
+    const clvr_clustered *k = &tr->sc->clustered;
     double v;
     if (!strcmp(name, "frames")) v = (double)tr->frames;
     else if (!strcmp(name, "rays")) v = (double)c.rays;
@@ -1025,10 +1489,10 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "null_collisions")) v = (double)c.null_collisions;
     else if (!strcmp(name, "kernel_s")) v = c.kernel_s;
     else if (!strcmp(name, "last_frame_s")) v = c.last_frame_s;
-    else if (!strcmp(name, "preprocess_s")) v = tr->preprocess_s;
+    else if (!strcmp(name, "preprocess_s")) v = tr->sc->preprocess_s;
     else if (!strcmp(name, "kernel_build_s")) v = tr->ctx->cl.build_s;
     else if (!strcmp(name, "elements")) v = (double)k->num_elements;
-    else if (!strcmp(name, "points")) v = (double)tr->clustered_points;
+    else if (!strcmp(name, "points")) v = (double)tr->sc->points;
     else if (!strcmp(name, "instances")) v = (double)k->num_instances;
     else if (!strcmp(name, "leaves")) v = (double)k->num_leaves;
     else if (!strcmp(name, "sampling_clusters")) v = (double)k->num_sampling;
@@ -1042,6 +1506,647 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
                       &e, msg);
     *value = v;
     return finish(CLVR_OK, &e, msg);
+}
+
+/* --- API 1.1: dataset information ------------------------------------------ */
+
+clvr_result clvr_dataset_get_info(const clvr_dataset *ds, clvr_dataset_info *info, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_dataset_get_info";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!info) return finish(NULL_ARG(fn, "info"), &e, msg);
+    clvr_dataset_info d;
+    memset(&d, 0, sizeof d);
+    d.size = sizeof d;
+    d.num_points = ds->num_points;
+    memcpy(d.num_cells, ds->num_cells, sizeof d.num_cells);
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) d.num_elements += ds->num_cells[t];
+    d.num_fields = table_fields(ds);
+    memcpy(d.lo, ds->lo, sizeof d.lo);
+    memcpy(d.hi, ds->hi, sizeof d.hi);
+    if (ds->num_fields) {
+        clvr_mesh m;
+        mesh_view(ds, 0, &m);
+        d.bytes_points = clvr_mesh_vertex_bytes(&m);
+        d.bytes_indices = clvr_mesh_index_bytes(&m);
+        d.scalar_min = ds->fields[0].lo;
+        d.scalar_max = ds->fields[0].hi;
+        snprintf(d.current_name, sizeof d.current_name, "%s", ds->loaded.positions ? ds->loaded.scalar_name
+                                                                                    : ds->fields[0].name);
+    }
+    d.current_field = ds->loaded.num_fields ? ds->loaded.scalar_field : 0;
+    d.skipped_cells = ds->loaded.skipped_cells;
+    d.file_fields = ds->loaded.num_fields;
+    d.decomposed_cells = ds->loaded.decomposed_cells;
+    d.cell_flat = ds->loaded.cell_flat;
+    d.current_is_cell = ds->loaded.num_fields && ds->loaded.fields[ds->loaded.scalar_field].association ==
+                                                     CLVR_FIELD_CELL;
+    return finish(versioned_out(fn, "clvr_dataset_info", info, &d, sizeof d, &e), &e, msg);
+}
+
+clvr_result clvr_dataset_get_field(const clvr_dataset *ds, uint32_t i, clvr_dataset_field *out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_dataset_get_field";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    if (i >= table_fields(ds))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: field %u asked but the dataset has %u", fn, i,
+                                     table_fields(ds)),
+                      &e, msg);
+    clvr_dataset_field f;
+    table_field(ds, i, &f);
+    return finish(versioned_out(fn, "clvr_dataset_field", out, &f, sizeof f, &e), &e, msg);
+}
+
+clvr_result clvr_dataset_get_array(const clvr_dataset *ds, const char *name, const void **data, int *borrowed,
+                                   clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_dataset_get_array";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!name || !data || !borrowed) return finish(NULL_ARG(fn, "name, data or borrowed"), &e, msg);
+    if (!strcmp(name, "points")) {
+        *data = ds->xyz;
+        *borrowed = ds->xyz_owned == NULL && !ds->loaded.positions;
+        return finish(CLVR_OK, &e, msg);
+    }
+    const int t = cell_type_of(name);
+    if (t >= 0) {
+        *data = ds->cells[t];
+        *borrowed = ds->cells[t] && ds->cells_owned[t] == NULL && !ds->loaded.positions;
+        return finish(CLVR_OK, &e, msg);
+    }
+    int i;
+    clvr_status s = lookup_field(ds, fn, name, &i, &e);
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    *data = ds->fields[i].values;
+    *borrowed = ds->fields[i].owned == NULL && !ds->fields[i].from_file;
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_dataset_warnings(const clvr_dataset *ds, const char *name, char *buf, size_t size, uint32_t *count,
+                                  clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_dataset_warnings";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!buf || !size) return finish(NULL_ARG(fn, "buf (or size 0)"), &e, msg);
+    if (!name) name = "dataset";
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
+    if (!f) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
+    int lines = 0;
+    if (ds->num_fields && !ds->consumed) {
+        clvr_mesh m;
+        mesh_view(ds, 0, &m);
+        clvr_limits_report lr;
+        clvr_limits_scan(&m, &lr);
+        lines += clvr_limits_print_warnings(f, name, &lr);
+    }
+    const uint64_t sk = ds->loaded.skipped_cells, dc = ds->loaded.decomposed_cells;
+    if (sk) {
+        fprintf(f, "clvr: warning: %s: %llu cell%s of other types (surface, line or polyhedron cells) left out; "
+                   "clvr renders tetrahedra, pyramids, wedges and hexahedra\n",
+                name, (unsigned long long)sk, sk == 1 ? "" : "s");
+        ++lines;
+    }
+    if (dc) {
+        fprintf(f, "clvr: %s: %llu polyhedr%s decomposed into tets and pyramids\n", name, (unsigned long long)dc,
+                dc == 1 ? "on" : "a");
+        ++lines;
+    }
+    fclose(f);
+    copy_str(buf, size, text ? text : "");
+    free(text);
+    if (count) *count = (uint32_t)lines;
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_file_check_memory(const char *path, uint32_t width, uint32_t height, uint32_t partitions,
+                                   clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!path) return finish(NULL_ARG("clvr_file_check_memory", "path"), &e, msg);
+    uint64_t hv = 0, hc[CLVR_CELL_TYPE_COUNT] = {0};
+    clvr_error perr = {0};
+    if (clvr_mesh_peek_bin(path, &hv, hc, &perr) != CLVR_OK) return finish(CLVR_OK, &e, msg); /* read will say */
+    uint64_t n = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += hc[t];
+    clvr_mem_limits ml;
+    clvr_mem_limits_read(&ml);
+    return finish(clvr_limits_check_host(path, hv, hc, clvr_partition_elements(n, partitions), width, height, 0, &ml,
+                                         &e),
+                  &e, msg);
+}
+
+clvr_result clvr_dataset_check_memory(const clvr_dataset *ds, const char *name, uint32_t width, uint32_t height,
+                                      uint32_t partitions, clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!ds) return finish(NULL_ARG("clvr_dataset_check_memory", "ds"), &e, msg);
+    uint64_t n = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += ds->num_cells[t];
+    clvr_mem_limits ml;
+    clvr_mem_limits_read(&ml);
+    return finish(clvr_limits_check_host(name ? name : "dataset", ds->num_points, ds->num_cells,
+                                         clvr_partition_elements(n, partitions), width, height, 1, &ml, &e),
+                  &e, msg);
+}
+
+/* --- API 1.1: context and scene -------------------------------------------- */
+
+clvr_result clvr_context_warm_up_with(clvr_context *ctx, const clvr_preprocess_settings *s, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_context_warm_up_with";
+    if (!ctx) return finish(NULL_ARG(fn, "ctx"), &e, msg);
+    clvr_preprocess_settings ps;
+    VERSIONED_IN(fn, s, preprocess_settings, ps);
+    clvr_preprocess_options po;
+    clvr_status st = check_preprocess(fn, &ps, &po, &e);
+    if (st == CLVR_OK) st = warm_up(ctx, &po, &e);
+    return finish(st, &e, msg);
+}
+
+clvr_result clvr_context_build_info(clvr_context *ctx, int notices, double *build_s, int *notice_shown,
+                                    clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!ctx) return finish(NULL_ARG("clvr_context_build_info", "ctx"), &e, msg);
+    ctx->cl.build_notice = notices != 0;
+    if (build_s) *build_s = ctx->cl.build_s;
+    if (notice_shown) *notice_shown = ctx->cl.build_notice_shown;
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_scene_get_stats";
+    if (!sc) return finish(NULL_ARG(fn, "sc"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    const clvr_clustered *c = &sc->clustered;
+    const clvr_accel *a = &sc->accel;
+    clvr_scene_stats d;
+    memset(&d, 0, sizeof d);
+    d.size = sizeof d;
+    d.elements = c->num_elements;
+    d.points = sc->points;
+    d.instances = c->num_instances;
+    d.instances16 = c->num_instances16;
+    d.leaves = c->num_leaves;
+    d.sampling_clusters = c->num_sampling;
+    d.leaf_size = c->leaf_size;
+    d.sampling_size = c->sampling_size;
+    d.partitions = sc->partitions;
+    memcpy(d.lo, sc->lo, sizeof d.lo);
+    memcpy(d.hi, sc->hi, sizeof d.hi);
+    d.bytes_points_before = sc->bytes_points_before;
+    d.bytes_points_after = c->bytes_vertices_after;
+    d.bytes_indices_before = c->bytes_indices_before ? c->bytes_indices_before : sc->bytes_indices_before;
+    d.bytes_indices_after = c->bytes_indices_after;
+    d.bytes_bvh = clvr_accel_bvh_bytes(a);
+    d.bytes_element_boxes = a->two_level.ebox_bytes;
+    /* Table 1's "pre" column: the same packed 4-wide tree with one element
+     * per leaf, i.e. over num_elements primitives. */
+    d.bytes_bvh_one_per_leaf =
+        (uint64_t)clvr_bvh_nodes_bound(c->num_elements > 0x7fffffffull ? 0x7fffffffu : (uint32_t)c->num_elements) *
+        sizeof(clvr_bvh_node);
+    d.bytes_sampling = c->bytes_sampling + (uint64_t)a->sampling_node_count * sizeof(clvr_bvh_node);
+    d.device_bytes = sc->ctx->cl.allocated_bytes;
+    d.preprocess_s = sc->preprocess_s;
+    for (int i = 0; i < CLVR_PP_STAGE_COUNT && d.num_stages < CLVR_STATS_MAX_STAGES - 1; ++i) {
+        snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "%s", clvr_pp_stage_name(i));
+        d.stage_s[d.num_stages++] = c->stage_s[i];
+    }
+    d.scalar_min = sc->scalar_lo;
+    d.scalar_max = sc->scalar_hi;
+    snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "bvh");
+    d.stage_s[d.num_stages++] = a->two_level.build_seconds;
+    return finish(versioned_out(fn, "clvr_scene_stats", out, &d, sizeof d, &e), &e, msg);
+}
+
+/* --- API 1.1: settings, size, statistics, camera ---------------------------- */
+
+clvr_result clvr_tracer_get_settings(const clvr_tracer *tr, clvr_tracer_settings *out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_get_settings";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_tracer_settings d;
+    settings_from_render(&tr->rs, tr->shadows, &d);
+    return finish(versioned_out(fn, "clvr_tracer_settings", out, &d, sizeof d, &e), &e, msg);
+}
+
+clvr_result clvr_tracer_set_settings(clvr_tracer *tr, const clvr_tracer_settings *s, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_set_settings";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!s) return finish(NULL_ARG(fn, "s"), &e, msg);
+    clvr_tracer_settings ts;
+    VERSIONED_IN(fn, s, tracer_settings, ts);
+    clvr_render_settings rs = tr->rs;
+    int shadows;
+    clvr_status st = settings_to_render(fn, &ts, &rs, &shadows, &e);
+    if (st != CLVR_OK) return finish(st, &e, msg);
+    const clvr_render_settings old = tr->rs;
+    const int old_shadows = tr->shadows;
+    tr->rs = rs;
+    tr->shadows = shadows;
+    st = apply_settings(tr, &e);
+    if (st != CLVR_OK) { /* all or nothing */
+        tr->rs = old;
+        tr->shadows = old_shadows;
+    }
+    return finish(st, &e, msg);
+}
+
+clvr_result clvr_tracer_set_size(clvr_tracer *tr, uint32_t width, uint32_t height, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_set_size";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (width < 1 || height < 1 || width > CLVR_IMAGE_MAX_DIM || height > CLVR_IMAGE_MAX_DIM)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: image %ux%u; width and height must be in [1, %u]", fn,
+                                     width, height, CLVR_IMAGE_MAX_DIM),
+                      &e, msg);
+    const uint32_t w0 = tr->rs.width, h0 = tr->rs.height;
+    tr->rs.width = width;
+    tr->rs.height = height;
+    clvr_status s = apply_settings(tr, &e);
+    if (s == CLVR_OK) {
+        float eye[3], target[3], up[3];
+        memcpy(eye, tr->cam.origin, sizeof eye);
+        memcpy(target, tr->cam.target, sizeof target);
+        memcpy(up, tr->up, sizeof up);
+        s = set_camera(tr, eye, target, up, tr->cam.fovy, &e);
+    }
+    if (s != CLVR_OK) {
+        tr->rs.width = w0;
+        tr->rs.height = h0;
+    }
+    return finish(s, &e, msg);
+}
+
+clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_get_render_stats";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_render_counters c = {0};
+    clvr_status s = CLVR_OK;
+    if (tr->frames) s = clvr_renderer_read(tr->renderer, NULL, &c, &e);
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    clvr_render_stats d;
+    memset(&d, 0, sizeof d);
+    d.size = sizeof d;
+    d.frames = tr->frames ? c.frames : 0;
+    d.rays = c.rays;
+    d.samples = c.samples;
+    d.null_collisions = c.null_collisions;
+    d.kernel_s = c.kernel_s;
+    d.last_frame_s = c.last_frame_s;
+    d.width = tr->rs.width;
+    d.height = tr->rs.height;
+    snprintf(d.method, sizeof d.method, "%s", clvr_render_method_name(tr->rs.method));
+    return finish(versioned_out(fn, "clvr_render_stats", out, &d, sizeof d, &e), &e, msg);
+}
+
+clvr_result clvr_tracer_get_view(const clvr_tracer *tr, float eye[3], float target[3], float up[3], float *fovy_deg,
+                                 clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!tr) return finish(NULL_ARG("clvr_tracer_get_view", "tr"), &e, msg);
+    if (eye) memcpy(eye, tr->cam.origin, 3 * sizeof(float));
+    if (target) memcpy(target, tr->cam.target, 3 * sizeof(float));
+    if (up) memcpy(up, tr->up, 3 * sizeof(float));
+    if (fovy_deg) *fovy_deg = tr->cam.fovy;
+    return finish(CLVR_OK, &e, msg);
+}
+
+void clvr_rotate_about(const float p[3], const float centre[3], const float axis[3], float deg, float out[3])
+{
+    clvr_camera_rotate_about(p, centre, axis, deg, out);
+}
+
+clvr_result clvr_tracer_draw_box(const clvr_tracer *tr, float *rgba, size_t count, const float lo[3],
+                                 const float hi[3], const float rgb[3], float line_width, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_draw_box";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!rgba || !lo || !hi || !rgb) return finish(NULL_ARG(fn, "rgba, lo, hi or rgb"), &e, msg);
+    const size_t need = (size_t)tr->rs.width * tr->rs.height * 4;
+    if (count < need)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: rgba holds %zu floats; a %ux%u image needs %zu", fn,
+                                     count, tr->rs.width, tr->rs.height, need),
+                      &e, msg);
+    if (!finite3(lo) || !finite3(hi) || !finite3(rgb) || !(line_width > 0) || !isfinite(line_width))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: lo, hi and rgb must be finite and line_width > 0", fn),
+                      &e, msg);
+    clvr_outline_draw_box(rgba, &tr->cam, lo, hi, rgb, line_width);
+    return finish(CLVR_OK, &e, msg);
+}
+
+/* --- API 1.1: the transfer function in use --------------------------------- */
+
+clvr_result clvr_tracer_get_tf(const clvr_tracer *tr, clvr_tf_info *out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_get_tf";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_status s = ensure_tf((clvr_tracer *)tr, &e); /* the automatic one, made at first use */
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    clvr_tf_info d;
+    memset(&d, 0, sizeof d);
+    d.size = sizeof d;
+    snprintf(d.colormap, sizeof d.colormap, "%s", tr->tf_state == 1 ? tr->tf.name : "table");
+    d.range_lo = tr->range_lo;
+    d.range_hi = tr->range_hi;
+    d.density = tr->density;
+    d.auto_density = tr->auto_density;
+    d.table_size = tr->table_n;
+    d.extinction_scale = tr->ext_scale;
+    return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, &e), &e, msg);
+}
+
+clvr_result clvr_tracer_get_tf_table(const clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_get_tf_table";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!rgba) return finish(NULL_ARG(fn, "rgba"), &e, msg);
+    clvr_status s = ensure_tf((clvr_tracer *)tr, &e);
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    if (count < 4 * (size_t)tr->table_n)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: rgba holds %zu floats; the table needs %zu", fn, count,
+                                     4 * (size_t)tr->table_n),
+                      &e, msg);
+    memcpy(rgba, tr->table, 4 * (size_t)tr->table_n * sizeof(float));
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_tracer_edit_tf(clvr_tracer *tr, const char *colormap, float range_lo, float range_hi, float density,
+                                clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_edit_tf";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    clvr_status s = ensure_tf(tr, &e);
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    if (tr->tf_state != 1)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: the transfer function is a table "
+                                     "(clvr_tracer_set_tf_table); set it again instead", fn),
+                      &e, msg);
+    const int keep_range = isnan(range_lo) && isnan(range_hi);
+    if (!keep_range && !(isfinite(range_lo) && isfinite(range_hi) && range_lo < range_hi))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: range [%g, %g] must be finite with lo < hi, or both "
+                                     "NaN to keep it", fn, (double)range_lo, (double)range_hi),
+                      &e, msg);
+    if (!isnan(density) && (!(density >= 0) || !isfinite(density)))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: density %g; use a finite value >= 0, or NaN to keep it",
+                                     fn, (double)density),
+                      &e, msg);
+    clvr_tf old = tr->tf; /* the colour points are replaced by a colormap change: keep the old ones until it works */
+    clvr_tf edit = tr->tf;
+    edit.colors = NULL;
+    edit.num_colors = 0;
+    if (colormap) s = clvr_tf_set_colormap(&edit, colormap, &e);
+    else {
+        edit.colors = malloc((size_t)old.num_colors * 4 * sizeof(float));
+        if (!edit.colors) s = clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn);
+        else {
+            memcpy(edit.colors, old.colors, (size_t)old.num_colors * 4 * sizeof(float));
+            edit.num_colors = old.num_colors;
+        }
+    }
+    if (s != CLVR_OK) {
+        free(edit.colors);
+        return finish(s, &e, msg);
+    }
+    if (!keep_range) {
+        edit.range_lo = range_lo;
+        edit.range_hi = range_hi;
+        edit.range_set = 1;
+    }
+    if (!isnan(density)) edit.density = density;
+    tr->tf = edit; /* upload_tf keeps tr->tf when given it */
+    s = upload_tf(tr, &tr->tf, &e);
+    if (s == CLVR_OK) free(old.colors);
+    else {
+        free(edit.colors);
+        tr->tf = old;
+    }
+    return finish(s, &e, msg);
+}
+
+const char *clvr_colormap_names(void) { return clvr_tf_colormap_names(); }
+
+
+struct clvr_transfer {
+    clvr_tf tf;
+    float auto_density;
+};
+
+/* A deep copy of src into *dst (zeroed or freed first by the caller). */
+static clvr_status tf_copy(const clvr_tf *src, clvr_tf *dst, clvr_error *e)
+{
+    *dst = *src;
+    dst->colors = malloc((size_t)(src->num_colors ? src->num_colors : 1) * 4 * sizeof(float));
+    dst->opacity = malloc((size_t)(src->num_opacity ? src->num_opacity : 1) * 4 * sizeof(float));
+    if (!dst->colors || !dst->opacity) {
+        free(dst->colors);
+        free(dst->opacity);
+        memset(dst, 0, sizeof *dst);
+        return clvr_error_set(e, CLVR_ERR_NO_MEMORY, "out of memory copying a transfer function");
+    }
+    if (src->num_colors) memcpy(dst->colors, src->colors, (size_t)src->num_colors * 4 * sizeof(float));
+    if (src->num_opacity) memcpy(dst->opacity, src->opacity, (size_t)src->num_opacity * 4 * sizeof(float));
+    return CLVR_OK;
+}
+
+clvr_result clvr_transfer_create(const clvr_dataset *ds, const char *field, const char *colormap, const char *tf_path,
+                                 float range_lo, float range_hi, float density, int ramp, clvr_transfer **out,
+                                 clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_transfer_create";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    const int range_set = !(isnan(range_lo) && isnan(range_hi));
+    if (range_set && !(isfinite(range_lo) && isfinite(range_hi) && range_lo < range_hi))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: range [%g, %g] must be finite with lo < hi, or both "
+                                     "NaN for the data range", fn, (double)range_lo, (double)range_hi),
+                      &e, msg);
+    if (!(density >= 0) || !isfinite(density))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: density is %g; use a value > 0, or 0 for automatic",
+                                     fn, (double)density),
+                      &e, msg);
+    if (ds->consumed)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: the dataset's cells were consumed by a scene; make "
+                                     "the transfer function before clvr_scene_create", fn),
+                      &e, msg);
+    int fi;
+    clvr_status s = lookup_field(ds, fn, field, &fi, &e);
+    if (s != CLVR_OK) return finish(s, &e, msg);
+    clvr_transfer *t = calloc(1, sizeof *t);
+    if (!t) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
+    clvr_mesh m;
+    mesh_view(ds, (uint32_t)fi, &m);
+    s = tf_build(&m, colormap, tf_path, range_set, range_lo, range_hi, density, ramp, &t->tf, &t->auto_density, &e);
+    if (s != CLVR_OK) {
+        clvr_transfer_destroy(t);
+        return finish(s, &e, msg);
+    }
+    *out = t;
+    return finish(CLVR_OK, &e, msg);
+}
+
+void clvr_transfer_destroy(clvr_transfer *tf)
+{
+    if (!tf) return;
+    clvr_tf_free(&tf->tf);
+    free(tf);
+}
+
+clvr_result clvr_transfer_get_info(const clvr_transfer *tf, clvr_tf_info *out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_transfer_get_info";
+    if (!tf) return finish(NULL_ARG(fn, "tf"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_tf_info d;
+    memset(&d, 0, sizeof d);
+    d.size = sizeof d;
+    snprintf(d.colormap, sizeof d.colormap, "%s", tf->tf.name);
+    d.range_lo = tf->tf.range_lo;
+    d.range_hi = tf->tf.range_hi;
+    d.density = tf->tf.density;
+    d.auto_density = tf->auto_density;
+    d.table_size = clvr_tf_table_size(&tf->tf);
+    d.extinction_scale = clvr_tf_extinction_scale(&tf->tf);
+    return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, &e), &e, msg);
+}
+
+clvr_result clvr_tracer_set_transfer(clvr_tracer *tr, const clvr_transfer *tf, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_set_transfer";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!tf) return finish(NULL_ARG(fn, "tf"), &e, msg);
+    clvr_tf copy;
+    clvr_status s = tf_copy(&tf->tf, &copy, &e);
+    if (s == CLVR_OK) s = upload_tf(tr, &copy, &e);
+    if (s == CLVR_OK) tr->auto_density = tf->auto_density;
+    clvr_tf_free(&copy);
+    return finish(s, &e, msg);
+}
+
+/* --- API 1.1: images and process ------------------------------------------- */
+
+void clvr_image_settings_init(clvr_image_settings *s)
+{
+    if (!s) return;
+    memset(s, 0, sizeof *s);
+    s->size = sizeof *s;
+    s->tonemap = "aces";
+}
+
+clvr_result clvr_image_save_with(const char *path, uint32_t width, uint32_t height, const float *rgba,
+                                 const clvr_image_settings *s, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_image_save_with";
+    if (!path) return finish(NULL_ARG(fn, "path"), &e, msg);
+    if (!rgba) return finish(NULL_ARG(fn, "rgba"), &e, msg);
+    clvr_image_settings is;
+    VERSIONED_IN(fn, s, image_settings, is);
+    if (!isfinite(is.exposure_ev))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: exposure_ev must be finite", fn), &e, msg);
+    clvr_tonemap tm = clvr_tonemap_parse(is.tonemap ? is.tonemap : "aces");
+    if (tm >= CLVR_TONEMAP_COUNT)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown tone curve '%.64s'; use none, aces or filmic",
+                                     fn, is.tonemap),
+                      &e, msg);
+    if (is.legend_table && (is.legend_entries < 1 || !(is.legend_lo < is.legend_hi)))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: a legend needs legend_entries >= 1 and legend_lo < "
+                                     "legend_hi", fn),
+                      &e, msg);
+    clvr_image_legend legend = {is.legend_table, is.legend_entries, is.legend_lo, is.legend_hi, is.legend_name};
+    clvr_image_display d = {is.exposure_ev, tm, is.transparent != 0, is.legend_table ? &legend : NULL};
+    return finish(clvr_image_write_display(path, width, height, rgba, &d, &e), &e, msg);
+}
+
+clvr_result clvr_image_check_path(const char *path, clvr_message *msg)
+{
+    clvr_error e = {0};
+    if (!path) return finish(NULL_ARG("clvr_image_check_path", "path"), &e, msg);
+    return finish(clvr_image_check_output(path, &e), &e, msg);
+}
+
+int clvr_image_path_is_png(const char *path) { return path && clvr_image_is_png(path); }
+
+clvr_result clvr_image_path_numbered(const char *path, uint32_t index, char *out, size_t size, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_image_path_numbered";
+    if (!path || !out) return finish(NULL_ARG(fn, "path or out"), &e, msg);
+    if (!clvr_image_numbered_path(path, index, out, size))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: %s with a frame number does not fit %zu bytes", fn,
+                                     path, size),
+                      &e, msg);
+    return finish(CLVR_OK, &e, msg);
+}
+
+void clvr_process_memory(uint64_t *resident, uint64_t *peak) { clvr_mem_rss(resident, peak); }
+
+clvr_result clvr_image_to_srgb8(const float *rgba, uint32_t width, uint32_t height, float exposure_ev,
+                                const char *tonemap, uint8_t *rgba8, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_image_to_srgb8";
+    if (!rgba || !rgba8) return finish(NULL_ARG(fn, "rgba or rgba8"), &e, msg);
+    if (!isfinite(exposure_ev))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: exposure_ev must be finite", fn), &e, msg);
+    const clvr_tonemap tm = clvr_tonemap_parse(tonemap ? tonemap : "aces");
+    if (tm >= CLVR_TONEMAP_COUNT)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown tone curve '%.64s'; use none, aces or filmic",
+                                     fn, tonemap),
+                      &e, msg);
+    const float gain = exp2f(exposure_ev);
+    const size_t n = (size_t)width * height * 4;
+    for (size_t i = 0; i < n; i += 4) {
+        for (int k = 0; k < 3; ++k) rgba8[i + k] = clvr_image_srgb_to_u8(clvr_image_tonemap(tm, rgba[i + k] * gain));
+        rgba8[i + 3] = 255;
+    }
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_image_save_srgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
+                                  clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_image_save_srgb8";
+    if (!path || !rgba8) return finish(NULL_ARG(fn, "path or rgba8"), &e, msg);
+    const size_t n = (size_t)width * height;
+    float *img = malloc((n ? n : 1) * 4 * sizeof(float));
+    if (!img) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
+    float dec[256];
+    for (int i = 0; i < 256; ++i) dec[i] = clvr_image_srgb_decode((float)i / 255.0f);
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) img[4 * i + k] = dec[rgba8[4 * i + k]];
+        img[4 * i + 3] = 1.0f;
+    }
+    clvr_status s = clvr_image_write(path, width, height, img, &e);
+    free(img);
+    return finish(s, &e, msg);
 }
 
 /* --- images --------------------------------------------------------------- */

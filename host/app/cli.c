@@ -4,6 +4,7 @@
 #include "render.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -450,3 +451,32 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
         s = clvr_error_set(err, CLVR_ERR_USAGE, "--orbit renders numbered files; it does not apply to --view");
     return s;
 }
+
+clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_error *err)
+{
+    (void)err;
+    snprintf(s->method, sizeof s->method, "%s", clvr_render_method_name(o->method));
+    snprintf(s->estimator, sizeof s->estimator, "%s", clvr_render_estimator_name(o->estimator));
+    snprintf(s->sampler, sizeof s->sampler, "%s", o->sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
+    s->seed = o->seed;
+    s->urm_steps = o->urm_steps;
+    s->step = o->step > 0 ? o->step : 0;
+    s->bins = o->bins;
+    s->segments = o->segments;
+    s->macrocells = o->macrocells;
+    memcpy(s->light_dir, o->light_dir, sizeof s->light_dir);
+    s->light_intensity = o->light_intensity;
+    s->ambient = o->ambient;
+    s->shadows = o->shadows;
+    memcpy(s->background, o->background, sizeof s->background);
+    s->clip_box = o->clip_box_set;
+    if (o->clip_box_set) {
+        memcpy(s->clip_lo, o->clip_lo, sizeof s->clip_lo);
+        memcpy(s->clip_hi, o->clip_hi, sizeof s->clip_hi);
+    }
+    s->num_clip_planes = o->num_clip_planes;
+    memcpy(s->clip_planes, o->clip_planes, sizeof s->clip_planes);
+    return CLVR_OK;
+}
+
+const char *clvr_cli_tonemap_name(int tonemap) { return clvr_tonemap_name((clvr_tonemap)tonemap); }

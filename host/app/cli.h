@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "clvr.h"
 #include "clvr_shared.h"
 #include "status.h"
 
@@ -76,6 +77,15 @@ typedef struct clvr_options {
 /* Fills defaults, then parses argv. On a bad command line returns
  * CLVR_ERR_USAGE with a message naming the option and what it expects. */
 clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *err);
+
+/* The render settings of the command line (--method, --estimator,
+ * --sampler, --seed, --urm-steps, --step, --bins, --segments, --macrocells,
+ * --light, --light-intensity, --ambient, --shadows, --background, --clip,
+ * --clip-box) as libclvr's settings (s initialised by the caller). */
+clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_error *err);
+
+/* The name of --tonemap's value, as clvr_image_settings.tonemap takes it. */
+const char *clvr_cli_tonemap_name(int tonemap);
 
 /* The --help text. */
 void clvr_cli_print_help(FILE *out);

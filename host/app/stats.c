@@ -4,26 +4,22 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "accel.h"
-#include "cli.h"
-#include "preprocess.h"
-#include "render.h"
+#include <stdio.h>
 
-void clvr_stats_from_mesh(clvr_stats *s, const clvr_mesh *m)
+void clvr_stats_from_dataset(clvr_stats *s, const clvr_dataset_info *d)
 {
-    s->elements = clvr_mesh_num_elements(m);
-    s->vertices = m->num_vertices;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) s->cells[t] = m->num_cells[t];
-    s->bytes_vertices = clvr_mesh_vertex_bytes(m);
-    s->bytes_indices_before = clvr_mesh_index_bytes(m);
+    s->elements = d->num_elements;
+    s->vertices = d->num_points;
+    for (uint32_t t = 0; t < 4; ++t) s->cells[t] = d->num_cells[t];
+    s->bytes_vertices = d->bytes_points;
+    s->bytes_indices_before = d->bytes_indices;
 }
 
-void clvr_stats_from_render(clvr_stats *s, const clvr_render_counters *rc, uint32_t method, uint32_t width,
-                            uint32_t height)
+void clvr_stats_from_render(clvr_stats *s, const clvr_render_stats *rc)
 {
-    s->method = method;
-    s->width = width;
-    s->height = height;
+    snprintf(s->method, sizeof s->method, "%s", rc->method);
+    s->width = rc->width;
+    s->height = rc->height;
     s->frames = rc->frames;
     s->rays = rc->rays;
     s->samples = rc->samples;
@@ -34,33 +30,27 @@ void clvr_stats_from_render(clvr_stats *s, const clvr_render_counters *rc, uint3
     s->null_collisions_per_ray = rc->rays ? (double)rc->null_collisions / (double)rc->rays : 0.0;
 }
 
-void clvr_stats_from_clusters(clvr_stats *s, const clvr_clustered *c, const clvr_accel *a)
+void clvr_stats_from_scene(clvr_stats *s, const clvr_scene_stats *c)
 {
     s->have_clusters = 1;
-    s->bytes_vertices_after = c->bytes_vertices_after;
+    s->bytes_vertices_after = c->bytes_points_after;
     s->bytes_indices_after = c->bytes_indices_after;
     if (c->bytes_indices_before) s->bytes_indices_before = c->bytes_indices_before;
-    s->bytes_bvh = clvr_accel_bvh_bytes(a);
-    s->bytes_element_boxes = a->two_level.ebox_bytes;
-    /* Table 1's "pre" column: the same packed 4-wide tree with one element
-     * per leaf, i.e. over num_elements primitives. */
-    s->bytes_bvh_one_per_leaf =
-        (uint64_t)clvr_bvh_nodes_bound(c->num_elements > 0x7fffffffull ? 0x7fffffffu : (uint32_t)c->num_elements) *
-        sizeof(clvr_bvh_node);
-    s->bytes_sampling = c->bytes_sampling + (uint64_t)a->sampling_node_count * sizeof(clvr_bvh_node);
-    s->num_instances = c->num_instances;
-    s->num_instances16 = c->num_instances16;
-    s->num_leaves = c->num_leaves;
-    s->num_sampling = c->num_sampling;
+    s->bytes_bvh = c->bytes_bvh;
+    s->bytes_element_boxes = c->bytes_element_boxes;
+    s->bytes_bvh_one_per_leaf = c->bytes_bvh_one_per_leaf;
+    s->bytes_sampling = c->bytes_sampling;
+    s->num_instances = c->instances;
+    s->num_instances16 = c->instances16;
+    s->num_leaves = c->leaves;
+    s->num_sampling = c->sampling_clusters;
     s->leaf_size = c->leaf_size;
     s->sampling_size = c->sampling_size;
     s->num_stages = 0;
-    for (int i = 0; i < CLVR_PP_STAGE_COUNT && s->num_stages < CLVR_STATS_MAX_STAGES - 1; ++i) {
-        s->stage_name[s->num_stages] = clvr_pp_stage_name(i);
+    for (uint32_t i = 0; i < c->num_stages && s->num_stages < CLVR_STATS_MAX_STAGES; ++i) {
+        snprintf(s->stage_name[s->num_stages], sizeof s->stage_name[0], "%s", c->stage_name[i]);
         s->stage_s[s->num_stages++] = c->stage_s[i];
     }
-    s->stage_name[s->num_stages] = "bvh";
-    s->stage_s[s->num_stages++] = a->two_level.build_seconds;
 }
 
 static double per_element(uint64_t bytes, uint64_t elements)
@@ -115,7 +105,7 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
     if (s->have_render) {
         fprintf(out, "\nrender: %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
                      "%.2f null collisions/ray\n",
-                clvr_render_method_name(s->method), s->width, s->height, (unsigned long long)s->frames,
+                s->method, s->width, s->height, (unsigned long long)s->frames,
                 s->frame_s, s->rays_per_s / 1e6, s->samples_per_ray, s->null_collisions_per_ray);
     }
 }
@@ -129,12 +119,20 @@ static void jnum(FILE *f, const char *indent, const char *key, double v, int com
         fprintf(f, "%s\"%s\": null%s\n", indent, key, comma ? "," : "");
 }
 
-clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_error *err)
+/* A failed write: msg names the file and the OS error (clvr's ERR_WRITE). */
+static clvr_result write_failed(clvr_message *msg, const char *path, int e)
+{
+    msg->result = CLVR_RESULT_ERR_WRITE;
+    snprintf(msg->text, sizeof msg->text, "cannot write %s: %s", path, strerror(e));
+    return msg->result;
+}
+
+clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_message *msg)
 {
     char tmp[4096];
     snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid());
     FILE *f = fopen(tmp, "w");
-    if (!f) return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(errno));
+    if (!f) return write_failed(msg, path, errno);
     struct { const char *k; double v; } b[] = {
         {"vertices", (double)s->bytes_vertices},
         {"vertices_after", (double)s->bytes_vertices_after},
@@ -183,7 +181,7 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
     jnum(f, "    ", "preprocess_s", s->preprocess_s, 0);
     fprintf(f, "  },\n");
     if (s->have_render) {
-        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n", clvr_render_method_name(s->method));
+        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n", s->method);
         for (size_t i = 0; i < nr; ++i) jnum(f, "    ", r[i].k, r[i].v, i + 1 < nr);
         fprintf(f, "  },\n");
     }
@@ -205,13 +203,16 @@ clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_er
     fprintf(f, "}\n");
     int bad = ferror(f);
     if (fclose(f) != 0 || bad) {
+        const int e = errno;
         remove(tmp);
-        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(errno));
+        return write_failed(msg, path, e);
     }
     if (rename(tmp, path) != 0) {
         int e = errno;
         remove(tmp);
-        return clvr_error_set(err, CLVR_ERR_WRITE, "cannot write %s: %s", path, strerror(e));
+        return write_failed(msg, path, e);
     }
-    return CLVR_OK;
+    msg->result = CLVR_RESULT_OK;
+    msg->text[0] = '\0';
+    return CLVR_RESULT_OK;
 }

@@ -7,20 +7,13 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "mesh.h"
-#include "status.h"
-
-struct clvr_clustered;
-struct clvr_accel;
-struct clvr_render_counters;
-
-#define CLVR_STATS_MAX_STAGES 16
+#include "clvr.h"
 
 typedef struct clvr_stats {
     int have_mesh, have_clusters, have_render;
     /* mesh */
     uint64_t elements, vertices;
-    uint64_t cells[CLVR_CELL_TYPE_COUNT];
+    uint64_t cells[4];
     double load_s;
     /* memory, bytes */
     uint64_t bytes_vertices;        /* input: float3 position + float scalar per vertex */
@@ -42,24 +35,26 @@ typedef struct clvr_stats {
     double preprocess_s;            /* wall time: upload + clustering + BVH, kernel compilation excluded */
     double kernel_build_s;          /* wall time in the driver's compiler (all programs; ms when cached) */
     int num_stages;
-    const char *stage_name[CLVR_STATS_MAX_STAGES];
+    char stage_name[CLVR_STATS_MAX_STAGES][16];
     double stage_s[CLVR_STATS_MAX_STAGES];
     /* render */
-    uint32_t method, width, height;
+    char method[16];
+    uint32_t width, height;
     uint64_t frames, rays, samples, null_collisions;
     double frame_s, rays_per_s, samples_per_ray, null_collisions_per_ray, render_wall_s;
 } clvr_stats;
 
-void clvr_stats_from_mesh(clvr_stats *s, const clvr_mesh *m);
-void clvr_stats_from_clusters(clvr_stats *s, const struct clvr_clustered *c, const struct clvr_accel *a);
-void clvr_stats_from_render(clvr_stats *s, const struct clvr_render_counters *rc, uint32_t method, uint32_t width,
-                            uint32_t height);
+/* The figures of the input, of the preprocessing and of the frames, from
+ * libclvr's public statistics. */
+void clvr_stats_from_dataset(clvr_stats *s, const clvr_dataset_info *d);
+void clvr_stats_from_scene(clvr_stats *s, const clvr_scene_stats *c);
+void clvr_stats_from_render(clvr_stats *s, const clvr_render_stats *r);
 
 /* Human-readable tables on out. */
 void clvr_stats_print(FILE *out, const clvr_stats *s);
 /* JSON, written to a temporary file and renamed. Nested objects ("bytes":
  * {"vertices": ...}) and, for tools that look keys up flat, the same values
  * under dotted top-level keys ("bytes.vertices"). */
-clvr_status clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_error *err);
+clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_message *msg);
 
 #endif

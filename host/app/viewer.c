@@ -7,7 +7,6 @@
  * along the bottom. Input is turned into edits by handlers that the GLFW
  * callbacks and the CLVR_VIEW_SCRIPT test hook share, so scripted tests
  * drive the same code as a person does. See viewer.h and docs/viewer.md. */
-#include "clock.h"
 #include "viewer.h"
 
 #include <GLFW/glfw3.h>
@@ -21,14 +20,12 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "image.h"
 
 /* A modifier bit of our own beside GLFW's: "L is held" turns a left drag
  * into a light rotation. GLFW's modifier bits stop at 0x20. */
 #define VIEW_MOD_LIGHT 0x100
 
 #define MAX_MAPS 16
-#define SRGB_LUT 4096
 #define STRIP_TEXELS 256
 #define ORBIT_DEG_PER_PX 0.4f
 #define KEY_ORBIT_DEG 10.0f
@@ -42,12 +39,16 @@
 
 typedef struct viewer {
     const clvr_options *o;
-    clvr_cl *cl;
-    const clvr_clustered *mesh;
-    clvr_renderer *r;
-    clvr_tf *tf;
-    clvr_render_settings rs;
+    clvr_tracer *tr;             /* every edit goes through libclvr's public calls */
+    const char *device;          /* the device's name, for the status line */
+    float data_lo, data_hi;      /* the field's range */
+    clvr_tracer_settings ts;     /* the render settings, as edited */
+    uint32_t width, height;      /* the tracer's image: the framebuffer's size */
+    int resized;
     int shadows;                 /* what the user asked for; march never has shadows */
+    char map_name[64];           /* the colour map in use */
+    float range_lo, range_hi, density; /* the transfer function's window and density, as edited */
+    float ext_scale;             /* table extinction per unit opacity (clvr_tf_info) */
     GLFWwindow *win;
     clvr_error *err;
     clvr_status status;          /* first failure of an edit; ends the loop */
@@ -77,9 +78,7 @@ typedef struct viewer {
     size_t img_cap;              /* pixels allocated */
     GLuint tex, strip_tex;
     uint32_t tex_w, tex_h;
-    clvr_image_display display;  /* what `clvr -o x.png` applies: exposure, tone curve, alpha */
-    float gain;                  /* 2^exposure */
-    uint8_t lut[SRGB_LUT];       /* display-linear [0, 1] -> 8-bit sRGB */
+    clvr_image_settings display; /* what `clvr -o x.png` applies: exposure, tone curve, alpha */
 
     /* Mouse. */
     int button;                  /* GLFW_MOUSE_BUTTON_* held, -1: none */
@@ -98,6 +97,32 @@ typedef struct viewer {
     int script_line;
     long wait_frames;
 } viewer;
+
+static const char *const method_names[] = {"march", "track", "bins", "dda"};
+static const char *const estimator_names[] = {"delta", "urm"};
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Index of name in names (n of them); 0 when absent. */
+static unsigned name_index(const char *const *names, unsigned n, const char *name)
+{
+    for (unsigned i = 0; i < n; ++i)
+        if (!strcmp(names[i], name)) return i;
+    return 0;
+}
+
+static int is_march(const viewer *v) { return !strcmp(v->ts.method, "march"); }
+
+/* A failed library call ends the viewer with its message. */
+static clvr_status lib_fail(viewer *v, const clvr_message *msg)
+{
+    return clvr_error_set(v->err, (clvr_status)msg->result, "%s", msg->text);
+}
 
 /* --- small vector helpers ---------------------------------------------- */
 
@@ -165,7 +190,7 @@ static void pan(viewer *v, float dx, float dy)
     view_basis(v, fwd, right, up);
     for (int k = 0; k < 3; ++k) off[k] = v->eye[k] - v->target[k];
     float dist = len3(off);
-    float per_px = 2.0f * dist * tanf(0.5f * v->fovy * (float)M_PI / 180.0f) / (float)(v->rs.height ? v->rs.height : 1);
+    float per_px = 2.0f * dist * tanf(0.5f * v->fovy * (float)M_PI / 180.0f) / (float)(v->height ? v->height : 1);
     for (int k = 0; k < 3; ++k) {
         float m = -dx * per_px * right[k] + dy * per_px * up[k];
         v->eye[k] += m;
@@ -195,9 +220,9 @@ static void rotate_light(viewer *v, float dx_deg, float dy_deg)
 {
     float fwd[3], right[3], up[3];
     view_basis(v, fwd, right, up);
-    rotate3(v->rs.light_dir, up, dx_deg);
-    rotate3(v->rs.light_dir, right, dy_deg);
-    if (!normalize3(v->rs.light_dir)) { v->rs.light_dir[0] = 0; v->rs.light_dir[1] = 1; v->rs.light_dir[2] = 0; }
+    rotate3(v->ts.light_dir, up, dx_deg);
+    rotate3(v->ts.light_dir, right, dy_deg);
+    if (!normalize3(v->ts.light_dir)) { v->ts.light_dir[0] = 0; v->ts.light_dir[1] = 1; v->ts.light_dir[2] = 0; }
     v->dirty_settings = 1;
 }
 
@@ -207,45 +232,41 @@ static void set_map(viewer *v, int index)
 {
     if (v->num_maps == 0) return;
     v->map_index = (index % v->num_maps + v->num_maps) % v->num_maps;
-    clvr_error e;
-    if (clvr_tf_set_colormap(v->tf, v->maps[v->map_index], &e) != CLVR_OK) {
-        fprintf(stderr, "clvr: %s\n", e.msg);
-        return;
-    }
+    snprintf(v->map_name, sizeof v->map_name, "%s", v->maps[v->map_index]);
     v->map_changed = 1;
     v->dirty_tf = 1;
 }
 
 static void move_window(viewer *v, float fraction)
 {
-    float w = v->tf->range_hi - v->tf->range_lo;
-    v->tf->range_lo += fraction * w;
-    v->tf->range_hi += fraction * w;
+    float w = v->range_hi - v->range_lo;
+    v->range_lo += fraction * w;
+    v->range_hi += fraction * w;
     v->dirty_tf = 1;
 }
 
 static void scale_window(viewer *v, float factor)
 {
-    float c = 0.5f * (v->tf->range_lo + v->tf->range_hi), w = v->tf->range_hi - v->tf->range_lo;
+    float c = 0.5f * (v->range_lo + v->range_hi), w = v->range_hi - v->range_lo;
     float nw = w * factor;
     /* Keep lo < hi representable: no narrower than a few ulps of the centre
      * or a millionth of the data range. */
-    float data_w = v->mesh->scalar_max - v->mesh->scalar_min;
+    float data_w = v->data_hi - v->data_lo;
     float min_w = fmaxf(1e-6f * fmaxf(data_w, fabsf(c)), 64.0f * 1.2e-7f * fabsf(c));
     if (!(min_w > 0.0f)) min_w = 1e-6f;
     if (nw < min_w) nw = min_w;
-    v->tf->range_lo = c - 0.5f * nw;
-    v->tf->range_hi = c + 0.5f * nw;
-    if (!(v->tf->range_hi > v->tf->range_lo)) v->tf->range_hi = nextafterf(v->tf->range_lo, INFINITY);
+    v->range_lo = c - 0.5f * nw;
+    v->range_hi = c + 0.5f * nw;
+    if (!(v->range_hi > v->range_lo)) v->range_hi = nextafterf(v->range_lo, INFINITY);
     v->dirty_tf = 1;
 }
 
 static void scale_density(viewer *v, float factor)
 {
-    float d = v->tf->density;
+    float d = v->density;
     d = d > 0.0f ? d * factor : (factor > 1.0f ? 0.05f * v->density_factor : 0.0f);
     if (d > 1e30f) d = 1e30f;
-    v->tf->density = d;
+    v->density = d;
     v->dirty_tf = 1;
 }
 
@@ -254,13 +275,13 @@ static void scale_density(viewer *v, float factor)
 /* Writes the image shown (the running mean of img_spp frames) to path. */
 static void save_image(viewer *v, const char *path)
 {
-    clvr_error e;
+    clvr_message msg;
     if (v->img_spp == 0 || !v->rgba) {
         fprintf(stderr, "clvr: no image to save yet\n");
         return;
     }
-    if (clvr_image_write_display(path, v->img_w, v->img_h, v->rgba, &v->display, &e) != CLVR_OK) {
-        fprintf(stderr, "clvr: %s\n", e.msg);
+    if (clvr_image_save_with(path, v->img_w, v->img_h, v->rgba, &v->display, &msg) != CLVR_RESULT_OK) {
+        fprintf(stderr, "clvr: %s\n", msg.text);
         return;
     }
     printf("clvr: saved %s (%ux%u, %llu spp)\n", path, v->img_w, v->img_h, (unsigned long long)v->img_spp);
@@ -329,16 +350,18 @@ static void print_command_line(viewer *v)
     if (o->scalar_name) { appendf(line, cap, " --scalar "); append_quoted(line, cap, o->scalar_name); }
     if (o->device) { appendf(line, cap, " --device "); append_quoted(line, cap, o->device); }
     uint64_t spp = v->img_spp > o->spp ? v->img_spp : o->spp;
-    appendf(line, cap, " --size %ux%u --spp %llu --seed %llu", v->rs.width, v->rs.height, (unsigned long long)spp,
-            (unsigned long long)v->rs.seed);
-    appendf(line, cap, " --method %s --shadows %s --estimator %s", clvr_render_method_name(v->rs.method),
-            v->shadows ? "on" : "off", clvr_render_estimator_name(v->rs.estimator));
-    if (v->rs.urm_steps != d.urm_steps) appendf(line, cap, " --urm-steps %u", v->rs.urm_steps);
-    if (v->rs.sampler != d.sampler) appendf(line, cap, " --sampler independent");
-    if (v->rs.step != d.step) appendf(line, cap, " --step %.9g", (double)v->rs.step);
-    if (v->rs.bins != d.bins) appendf(line, cap, " --bins %u", v->rs.bins);
-    if (v->rs.segments != d.segments) appendf(line, cap, " --segments %u", v->rs.segments);
-    if (v->rs.macrocells != d.macrocells) appendf(line, cap, " --macrocells %u", v->rs.macrocells);
+    clvr_tracer_settings dts; /* the library's defaults: the command line's */
+    clvr_tracer_settings_init(&dts);
+    appendf(line, cap, " --size %ux%u --spp %llu --seed %llu", v->width, v->height, (unsigned long long)spp,
+            (unsigned long long)v->ts.seed);
+    appendf(line, cap, " --method %s --shadows %s --estimator %s", v->ts.method, v->shadows ? "on" : "off",
+            v->ts.estimator);
+    if (v->ts.urm_steps != dts.urm_steps) appendf(line, cap, " --urm-steps %u", v->ts.urm_steps);
+    if (strcmp(v->ts.sampler, dts.sampler)) appendf(line, cap, " --sampler %s", v->ts.sampler);
+    if (v->ts.step != dts.step) appendf(line, cap, " --step %.9g", (double)v->ts.step);
+    if (v->ts.bins != dts.bins) appendf(line, cap, " --bins %u", v->ts.bins);
+    if (v->ts.segments != dts.segments) appendf(line, cap, " --segments %u", v->ts.segments);
+    if (v->ts.macrocells != dts.macrocells) appendf(line, cap, " --macrocells %u", v->ts.macrocells);
     if (o->leaf_size != d.leaf_size) appendf(line, cap, " --leaf-size %u", o->leaf_size);
     if (o->sampling_size != d.sampling_size) appendf(line, cap, " --sampling-size %u", o->sampling_size);
     appendf(line, cap, " --camera %.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", (double)v->eye[0], (double)v->eye[1],
@@ -349,19 +372,19 @@ static void print_command_line(viewer *v)
     appendf(line, cap, " --colormap ");
     append_quoted(line, cap, v->map_changed ? v->maps[v->map_index] : o->colormap);
     if (o->opacity_ramp) appendf(line, cap, " --opacity ramp");
-    appendf(line, cap, " --range %.9g %.9g --density %.9g", (double)v->tf->range_lo, (double)v->tf->range_hi,
-            (double)(v->tf->density / v->density_factor));
-    appendf(line, cap, " --light %.9g,%.9g,%.9g", (double)v->rs.light_dir[0], (double)v->rs.light_dir[1],
-            (double)v->rs.light_dir[2]);
-    if (v->rs.light_intensity != d.light_intensity)
-        appendf(line, cap, " --light-intensity %.9g", (double)v->rs.light_intensity);
-    if (v->rs.ambient != d.ambient) appendf(line, cap, " --ambient %.9g", (double)v->rs.ambient);
+    appendf(line, cap, " --range %.9g %.9g --density %.9g", (double)v->range_lo, (double)v->range_hi,
+            (double)(v->density / v->density_factor));
+    appendf(line, cap, " --light %.9g,%.9g,%.9g", (double)v->ts.light_dir[0], (double)v->ts.light_dir[1],
+            (double)v->ts.light_dir[2]);
+    if (v->ts.light_intensity != d.light_intensity)
+        appendf(line, cap, " --light-intensity %.9g", (double)v->ts.light_intensity);
+    if (v->ts.ambient != d.ambient) appendf(line, cap, " --ambient %.9g", (double)v->ts.ambient);
     if (o->transparent) appendf(line, cap, " --background none");
-    else if (memcmp(v->rs.background, d.background, sizeof d.background))
-        appendf(line, cap, " --background %.9g,%.9g,%.9g", (double)v->rs.background[0], (double)v->rs.background[1],
-                (double)v->rs.background[2]);
+    else if (memcmp(v->ts.background, d.background, sizeof d.background))
+        appendf(line, cap, " --background %.9g,%.9g,%.9g", (double)v->ts.background[0], (double)v->ts.background[1],
+                (double)v->ts.background[2]);
     if (o->exposure != d.exposure) appendf(line, cap, " --exposure %.9g", (double)o->exposure);
-    if (o->tonemap != d.tonemap) appendf(line, cap, " --tonemap %s", clvr_tonemap_name((clvr_tonemap)o->tonemap));
+    if (o->tonemap != d.tonemap) appendf(line, cap, " --tonemap %s", clvr_cli_tonemap_name(o->tonemap));
     /* Clipping and the outline come from the command line unchanged. */
     for (uint32_t i = 0; i < o->num_clip_planes; ++i)
         appendf(line, cap, " --clip %.9g,%.9g,%.9g,%.9g", (double)o->clip_planes[i][0], (double)o->clip_planes[i][1],
@@ -419,7 +442,7 @@ static void handle_key(viewer *v, int key, int mods)
         float sx = key == GLFW_KEY_LEFT ? -1.0f : key == GLFW_KEY_RIGHT ? 1.0f : 0.0f;
         float sy = key == GLFW_KEY_UP ? -1.0f : key == GLFW_KEY_DOWN ? 1.0f : 0.0f;
         if (light) rotate_light(v, sx * KEY_LIGHT_DEG, sy * KEY_LIGHT_DEG);
-        else if (shift) pan(v, sx * KEY_PAN_FRACTION * (float)v->rs.height, sy * KEY_PAN_FRACTION * (float)v->rs.height);
+        else if (shift) pan(v, sx * KEY_PAN_FRACTION * (float)v->height, sy * KEY_PAN_FRACTION * (float)v->height);
         else orbit(v, sx * KEY_ORBIT_DEG, sy * KEY_ORBIT_DEG);
         break;
     }
@@ -435,8 +458,8 @@ static void handle_key(viewer *v, int key, int mods)
         else move_window(v, WINDOW_MOVE);
         break;
     case GLFW_KEY_W:
-        v->tf->range_lo = v->range0_lo;
-        v->tf->range_hi = v->range0_hi;
+        v->range_lo = v->range0_lo;
+        v->range_hi = v->range0_hi;
         v->dirty_tf = 1;
         break;
     case GLFW_KEY_EQUAL:
@@ -447,14 +470,18 @@ static void handle_key(viewer *v, int key, int mods)
         v->shadows = !v->shadows;
         v->dirty_settings = 1;
         break;
-    case GLFW_KEY_M:
-        v->rs.method = (v->rs.method + (shift ? CLVR_RENDER_COUNT - 1u : 1u)) % CLVR_RENDER_COUNT;
+    case GLFW_KEY_M: {
+        const unsigned n = 4, i = name_index(method_names, n, v->ts.method);
+        snprintf(v->ts.method, sizeof v->ts.method, "%s", method_names[(i + (shift ? n - 1u : 1u)) % n]);
         v->dirty_settings = 1;
         break;
-    case GLFW_KEY_E:
-        v->rs.estimator = (v->rs.estimator + (shift ? CLVR_ESTIMATOR_COUNT - 1u : 1u)) % CLVR_ESTIMATOR_COUNT;
+    }
+    case GLFW_KEY_E: {
+        const unsigned n = 2, i = name_index(estimator_names, n, v->ts.estimator);
+        snprintf(v->ts.estimator, sizeof v->ts.estimator, "%s", estimator_names[(i + (shift ? n - 1u : 1u)) % n]);
         v->dirty_settings = 1;
         break;
+    }
     case GLFW_KEY_X: save_numbered(v, "exr"); break;
     case GLFW_KEY_P: save_numbered(v, "png"); break;
     case GLFW_KEY_K: print_command_line(v); break;
@@ -566,62 +593,91 @@ static clvr_status ensure_image(viewer *v, uint32_t w, uint32_t h)
  * do: clamped at the window's ends. */
 static void strip_range(const viewer *v, float *lo, float *hi)
 {
-    *lo = fminf(v->mesh->scalar_min, v->tf->range_lo);
-    *hi = fmaxf(v->mesh->scalar_max, v->tf->range_hi);
+    *lo = fminf(v->data_lo, v->range_lo);
+    *hi = fmaxf(v->data_hi, v->range_hi);
     if (!(*hi > *lo)) *hi = *lo + 1.0f;
+}
+
+/* The table entry at x in [0, 1] of the window, clamped as the kernels do. */
+static const float *table_at(const viewer *v, float x)
+{
+    if (!(x > 0.0f)) x = 0.0f;
+    if (x > 1.0f) x = 1.0f;
+    uint32_t i = (uint32_t)lrintf(x * (float)(v->table_n - 1));
+    return v->table + 4 * (size_t)i;
 }
 
 static void update_strip(viewer *v)
 {
+    float lin[STRIP_TEXELS * 4];
     uint8_t px[STRIP_TEXELS * 4];
     float lo, hi;
     strip_range(v, &lo, &hi);
+    if (!v->table_n) return;
     for (int i = 0; i < STRIP_TEXELS; ++i) {
         float s = lo + ((float)i + 0.5f) / STRIP_TEXELS * (hi - lo);
-        float x = (s - v->tf->range_lo) / (v->tf->range_hi - v->tf->range_lo), c[3];
-        clvr_tf_color(v->tf, x, c);
-        for (int k = 0; k < 3; ++k) px[4 * i + k] = (uint8_t)lrintf(fminf(fmaxf(c[k], 0.0f), 1.0f) * 255.0f);
-        px[4 * i + 3] = 255;
+        const float *c = table_at(v, (s - v->range_lo) / (v->range_hi - v->range_lo));
+        memcpy(lin + 4 * i, c, 3 * sizeof(float));
+        lin[4 * i + 3] = 1.0f;
     }
+    /* The colours as the legend shows them: sRGB, no exposure or tone curve. */
+    clvr_message msg;
+    if (clvr_image_to_srgb8(lin, STRIP_TEXELS, 1, 0.0f, "none", px, &msg) != CLVR_RESULT_OK) return;
     glBindTexture(GL_TEXTURE_2D, v->strip_tex);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, STRIP_TEXELS, 1, 0, GL_RGBA, GL_UNSIGNED_BYTE, px);
+}
+
+/* The tracer's transfer function and its baked table, after a change. */
+static clvr_status read_tf(viewer *v)
+{
+    clvr_message msg;
+    clvr_tf_info ti;
+    ti.size = sizeof ti;
+    if (clvr_tracer_get_tf(v->tr, &ti, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
+    if (ti.table_size != v->table_n) {
+        float *t = realloc(v->table, (size_t)ti.table_size * 4 * sizeof(float));
+        if (!t) return clvr_error_set(v->err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
+        v->table = t;
+        v->table_n = ti.table_size;
+    }
+    if (clvr_tracer_get_tf_table(v->tr, v->table, (size_t)v->table_n * 4, &msg) != CLVR_RESULT_OK)
+        return lib_fail(v, &msg);
+    snprintf(v->map_name, sizeof v->map_name, "%s", ti.colormap);
+    v->range_lo = ti.range_lo;
+    v->range_hi = ti.range_hi;
+    v->density = ti.density;
+    v->ext_scale = ti.extinction_scale > 0.0f ? ti.extinction_scale : 1.0f;
+    return CLVR_OK;
 }
 
 static clvr_status apply_edits(viewer *v)
 {
     clvr_status s = CLVR_OK;
-    clvr_error *err = v->err;
+    clvr_message msg;
+    if (v->resized) {
+        if (clvr_tracer_set_size(v->tr, v->width, v->height, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
+        v->resized = 0;
+    }
     if (v->dirty_settings) {
-        v->rs.shadows = v->shadows && v->rs.method != CLVR_RENDER_MARCH;
-        CLVR_TRY(clvr_renderer_set_settings(v->r, &v->rs, err));
+        v->ts.shadows = v->shadows;
+        if (clvr_tracer_set_settings(v->tr, &v->ts, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
         v->dirty_settings = 0;
     }
     if (v->dirty_camera) {
-        clvr_camera cam;
-        clvr_error e;
-        if (clvr_camera_look_at(&cam, v->eye, v->target, v->pole, v->fovy, v->rs.width, v->rs.height, &e) != CLVR_OK) {
-            /* Cannot happen with the clamps above; keep the old view rather than stop. */
-            fprintf(stderr, "clvr: %s\n", e.msg);
-        } else {
-            CLVR_TRY(clvr_renderer_set_camera(v->r, &cam, err));
-        }
+        /* A degenerate view cannot happen with the clamps above; keep the old one rather than stop. */
+        if (clvr_tracer_set_camera(v->tr, v->eye, v->target, v->pole, v->fovy, &msg) != CLVR_RESULT_OK)
+            fprintf(stderr, "clvr: %s\n", msg.text);
         v->dirty_camera = 0;
     }
     if (v->dirty_tf) {
-        uint32_t n = clvr_tf_table_size(v->tf);
-        if (n != v->table_n) {
-            float *t = realloc(v->table, (size_t)n * 4 * sizeof(float));
-            if (!t) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
-            v->table = t;
-            v->table_n = n;
-        }
-        clvr_tf_bake(v->tf, v->table, n);
-        CLVR_TRY(clvr_renderer_set_tf(v->r, v->table, n, v->tf->range_lo, v->tf->range_hi, v->tf->density, err));
+        if (clvr_tracer_edit_tf(v->tr, v->map_changed ? v->map_name : NULL, v->range_lo, v->range_hi, v->density,
+                                &msg) != CLVR_RESULT_OK)
+            return lib_fail(v, &msg);
+        if ((s = read_tf(v)) != CLVR_OK) return s;
         update_strip(v);
         v->dirty_tf = 0;
     }
     v->rays_last = 0;
-cleanup:
     return s;
 }
 
@@ -629,29 +685,26 @@ cleanup:
 static clvr_status render_frame(viewer *v)
 {
     clvr_status s = CLVR_OK;
-    clvr_render_counters c;
-    CLVR_TRY(clvr_renderer_frame(v->r, v->err));
-    CLVR_TRY(ensure_image(v, v->rs.width, v->rs.height));
-    CLVR_TRY(clvr_renderer_read(v->r, v->rgba, &c, v->err));
-    v->img_w = v->rs.width;
-    v->img_h = v->rs.height;
+    clvr_message msg;
+    clvr_render_stats c;
+    c.size = sizeof c;
+    if (clvr_tracer_render(v->tr, 1, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
+    if ((s = ensure_image(v, v->width, v->height)) != CLVR_OK) return s;
+    if (clvr_tracer_read_image(v->tr, v->rgba, (size_t)v->width * v->height * 4, &msg) != CLVR_RESULT_OK ||
+        clvr_tracer_get_render_stats(v->tr, &c, &msg) != CLVR_RESULT_OK)
+        return lib_fail(v, &msg);
+    v->img_w = v->width;
+    v->img_h = v->height;
     v->img_spp = c.frames;
     /* Counters restart with the accumulation. */
     uint64_t rays = c.frames <= 1 || c.rays < v->rays_last ? c.rays : c.rays - v->rays_last;
     v->rays_last = c.rays;
     v->rays_since_title += rays;
     v->frames_since_title++;
-    /* As write_png (image.c) maps an opaque image: scale by 2^exposure, tone
-     * curve, sRGB (the last by table, within one code of the PNG's). */
-    size_t n = (size_t)v->img_w * v->img_h * 4;
-    const clvr_tonemap tm = v->display.tonemap;
-    for (size_t i = 0; i < n; i += 4) {
-        for (int k = 0; k < 3; ++k) {
-            float y = clvr_image_tonemap(tm, v->rgba[i + k] * v->gain); /* in [0, 1], NaN -> 0 */
-            v->rgba8[i + k] = v->lut[(int)(y * (SRGB_LUT - 1) + 0.5f)];
-        }
-        v->rgba8[i + 3] = 255;
-    }
+    /* As the PNG writer maps an opaque image: 2^exposure, tone curve, sRGB. */
+    if (clvr_image_to_srgb8(v->rgba, v->img_w, v->img_h, v->display.exposure_ev, v->display.tonemap, v->rgba8,
+                            &msg) != CLVR_RESULT_OK)
+        return lib_fail(v, &msg);
     glBindTexture(GL_TEXTURE_2D, v->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     if (v->tex_w != v->img_w || v->tex_h != v->img_h) {
@@ -663,7 +716,6 @@ static clvr_status render_frame(viewer *v)
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)v->img_w, (GLsizei)v->img_h, GL_RGBA, GL_UNSIGNED_BYTE,
                         v->rgba8);
     }
-cleanup:
     return s;
 }
 
@@ -710,11 +762,12 @@ static void draw(viewer *v)
     glBegin(GL_LINE_STRIP);
     for (int i = 0; i <= 64; ++i) {
         float s = lo + (float)i / 64.0f * (hi - lo);
-        float x = (s - v->tf->range_lo) / (v->tf->range_hi - v->tf->range_lo);
-        glVertex2f((float)i / 64.0f * (float)fw, 1.0f + clvr_tf_opacity(v->tf, x) * (sh - 2.0f));
+        float x = (s - v->range_lo) / (v->range_hi - v->range_lo);
+        float opacity = v->table_n ? table_at(v, x)[3] / v->ext_scale : 0.0f;
+        glVertex2f((float)i / 64.0f * (float)fw, 1.0f + fminf(fmaxf(opacity, 0.0f), 1.0f) * (sh - 2.0f));
     }
     glEnd();
-    float xs[2] = {(v->tf->range_lo - lo) / (hi - lo) * (float)fw, (v->tf->range_hi - lo) / (hi - lo) * (float)fw};
+    float xs[2] = {(v->range_lo - lo) / (hi - lo) * (float)fw, (v->range_hi - lo) / (hi - lo) * (float)fw};
     for (int pass = 0; pass < 2; ++pass) {
         glLineWidth(pass == 0 ? 3.0f : 1.0f);
         if (pass == 0) glColor3f(0.0f, 0.0f, 0.0f);
@@ -739,25 +792,18 @@ static void screenshot(viewer *v, const char *path)
     draw(v);
     glFinish();
     size_t n = (size_t)fw * fh;
-    uint8_t *px = malloc(n * 4);
-    float *img = malloc(n * 4 * sizeof(float));
-    clvr_error e;
+    uint8_t *px = malloc(n * 4), *img = malloc(n * 4);
+    clvr_message msg;
     if (!px || !img) {
         fprintf(stderr, "clvr: out of memory for a screenshot\n");
     } else {
         glReadBuffer(GL_BACK);
         glPixelStorei(GL_PACK_ALIGNMENT, 1);
         glReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, px);
-        float dec[256];
-        for (int i = 0; i < 256; ++i) dec[i] = clvr_image_srgb_decode((float)i / 255.0f);
         for (int y = 0; y < fh; ++y) /* GL rows are bottom to top */
-            for (int x = 0; x < fw; ++x) {
-                const uint8_t *p = px + ((size_t)(fh - 1 - y) * fw + x) * 4;
-                float *q = img + ((size_t)y * fw + x) * 4;
-                for (int k = 0; k < 3; ++k) q[k] = dec[p[k]];
-                q[3] = 1.0f;
-            }
-        if (clvr_image_write(path, (uint32_t)fw, (uint32_t)fh, img, &e) != CLVR_OK) fprintf(stderr, "clvr: %s\n", e.msg);
+            memcpy(img + (size_t)y * fw * 4, px + (size_t)(fh - 1 - y) * fw * 4, (size_t)fw * 4);
+        if (clvr_image_save_srgb8(path, (uint32_t)fw, (uint32_t)fh, img, &msg) != CLVR_RESULT_OK)
+            fprintf(stderr, "clvr: %s\n", msg.text);
         else printf("clvr: screenshot %s (%dx%d)\n", path, fw, fh);
         fflush(stdout);
     }
@@ -767,7 +813,7 @@ static void screenshot(viewer *v, const char *path)
 
 static void update_title(viewer *v, int force)
 {
-    double t = clvr_clock_monotonic_s();
+    double t = now_s();
     if (!force && t - v->t_title < TITLE_PERIOD_S) return;
     double dt = t - v->t_title;
     if (dt > 0.0 && v->frames_since_title > 0) {
@@ -782,15 +828,14 @@ static void update_title(viewer *v, int force)
     const char *mesh = v->o->mesh_path ? strrchr(v->o->mesh_path, '/') : NULL;
     mesh = mesh ? mesh + 1 : v->o->mesh_path ? v->o->mesh_path : "default scene";
     char method[48];
-    if (v->rs.method == CLVR_RENDER_MARCH) snprintf(method, sizeof method, "march");
-    else snprintf(method, sizeof method, "%s %s", clvr_render_method_name(v->rs.method),
-                  clvr_render_estimator_name(v->rs.estimator));
+    if (is_march(v)) snprintf(method, sizeof method, "march");
+    else snprintf(method, sizeof method, "%s %s", v->ts.method, v->ts.estimator);
     snprintf(v->title, sizeof v->title,
              "clvr | %s | %s | %llu spp | %.1f fps | %.2f Mrays/s | %s [%.4g, %.4g] density %.3g | shadows %s | %s",
              mesh, method, (unsigned long long)v->img_spp, v->fps, v->mrays,
-             v->tf->name, (double)v->tf->range_lo, (double)v->tf->range_hi,
-             (double)(v->tf->density / v->density_factor),
-             v->rs.method == CLVR_RENDER_MARCH ? "n/a" : v->shadows ? "on" : "off", v->cl->device_name);
+             v->map_name, (double)v->range_lo, (double)v->range_hi,
+             (double)(v->density / v->density_factor),
+             is_march(v) ? "n/a" : v->shadows ? "on" : "off", v->device);
     glfwSetWindowTitle(v->win, v->title);
 }
 
@@ -836,9 +881,9 @@ static int parse_key(const char *name, int *key, int *mods)
 static int resize_window(viewer *v, int w, int h)
 {
     glfwSetWindowSize(v->win, w, h);
-    double t0 = clvr_clock_monotonic_s();
+    double t0 = now_s();
     int fw = 0, fh = 0;
-    while (clvr_clock_monotonic_s() - t0 < 5.0) {
+    while (now_s() - t0 < 5.0) {
         glfwPollEvents();
         glfwGetFramebufferSize(v->win, &fw, &fh);
         if (fw == w && fh == h) return 1;
@@ -862,8 +907,8 @@ static void run_command(viewer *v, char *cmd)
     }
     /* The X server has queued the events before the command returned; a
      * short pump reads all of them. */
-    double t0 = clvr_clock_monotonic_s();
-    while (clvr_clock_monotonic_s() - t0 < 0.2) {
+    double t0 = now_s();
+    while (now_s() - t0 < 0.2) {
         glfwPollEvents();
         usleep(5000);
     }
@@ -959,50 +1004,61 @@ clvr_status clvr_viewer_probe(clvr_error *err)
     return CLVR_OK;
 }
 
-clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clustered *mesh, clvr_renderer *r,
-                            const clvr_render_settings *rs, const clvr_camera *cam, clvr_tf *tf, clvr_error *err)
+clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     int glfw_up = 0;
+    clvr_message msg;
     viewer *v = calloc(1, sizeof *v);
     if (!v) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the viewer");
     v->o = o;
-    v->cl = cl;
-    v->mesh = mesh;
-    v->r = r;
-    v->tf = tf;
-    v->rs = *rs;
+    v->tr = tr;
+    v->device = device ? device : "";
     v->shadows = o->shadows;
     v->err = err;
     v->button = -1;
-    v->fovy = cam->fovy;
+    v->ts.size = sizeof v->ts;
+    clvr_scene_stats st;
+    st.size = sizeof st;
+    if (clvr_tracer_get_settings(tr, &v->ts, &msg) != CLVR_RESULT_OK ||
+        clvr_tracer_size(tr, &v->width, &v->height, &msg) != CLVR_RESULT_OK ||
+        clvr_tracer_get_view(tr, v->eye0, v->target0, NULL, &v->fovy, &msg) != CLVR_RESULT_OK ||
+        clvr_scene_get_stats(clvr_tracer_scene(tr), &st, &msg) != CLVR_RESULT_OK) {
+        s = lib_fail(v, &msg);
+        goto cleanup;
+    }
+    if ((s = read_tf(v)) != CLVR_OK) goto cleanup;
+    if (!strcmp(v->map_name, "table")) {
+        s = clvr_error_set(err, CLVR_ERR_USAGE, "the viewer edits a transfer function set by options, not a table");
+        goto cleanup;
+    }
+    v->data_lo = st.scalar_min;
+    v->data_hi = st.scalar_max;
     for (int k = 0; k < 3; ++k) {
-        v->eye[k] = v->eye0[k] = cam->origin[k];
-        v->target[k] = v->target0[k] = cam->target[k];
+        v->eye[k] = v->eye0[k];
+        v->target[k] = v->target0[k];
         v->pole[k] = o->camera_set ? o->camera[6 + k] : o->up[k]; /* --up: the framing's axis */
     }
     if (!normalize3(v->pole)) v->pole[1] = 1.0f;
-    float ext[3] = {mesh->bounds.hi[0] - mesh->bounds.lo[0], mesh->bounds.hi[1] - mesh->bounds.lo[1],
-                    mesh->bounds.hi[2] - mesh->bounds.lo[2]};
+    float ext[3] = {st.hi[0] - st.lo[0], st.hi[1] - st.lo[1], st.hi[2] - st.lo[2]};
     v->diag = len3(ext);
-    v->range0_lo = tf->range_lo;
-    v->range0_hi = tf->range_hi;
-    v->density_factor = o->density > 0.0f && tf->density > 0.0f ? tf->density / o->density : 1.0f;
+    v->range0_lo = v->range_lo;
+    v->range0_hi = v->range_hi;
+    v->density_factor = o->density > 0.0f && v->density > 0.0f ? v->density / o->density : 1.0f;
+    clvr_image_settings_init(&v->display);
     v->display.exposure_ev = o->exposure;
-    v->display.tonemap = (clvr_tonemap)o->tonemap;
+    v->display.tonemap = clvr_cli_tonemap_name(o->tonemap);
     v->display.transparent = o->transparent;
-    v->gain = exp2f(o->exposure);
-    for (int i = 0; i < SRGB_LUT; ++i) v->lut[i] = clvr_image_srgb_to_u8((float)i / (SRGB_LUT - 1));
 
-    /* The colour maps to cycle through, from tf.h's list. */
-    const char *names = clvr_tf_colormap_names();
+    /* The colour maps to cycle through, from libclvr's list. */
+    const char *names = clvr_colormap_names();
     v->map_index = -1;
     while (*names && v->num_maps < MAX_MAPS) {
         size_t len = strcspn(names, ", ");
         if (len > 0 && len < sizeof v->maps[0]) {
             memcpy(v->maps[v->num_maps], names, len);
             v->maps[v->num_maps][len] = 0;
-            if (!strcasecmp(v->maps[v->num_maps], tf->name)) v->map_index = v->num_maps;
+            if (!strcasecmp(v->maps[v->num_maps], v->map_name)) v->map_index = v->num_maps;
             v->num_maps++;
         }
         names += len;
@@ -1053,12 +1109,12 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
     }
     update_strip(v);
     if (!o->quiet) fprintf(stderr, "clvr: viewer open; press H for the controls, Q to quit\n");
-    v->t_title = clvr_clock_monotonic_s();
+    v->t_title = now_s();
 
     while (!v->quit && v->status == CLVR_OK && !glfwWindowShouldClose(v->win)) {
         int fw, fh;
         glfwGetFramebufferSize(v->win, &fw, &fh);
-        int busy = v->dirty_settings || v->dirty_camera || v->dirty_tf || v->wait_frames > 0 ||
+        int busy = v->resized || v->dirty_settings || v->dirty_camera || v->dirty_tf || v->wait_frames > 0 ||
                    (v->script && v->wait_frames <= 0) || (v->img_spp < CLVR_VIEWER_MAX_SPP && fw > 0 && fh > 0);
         if (busy) glfwPollEvents();
         else glfwWaitEventsTimeout(0.5);
@@ -1066,12 +1122,12 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clust
         run_script(v);
         if (v->status != CLVR_OK || v->quit) break;
         glfwGetFramebufferSize(v->win, &fw, &fh);
-        if (fw > 0 && fh > 0 && ((uint32_t)fw != v->rs.width || (uint32_t)fh != v->rs.height)) {
-            v->rs.width = (uint32_t)fw;
-            v->rs.height = (uint32_t)fh;
-            v->dirty_settings = v->dirty_camera = 1;
+        if (fw > 0 && fh > 0 && ((uint32_t)fw != v->width || (uint32_t)fh != v->height)) {
+            v->width = (uint32_t)fw;
+            v->height = (uint32_t)fh;
+            v->resized = v->dirty_camera = 1;
         }
-        int changed = v->dirty_settings || v->dirty_camera || v->dirty_tf;
+        int changed = v->resized || v->dirty_settings || v->dirty_camera || v->dirty_tf;
         if (changed) {
             v->status = apply_edits(v);
             if (v->status != CLVR_OK) break;

@@ -33,13 +33,8 @@
 #ifndef CLVR_VIEWER_H
 #define CLVR_VIEWER_H
 
-#include "camera.h"
-#include "cl_context.h"
+#include "clvr.h"
 #include "cli.h"
-#include "preprocess.h"
-#include "render.h"
-#include "status.h"
-#include "tf.h"
 
 /* Largest accumulation the viewer runs to; after it, it idles until an
  * input event (the float sums lose precision beyond this anyway). */
@@ -53,19 +48,17 @@ clvr_status clvr_viewer_probe(clvr_error *err);
 
 /* Runs the viewer until the window is closed (or Q / Escape, or the script's
  * quit). Takes what main has built:
- *   o         the parsed command line (initial window size o->width x
- *             o->height; the mesh path, colormap and other options for the
- *             printed command line);
- *   cl, mesh  the device and clustered mesh (mesh bounds and scalar range);
- *   r         a renderer over them, settings `rs`, camera `cam` and the
- *             transfer function `tf` already set; the viewer changes all
- *             three (window size, method, shadows, light, camera, tf) and
- *             leaves them in their last state;
- *   tf        the transfer function, edited in place (caller frees).
+ *   o       the parsed command line (initial window size o->width x
+ *           o->height; the mesh path, colormap and other options for the
+ *           printed command line; o->density the automatic density factor);
+ *   tr      a tracer with camera and transfer function (set by options)
+ *           set; the viewer changes its window size, method, shadows,
+ *           light, camera and transfer function and leaves them in their
+ *           last state;
+ *   device  the device's name for the status line.
  * Errors: CLVR_ERR_NO_DEVICE (no display / no OpenGL context), any renderer
  * error. Writes nothing to stdout except help, saved file names and the
  * printed command lines. */
-clvr_status clvr_viewer_run(const clvr_options *o, clvr_cl *cl, const clvr_clustered *mesh, clvr_renderer *r,
-                            const clvr_render_settings *rs, const clvr_camera *cam, clvr_tf *tf, clvr_error *err);
+clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_error *err);
 
 #endif /* CLVR_VIEWER_H */

@@ -13,8 +13,11 @@ Images are numpy float32 arrays of shape (height, width, 4): linear r, g, b
 ray, rows top to bottom.
 
 Arrays are checked here before any device work (dtype, shape, index range,
-NaN) and then copied by libclvr (CLVR_COPY): nothing the caller passes is
-modified or kept. Failures raise clvr.Error (or its subclass
+NaN); nothing the caller passes is ever modified. Mesh.from_arrays borrows
+(CLVR_BORROW) each array that is already C-contiguous with the dtype libclvr
+reads (float32 points and fields, uint32 cells): no copy, so keep it
+unchanged while the Mesh or a Renderer of it lives (copy=True copies
+everything); other arrays are converted and the conversion is kept. Failures raise clvr.Error (or its subclass
 clvr.InputError, also a ValueError, for bad arguments and data) carrying
 clvr's one-line message.
 
@@ -29,7 +32,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["Error", "InputError", "Context", "Mesh", "Renderer", "save_image", "list_devices",
+__all__ = ["Error", "InputError", "Context", "Mesh", "Scene", "Renderer", "save_image", "list_devices",
            "api_version", "version", "CELL_TYPES"]
 
 API_VERSION_MAJOR = 1
@@ -84,6 +87,41 @@ class _Message(ctypes.Structure):
 
 
 _M = ctypes.POINTER(_Message)
+
+
+class _LoadSettings(ctypes.Structure):
+    _fields_ = [("size", _U32), ("field", _S), ("cell_flat", ctypes.c_int), ("field_ranges", ctypes.c_int)]
+
+
+class _DatasetField(ctypes.Structure):
+    _fields_ = [("size", _U32), ("name", ctypes.c_char * 64), ("is_cell", ctypes.c_int), ("components", _U32),
+                ("has_range", ctypes.c_int), ("min", _F), ("max", _F), ("loaded", ctypes.c_int)]
+
+
+class _PreprocessSettings(ctypes.Structure):
+    _fields_ = [("size", _U32), ("leaf_size", _U32), ("sampling_size", _U32), ("partitions", _U32),
+                ("consume", ctypes.c_int), ("name", _S), ("width", _U32), ("height", _U32)]
+
+
+class _SceneStats(ctypes.Structure):
+    _fields_ = [("size", _U32), ("elements", _U64), ("points", _U64), ("instances", _U64), ("instances16", _U64),
+                ("leaves", _U64), ("sampling_clusters", _U64), ("leaf_size", _U32), ("sampling_size", _U32),
+                ("partitions", _U32), ("lo", _F * 3), ("hi", _F * 3), ("bytes_points_before", _U64),
+                ("bytes_points_after", _U64), ("bytes_indices_before", _U64), ("bytes_indices_after", _U64),
+                ("bytes_bvh", _U64), ("bytes_bvh_one_per_leaf", _U64), ("bytes_sampling", _U64),
+                ("bytes_element_boxes", _U64), ("device_bytes", _U64), ("preprocess_s", ctypes.c_double),
+                ("num_stages", _U32), ("stage_name", (ctypes.c_char * 16) * 16), ("stage_s", ctypes.c_double * 16),
+                ("scalar_min", _F), ("scalar_max", _F)]
+
+
+class _TracerSettings(ctypes.Structure):
+    _fields_ = [("size", _U32), ("method", ctypes.c_char * 16), ("estimator", ctypes.c_char * 16),
+                ("sampler", ctypes.c_char * 16), ("seed", _U64), ("urm_steps", _U32), ("step", _F), ("bins", _U32),
+                ("segments", _U32), ("macrocells", _U32), ("light_dir", _F * 3), ("light_intensity", _F),
+                ("ambient", _F), ("shadows", ctypes.c_int), ("background", _F * 3), ("clip_box", ctypes.c_int),
+                ("clip_lo", _F * 3), ("clip_hi", _F * 3), ("num_clip_planes", _U32), ("clip_planes", (_F * 4) * 6)]
+
+
 _PROTOS = {
     "clvr_api_version": (ctypes.c_uint, []),
     "clvr_version_string": (_S, []),
@@ -97,6 +135,17 @@ _PROTOS = {
     "clvr_dataset_add_cells": (ctypes.c_int, [_P, _S, _U64, _P, ctypes.c_int, _M]),
     "clvr_dataset_add_field": (ctypes.c_int, [_P, _S, _P, ctypes.c_int, _M]),
     "clvr_dataset_load": (ctypes.c_int, [_S, _S, ctypes.POINTER(_P), _M]),
+    "clvr_dataset_load_with": (ctypes.c_int, [_S, ctypes.POINTER(_LoadSettings), ctypes.POINTER(_P), _M]),
+    "clvr_dataset_get_field": (ctypes.c_int, [_P, _U32, ctypes.POINTER(_DatasetField), _M]),
+    "clvr_dataset_get_array": (ctypes.c_int, [_P, _S, ctypes.POINTER(_P), ctypes.POINTER(ctypes.c_int), _M]),
+    "clvr_scene_create": (ctypes.c_int, [_P, _P, _S, ctypes.POINTER(_PreprocessSettings), ctypes.POINTER(_P), _M]),
+    "clvr_scene_destroy": (None, [_P]),
+    "clvr_scene_get_stats": (ctypes.c_int, [_P, ctypes.POINTER(_SceneStats), _M]),
+    "clvr_tracer_create_on": (ctypes.c_int, [_P, ctypes.POINTER(_TracerSettings), _U32, _U32, ctypes.POINTER(_P),
+                                             _M]),
+    "clvr_tracer_settings_init": (None, [ctypes.POINTER(_TracerSettings)]),
+    "clvr_tracer_get_settings": (ctypes.c_int, [_P, ctypes.POINTER(_TracerSettings), _M]),
+    "clvr_tracer_set_settings": (ctypes.c_int, [_P, ctypes.POINTER(_TracerSettings), _M]),
     "clvr_dataset_destroy": (None, [_P]),
     "clvr_dataset_counts": (ctypes.c_int, [_P, ctypes.POINTER(_U64), ctypes.POINTER(_U64),
                                            ctypes.POINTER(_U32), _M]),
@@ -130,6 +179,7 @@ if _lib.clvr_api_version() // 1000 != API_VERSION_MAJOR:
                       % (_lib.clvr_api_version() // 1000, _lib.clvr_api_version() % 1000, API_VERSION_MAJOR))
 
 _COPY = 0
+_BORROW = 1
 _INPUT_RESULTS = {"ERR_USAGE", "ERR_BAD_INDEX", "ERR_BAD_VALUE", "ERR_BAD_FIELD", "ERR_EMPTY", "ERR_OVERFLOW"}
 
 
@@ -280,18 +330,31 @@ class Context:
 class Mesh:
     """An unstructured mesh on the host: points, cells of the four types and
     named scalars per point. Build it with from_arrays, from_meshio,
-    from_vtk or load; libclvr holds its own copy."""
+    from_vtk or load. Ownership is stated per constructor: from_arrays
+    lends libclvr the caller's arrays when their layout allows (see there),
+    load gives libclvr the file's data."""
 
     def __init__(self, _handle):
         self._h = _handle
+        self._keep = []
 
     @classmethod
-    def from_arrays(cls, points, cells, point_data=None):
+    def from_arrays(cls, points, cells, point_data=None, copy=False):
         """points (N, 3) reals; cells {"tetra": (M, 4), "pyramid": (M, 5),
         "wedge": (M, 6), "hexahedron": (M, 8)} integer arrays (VTK vertex
         order); point_data {name: (N,) reals}. Everything is checked first
         (InputError names the array, the position and the fix); nothing is
-        modified."""
+        modified.
+
+        Ownership, per array: one that is already C-contiguous with
+        libclvr's dtype (points and point_data float32, cells uint32) is
+        borrowed, not copied (CLVR_BORROW; Mesh.borrowed(name) says which):
+        it must stay unchanged while this Mesh or a Renderer made from it
+        lives (changes made meanwhile are seen by later renders). Any other
+        array is converted once and the converted copy is lent instead.
+        copy=True: libclvr copies every array (CLVR_COPY) and keeps none of
+        the caller's."""
+        keep = []
         p = _as_points(points)
         n = p.shape[0]
         if isinstance(cells, (list, tuple)):  # meshio's [(type, array), ...]
@@ -312,20 +375,27 @@ class Mesh:
         fs = {name: _as_field(name, v, n) for name, v in point_data.items()}
         if not fs:
             raise InputError("point_data is empty: clvr renders a scalar per point; give one")
+        own = _COPY if copy else _BORROW
         h = _P()
-        _call(_lib.clvr_dataset_create, n, _ptr(p), _COPY, ctypes.byref(h))
+        _call(_lib.clvr_dataset_create, n, _ptr(p), own, ctypes.byref(h))
         mesh = cls(h)
+        # Lent arrays live as long as this object (a Renderer keeps the Mesh).
+        mesh._keep = [] if copy else [p] + list(cs.values()) + list(fs.values())
         for name, c in cs.items():
-            _call(_lib.clvr_dataset_add_cells, h, name.encode(), c.shape[0], _ptr(c), _COPY)
+            if c.shape[0]:
+                _call(_lib.clvr_dataset_add_cells, h, name.encode(), c.shape[0], _ptr(c), own)
         for name, f in fs.items():
-            _call(_lib.clvr_dataset_add_field, h, name.encode(), _ptr(f), _COPY)
+            _call(_lib.clvr_dataset_add_field, h, name.encode(), _ptr(f), own)
         return mesh
 
     @classmethod
     def from_meshio(cls, m, fields=None):
         """A meshio.Mesh: its tetra, pyramid, wedge and hexahedron blocks
         (other cell types are left out with a warning) and its scalar point
-        data (vector arrays are left out), or only `fields` (names)."""
+        data (vector arrays are left out), or only `fields` (names).
+        Through from_arrays: arrays already in libclvr's layout (float32
+        points or fields) are lent, not copied; meshio's usual float64
+        points and int64 cells are converted."""
         cells, skipped = {}, {}
         for block in m.cells:
             if block.type in CELL_TYPES:
@@ -340,7 +410,9 @@ class Mesh:
 
     @classmethod
     def from_vtk(cls, ugrid, fields=None):
-        """A vtkUnstructuredGrid (python3-vtk9), as from_meshio."""
+        """A vtkUnstructuredGrid (python3-vtk9), as from_meshio: float32
+        points and point arrays are lent from VTK's memory (the numpy views
+        keep the VTK arrays alive), cells are gathered into new arrays."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
         if ugrid.GetPoints() is None:
             raise InputError("the vtkUnstructuredGrid has no points")
@@ -371,16 +443,40 @@ class Mesh:
         return cls.from_arrays(points, cells, _scalars(data, fields))
 
     @classmethod
-    def load(cls, path, field=None):
+    def load(cls, path, scalar=None, cell_flat=False, field_ranges=False, field=None):
         """A mesh file: clvr .bin, .umesh and legacy .vtk through libclvr's
-        readers; anything else (.vtu, .msh, ...) through meshio."""
+        readers (the mesh owns what it read: nothing is borrowed); anything
+        else (.vtu, .msh, ...) through meshio (see from_meshio).
+
+        scalar: the field rendered by default, as the program's --scalar:
+        "NAME", "point:NAME", "cell:NAME" or a component "NAME:x" /
+        "NAME:mag" (None: the file's first). Every field of the file is
+        listed by `fields`, and Renderer(mesh, field=NAME) renders another
+        one (read from the file then). cell_flat: show cell data flat (each
+        element its own value) instead of averaged to the points.
+        field_ranges: decode every field now for its range (`fields`,
+        field_range); else only the fields read. field is the old name of
+        scalar."""
+        if scalar is None:
+            scalar = field
         ext = os.path.splitext(os.fspath(path))[1].lower()
         if ext in (".bin", ".umesh", ".vtk"):
+            ls = _LoadSettings(ctypes.sizeof(_LoadSettings), _b(scalar), 1 if cell_flat else 0,
+                               1 if field_ranges else 0)
             h = _P()
-            _call(_lib.clvr_dataset_load, _b(path), _b(field), ctypes.byref(h))
+            _call(_lib.clvr_dataset_load_with, _b(os.fspath(path)), ctypes.byref(ls), ctypes.byref(h))
             return cls(h)
         import meshio
-        return cls.from_meshio(meshio.read(os.fspath(path)), None if field is None else [field])
+        m = meshio.read(os.fspath(path))
+        if scalar is None:
+            return cls.from_meshio(m)
+        # The chosen scalar first (the default one), then the others.
+        data = _scalars(m.point_data, None)
+        if scalar not in data:
+            raise InputError("%s: no scalar point field %r; it has %s" % (path, scalar, sorted(data) or "none"),
+                             "ERR_BAD_FIELD")
+        names = [scalar] + [k for k in data if k != scalar]
+        return cls.from_meshio(m, names)
 
     _destroy = staticmethod(_lib.clvr_dataset_destroy)
 
@@ -416,6 +512,36 @@ class Mesh:
             _call(_lib.clvr_dataset_field_name, self._h, i, buf, 64)
             names.append(buf.value.decode())
         return names
+
+    @property
+    def fields(self):
+        """Every field, in order: a file's arrays as the file has them (also
+        those not read yet), or the point_data given. A list of dicts:
+        name, association ("point" or "cell"), components, range ((lo, hi),
+        or None when not decoded yet), loaded (in memory now)."""
+        out = []
+        for i in range(self._counts()[2]):
+            f = _DatasetField()
+            f.size = ctypes.sizeof(_DatasetField)
+            _call(_lib.clvr_dataset_get_field, self._h, i, ctypes.byref(f))
+            out.append({"name": f.name.decode("utf-8", "replace"), "association": "cell" if f.is_cell else "point",
+                        "components": f.components, "range": (f.min, f.max) if f.has_range else None,
+                        "loaded": bool(f.loaded)})
+        return out
+
+    def borrowed(self, name):
+        """True when libclvr reads the caller's own array for `name`
+        ("points", a cell type or a field name), without a copy."""
+        data, b = _P(), ctypes.c_int()
+        _call(_lib.clvr_dataset_get_array, self._h, _b(name), ctypes.byref(data), ctypes.byref(b))
+        return bool(b.value)
+
+    def array_address(self, name):
+        """The address of the array libclvr reads for `name` (compare with
+        a numpy array's .ctypes.data to see that it was borrowed)."""
+        data, b = _P(), ctypes.c_int()
+        _call(_lib.clvr_dataset_get_array, self._h, _b(name), ctypes.byref(data), ctypes.byref(b))
+        return data.value or 0
 
     @property
     def bounds(self):
@@ -458,26 +584,161 @@ def _vec3(name, v):
     return _c_float3(*a)
 
 
+class Scene:
+    """A mesh preprocessed on a device (Quick Clusters and the trees), as its
+    own, timed step; Renderers made from it share it.
+
+    mesh: a clvr.Mesh; device: a device string (see Context) or a Context;
+    field: the scalar (None: the mesh's current one; a file's other field
+    by name is read now); leaf_size, sampling_size: elements per leaf and
+    per sampling cluster (the paper's 16); partitions: preprocess in that
+    many pieces to bound peak memory (0: automatic)."""
+
+    def __init__(self, mesh, device="pocl", field=None, leaf_size=16, sampling_size=16, partitions=0):
+        if not isinstance(mesh, Mesh):
+            raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load)")
+        for what, v in (("leaf_size", leaf_size), ("sampling_size", sampling_size), ("partitions", partitions)):
+            if not isinstance(v, (int, np.integer)) or v < 0:
+                raise InputError("%s must be a whole number >= 0, got %r" % (what, v))
+        self.context = device if isinstance(device, Context) else Context(device)
+        self.mesh = mesh
+        ps = _PreprocessSettings(ctypes.sizeof(_PreprocessSettings), int(leaf_size), int(sampling_size),
+                                 int(partitions), 0, None, 0, 0)
+        self._h = _P()
+        _call(_lib.clvr_scene_create, self.context._h, mesh._h, _b(field), ctypes.byref(ps), ctypes.byref(self._h))
+
+    _destroy = staticmethod(_lib.clvr_scene_destroy)
+
+    def close(self):
+        if getattr(self, "_h", None) and self._h.value:
+            self._destroy(self._h)
+            self._h = _P()
+
+    def __del__(self):
+        self.close()
+
+    @property
+    def stats(self):
+        """The preprocessing's figures: counts, bytes (the paper's Table 1),
+        preprocess_s (wall, compilation excluded) and stages {name: s}."""
+        st = _SceneStats()
+        st.size = ctypes.sizeof(_SceneStats)
+        _call(_lib.clvr_scene_get_stats, self._h, ctypes.byref(st))
+        out = {k: getattr(st, k) for k, _ in _SceneStats._fields_
+               if k not in ("size", "lo", "hi", "num_stages", "stage_name", "stage_s")}
+        out["bounds"] = (tuple(st.lo), tuple(st.hi))
+        out["stages"] = {st.stage_name[i].value.decode(): st.stage_s[i] for i in range(st.num_stages)}
+        return out
+
+
+_SETTINGS_STR = ("method", "estimator", "sampler")
+_SETTINGS_VEC = ("light_dir", "background", "clip_lo", "clip_hi")
+
+
+def _settings_dict(ts):
+    d = {}
+    for k, _ in _TracerSettings._fields_:
+        if k == "size":
+            continue
+        v = getattr(ts, k)
+        if k in _SETTINGS_STR:
+            v = v.decode()
+        elif k in _SETTINGS_VEC:
+            v = tuple(v)
+        elif k == "clip_planes":
+            v = [tuple(v[i]) for i in range(ts.num_clip_planes)]
+        elif k in ("shadows", "clip_box"):
+            v = bool(v)
+        d[k] = v
+    del d["num_clip_planes"]
+    return d
+
+
+def _settings_apply(ts, kw):
+    names = set(k for k, _ in _TracerSettings._fields_) - {"size", "num_clip_planes"}
+    unknown = set(kw) - names
+    if unknown:
+        raise InputError("unknown setting(s) %s; use %s" % (sorted(unknown), ", ".join(sorted(names))))
+    for k, v in kw.items():
+        if k in _SETTINGS_STR:
+            if not isinstance(v, str):
+                raise InputError("%s must be a string, got %r" % (k, v))
+            setattr(ts, k, v.encode())
+        elif k in _SETTINGS_VEC:
+            setattr(ts, k, _vec3(k, v))
+        elif k == "clip_planes":
+            planes = np.asarray(v, dtype=np.float64).reshape(-1, 4) if len(v) else np.zeros((0, 4))
+            if planes.shape[0] > 6:
+                raise InputError("clip_planes: at most 6 planes (nx, ny, nz, d)")
+            ts.num_clip_planes = planes.shape[0]
+            for i, p in enumerate(planes):
+                ts.clip_planes[i] = (_F * 4)(*p)
+        elif k in ("shadows", "clip_box"):
+            setattr(ts, k, 1 if v else 0)
+        elif k in ("step", "light_intensity", "ambient"):
+            setattr(ts, k, float(v))
+        else:
+            if not isinstance(v, (int, np.integer)) or v < 0:
+                raise InputError("%s must be a whole number >= 0, got %r" % (k, v))
+            setattr(ts, k, int(v))
+    if "clip_lo" in kw or "clip_hi" in kw:
+        ts.clip_box = 1 if kw.get("clip_box", True) else 0
+
+
 class Renderer:
     """The clvr path tracer over one mesh: preprocesses it on the device
     (Quick Clusters) once, then renders progressively.
 
-    mesh: a clvr.Mesh; device: a device string (see Context) or a Context;
-    field: the scalar to render (None: the mesh's first)."""
+    mesh: a clvr.Mesh, or a clvr.Scene already preprocessed (then device
+    and field come from the scene); device: a device string (see Context)
+    or a Context; field: the scalar to render (None: the mesh's current
+    one; a file's other field by name: read from the file now); settings:
+    any of Renderer.settings' keys (method, estimator, sampler, seed,
+    urm_steps, step, bins, segments, macrocells, light_dir,
+    light_intensity, ambient, shadows, background, clip_box, clip_lo,
+    clip_hi, clip_planes)."""
 
-    def __init__(self, mesh, device="pocl", width=512, height=512, field=None):
-        if not isinstance(mesh, Mesh):
-            raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load)")
+    def __init__(self, mesh, device="pocl", width=512, height=512, field=None, **settings):
+        if not isinstance(mesh, (Mesh, Scene)):
+            raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load) or a "
+                             "clvr.Scene")
         for what, v in (("width", width), ("height", height)):
             if not isinstance(v, (int, np.integer)) or not 1 <= v <= 65536:
                 raise InputError("%s must be a whole number in [1, 65536], got %r" % (what, v))
-        self.context = device if isinstance(device, Context) else Context(device)
-        self.mesh = mesh
+        ts = _TracerSettings()
+        _lib.clvr_tracer_settings_init(ctypes.byref(ts))
+        _settings_apply(ts, settings)
         self._h = _P()
-        _call(_lib.clvr_tracer_create, self.context._h, mesh._h, _b(field), int(width), int(height),
-              ctypes.byref(self._h))
+        if isinstance(mesh, Scene):
+            self.scene, self.context, self.mesh = mesh, mesh.context, mesh.mesh
+            _call(_lib.clvr_tracer_create_on, mesh._h, ctypes.byref(ts), int(width), int(height),
+                  ctypes.byref(self._h))
+        else:
+            self.context = device if isinstance(device, Context) else Context(device)
+            self.mesh = mesh  # keeps the arrays it lent alive
+            _call(_lib.clvr_tracer_create, self.context._h, mesh._h, _b(field), int(width), int(height),
+                  ctypes.byref(self._h))
+            if settings:
+                _call(_lib.clvr_tracer_set_settings, self._h, ctypes.byref(ts))
         self.width, self.height = int(width), int(height)
-        self._seed = 1  # the renderer's default, as the program's --seed
+        self._seed = int(ts.seed)  # the renderer's default, as the program's --seed
+
+    @property
+    def settings(self):
+        """Every render setting as a dict (see the class docstring)."""
+        ts = _TracerSettings()
+        ts.size = ctypes.sizeof(_TracerSettings)
+        _call(_lib.clvr_tracer_get_settings, self._h, ctypes.byref(ts))
+        return _settings_dict(ts)
+
+    def set_settings(self, **kw):
+        """Changes the given settings (all checked; all or none applied)."""
+        ts = _TracerSettings()
+        ts.size = ctypes.sizeof(_TracerSettings)
+        _call(_lib.clvr_tracer_get_settings, self._h, ctypes.byref(ts))
+        _settings_apply(ts, kw)
+        _call(_lib.clvr_tracer_set_settings, self._h, ctypes.byref(ts))
+        self._seed = int(ts.seed)
 
     _destroy = staticmethod(_lib.clvr_tracer_destroy)
 
