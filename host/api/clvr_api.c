@@ -2168,3 +2168,52 @@ clvr_result clvr_image_save(const char *path, uint32_t width, uint32_t height, c
     clvr_image_display d = {exposure_ev, tm, transparent != 0, NULL};
     return finish(clvr_image_write_display(path, width, height, rgba, &d, &e), &e, msg);
 }
+
+/* --- internal: the library's own drivers (clvr_internal.h) --------------- */
+
+clvr_status clvr_internal_status(clvr_result r, const clvr_message *msg, clvr_error *err)
+{
+    if (r == CLVR_RESULT_OK) return CLVR_OK;
+    return clvr_error_set(err, (clvr_status)r, "%s", msg && msg->text[0] ? msg->text : clvr_result_text(r));
+}
+
+clvr_status clvr_internal_dataset_adopt(clvr_mesh *m, clvr_dataset **out, clvr_error *err)
+{
+    return dataset_adopt(m, out, err);
+}
+
+clvr_status clvr_internal_tf_build(const clvr_mesh *m, const char *colormap, const char *tf_path, int range_set,
+                                   float lo, float hi, float density, int ramp, clvr_tf *tf, float *auto_density,
+                                   clvr_error *err)
+{
+    return tf_build(m, colormap, tf_path, range_set, lo, hi, density, ramp, tf, auto_density, err);
+}
+
+clvr_status clvr_internal_tracer_create(clvr_context *ctx, clvr_dataset *ds, const clvr_preprocess_settings *ps,
+                                        const clvr_render_settings *rs, int shadows, clvr_tracer **out,
+                                        double *preprocess_s, clvr_error *err)
+{
+    clvr_scene *sc = NULL;
+    clvr_tracer *tr = NULL;
+    clvr_status s = scene_create(ctx, ds, NULL, ps, &sc, err);
+    if (s == CLVR_OK) {
+        clvr_tracer_settings ts;
+        clvr_tracer_settings_init(&ts);
+        s = tracer_create(sc, &ts, rs->width, rs->height, &tr, err);
+    }
+    if (s == CLVR_OK) {
+        tr->rs = *rs;
+        tr->shadows = shadows;
+        s = apply_settings(tr, err);
+    }
+    if (s == CLVR_OK && preprocess_s) *preprocess_s = sc->preprocess_s;
+    scene_release(sc); /* the tracer holds it */
+    if (s != CLVR_OK) {
+        clvr_tracer_destroy(tr);
+        return s;
+    }
+    *out = tr;
+    return CLVR_OK;
+}
+
+clvr_renderer *clvr_internal_tracer_renderer(clvr_tracer *tr) { return tr ? tr->renderer : NULL; }

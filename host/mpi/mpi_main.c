@@ -21,7 +21,7 @@
 #include "camera.h"
 #include "clock.h"
 #include "clvr.h"
-#include "clvr_bridge.h"
+#include "clvr_internal.h"
 #include "image.h"
 #include "limits_check.h"
 #include "mesh_io.h"
@@ -300,8 +300,8 @@ static int run(mpi_run *m, const clvr_options *o)
     }
     if (root) {
         if (have_whole)
-            s = clvr_api_tf_build(&whole, o->colormap, o->tf_file, o->range_set, o->range_lo, o->range_hi, o->density,
-                                  o->density_auto, o->opacity_ramp, &tf, &dens, &err);
+            s = clvr_internal_tf_build(&whole, o->colormap, o->tf_file, o->range_set, o->range_lo, o->range_hi,
+                                       o->density_auto ? 0.0f : o->density, o->opacity_ramp, &tf, &dens, &err);
         if (s == CLVR_OK) {
             /* Opacity to extinction relative to the whole mesh's diagonal. */
             clvr_tf_set_extent(&tf, share.bounds_lo, share.bounds_hi);
@@ -336,17 +336,24 @@ static int run(mpi_run *m, const clvr_options *o)
 
     /* --- device, Quick Clusters of the share, renderer */
     t = now();
-    s = clvr_bridge_status(clvr_context_create(o->device, &ctx, &msg), &msg, &err);
-    if (s == CLVR_OK) s = clvr_dataset_adopt(&share.mesh, &ds, &err);
-    clvr_tracer_parts parts;
-    memset(&parts, 0, sizeof parts);
+    s = clvr_internal_status(clvr_context_create(o->device, &ctx, &msg), &msg, &err);
+    if (s == CLVR_OK) s = clvr_internal_dataset_adopt(&share.mesh, &ds, &err);
+    clvr_renderer *renderer = NULL;
     if (s == CLVR_OK) {
-        clvr_tracer_setup setup;
-        clvr_tracer_setup_default(&setup, o->width, o->height);
-        setup.name = o->mesh_path ? o->mesh_path : "(built-in default scene)";
-        setup.po.leaf_size = o->leaf_size;
-        if (o->sampling_size) setup.po.sampling_size = o->sampling_size;
-        clvr_render_settings *rs = &setup.rs;
+        clvr_preprocess_settings ps;
+        clvr_preprocess_settings_init(&ps);
+        ps.name = o->mesh_path ? o->mesh_path : "(built-in default scene)";
+        if (o->leaf_size) ps.leaf_size = o->leaf_size;
+        if (o->sampling_size) ps.sampling_size = o->sampling_size;
+        ps.partitions = o->partitions;
+        ps.consume = 1;
+        ps.width = o->width;
+        ps.height = o->height;
+        clvr_render_settings rsv;
+        clvr_render_settings_default(&rsv);
+        rsv.width = o->width;
+        rsv.height = o->height;
+        clvr_render_settings *rs = &rsv;
         rs->method = o->method;
         rs->seed = o->seed;
         rs->sampler = o->sampler;
@@ -377,24 +384,17 @@ static int run(mpi_run *m, const clvr_options *o)
             for (int a = 0; a < 3; ++a) rs->clip_lo[a] = rs->clip_hi[a] = share.region_lo[a];
         rs->num_clip_planes = o->num_clip_planes;
         memcpy(rs->clip_planes, o->clip_planes, sizeof rs->clip_planes);
-        setup.shadows = o->shadows;
-        setup.partitions = o->partitions;
-        setup.consume = 1;
-        /* A placeholder (the built-in map): the broadcast table replaces it
-         * below, and none is computed from the share's own histogram. */
-        clvr_tf placeholder = {0};
-        s = clvr_tf_init(&placeholder, NULL, &err);
-        setup.tf = &placeholder;
-        if (s == CLVR_OK) s = clvr_tracer_create_setup(ctx, ds, NULL, &setup, &tracer, &err);
-        clvr_tf_free(&placeholder);
+        /* The broadcast table is set on the renderer below; the tracer's own
+         * automatic transfer function (at a first clvr_tracer_render, which
+         * this driver never calls) is not computed from the share. */
+        s = clvr_internal_tracer_create(ctx, ds, &ps, rs, o->shadows, &tracer, &st.preprocess_s, &err);
     }
     if (s == CLVR_OK) {
-        clvr_tracer_parts_of(tracer, &parts);
-        st.preprocess_s = parts.preprocess_s;
+        renderer = clvr_internal_tracer_renderer(tracer);
         clvr_tracer_drop_dataset(tracer, &msg);
         clvr_dataset_destroy(ds);
         ds = NULL;
-        s = clvr_renderer_set_tf(parts.renderer, table, tfh.n, tfh.lo, tfh.hi, tfh.density, &err);
+        s = clvr_renderer_set_tf(renderer, table, tfh.n, tfh.lo, tfh.hi, tfh.density, &err);
     }
     /* The camera frames the whole mesh's bounds, as one process does. */
     if (s == CLVR_OK) {
@@ -411,7 +411,7 @@ static int run(mpi_run *m, const clvr_options *o)
             s = clvr_camera_frame_view(&cam, share.bounds_lo, share.bounds_hi, &view, o->fovy, o->width, o->height,
                                        &err);
         }
-        if (s == CLVR_OK) s = clvr_renderer_set_camera(parts.renderer, &cam, &err);
+        if (s == CLVR_OK) s = clvr_renderer_set_camera(renderer, &cam, &err);
     }
     s = agree(m, s, &err);
     if (s != CLVR_OK) goto done;
@@ -452,7 +452,7 @@ static int run(mpi_run *m, const clvr_options *o)
         const size_t ng = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
         grid = malloc(ng * sizeof(float));
         grid_all = malloc(ng * sizeof(float));
-        s = grid && grid_all ? clvr_renderer_light_grid(parts.renderer, grid, &err)
+        s = grid && grid_all ? clvr_renderer_light_grid(renderer, grid, &err)
                              : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the light grid");
         s = agree(m, s, &err);
         if (s != CLVR_OK) goto done;
@@ -466,7 +466,7 @@ static int run(mpi_run *m, const clvr_options *o)
         const char *lg = getenv("CLVR_MPI_TEST_LIGHT_GRID");
         if (lg && !strcmp(lg, "one"))
             for (size_t i = 0; i < ng; ++i) grid_all[i] = 1.0f;
-        s = clvr_renderer_set_light_grid(parts.renderer, grid_all, &err);
+        s = clvr_renderer_set_light_grid(renderer, grid_all, &err);
         s = agree(m, s, &err);
         if (s != CLVR_OK) goto done;
         st.light_s = now() - render0;
@@ -491,7 +491,7 @@ static int run(mpi_run *m, const clvr_options *o)
     double last_report = render0;
     for (frames = 0; frames < o->spp; ++frames) {
         uint64_t n1 = 0, n2 = 0;
-        s = clvr_renderer_mpi_record(parts.renderer, frames, rank_key, rec, &n1, &err);
+        s = clvr_renderer_mpi_record(renderer, frames, rank_key, rec, &n1, &err);
         s = agree(m, s, &err);
         if (s != CLVR_OK) goto done;
         t = now();
@@ -510,7 +510,7 @@ static int run(mpi_run *m, const clvr_options *o)
             MPI_Bcast(pick_t, (int)npix, MPI_FLOAT, 0, m->comm);
             m->comm_s += now() - t;
             if (root) m->bytes_sent += (double)npix * sizeof(float) * (m->size - 1);
-            s = clvr_renderer_mpi_shadow(parts.renderer, frames, rank_key, pick_t, tau, &n2, &err);
+            s = clvr_renderer_mpi_shadow(renderer, frames, rank_key, pick_t, tau, &n2, &err);
             s = agree(m, s, &err);
             if (s != CLVR_OK) goto done;
             t = now();
