@@ -436,3 +436,17 @@ clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, floa
     if (global_majorant) *global_majorant = r->frame.global_majorant;
     return clvr_majorants_read(r->maj, clusters, cells, blocks, err);
 }
+
+clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const uint32_t n = r->frame.light_res;
+    *res = n;
+    if (!r->light_valid)
+        return clvr_error_set(err, CLVR_ERR_INTERNAL, "no light grid yet (it is made by a urm frame with shadows)");
+    if (out)
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, (size_t)n * n * n * sizeof(float),
+                                          out, 0, NULL, NULL));
+cleanup:
+    return s;
+}

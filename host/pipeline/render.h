@@ -93,6 +93,12 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
  * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL). */
 clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float *rgba_sumsq, clvr_error *err);
 
+/* The urm light grid (transmittance toward the light at the centres of
+ * frame light_res^3 cells over the grid domain, x fastest) as last built by
+ * a frame with urm and shadows; *res gets light_res. out: light_res^3
+ * floats, or NULL for *res only. An error before such a frame. */
+clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res, clvr_error *err);
+
 /* The majorant of every sampling cluster / macrocell / macrocell block
  * (ceil(macrocells / CLVR_DDA_BLOCK)^3, see clvr_shared.h) (tests); any may
  * be NULL. */
