@@ -633,6 +633,22 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
             TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, 4), 0);
             snprintf(what, sizeof what, "%s shadows %s: urm dda vs delta track", name, shadows ? "on" : "off");
             TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, 4), 0);
+            if (shadows) {
+                /* A light grid of one cell: G is one number, flat
+                 * everywhere, and wrong nearly everywhere, so every
+                 * correction shadow ray goes through the Russian roulette
+                 * (kept with probability CLVR_URM_SHADOW_RR_Q) and carries
+                 * a large correction: the image must still be delta's. */
+                float *m1, *v1;
+                fx.set.light_res = 1;
+                fx.set.seed = 18 + 100 * est;
+                render_stats(&fx, N, &m1, &v1);
+                fx.set.light_res = CLVR_URM_LIGHT_RES;
+                snprintf(what, sizeof what, "%s shadows on: urm dda, 1-cell light grid, vs delta track", name);
+                TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, 4), 0);
+                free(m1);
+                free(v1);
+            }
             free(mt); free(vt);
         }
         free(mb); free(vb); free(md); free(vd);
