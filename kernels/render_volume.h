@@ -411,8 +411,10 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 /* Russian roulette on urm's correction shadow ray (clvr_render_track):
  * traced with probability CLVR_URM_SHADOW_RR_Q where the light grid's spread
  * at the pick is at most CLVR_URM_SHADOW_RR_SPREAD, always elsewhere.
- * post-tets, 256^2, shadows: shadow rays per pixel 0.38 -> 0.19, lookups
- * per frame -16%, error per frame +1-5%. */
+ * 256^2, shadows, 1M tets / post-tets: shadow rays per pixel 0.45 -> 0.20 /
+ * 0.38 -> 0.19, lookups to 2% relative RMSE 91 -> 75 / 63 -> 53 at the same
+ * frames (5 / 4). A spread of 0.1 lost a frame on post; 0.02 with q = 0.5
+ * hardly triggered (bench/results/render-converge/2026-11-25-levers-*). */
 #ifndef CLVR_URM_SHADOW_RR_SPREAD
 #define CLVR_URM_SHADOW_RR_SPREAD 0.05f
 #endif
