@@ -12,6 +12,9 @@
  *    means within k standard errors) on a mixed mesh and on a real file, and
  *    so does dda with the low-discrepancy sampler (its per-frame variance
  *    overstates the variance of its mean, so the bound only gets looser);
+ *    urm matches delta per 4x4 block, also with a one-cell light grid (the
+ *    shadow-ray Russian roulette taken on every pixel, with large
+ *    corrections);
  * 3. march with a small step agrees with delta tracking without shadows;
  * 4. majorants (sampling clusters, macrocells, global) are true upper bounds
  *    of the extinction for random transfer functions, and every block of
