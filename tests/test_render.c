@@ -6,10 +6,15 @@
  *    independent frames' binomial standard error used as the bound);
  *    and the same box cut by a clip box and clip planes matches the
  *    transmittance of the chord that is left;
+ *    and the urm light grid (the shadow rays' control variate) matches the
+ *    analytic transmittance toward the light at its cell centres;
  * 2. track, bins and dda converge to the same image (per-pixel difference of
  *    means within k standard errors) on a mixed mesh and on a real file, and
  *    so does dda with the low-discrepancy sampler (its per-frame variance
  *    overstates the variance of its mean, so the bound only gets looser);
+ *    urm matches delta per 4x4 block, also with a one-cell light grid (the
+ *    shadow-ray Russian roulette taken on every pixel, with large
+ *    corrections);
  * 3. march with a small step agrees with delta tracking without shadows;
  * 4. majorants (sampling clusters, macrocells, global) are true upper bounds
  *    of the extinction for random transfer functions, and every block of
@@ -321,6 +326,76 @@ static void test_homogeneous(clvr_cl *cl)
     fixture_close(&fx);
 }
 
+/* ---- 1c. the urm light grid (the shadow rays' control variate) against
+ * the analytic transmittance toward the light in a homogeneous unit box,
+ * exp(-sigma * distance from the cell centre to the box along the light),
+ * for three light directions of different dominant axes and signs. Any
+ * grid keeps urm unbiased (1 and 2 test that, and cannot see a wrong grid);
+ * this tests that the grid is right, which is what lowers the variance. In
+ * a homogeneous medium urm's transmittance is exact (its control is linear
+ * in sigma, the residual 0), so the bound is float rounding; sigma keeps
+ * every T above the Russian roulette threshold. */
+static void test_light_grid(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 6;
+    p.mix = CLVR_SCENE_MIX_TET;
+    p.field = CLVR_SCENE_FIELD_CONSTANT;
+    p.value = 1.0f;
+    clvr_mesh m;
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, 8, 8)) return;
+    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
+    clvr_camera cam;
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, 8, 8, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    const float sigma = 1.5f, table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
+    set_table(&fx, table, 2, 0.0f, 2.0f);
+    const float dirs[3][3] = {{1.0f, 2.0f, 1.5f}, {-1.0f, 0.3f, -0.5f}, {0.2f, -0.1f, -1.0f}};
+    uint32_t res = 0;
+    TU_CHECK(clvr_renderer_read_light(fx.r, NULL, &res, &err) != CLVR_OK); /* none yet */
+    for (int di = 0; di < 3; ++di) {
+        fx.set.estimator = CLVR_ESTIMATOR_URM;
+        fx.set.shadows = 1;
+        fx.set.method = CLVR_RENDER_DDA;
+        memcpy(fx.set.light_dir, dirs[di], sizeof dirs[di]);
+        float *mean, *var;
+        if (render_stats(&fx, 1, &mean, &var)) { free(mean); free(var); break; }
+        free(mean);
+        free(var);
+        TU_CHECK_STATUS(clvr_renderer_read_light(fx.r, NULL, &res, &err), CLVR_OK, &err);
+        float *g = malloc((size_t)res * res * res * sizeof(float));
+        if (!g || clvr_renderer_read_light(fx.r, g, &res, &err) != CLVR_OK) { free(g); ++tu_fail_; break; }
+        const double n = sqrt((double)dirs[di][0] * dirs[di][0] + (double)dirs[di][1] * dirs[di][1] +
+                              (double)dirs[di][2] * dirs[di][2]);
+        double worst = 0, sum = 0;
+        for (uint32_t z = 0; z < res; ++z)
+            for (uint32_t y = 0; y < res; ++y)
+                for (uint32_t x = 0; x < res; ++x) {
+                    const double c[3] = {(x + 0.5) / res, (y + 0.5) / res, (z + 0.5) / res};
+                    double t = 1e30;
+                    for (int k = 0; k < 3; ++k) {
+                        const double dk = dirs[di][k] / n;
+                        if (dk > 0) t = fmin(t, (1.0 - c[k]) / dk);
+                        else if (dk < 0) t = fmin(t, (0.0 - c[k]) / dk);
+                    }
+                    const double e = fabs(g[(z * res + y) * res + x] - exp(-sigma * t));
+                    worst = fmax(worst, e);
+                    sum += e;
+                }
+        const double mean_err = sum / ((double)res * res * res);
+        if (!(worst < 1e-4 && mean_err < 1e-5))
+            fprintf(stderr, "light grid, light (%g, %g, %g): |G - T| max %g, mean %g\n", dirs[di][0], dirs[di][1],
+                    dirs[di][2], worst, mean_err);
+        TU_CHECK(worst < 1e-4 && mean_err < 1e-5);
+        free(g);
+    }
+    fixture_close(&fx);
+}
+
 /* ---- 1b. clip box and planes: the chord that is left */
 /* Length of the camera ray through (px, py) inside the unit box cut to the
  * box [lo, hi] and the half-spaces n.p <= d of planes (np of them), in
@@ -561,6 +636,22 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
             TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, 4), 0);
             snprintf(what, sizeof what, "%s shadows %s: urm dda vs delta track", name, shadows ? "on" : "off");
             TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, 4), 0);
+            if (shadows) {
+                /* A light grid of one cell: G is one number, flat
+                 * everywhere, and wrong nearly everywhere, so every
+                 * correction shadow ray goes through the Russian roulette
+                 * (kept with probability CLVR_URM_SHADOW_RR_Q) and carries
+                 * a large correction: the image must still be delta's. */
+                float *m1, *v1;
+                fx.set.light_res = 1;
+                fx.set.seed = 18 + 100 * est;
+                render_stats(&fx, N, &m1, &v1);
+                fx.set.light_res = CLVR_URM_LIGHT_RES;
+                snprintf(what, sizeof what, "%s shadows on: urm dda, 1-cell light grid, vs delta track", name);
+                TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, 4), 0);
+                free(m1);
+                free(v1);
+            }
             free(mt); free(vt);
         }
         free(mb); free(vb); free(md); free(vd);
@@ -783,6 +874,7 @@ int main(void)
     test_ld_sequence();
     tu_open_device(&cl);
     test_homogeneous(&cl);
+    test_light_grid(&cl);
     test_clip(&cl);
     test_majorants(&cl);
     test_seeds(&cl);

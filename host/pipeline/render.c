@@ -68,6 +68,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
     s->estimator = CLVR_ESTIMATOR_URM;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
     s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
+    s->light_res = CLVR_URM_LIGHT_RES;
     s->width = s->height = 512;
     s->seed = 1;
     /* Low-discrepancy frames: the progressive image reaches a given error
@@ -148,11 +149,14 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     clvr_status s = CLVR_OK;
     if (set->method >= CLVR_RENDER_COUNT || set->estimator >= CLVR_ESTIMATOR_COUNT || set->sampler > CLVR_SAMPLER_LD ||
         set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
-        set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f))
+        set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
+        set->light_res == 0 || set->light_res > CLVR_URM_LIGHT_RES)
         return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
-                              "%ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g)", set->method,
+                              "%ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, light grid %u: "
+                              "1..%u)", set->method,
                               set->estimator, set->sampler, set->width, set->height, set->bins, set->segments,
-                              set->macrocells, set->urm_steps, (double)set->urm_kappa);
+                              set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
+                              CLVR_URM_LIGHT_RES);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
@@ -205,7 +209,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->grid_res = set->macrocells;
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
-    f->light_res = CLVR_URM_LIGHT_RES;
+    f->light_res = set->light_res;
     {
         /* The light grid depends on these fields only (and on the transfer
          * function): a new image size, exposure, sampler or a shadows toggle
@@ -583,6 +587,20 @@ clvr_status clvr_renderer_set_light_grid(clvr_renderer *r, const float *grid, cl
     CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, n * sizeof(float), grid, 0, NULL,
                                        NULL));
     r->light_valid = 1;
+cleanup:
+    return s;
+}
+
+clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const uint32_t n = r->frame.light_res;
+    *res = n;
+    if (!r->light_valid)
+        return clvr_error_set(err, CLVR_ERR_INTERNAL, "no light grid yet (it is made by a urm frame with shadows)");
+    if (out)
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, (size_t)n * n * n * sizeof(float),
+                                          out, 0, NULL, NULL));
 cleanup:
     return s;
 }

@@ -27,6 +27,8 @@ typedef struct clvr_render_settings {
     uint32_t estimator;        /* CLVR_ESTIMATOR_* (track, bins, dda) */
     uint32_t urm_steps;        /* urm: minimum quadrature points per ray (>= 1) */
     float urm_kappa;           /* urm: largest majorant optical depth between two points (> 0) */
+    uint32_t light_res;        /* urm with shadows: light grid cells per axis, 1..CLVR_URM_LIGHT_RES (the
+                                * default); any keeps the image unbiased, a coarser one is noisier */
     uint32_t width, height;
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
@@ -92,6 +94,12 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
 /* The sum of per-frame samples (not the mean), for tests that need per-pixel
  * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL). */
 clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float *rgba_sumsq, clvr_error *err);
+
+/* The urm light grid (transmittance toward the light at the centres of
+ * frame light_res^3 cells over the grid domain, x fastest) as last built by
+ * a frame with urm and shadows; *res gets light_res. out: light_res^3
+ * floats, or NULL for *res only. An error before such a frame. */
+clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res, clvr_error *err);
 
 /* The majorant of every sampling cluster / macrocell / macrocell block
  * (ceil(macrocells / CLVR_DDA_BLOCK)^3, see clvr_shared.h) (tests); any may
