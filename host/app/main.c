@@ -61,6 +61,7 @@ static clvr_status load_mesh(const clvr_options *o, clvr_mesh *m, clvr_error *er
     lo.scalar_name = o->scalar_name;
     lo.field_ranges = o->info; /* --info lists every array with its range */
     lo.cell_flat = o->cell_flat;
+    lo.map_indices = lo.map_vertices = 1; /* a .bin's arrays stay page cache: no second host copy */
     return clvr_mesh_load(o->mesh_path, &lo, m, err);
 }
 
@@ -127,6 +128,7 @@ int main(int argc, char **argv)
     /* --- mesh. On a CPU device the device's memory is the host's: a mesh
      * that cannot fit is refused from the .bin header, before it is read
      * (not by the OOM killer or an allocation failure inside the driver). */
+    int mapped = 0; /* a .bin: load_mesh maps its arrays */
     if (o.mesh_path && !o.info) {
         uint64_t hv = 0, hc[CLVR_CELL_TYPE_COUNT] = {0};
         clvr_error perr = {0};
@@ -135,7 +137,10 @@ int main(int argc, char **argv)
             for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += hc[t];
             clvr_mem_limits ml;
             clvr_mem_limits_read(&ml);
-            s = clvr_limits_check_host(o.mesh_path, hv, hc, part_elements(&o, n), o.width, o.height, 0, &ml, &err);
+            mapped = 1;
+            int boxes = o.element_boxes; /* resolved (with its notice) once loaded, below */
+            s = clvr_limits_check_host_boxes(o.mesh_path, hv, hc, part_elements(&o, n), o.width, o.height, 0, mapped,
+                                             &boxes, &ml, NULL, &err);
             if (s != CLVR_OK) return fail(&err);
         }
     }
@@ -191,8 +196,9 @@ int main(int argc, char **argv)
     {
         clvr_mem_limits ml;
         clvr_mem_limits_read(&ml);
-        s = clvr_limits_check_host(mesh_name, view.num_vertices, view.num_cells,
-                                   part_elements(&o, clvr_mesh_num_elements(&view)), o.width, o.height, 1, &ml, &err);
+        s = clvr_limits_check_host_boxes(mesh_name, view.num_vertices, view.num_cells,
+                                         part_elements(&o, clvr_mesh_num_elements(&view)), o.width, o.height, 1,
+                                         mapped, &o.element_boxes, &ml, o.quiet ? NULL : stderr, &err);
         if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     }
 
@@ -210,6 +216,7 @@ int main(int argc, char **argv)
     clvr_preprocess_options_default(&po);
     po.leaf_size = o.leaf_size;
     if (o.sampling_size) po.sampling_size = o.sampling_size;
+    po.no_element_boxes = o.element_boxes == CLVR_EBOX_OFF;
     /* A mesh or image the device cannot hold fails now, with the numbers,
      * not minutes into preprocessing. */
     s = clvr_limits_check_parts(cl, &view, mesh_name, &po, part_elements(&o, clvr_mesh_num_elements(&view)), o.width,
