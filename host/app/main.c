@@ -137,7 +137,7 @@ int main(int argc, char **argv)
             for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += hc[t];
             clvr_mem_limits ml;
             clvr_mem_limits_read(&ml);
-            mapped = 1;
+            mapped = !o.cell_flat; /* --cell-data flat rewrites the lists: read, not mapped */
             int boxes = o.element_boxes; /* resolved (with its notice) once loaded, below */
             s = clvr_limits_check_host_boxes(o.mesh_path, hv, hc, part_elements(&o, n), o.width, o.height, 0, mapped,
                                              &boxes, &ml, NULL, &err);
@@ -198,7 +198,8 @@ int main(int argc, char **argv)
         clvr_mem_limits_read(&ml);
         s = clvr_limits_check_host_boxes(mesh_name, view.num_vertices, view.num_cells,
                                          part_elements(&o, clvr_mesh_num_elements(&view)), o.width, o.height, 1,
-                                         mapped, &o.element_boxes, &ml, o.quiet ? NULL : stderr, &err);
+                                         view.map_base != NULL, &o.element_boxes, &ml, o.quiet ? NULL : stderr,
+                                         &err);
         if (s != CLVR_OK) { rc = fail(&err); goto cleanup; }
     }
 
