@@ -34,7 +34,7 @@ static uint32_t coarse_key(const clvr_mesh *m, uint32_t t, uint64_t e, const clv
 }
 
 /* Elements per step of the key pass between page releases of a mapped
- * mesh (1 to 4 MB of indices). */
+ * mesh (16 to 32 MB of indices). */
 #define KEY_BLOCK ((uint64_t)1 << 20)
 
 /* One thread's share of a pass over all elements (mesh order). */
