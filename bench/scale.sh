@@ -7,16 +7,22 @@
 # a data folder and reused; they are never committed.
 #
 # Usage: bench/scale.sh [--build DIR] [--data DIR] [--out DIR] [--sizes "10M 100M ..."]
-#                       [--tets "788M"] [--spp N] [--size WxH] [--partitions K] [--keep]
+#                       [--tets "791M"] [--spp N] [--size WxH] [--partitions K] [--keep]
+#                       [--element-boxes on|off|auto] [--quiet]
 #   --build       build directory with clvr and clvr-gen (default: build)
 #   --data        where the generated .bin files go (default: /tmp/clvr-scale); needs
 #                 37 bytes per mixed element and 20 per tet element of disk
 #   --out         report folder (default: bench/results); writes
 #                 <date>-scale.md and <date>-scale.json
 #   --sizes       mixed meshes (clvr-gen mixed), default "10M 100M 300M 500M"
-#   --tets        tetrahedral meshes (clvr-gen cellvar), default "788M"; "" for none
+#   --tets        tetrahedral meshes (clvr-gen cellvar), default "791M" (788M asks for a
+#                 508^3 lattice, 786.6M tets); "" for none
 #   --spp         samples per pixel (default 16), --size image size (default 512x512)
 #   --partitions  passed to clvr (default 0: automatic)
+#   --element-boxes  passed to clvr (default auto: off only where the mesh fits only
+#                 without them)
+#   --quiet       pass -q to clvr: no progress and no warnings scan (a pass over
+#                 every element per duplicate-search group: minutes at 500M on 2 cores)
 #   --keep        keep the generated meshes (default: a mesh above 100M elements is
 #                 deleted after its run, so that the next one has the disk)
 # Sizes that do not fit the disk are skipped with a line saying so. Timings
@@ -28,11 +34,13 @@ BUILD=$ROOT/build
 DATA=/tmp/clvr-scale
 OUT=$ROOT/bench/results
 SIZES="10M 100M 300M 500M"
-TETS="788M"
+TETS="791M"   # the lattice of 509^3 cubes x 6 tets: the first at or above the Lander's 788M
 SPP=16
 IMG=512x512
 PARTS=0
 KEEP=0
+EBOX=auto
+QUIET=
 while [ $# -gt 0 ]; do
   case $1 in
     --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
@@ -44,6 +52,8 @@ while [ $# -gt 0 ]; do
     --size) IMG=$2; shift 2 ;;
     --partitions) PARTS=$2; shift 2 ;;
     --keep) KEEP=1; shift ;;
+    --element-boxes) EBOX=$2; shift 2 ;;
+    --quiet) QUIET=-q; shift ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "scale.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
   esac
@@ -88,8 +98,8 @@ run_one() { # KIND SIZE
   load=$(cut -d' ' -f1 /proc/loadavg)
   echo "scale.sh: clvr $file (load average $load)" >&2
   local t0=$(date +%s.%N)
-  nice "$BUILD/clvr" "$file" -o "$RUNS/$tag.png" --spp "$SPP" --size "$IMG" --partitions "$PARTS" \
-    --stats-json "$RUNS/$tag.json" > "$RUNS/$tag.out" 2> "$RUNS/$tag.err" || rc=$?
+  nice "$BUILD/clvr" "$file" $QUIET -o "$RUNS/$tag.png" --spp "$SPP" --size "$IMG" --partitions "$PARTS" \
+    --element-boxes "$EBOX" --stats-json "$RUNS/$tag.json" > "$RUNS/$tag.out" 2> "$RUNS/$tag.err" || rc=$?
   local wall
   wall=$(python3 -c "import time,sys; print(round(time.time()-float(sys.argv[1]),2))" "$t0")
   printf '%s\t%s\t%s\trc=%s\t%s\t%s\t%s\n' "$kind" "$size" "$n" "$rc" "$wall" "$load" "$(stat -c %s "$file")" >> "$RUNS/list"
@@ -124,20 +134,20 @@ json.dump({"benchmark": "scale", "commit": commit, "date": date, "spp": int(spp)
           open(base + ".json", "w"), indent=1)
 with open(base + ".md", "w") as md:
     md.write(f"bench/scale.sh at clvr commit {commit} ({date}), {img} at {spp} spp, PoCL on the 2-core 24 GiB VM\n\n")
-    md.write("| mesh | elements | partitions | peak RSS GB | resident GB | peak/resident | load s | load GB/s | "
-             "preprocess s | frame s (mean) | render s | load avg |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+    md.write("| mesh | elements | partitions | peak RSS GB | resident GB | peak/resident | element boxes GB | load s | load GB/s | "
+             "preprocess s | frame s (mean) | render s | load avg |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
     stages = []
     for r in rows:
         name = f"{r['kind']} {r['size']}"
         if "skipped" in r:
-            md.write(f"| {name} | {r['elements']} | {r['skipped']} |||||||||\n"); continue
+            md.write(f"| {name} | {r['elements']} | {r['skipped']} ||||||||||\n"); continue
         st = r.get("stats")
         if not st:
-            md.write(f"| {name} | {r['elements']} | exit {r['exit']}: {' '.join(r.get('error', []))} |||||||||\n"); continue
+            md.write(f"| {name} | {r['elements']} | exit {r['exit']}: {' '.join(r.get('error', []))} ||||||||||\n"); continue
         t = st["time"]; b = st["bytes"]; rd = st.get("render", {})
         peak, res = b.get("peak_rss", 0), b.get("resident", 0)
         md.write(f"| {name} | {st['elements']} | {st.get('partitions', 0):.0f} | {peak/1e9:.2f} | {res/1e9:.2f} | "
-                 f"{peak/res if res else 0:.2f} | {t['load_s']:.2f} | {r['file_bytes']/1e9/t['load_s'] if t['load_s'] else 0:.2f} | "
+                 f"{peak/res if res else 0:.2f} | {b.get('element_boxes', 0)/1e9:.2f} | {t['load_s']:.2f} | {r['file_bytes']/1e9/t['load_s'] if t['load_s'] else 0:.2f} | "
                  f"{t['preprocess_s']:.2f} | {rd.get('frame_s', 0):.2f} | {rd.get('wall_s', 0):.1f} | {r['load_average']} |\n")
         stages.append((name, st["elements"], {k[:-2]: v for k, v in t.items() if k.endswith("_s") and k not in ("load_s", "preprocess_s", "kernel_build_s")}))
     if stages:

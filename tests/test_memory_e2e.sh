@@ -2,7 +2,8 @@
 # End-to-end memory checks of partitioned preprocessing (issue #15) through
 # the built binaries: a generated mixed mesh renders in K partitions with
 # bytes.peak_rss, bytes.resident and partitions in --stats-json, the same
-# picture as in one partition; under an address-space limit (ulimit -v) too
+# picture as in one partition, and with --element-boxes off (no boxes, same
+# picture); under an address-space limit (ulimit -v) too
 # small for it, clvr refuses from the .bin header with its own message and
 # exit code 1 instead of aborting inside the OpenCL driver.
 # Usage: test_memory_e2e.sh BUILD_DIR
@@ -45,6 +46,29 @@ diff = max(abs(p - q) for p, q in zip(x, y))
 assert diff < 1e-3, diff
 assert max(x) > 0.01
 PY
+
+# --element-boxes off: no boxes in the stats, the same elements found, so
+# the same picture; a wrong value is a usage error.
+if "$CLVR" "$tmp/m.bin" -o "$tmp/nobox.pfm" --size 48x48 --spp 4 --partitions 1 --element-boxes off \
+    --stats-json "$tmp/nobox.json" -q 2>"$tmp/errnb"; then ok; else bad "--element-boxes off failed: $(cat "$tmp/errnb")"; fi
+/usr/bin/python3 - "$tmp" <<'PY' && ok || bad "--element-boxes off: stats or image"
+import json, struct, sys
+d = sys.argv[1]
+a, b = json.load(open(d + "/k1.json")), json.load(open(d + "/nobox.json"))
+assert a["bytes"]["element_boxes"] > 0 and b["bytes"]["element_boxes"] == 0, (a["bytes"], b["bytes"])
+def pfm(p):
+    f = open(p, "rb").read()
+    parts = f.split(b"\n", 3)
+    w, h = map(int, parts[1].split())
+    return struct.unpack("<%df" % (w * h * 3), parts[3][: w * h * 12])
+x, y = pfm(d + "/k1.pfm"), pfm(d + "/nobox.pfm")
+diff = max(abs(p - q) for p, q in zip(x, y))
+assert diff < 1e-3 and max(x) > 0.01, diff
+PY
+"$CLVR" "$tmp/m.bin" -o "$tmp/x.png" --element-boxes maybe >/dev/null 2>"$tmp/erru"
+rc=$?
+if [ "$rc" -eq 2 ] && grep -q "element-boxes expects on, off or auto" "$tmp/erru"; then ok
+else bad "--element-boxes maybe: exit $rc: $(cat "$tmp/erru")"; fi
 
 # An address space too small: clvr's own refusal, from the header. (Not
 # under AddressSanitizer, whose shadow memory alone needs terabytes of

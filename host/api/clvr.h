@@ -356,8 +356,12 @@ CLVR_API clvr_result clvr_dataset_warnings(const clvr_dataset *ds, const char *n
  * once loaded). */
 CLVR_API clvr_result clvr_file_check_memory(const char *path, uint32_t width, uint32_t height, uint32_t partitions,
                                             clvr_message *msg);
+/* element_boxes: CLVR_ELEMENT_BOXES_* asked for; *resolved (may be NULL)
+ * receives ON or OFF: AUTO becomes OFF when the run fits only without the
+ * boxes (pass it on in clvr_preprocess_settings.element_boxes). */
 CLVR_API clvr_result clvr_dataset_check_memory(const clvr_dataset *ds, const char *name, uint32_t width,
-                                               uint32_t height, uint32_t partitions, clvr_message *msg);
+                                               uint32_t height, uint32_t partitions, int element_boxes,
+                                               int *resolved, clvr_message *msg);
 
 /* --- preprocessing as its own step (1.1) --------------------------------- */
 
@@ -373,7 +377,13 @@ typedef struct clvr_preprocess_settings {
     const char *name;        /* the dataset in messages (a path); NULL: "dataset" */
     uint32_t width, height;  /* the image the tracers will render, for the device memory check before
                                 preprocessing (0: checked by clvr_tracer_create_on only) */
+    int element_boxes;       /* point location's quantized element boxes (6 bytes per element, about twice
+                                the lookup speed): CLVR_ELEMENT_BOXES_AUTO (default: on unless the host memory
+                                check finds the run fits only without them), _ON, _OFF */
 } clvr_preprocess_settings;
+#define CLVR_ELEMENT_BOXES_AUTO 0
+#define CLVR_ELEMENT_BOXES_ON 1
+#define CLVR_ELEMENT_BOXES_OFF 2
 CLVR_API void clvr_preprocess_settings_init(clvr_preprocess_settings *s);
 
 /* Preprocesses ds's field `field` (NULL: the current one; a file's other

@@ -475,6 +475,7 @@ static clvr_status dataset_load(const char *path, const clvr_load_settings *ls, 
     lo.scalar_name = ls->field;
     lo.cell_flat = ls->cell_flat;
     lo.field_ranges = ls->field_ranges;
+    lo.map_indices = lo.map_vertices = 1; /* a .bin's arrays stay page cache: no second host copy */
     char *copy = strdup(path);
     if (!copy) return clvr_error_set(e, CLVR_ERR_NO_MEMORY, "out of memory");
     clvr_status s = clvr_mesh_load(path, &lo, &m, e);
@@ -608,6 +609,7 @@ static clvr_status resolve_field(clvr_dataset *ds, const char *fn, const char *f
     clvr_load_options lo = {0};
     lo.scalar_name = field;
     lo.cell_flat = ds->cell_flat;
+    lo.map_indices = lo.map_vertices = 1;
     s = clvr_mesh_load(ds->path, &lo, &m, e);
     if (s == CLVR_OK && (m.num_vertices != ds->num_points || m.cell_flat != ds->cell_flat))
         s = clvr_error_set(e, CLVR_ERR_BAD_FIELD,
@@ -938,6 +940,11 @@ static clvr_status check_preprocess(const char *fn, const clvr_preprocess_settin
         return clvr_error_set(e, CLVR_ERR_USAGE, "%s: sampling_size is 0; use >= 1 (default 16)", fn);
     po->leaf_size = ps->leaf_size;
     po->sampling_size = ps->sampling_size;
+    if (ps->element_boxes != CLVR_EBOX_AUTO && ps->element_boxes != CLVR_EBOX_ON &&
+        ps->element_boxes != CLVR_EBOX_OFF)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: element_boxes is %d; use CLVR_ELEMENT_BOXES_AUTO, _ON or _OFF",
+                              fn, ps->element_boxes);
+    po->no_element_boxes = ps->element_boxes == CLVR_EBOX_OFF;
     return CLVR_OK;
 }
 
@@ -980,6 +987,19 @@ static clvr_status scene_create(clvr_context *ctx, clvr_dataset *ds, const char 
      * minutes into preprocessing (the image is checked by the tracer). */
     const uint64_t n = clvr_mesh_num_elements(&m);
     const uint64_t part = clvr_partition_elements(n, ps->partitions);
+    if (ps->element_boxes == CLVR_EBOX_AUTO) {
+        /* AUTO: off only when the host check says the run fits only
+         * without the boxes (clvr_dataset_check_memory); a run that does not
+         * fit either way is left to the checks that report it. */
+        clvr_mem_limits ml;
+        clvr_mem_limits_read(&ml);
+        clvr_error ignored = {0};
+        int boxes = CLVR_EBOX_AUTO;
+        if (clvr_limits_check_host_boxes("dataset", m.num_vertices, m.num_cells, part, ps->width ? ps->width : 1,
+                                         ps->height ? ps->height : 1, 1, ds->loaded.map_base != NULL, &boxes, &ml,
+                                         NULL, &ignored) == CLVR_OK)
+            po.no_element_boxes = boxes == CLVR_EBOX_OFF;
+    }
     s = clvr_limits_check_parts(&ctx->cl, &m, ps->name ? ps->name : "dataset", &po, part,
                                 ps->width ? ps->width : 1, ps->height ? ps->height : 1, err);
     /* Preprocessing in partitions (partition.h). A loaded file's mesh that
@@ -1637,23 +1657,34 @@ clvr_result clvr_file_check_memory(const char *path, uint32_t width, uint32_t he
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += hc[t];
     clvr_mem_limits ml;
     clvr_mem_limits_read(&ml);
-    return finish(clvr_limits_check_host(path, hv, hc, clvr_partition_elements(n, partitions), width, height, 0, &ml,
-                                         &e),
+    /* The library maps a .bin's arrays (read, not mapped, for cell data
+     * shown flat: checked again once loaded); boxes as AUTO resolves them. */
+    int boxes = CLVR_EBOX_AUTO;
+    return finish(clvr_limits_check_host_boxes(path, hv, hc, clvr_partition_elements(n, partitions), width, height, 0,
+                                               1, &boxes, &ml, NULL, &e),
                   &e, msg);
 }
 
 clvr_result clvr_dataset_check_memory(const clvr_dataset *ds, const char *name, uint32_t width, uint32_t height,
-                                      uint32_t partitions, clvr_message *msg)
+                                      uint32_t partitions, int element_boxes, int *resolved, clvr_message *msg)
 {
     clvr_error e = {0};
-    if (!ds) return finish(NULL_ARG("clvr_dataset_check_memory", "ds"), &e, msg);
+    static const char fn[] = "clvr_dataset_check_memory";
+    if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
+    if (element_boxes != CLVR_EBOX_AUTO && element_boxes != CLVR_EBOX_ON && element_boxes != CLVR_EBOX_OFF)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: element_boxes is %d; use CLVR_ELEMENT_BOXES_AUTO, _ON "
+                                     "or _OFF", fn, element_boxes),
+                      &e, msg);
     uint64_t n = 0;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) n += ds->num_cells[t];
     clvr_mem_limits ml;
     clvr_mem_limits_read(&ml);
-    return finish(clvr_limits_check_host(name ? name : "dataset", ds->num_points, ds->num_cells,
-                                         clvr_partition_elements(n, partitions), width, height, 1, &ml, &e),
-                  &e, msg);
+    int boxes = element_boxes;
+    clvr_status s = clvr_limits_check_host_boxes(name ? name : "dataset", ds->num_points, ds->num_cells,
+                                                 clvr_partition_elements(n, partitions), width, height, 1,
+                                                 ds->loaded.map_base != NULL, &boxes, &ml, NULL, &e);
+    if (s == CLVR_OK && resolved) *resolved = boxes;
+    return finish(s, &e, msg);
 }
 
 /* --- API 1.1: context and scene -------------------------------------------- */

@@ -1,6 +1,7 @@
 #include "cli.h"
 #include "camera.h"
 #include "image.h"
+#include "limits_check.h"
 #include "render.h"
 
 #include <errno.h>
@@ -82,6 +83,9 @@ void clvr_cli_print_help(FILE *out)
         "  --clip-box X0,Y0,Z0,X1,Y1,Z1  keep only the medium inside this box\n"
         "  --partitions K         preprocess in K pieces of the Hilbert curve (default 0: automatic,\n"
         "                         one per 4.2M elements; less scratch memory, same image)\n"
+        "  --element-boxes on|off|auto  quantized element boxes for point location (6 bytes per\n"
+        "                         element; faster). auto (default): on unless the mesh fits in\n"
+        "                         memory only without them (a notice says so)\n"
         "\n"
         "Scene:\n"
         "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"
@@ -325,6 +329,15 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             }
         }
         else if (!strcmp(a, "--sampling-size")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 20, &o->sampling_size, err); }
+        else if (!strcmp(a, "--element-boxes")) {
+            const char *v = NEXT();
+            if (v) {
+                if (!strcmp(v, "on")) o->element_boxes = CLVR_EBOX_ON;
+                else if (!strcmp(v, "off")) o->element_boxes = CLVR_EBOX_OFF;
+                else if (!strcmp(v, "auto")) o->element_boxes = CLVR_EBOX_AUTO;
+                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--element-boxes expects on, off or auto, got '%s'", v);
+            }
+        }
         else if (!strcmp(a, "--partitions")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 0, 65535u, &o->partitions, err); }
         else if (!strcmp(a, "--camera")) { const char *v = NEXT(); if (v) { s = parse_floats(a, v, 9, o->camera, err); o->camera_set = 1; } }
         else if (!strcmp(a, "--fovy")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.1f, 179.0f, &o->fovy, err); }

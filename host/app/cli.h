@@ -40,6 +40,7 @@ typedef struct clvr_options {
     uint32_t leaf_size;          /* --leaf-size N: 1, 4, 8, 16, 32 */
     uint32_t sampling_size;      /* --sampling-size N: elements per sampling cluster, 0: default */
     uint32_t partitions;         /* --partitions K: preprocessing partitions, 0: automatic (partition.h) */
+    int element_boxes;           /* --element-boxes: CLVR_EBOX_AUTO (default), _ON, _OFF (limits_check.h) */
     /* scene */
     int camera_set;
     float camera[9];             /* --camera px,py,pz,lx,ly,lz,ux,uy,uz */

@@ -178,7 +178,13 @@ int main(int argc, char **argv)
 
     /* Other formats are checked once loaded (their headers do not give
      * every count), .bin files again with what is left now. */
-    TRY(clvr_dataset_check_memory(ds, mesh_name, o.width, o.height, o.partitions, &msg));
+    int boxes = o.element_boxes; /* AUTO resolves here: off only when the run fits only without them */
+    TRY(clvr_dataset_check_memory(ds, mesh_name, o.width, o.height, o.partitions, o.element_boxes, &boxes, &msg));
+    if (boxes != o.element_boxes && !o.quiet)
+        fprintf(stderr,
+                "clvr: %s: point location without its element boxes (6 bytes per element): the run fits in memory "
+                "only without them (--element-boxes on insists)\n",
+                mesh_name);
 
     /* --- device */
     TRY(clvr_context_create(o.device, &ctx, &msg));
@@ -203,6 +209,7 @@ int main(int argc, char **argv)
     /* The program drops the dataset right after: preprocessing may give its
      * element lists back partition by partition (partition.h). */
     pps.consume = 1;
+    pps.element_boxes = boxes;
     /* Kernel compilation, timed apart from clustering: the programs'
      * builds, and PoCL's code generation at a kernel's first launch, which a
      * preprocessing of a 64-cube mesh of every type triggers (2.0 s of the

@@ -70,7 +70,8 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     resident = sat_add(resident, sat_mul(leaves, sizeof(clvr_box)));
     resident = sat_add(resident, sat_mul(N / sampling, sizeof(clvr_sampling_cluster)));
     resident = sat_add(resident, sat_mul(leaves / 3, LIMITS_BVH_NODE_BYTES));
-    resident = sat_add(resident, sat_mul(N, 6)); /* element boxes (kernels/locate.h) */
+    const uint64_t ebox = o && o->no_element_boxes ? 0 : sat_mul(N, 6); /* element boxes (kernels/locate.h) */
+    resident = sat_add(resident, ebox);
     uint64_t pixels = (uint64_t)width * height;
     out->image_bytes = sat_mul(pixels, LIMITS_PIXEL_BYTES);
     out->render_bytes = sat_add(resident, out->image_bytes);
@@ -85,6 +86,7 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
          * so 16 V is no lower bound) */
         {sat_mul(S, bits == 32 ? 4 : 2), bits == 32 ? "32-bit indices" : "16-bit indices"},
         {sat_mul(pixels, 16), "image accumulator"},
+        {ebox, "element boxes"},
     };
     out->largest_buffer = cand[0].name;
     for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i)
@@ -219,28 +221,43 @@ void clvr_mem_limits_read(clvr_mem_limits *out)
 void clvr_limits_host_estimate(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
                                uint64_t part_elements, uint32_t width, uint32_t height, clvr_host_estimate *out)
 {
+    const clvr_host_layout lay = {0, CLVR_EBOX_ON};
+    clvr_limits_host_estimate_layout(num_vertices, num_cells, part_elements, width, height, &lay, out);
+}
+
+void clvr_limits_host_estimate_layout(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                                      uint64_t part_elements, uint32_t width, uint32_t height,
+                                      const clvr_host_layout *lay, clvr_host_estimate *out)
+{
     memset(out, 0, sizeof *out);
     uint64_t N = 0, S = 0, V = num_vertices;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         N = sat_add(N, num_cells[t]);
         S = sat_add(S, sat_mul(num_cells[t], clvr_cell_vertex_count(t)));
     }
-    out->mesh_bytes = sat_add(sat_mul(V, 16), sat_mul(S, 4));
-    /* Clustered vertices (>= one float4 per vertex), 16-bit indices, leaf
-     * boxes, sampling clusters and BVH nodes at the default sizes (16
-     * elements per leaf and per sampling cluster: 2 + 2 + ~0.8 bytes per
-     * element; 6 keeps it a lower bound of what was measured, 6.3). */
-    out->result_bytes = sat_add(sat_add(sat_mul(V, 16), sat_mul(S, 2)), sat_mul(N, 6));
+    /* A mapped .bin is page cache (evictable, counted as available), not
+     * the process's memory: only what the run makes counts. */
+    out->mesh_bytes = lay->mapped ? 0 : sat_add(sat_mul(V, 16), sat_mul(S, 4));
+    /* Clustered vertices (one float4 per vertex and 10% duplicated across
+     * instance clusters), 16-bit indices, leaf boxes, sampling clusters and
+     * BVH nodes at the default sizes (16 elements per leaf and per sampling
+     * cluster: 2 + 4 + ~0.4 bytes per element). Measured, 500M mixed in 120
+     * partitions: vertices 1.10 x 16 V, leaves + BVH + sampling 6.67 bytes
+     * per element, 15.84 GB in all against 15.99 estimated (6 bytes and
+     * 16 V, the earlier figures, gave 14.95). */
+    out->result_bytes = sat_add(sat_add(sat_mul(V, 16) / 10 * 11, sat_mul(S, 2)), sat_mul(N, 7));
     /* and the point-location element boxes, CLVR_EBOX_BYTES (6) per element */
-    out->result_bytes = sat_add(out->result_bytes, sat_mul(N, 6));
+    if (lay->element_boxes != CLVR_EBOX_OFF) out->result_bytes = sat_add(out->result_bytes, sat_mul(N, 6));
     /* One partition's preprocessing: its share of the mesh as a sub-mesh,
      * the sort (24 bytes per element) and the split's lists (8 per slot),
      * its result before the append. */
     uint64_t pe = part_elements && part_elements < N ? part_elements : N;
     double f = N ? (double)pe / (double)N : 0.0;
     double scratch = f * (double)(sat_mul(V, 16) + sat_mul(S, 4)) * 2.0 + (double)pe * 24.0 + f * (double)S * 8.0;
-    /* Partitioned runs also keep 2 bytes per element (the plan) and a vertex map. */
-    if (pe < N) scratch += 2.0 * (double)N + 4.0 * (double)V;
+    /* Partitioned runs also keep 2 bytes per element (the plan) and a vertex
+     * map; a mapped mesh's order list (4 per element) is freed as the
+     * partitions are gathered, so it counts against the result below. */
+    if (pe < N) scratch += (lay->mapped ? 0.0 : 2.0 * (double)N) + 4.0 * (double)V;
     out->scratch_bytes = scratch >= 1.8e19 ? UINT64_MAX : (uint64_t)scratch;
     out->image_bytes = sat_mul((uint64_t)width * height, LIMITS_PIXEL_BYTES + 16u);
     /* In partitions the mesh is consumed as the result grows (partition.h):
@@ -250,20 +267,29 @@ void clvr_limits_host_estimate(uint64_t num_vertices, const uint64_t num_cells[C
      * both are alive at the end of preprocessing. */
     uint64_t held = pe < N ? max_u64(out->mesh_bytes, sat_add(sat_mul(V, 16), out->result_bytes))
                            : sat_add(out->mesh_bytes, out->result_bytes);
+    /* Mapped: the input's vertices are the file's too; the plan and the
+     * order list (6 per element) at the start, the result at the end. */
+    if (lay->mapped) held = pe < N ? max_u64(sat_mul(N, 6), out->result_bytes) : out->result_bytes;
     out->total_bytes = sat_add(held, sat_add(out->scratch_bytes, out->image_bytes));
 }
 
-clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
-                                   const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
-                                   uint32_t width, uint32_t height, int mesh_loaded, const clvr_mem_limits *l,
-                                   clvr_error *err)
+static clvr_status check_host_layout(const char *what, uint64_t num_vertices,
+                                    const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                    uint32_t width, uint32_t height, int mesh_loaded, const clvr_host_layout *lay,
+                                    const clvr_mem_limits *l, clvr_error *err)
 {
     clvr_host_estimate e;
-    clvr_limits_host_estimate(num_vertices, num_cells, part_elements, width, height, &e);
+    clvr_limits_host_estimate_layout(num_vertices, num_cells, part_elements, width, height, lay, &e);
     /* A loaded mesh is in use already: only what comes on top of it is needed. */
     uint64_t need = mesh_loaded ? (e.total_bytes > e.mesh_bytes ? e.total_bytes - e.mesh_bytes : 0) : e.total_bytes;
     const int as_binds = l->limit == l->as_left && l->as_left != UINT64_MAX;
     if (as_binds) need = sat_add(need, CLVR_LIMITS_DRIVER_VM_BYTES);
+    /* A mapping is address space all the same (VmSize has it once loaded). */
+    if (as_binds && lay->mapped && !mesh_loaded) {
+        uint64_t S = 0;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) S = sat_add(S, sat_mul(num_cells[t], clvr_cell_vertex_count(t)));
+        need = sat_add(need, sat_add(sat_mul(num_vertices, 16), sat_mul(S, 4)));
+    }
     /* The estimate is only about right (300M mixed: 3% above it) and the
      * system needs room too: at most 90% of memory; the address space is
      * exact. A sparse 500M-element .bin piled on one vertex that passed the
@@ -288,6 +314,55 @@ clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
         as_binds ? "Raise the limit (ulimit -v), or render a smaller (cropped or decimated) mesh"
                  : "Free memory or raise the limit, use a machine with more memory, or render a smaller (cropped or "
                    "decimated) mesh; more --partitions only shrink the scratch part");
+}
+
+clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
+                                   const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                   uint32_t width, uint32_t height, int mesh_loaded, const clvr_mem_limits *l,
+                                   clvr_error *err)
+{
+    const clvr_host_layout lay = {0, CLVR_EBOX_ON};
+    return check_host_layout(what, num_vertices, num_cells, part_elements, width, height, mesh_loaded, &lay, l, err);
+}
+
+clvr_status clvr_limits_check_host_boxes(const char *what, uint64_t num_vertices,
+                                         const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                         uint32_t width, uint32_t height, int mesh_loaded, int mapped,
+                                         int *element_boxes, const clvr_mem_limits *l, FILE *notice,
+                                         clvr_error *err)
+{
+    clvr_host_layout on = {mapped, CLVR_EBOX_ON}, off = {mapped, CLVR_EBOX_OFF};
+    const int mode = *element_boxes;
+    clvr_error e_on = {0};
+    clvr_status s = CLVR_OK;
+    if (mode != CLVR_EBOX_OFF) {
+        s = check_host_layout(what, num_vertices, num_cells, part_elements, width, height, mesh_loaded, &on, l, &e_on);
+        if (s == CLVR_OK) {
+            *element_boxes = CLVR_EBOX_ON;
+            return CLVR_OK;
+        }
+    }
+    s = check_host_layout(what, num_vertices, num_cells, part_elements, width, height, mesh_loaded, &off, l, err);
+    if (mode == CLVR_EBOX_OFF) return s;
+    uint64_t N = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) N = sat_add(N, num_cells[t]);
+    if (s != CLVR_OK) return s; /* even without the boxes: that need is the smallest */
+    if (mode == CLVR_EBOX_ON) { /* asked for: refuse, and say what would fit */
+        if (err) {
+            char why[sizeof err->msg];
+            memcpy(why, e_on.msg, sizeof why);
+            clvr_error_set(err, e_on.status, "%s. Without the element boxes (%.2f GB) it fits: --element-boxes off", why,
+                           gb(sat_mul(N, 6)));
+        }
+        return e_on.status;
+    }
+    *element_boxes = CLVR_EBOX_OFF;
+    if (notice)
+        fprintf(notice,
+                "clvr: %s: the mesh fits in memory only without the element boxes (%.2f GB, 6 bytes per element); "
+                "rendering without them (slower point location, same image; --element-boxes)\n",
+                what ? what : "mesh", gb(sat_mul(N, 6)));
+    return CLVR_OK;
 }
 
 /* ------------------------------------------------------------ mesh scan */
@@ -379,6 +454,16 @@ static uint64_t element_hash(const clvr_mesh *m, uint32_t t, uint64_t e)
  * 64-bit hashes match. Within a partition elements come in id order, so
  * the table keeps the earliest of equal elements and every later one
  * counts as a duplicate of it, as a single pass in id order would. */
+/* Mapped index lists (clvr_mesh.map_base): each pass below gives the pages
+ * of the last SCAN_BLOCK elements back behind it, so scanning a mesh does
+ * not make its file resident. Called with e the element just scanned. */
+#define SCAN_BLOCK ((uint64_t)1 << 20)
+static void scan_release(const clvr_mesh *m, uint32_t t, uint64_t e)
+{
+    /* All of the mapping: the elements' vertices (read at random) too. */
+    if (m->map_base && ((e + 1) % SCAN_BLOCK == 0 || e + 1 == m->num_cells[t])) clvr_mesh_release_all_pages(m);
+}
+
 /* Bytes of (hash, id) pairs the duplicate scan holds at once: the hash
  * partitions are processed in groups of about this size (one pass over the
  * elements per group), so a 788M-element mesh does not need 9.5 GB of
@@ -408,6 +493,7 @@ static void scan_duplicates(const clvr_mesh *m, uint64_t budget, clvr_limits_rep
         for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
             uint64_t h = element_hash(m, t, e);
             ++start[pbits ? (h >> (64 - pbits)) + 1 : 1];
+            scan_release(m, t, e);
         }
     uint64_t maxp = 0;
     for (uint32_t p = 0; p < np; ++p) {
@@ -434,6 +520,7 @@ static void scan_duplicates(const clvr_mesh *m, uint64_t budget, clvr_limits_rep
             for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
                 uint64_t h = element_hash(m, t, e);
                 uint32_t p = pbits ? (uint32_t)(h >> (64 - pbits)) : 0;
+                scan_release(m, t, e);
                 if (p < g0 || p >= g1) continue;
                 uint64_t at = fill[p]++ - base;
                 hs[at] = h;
@@ -487,7 +574,16 @@ done:
 
 void clvr_limits_scan(const clvr_mesh *m, clvr_limits_report *out)
 {
-    clvr_limits_scan_budget(m, LIMITS_SCAN_BUDGET, out);
+    /* Each group is a pass over every element (500M mixed: 24 passes of
+     * 256 MB, minutes on 2 cores). The scan runs before preprocessing and
+     * frees its scratch, so up to a quarter of the available memory (at
+     * most 3 GB: under the result of any mesh that needs more than one
+     * group of it) costs no peak: 500M elements in 2 passes. */
+    clvr_mem_limits l;
+    clvr_mem_limits_read(&l);
+    uint64_t budget = l.limit / 4;
+    budget = budget > ((uint64_t)3 << 30) ? (uint64_t)3 << 30 : budget;
+    clvr_limits_scan_budget(m, budget > LIMITS_SCAN_BUDGET ? budget : LIMITS_SCAN_BUDGET, out);
 }
 
 void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limits_report *out)
@@ -504,6 +600,7 @@ void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limit
                 out->first_inverted_type = t;
                 out->first_inverted = e;
             }
+            scan_release(m, t, e);
         }
     }
     scan_duplicates(m, scan_bytes, out);
@@ -516,7 +613,11 @@ void clvr_limits_scan_budget(const clvr_mesh *m, uint64_t scan_bytes, clvr_limit
     if (used) {
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
             uint64_t ni = clvr_mesh_num_indices(m, t);
-            for (uint64_t j = 0; j < ni; ++j) used[m->indices[t][j] >> 3] |= (uint8_t)(1u << (m->indices[t][j] & 7));
+            const uint32_t vpe = clvr_cell_vertex_count(t);
+            for (uint64_t j = 0; j < ni; ++j) {
+                used[m->indices[t][j] >> 3] |= (uint8_t)(1u << (m->indices[t][j] & 7));
+                if ((j + 1) % vpe == 0) scan_release(m, t, j / vpe);
+            }
         }
         for (uint64_t v = 0; v < m->num_vertices; ++v) out->unused_vertices += !(used[v >> 3] >> (v & 7) & 1);
         free(used);

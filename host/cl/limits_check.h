@@ -113,6 +113,33 @@ clvr_status clvr_limits_check_host(const char *what, uint64_t num_vertices,
                                    uint32_t width, uint32_t height, int mesh_loaded, const clvr_mem_limits *l,
                                    clvr_error *err);
 
+/* --element-boxes (clvr_preprocess_options.no_element_boxes). */
+#define CLVR_EBOX_AUTO 0
+#define CLVR_EBOX_ON 1
+#define CLVR_EBOX_OFF 2
+
+/* How the run holds the mesh and what it builds, for the host estimate. */
+typedef struct clvr_host_layout {
+    int mapped;          /* the .bin's arrays are mapped (clvr_load_options.map_indices and
+                            map_vertices): the loaded mesh is page cache, not process memory;
+                            a partitioned run's element order list (4 bytes per element) and
+                            the plan (2) are, at its start */
+    int element_boxes;   /* CLVR_EBOX_ON or CLVR_EBOX_OFF: 6 bytes per element or none */
+} clvr_host_layout;
+void clvr_limits_host_estimate_layout(uint64_t num_vertices, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT],
+                                      uint64_t part_elements, uint32_t width, uint32_t height,
+                                      const clvr_host_layout *lay, clvr_host_estimate *out);
+/* clvr_limits_check_host for a layout, resolving *element_boxes: AUTO
+ * becomes ON when the run fits with the boxes, else OFF when it fits
+ * without them (one "clvr: ..." notice line to `notice` unless NULL), else
+ * the error (for the run without boxes: the smallest). ON or OFF are
+ * checked as they are; an ON that would fit only as OFF says so. */
+clvr_status clvr_limits_check_host_boxes(const char *what, uint64_t num_vertices,
+                                         const uint64_t num_cells[CLVR_CELL_TYPE_COUNT], uint64_t part_elements,
+                                         uint32_t width, uint32_t height, int mesh_loaded, int mapped,
+                                         int *element_boxes, const clvr_mem_limits *l, FILE *notice,
+                                         clvr_error *err);
+
 /* What clvr_limits_scan found. Element ids are per type (tets[i] etc.). */
 typedef struct clvr_limits_report {
     uint64_t degenerate;        /* |Jacobian| at the parametric centre ~ 0 relative to the element size */

@@ -54,6 +54,13 @@ typedef struct clvr_mesh {
     int scalar_component;
     uint64_t decomposed_cells;                     /* polyhedra split into tets and pyramids on load */
     int cell_flat;                                 /* scalars are a cell field made flat (clvr_mesh_flatten_cells) */
+    /* Arrays mapped read-only from a .bin (clvr_load_options.map_indices,
+     * map_vertices): indices[t], and positions / scalars where mapped, then
+     * point into this private mapping of the file (page cache: no second
+     * host copy, pages evictable and not anonymous memory), must not be
+     * written, and go with the mapping. NULL: every array is malloc'd. */
+    void *map_base;
+    uint64_t map_bytes;
 } clvr_mesh;
 
 /* Allocates arrays for the given counts (zeroed struct first). On failure
@@ -62,6 +69,19 @@ clvr_status clvr_mesh_alloc(clvr_mesh *m, uint64_t num_vertices, const uint64_t 
                             clvr_error *err);
 /* Frees every array; accepts NULL and half-built meshes; leaves *m zeroed. */
 void clvr_mesh_free(clvr_mesh *m);
+
+/* Frees (or unmaps) the index lists only: indices[] NULL, counts kept,
+ * vertices and scalars untouched. */
+void clvr_mesh_free_indices(clvr_mesh *m);
+
+/* Mapped index lists: gives the whole pages of [p, p + bytes) that lie in
+ * m's mapping back to the page cache (MADV_DONTNEED), so that a pass over a
+ * mapped mesh does not grow the resident set by the file's size. Always
+ * safe: the pages are the file's and fault back in on the next read. No-op
+ * for malloc'd lists. */
+void clvr_mesh_release_pages(const clvr_mesh *m, const void *p, uint64_t bytes);
+/* The same for every mapped page. */
+void clvr_mesh_release_all_pages(const clvr_mesh *m);
 
 /* Total element count over the four types. */
 uint64_t clvr_mesh_num_elements(const clvr_mesh *m);

@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -443,6 +444,49 @@ static clvr_status bin_finish(clvr_mesh *m, const char *name, const clvr_load_op
     return s;
 }
 
+/* Maps the file's arrays up to the end of the last index list (one
+ * read-only private mapping from the file's start) and points m->indices,
+ * and with map_vertices m->positions (and a version 1 file's m->scalars),
+ * into it (m->map_base). The header has been checked against the file's
+ * size, so every array lies inside the file. A file truncated by someone
+ * else while mapped would fault (SIGBUS) on access: clvr's own files are
+ * written under a temporary name and renamed when complete, so they are
+ * never shortened in place. */
+static clvr_status bin_map_arrays(const bin_src *src, const bin_header *hd, int map_vertices, clvr_mesh *m,
+                                  clvr_error *err)
+{
+    uint64_t end = BIN_HEADER_SIZE;
+    for (uint32_t a = 0; a < BIN_ARRAY_COUNT; ++a) end += hd->array_bytes[a];
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) m->num_cells[t] = hd->num_cells[t];
+    if (end > (uint64_t)SIZE_MAX)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW, "%s: %.3f GB of arrays exceed the address space", src->name,
+                              (double)end / 1e9);
+    void *p = mmap(NULL, (size_t)end, PROT_READ, MAP_PRIVATE, src->fd, 0);
+    if (p == MAP_FAILED)
+        return clvr_error_set(err, errno == ENOMEM ? CLVR_ERR_NO_MEMORY : CLVR_ERR_IO,
+                              "%s: cannot map its %.3f GB of arrays: %s (raise ulimit -v, or free address space)",
+                              src->name, (double)end / 1e9, strerror(errno));
+    /* Read ahead in big steps: the passes over the lists are sequential. */
+    madvise(p, (size_t)end, MADV_SEQUENTIAL);
+    m->map_base = p;
+    m->map_bytes = end;
+    uint64_t off = BIN_HEADER_SIZE;
+    if (map_vertices) {
+        free(m->positions);
+        m->positions = hd->num_vertices ? (float *)((uint8_t *)p + off) : NULL;
+        if (hd->array_bytes[BIN_ARRAY_SCALARS]) {
+            free(m->scalars);
+            m->scalars = (float *)((uint8_t *)p + off + hd->array_bytes[BIN_ARRAY_POSITIONS]);
+        }
+    }
+    off += hd->array_bytes[BIN_ARRAY_POSITIONS] + hd->array_bytes[BIN_ARRAY_SCALARS];
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        m->indices[t] = hd->num_cells[t] ? (uint32_t *)((uint8_t *)p + off) : NULL;
+        off += hd->array_bytes[BIN_ARRAY_CELLS + t];
+    }
+    return CLVR_OK;
+}
+
 /* The reader behind clvr_mesh_parse_bin and clvr_mesh_load_bin. */
 static clvr_status bin_load(const bin_src *src, const clvr_load_options *opt, clvr_mesh *out, clvr_error *err)
 {
@@ -481,10 +525,22 @@ static clvr_status bin_load(const bin_src *src, const clvr_load_options *opt, cl
             return s;
         }
     }
-    s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
+    /* Mapped index lists (opt->map_indices): a file, not --cell-data flat
+     * of a cell field (which rewrites the lists). */
+    const int flat_cells = opt && opt->cell_flat && hd.version == BIN_VERSION_FIELDS && hd.num_fields &&
+                           hd.fields[fi].association == CLVR_FIELD_CELL;
+    const int map = opt && opt->map_indices && src->fd >= 0 && !flat_cells;
+    if (map) {
+        const uint64_t none[CLVR_CELL_TYPE_COUNT] = {0};
+        s = clvr_mesh_alloc(out, hd.num_vertices, none, err);
+        if (s == CLVR_OK) s = bin_map_arrays(src, &hd, opt->map_vertices, out, err);
+    } else {
+        s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
+    }
     uint64_t off = BIN_HEADER_SIZE;
     for (uint32_t a = 0; a < BIN_ARRAY_COUNT && s == CLVR_OK; ++a) {
-        s = src_read(src, off, bin_array_ptr(out, a), hd.array_bytes[a], bin_array_name(a), err);
+        if (!(map && (a >= BIN_ARRAY_CELLS || (opt->map_vertices && a <= BIN_ARRAY_SCALARS))))
+            s = src_read(src, off, bin_array_ptr(out, a), hd.array_bytes[a], bin_array_name(a), err);
         off += hd.array_bytes[a];
     }
     if (s == CLVR_OK && hd.version == BIN_VERSION) {

@@ -15,6 +15,14 @@ typedef struct clvr_load_options {
     int cell_flat;            /* nonzero: a cell field is rendered flat, each element its own value:
                                * every element gets its own copies of its vertices carrying that
                                * value (clvr_mesh_flatten_cells); 0: averaged onto the vertices */
+    int map_indices;          /* nonzero, .bin files: map the element index lists read-only
+                               * (MAP_PRIVATE) instead of reading them into the heap, so the
+                               * mesh's biggest arrays stay page cache, never a second host
+                               * copy (clvr_mesh.map_base); validation as for a read file.
+                               * Not for --cell-data flat, which rewrites the lists. */
+    int map_vertices;         /* with map_indices: the positions (and a version 1 file's scalars)
+                               * too, so the loaded mesh holds no anonymous memory at all; its
+                               * arrays must then never be written */
 } clvr_load_options;
 
 /* Loads any supported file, chosen by content (magic) and then extension:

@@ -19,6 +19,7 @@ void clvr_tf_auto_histogram_kept(const clvr_mesh *m, const uint8_t *keep, float 
         for (uint64_t c = 0; c < m->num_cells[t]; ++c, ++e) {
             if (keep && !keep[e]) continue;
             const uint32_t *idx = m->indices[t] + c * nv;
+            if ((c & 0xfffff) == 0xfffff) clvr_mesh_release_all_pages(m); /* a mapped .bin: pages back behind */
             double share = fabs(clvr_scene_cell_volume(t, m->positions, idx)) / nv;
             if (!(share > 0.0) || !isfinite(share)) continue;
             for (uint32_t k = 0; k < nv; ++k) {
@@ -169,6 +170,7 @@ clvr_status clvr_tf_auto_grid_add(clvr_tf_auto_grid *g, const clvr_mesh *m, cons
         for (uint64_t c = 0; c < m->num_cells[t]; ++c, ++e) {
             if (keep && !keep[e]) continue;
             const uint32_t *idx = m->indices[t] + c * nv;
+            if ((c & 0xfffff) == 0xfffff) clvr_mesh_release_all_pages(m); /* a mapped .bin: pages back behind */
             double vol = fabs(clvr_scene_cell_volume(t, m->positions, idx));
             if (!(vol > 0.0) || !isfinite(vol)) continue;
             double a_sum = 0.0, bl[3] = {INFINITY, INFINITY, INFINITY}, bh[3] = {-INFINITY, -INFINITY, -INFINITY};

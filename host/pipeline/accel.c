@@ -16,9 +16,10 @@ clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, cl
     CLVR_TRY(clvr_bvh_kernels_create(cl, &out->kernels, err));
     CLVR_TRY(clvr_bvh_build_device(cl, &out->kernels, c->host_instances, (uint32_t)c->num_instances, c->instances,
                                    c->leaf_boxes, (uint32_t)c->num_leaves, &out->two_level, err));
-    CLVR_TRY(clvr_bvh_element_boxes_device(cl, &out->kernels, &out->two_level, c->instances,
-                                           (uint32_t)c->num_instances, c->vertices, c->idx16, c->idx32, c->leaf_size,
-                                           (uint32_t)c->num_leaves, c->num_elements, err));
+    if (!c->no_element_boxes) /* --element-boxes off: the kernels get a NULL ebox and skip the test */
+        CLVR_TRY(clvr_bvh_element_boxes_device(cl, &out->kernels, &out->two_level, c->instances,
+                                               (uint32_t)c->num_instances, c->vertices, c->idx16, c->idx32,
+                                               c->leaf_size, (uint32_t)c->num_leaves, c->num_elements, err));
     CLVR_TRY(clvr_bvh_build_boxes_device(cl, &out->kernels, c->sampling, (uint32_t)c->num_sampling,
                                          &out->sampling_nodes, err));
     out->sampling_node_count = clvr_bvh_nodes_bound((uint32_t)c->num_sampling);

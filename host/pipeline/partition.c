@@ -33,6 +33,10 @@ static uint32_t coarse_key(const clvr_mesh *m, uint32_t t, uint64_t e, const clv
     return (uint32_t)(key >> (48u - CLVR_PARTITION_KEY_BITS));
 }
 
+/* Elements per step of the key pass between page releases of a mapped
+ * mesh (16 to 32 MB of indices). */
+#define KEY_BLOCK ((uint64_t)1 << 20)
+
 /* One thread's share of a pass over all elements (mesh order). */
 typedef struct key_job {
     const clvr_mesh *m;
@@ -59,10 +63,16 @@ static void *key_pass(void *arg)
         if (j->end <= first) break;
         const uint64_t b = j->begin > first ? j->begin - first : 0, e = j->end - first < n ? j->end - first : n;
         if (j->hist) /* pass 1: the element's coarse key, kept in its partition slot */
-            for (uint64_t i = b; i < e; ++i) {
-                const uint32_t k = coarse_key(m, t, i, &j->plan->box, scale, j->morton);
-                part[first + i] = (uint16_t)k;
-                ++j->hist[k];
+            for (uint64_t b0 = b; b0 < e; b0 += KEY_BLOCK) {
+                const uint64_t b1 = e - b0 < KEY_BLOCK ? e : b0 + KEY_BLOCK;
+                for (uint64_t i = b0; i < b1; ++i) {
+                    const uint32_t k = coarse_key(m, t, i, &j->plan->box, scale, j->morton);
+                    part[first + i] = (uint16_t)k;
+                    ++j->hist[k];
+                }
+                /* A mapped mesh: its pages back to the page cache behind
+                 * the pass (the vertices, read at random, too). */
+                clvr_mesh_release_all_pages(m);
             }
         else /* pass 2: coarse key -> partition, in place */
             for (uint64_t i = b; i < e; ++i) {
@@ -112,6 +122,7 @@ void clvr_partition_plan_free(clvr_partition_plan *p)
     if (!p) return;
     free(p->parts);
     free(p->part_of16);
+    if (p->order) munmap(p->order, (size_t)p->order_bytes);
     memset(p, 0, sizeof *p);
 }
 
@@ -265,10 +276,43 @@ clvr_status clvr_partition_plan_make(const clvr_mesh *m, uint32_t count, uint64_
     return plan_make(m, count, max_elements, 0, out, err);
 }
 
+/* The reorder of a mapped mesh: p->order, a counting sort of the element
+ * ids by partition (stable: mesh order inside each). Left as it is (the
+ * extraction scans part_of16) when the memory is not there. */
+static void plan_order(const clvr_mesh *m, clvr_partition_plan *p)
+{
+    const uint64_t N = p->num_elements, bytes = (N ? N : 1) * sizeof(uint32_t);
+    uint64_t *next = malloc((size_t)p->count * sizeof *next);
+    void *o = mmap(NULL, (size_t)bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (!next || o == MAP_FAILED) {
+        free(next);
+        if (o != MAP_FAILED) munmap(o, (size_t)bytes);
+        return;
+    }
+    (void)m;
+    uint64_t at = 0;
+    for (uint32_t k = 0; k < p->count; ++k) {
+        p->parts[k].first = next[k] = at;
+        at += p->parts[k].num_elements;
+    }
+    uint32_t *ord = o;
+    for (uint64_t g = 0; g < N; ++g) ord[next[p->part_of16[g]]++] = (uint32_t)g;
+    free(next);
+    free(p->part_of16);
+    p->part_of16 = NULL;
+    p->order = ord;
+    p->order_bytes = bytes;
+    p->reordered = 1;
+}
+
 void clvr_partition_plan_reorder(clvr_mesh *m, clvr_partition_plan *p)
 {
+    if (p->reordered) return;
+    if (m->map_base) { /* read-only lists: an order list instead of moving them */
+        plan_order(m, p);
+        return;
+    }
     uint64_t *next = malloc((size_t)p->count * sizeof *next), first = 0;
-    if (p->reordered) { free(next); return; }
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         const uint32_t vpe = clvr_cell_vertex_count(t);
         uint64_t at = 0;
@@ -333,7 +377,32 @@ clvr_status clvr_partition_extract(const clvr_mesh *m, const clvr_partition_plan
         goto cleanup;
     }
     uint64_t nv = 0, first = 0, k = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+    if (p->order) { /* a mapped mesh's partition: a range of the order list, ascending ids */
+        uint64_t type_first[CLVR_CELL_TYPE_COUNT + 1] = {0};
+        uint32_t *dst[CLVR_CELL_TYPE_COUNT];
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            type_first[t + 1] = type_first[t] + m->num_cells[t];
+            dst[t] = sub->indices[t];
+        }
+        uint32_t t = 0;
+        for (uint64_t i = q->first; i < q->first + q->num_elements; ++i) {
+            const uint64_t g = p->order[i];
+            while (g >= type_first[t + 1]) ++t;
+            const uint32_t vpe = clvr_cell_vertex_count(t);
+            const uint32_t *src = m->indices[t] + (g - type_first[t]) * vpe;
+            for (uint32_t j = 0; j < vpe; ++j) {
+                const uint32_t v = src[j];
+                if (vmap[v] == UINT32_MAX) {
+                    vmap[v] = (uint32_t)nv;
+                    verts[nv++] = v;
+                }
+                *dst[t]++ = vmap[v];
+            }
+            if (idl) idl[k] = (uint32_t)g;
+            ++k;
+        }
+    }
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT && !p->order; ++t) {
         const uint32_t vpe = clvr_cell_vertex_count(t);
         uint32_t *dst = sub->indices[t];
         const uint32_t *src = m->indices[t];
@@ -461,14 +530,6 @@ static void release_gathered(clvr_mesh *m, const clvr_partition *q, uint64_t rel
     }
 }
 
-static void free_indices(clvr_mesh *m)
-{
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        free(m->indices[t]);
-        m->indices[t] = NULL;
-    }
-}
-
 clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_preprocess_options *o,
                                         uint32_t count, uint64_t max_elements, int consume, clvr_clustered *out,
                                         uint32_t *num_partitions, clvr_error *err)
@@ -484,9 +545,10 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
     memset(arr, 0, sizeof arr);
     memset(out, 0, sizeof *out);
     if (num_partitions) *num_partitions = 0;
-    uint64_t released[CLVR_CELL_TYPE_COUNT] = {0};
+    uint64_t released[CLVR_CELL_TYPE_COUNT] = {0}, order_released = 0;
     CLVR_TRY(clvr_pp_options_resolve(o, &opt, err));
-    if (consume && opt.keep_order) {
+    /* A mapped mesh is never moved (an order list instead): its ids stay. */
+    if (consume && opt.keep_order && !m->map_base) {
         s = clvr_error_set(err, CLVR_ERR_USAGE, "partitioned preprocessing: keep_order needs the mesh kept (consume 0)");
         goto cleanup;
     }
@@ -499,6 +561,9 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         if (num_partitions) *num_partitions = 1;
         goto cleanup;
     }
+    /* A mapped mesh: whatever earlier passes left mapped goes back to the
+     * page cache before the result grows (the pages are the file's). */
+    clvr_mesh_release_all_pages(m);
     CLVR_TRY(plan_make(m, count, max_elements, opt.morton, &plan, err));
     if (consume) {
         const double t0 = clvr_clock_monotonic_s();
@@ -516,6 +581,7 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
     memset(vmap, 0xff, (m->num_vertices ? m->num_vertices : 1) * sizeof *vmap);
 
     out->leaf_size = opt.leaf_size;
+    out->no_element_boxes = opt.no_element_boxes;
     out->sampling_size = opt.sampling_size;
     out->index_bits = opt.index_bits;
     out->morton = opt.morton;
@@ -534,7 +600,21 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         if (plan.parts[k].num_elements == 0) continue;
         double t0 = clvr_clock_monotonic_s();
         CLVR_TRY(clvr_partition_extract(m, &plan, k, vmap, &sub, opt.keep_order ? &ids : NULL, err));
-        if (consume && plan.reordered) release_gathered(m, &plan.parts[k], released);
+        if (m->map_base) {
+            /* A mapped mesh: the pages this gather read go back to the page
+             * cache (a later partition sharing a page faults it in again),
+             * and so does the consumed part of the order list. */
+            clvr_mesh_release_all_pages(m);
+            if (plan.order) {
+                const uint64_t pg = 4096, done = (plan.parts[k].first + plan.parts[k].num_elements) * 4 / pg * pg;
+                if (done > order_released) {
+                    madvise((uint8_t *)plan.order + order_released, (size_t)(done - order_released), MADV_DONTNEED);
+                    order_released = done;
+                }
+            }
+        } else if (consume && plan.reordered) {
+            release_gathered(m, &plan.parts[k], released);
+        }
         out->stage_s[CLVR_PP_STAGE_EXTRACT] += clvr_clock_monotonic_s() - t0;
         s = clvr_preprocess(cl, &sub, &opt, &pc, err);
         if (s != CLVR_OK && err) {
@@ -652,7 +732,7 @@ cleanup:
     free(vmap);
     for (int i = 0; i < ARR_COUNT; ++i) grow_free(&arr[i]);
     clvr_partition_plan_free(&plan);
-    if (consume) free_indices(m);
+    if (consume) clvr_mesh_free_indices(m); /* or unmaps them */
     if (s != CLVR_OK) clvr_clustered_release(cl, out);
     return s;
 }

@@ -60,6 +60,8 @@ typedef struct clvr_partition {
     uint64_t num_elements;
     uint64_t first_cell[CLVR_CELL_TYPE_COUNT];  /* after clvr_partition_plan_reorder: where its
                                                    elements start in each type's list */
+    uint64_t first;                             /* after a reorder of a mapped mesh: where its
+                                                   elements start in the plan's `order` */
 } clvr_partition;
 
 typedef struct clvr_partition_plan {
@@ -70,6 +72,11 @@ typedef struct clvr_partition_plan {
                                   NULL after a reorder */
     uint64_t num_elements;
     int reordered;             /* the mesh's lists are in partition order (clvr_partition_plan_reorder) */
+    uint32_t *order;           /* a reorder of a mapped mesh (read-only lists): element ids (types
+                                  concatenated) by partition, mesh order inside each; an
+                                  anonymous mapping of order_bytes whose consumed pages go back
+                                  to the OS as partitions are gathered. NULL otherwise */
+    uint64_t order_bytes;
     double seconds;            /* wall seconds of the coarse key pass and the plan */
 } clvr_partition_plan;
 
@@ -89,7 +96,11 @@ void clvr_partition_plan_free(clvr_partition_plan *p); /* accepts zeroed and hal
  * counting sort by partition, O(elements)) so that every partition's
  * elements are one range per type (parts[].first_cell), and frees
  * part_of16: afterwards membership is by range. The order inside a
- * partition changes (swaps); the partition's own sort orders it anyway. */
+ * partition changes (swaps); the partition's own sort orders it anyway.
+ * A mapped mesh (m->map_base: read-only lists) is not written: a counting
+ * sort of the element ids instead gives p->order, where each partition is
+ * one range (parts[].first), 4 bytes per element in place of the 2 of
+ * part_of16. */
 void clvr_partition_plan_reorder(clvr_mesh *m, clvr_partition_plan *p);
 
 /* The partition of element g (mesh order; not after a reorder). */
@@ -111,7 +122,8 @@ clvr_status clvr_partition_extract(const clvr_mesh *m, const clvr_partition_plan
  * gathered, so the input's indices shrink while the result grows; on return
  * (success or not) m's index lists are freed (NULL, counts kept), its
  * vertices untouched. consume == 0 leaves m as it was (m is not written).
- * keep_order needs consume == 0.
+ * keep_order needs consume == 0, except for a mapped mesh (m->map_base),
+ * whose lists are never moved (the ids stay those of the file).
  * o->quantize_box is ignored (the plan's box is used). The result's device
  * buffers are made once at the end from host arrays the result owns (on a
  * CPU device with CL_MEM_USE_HOST_PTR, so the device reads them where they

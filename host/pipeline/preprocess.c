@@ -634,6 +634,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     }
     const int bits32 = opt.index_bits == 32;
     out->leaf_size = opt.leaf_size;
+    out->no_element_boxes = opt.no_element_boxes;
     out->sampling_size = opt.sampling_size;
     out->index_bits = opt.index_bits;
     out->morton = opt.morton;

@@ -41,6 +41,10 @@ typedef struct clvr_preprocess_options {
                                      call): partitions of one mesh preprocessed one by one with the
                                      whole mesh's box share one Hilbert grid, so their curves are
                                      pieces of one curve. Centres outside the box clamp to its faces. */
+    int no_element_boxes;     /* nonzero: the result carries no quantized element boxes (6 bytes per
+                                 element, kernels/locate.h): clvr_accel_build skips them and point
+                                 location tests every element of a leaf exactly (same elements
+                                 found, slower). 0 (default): boxes on */
 } clvr_preprocess_options;
 
 /* Fills the defaults above. */
@@ -92,6 +96,7 @@ typedef struct clvr_clustered {
     float scalar_min, scalar_max;
     uint32_t leaf_size, sampling_size, index_bits;
     int morton;
+    int no_element_boxes;     /* from the options: clvr_accel_build makes no element boxes */
     /* stats */
     double stage_s[CLVR_PP_STAGE_COUNT]; /* device seconds per stage (OpenCL event profiling) */
     double build_s;           /* wall seconds to build the kernels (cached by the driver after the first run) */

@@ -100,7 +100,8 @@ class _DatasetField(ctypes.Structure):
 
 class _PreprocessSettings(ctypes.Structure):
     _fields_ = [("size", _U32), ("leaf_size", _U32), ("sampling_size", _U32), ("partitions", _U32),
-                ("consume", ctypes.c_int), ("name", _S), ("width", _U32), ("height", _U32)]
+                ("consume", ctypes.c_int), ("name", _S), ("width", _U32), ("height", _U32),
+                ("element_boxes", ctypes.c_int)]
 
 
 class _SceneStats(ctypes.Structure):
