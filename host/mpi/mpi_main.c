@@ -28,6 +28,7 @@
 #include "mpi_composite.h"
 #include "mpi_share.h"
 #include "mpi_share_mesh.h"
+#include "partition.h"
 #include "render.h"
 #include "scene.h"
 #include "series.h"
@@ -345,7 +346,16 @@ static int run(mpi_run *m, const clvr_options *o)
         ps.name = o->mesh_path ? o->mesh_path : "(built-in default scene)";
         if (o->leaf_size) ps.leaf_size = o->leaf_size;
         if (o->sampling_size) ps.sampling_size = o->sampling_size;
-        ps.partitions = o->partitions;
+        /* As many partitions per rank as one process would cut the whole
+         * mesh into (partition.h's default size), so that each rank's are
+         * 1/N the size and its preprocessing peak is 1/N of one process's:
+         * a share is heap memory, not a mapped file, and one 2.5M-element
+         * partition had put its peak at 1.34 x 1/N of one process's
+         * (bench/mpi.sh, 5M mixed, 2 ranks; with this 1.0x). */
+        ps.partitions = o->partitions
+                            ? o->partitions
+                            : (uint32_t)((share.global_elements + CLVR_PARTITION_DEFAULT_ELEMENTS - 1) /
+                                         CLVR_PARTITION_DEFAULT_ELEMENTS);
         ps.consume = 1;
         ps.width = o->width;
         ps.height = o->height;
