@@ -144,6 +144,13 @@ static clvr_status load_share(mpi_run *m, const clvr_options *o, clvr_mesh *whol
         return clvr_mpi_load_share_bin(m->comm, o->mesh_path, &lo, share, err);
     }
 #endif
+    /* Other formats have no offsets to read a part at: every rank reads the
+     * file whole, once, and keeps its share. Say so, with the way out. */
+    if (o->mesh_path && m->rank == 0 && m->size > 1 && !o->quiet)
+        fprintf(stderr,
+                "clvr: note: every rank reads %s whole and keeps its share; convert it to .bin "
+                "(tools/clvr-convert) and each rank reads about 1/%d of the file\n",
+                o->mesh_path, m->size);
     clvr_status s = load_whole(o, whole, err);
     s = agree(m, s, err);
     if (s != CLVR_OK) return s;
