@@ -948,13 +948,17 @@ static clvr_status check_preprocess(const char *fn, const clvr_preprocess_settin
     return CLVR_OK;
 }
 
+/* qbox: the curve's quantization box (NULL: the mesh's bounds; the MPI
+ * driver gives every rank the whole mesh's, clvr_internal.h). */
 static clvr_status scene_create(clvr_context *ctx, clvr_dataset *ds, const char *field,
-                                const clvr_preprocess_settings *ps, clvr_scene **out, clvr_error *err)
+                                const clvr_preprocess_settings *ps, const clvr_box *qbox, clvr_scene **out,
+                                clvr_error *err)
 {
     static const char fn[] = "clvr_scene_create";
     clvr_preprocess_options po;
     clvr_status s = check_preprocess(fn, ps, &po, err);
     if (s != CLVR_OK) return s;
+    po.quantize_box = qbox;
     int fi;
     s = resolve_field(ds, fn, field, &fi, err);
     if (s != CLVR_OK) return s;
@@ -1047,7 +1051,7 @@ clvr_result clvr_scene_create(clvr_context *ctx, clvr_dataset *ds, const char *f
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
     clvr_preprocess_settings ps;
     VERSIONED_IN(fn, s, preprocess_settings, ps);
-    return finish(scene_create(ctx, ds, field, &ps, out, &e), &e, msg);
+    return finish(scene_create(ctx, ds, field, &ps, NULL, out, &e), &e, msg);
 }
 
 void clvr_scene_destroy(clvr_scene *sc) { scene_release(sc); }
@@ -1265,7 +1269,7 @@ clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *
     clvr_tracer_settings ts;
     clvr_tracer_settings_init(&ts);
     clvr_scene *sc = NULL;
-    clvr_status s = scene_create(ctx, ds, field, &ps, &sc, &e);
+    clvr_status s = scene_create(ctx, ds, field, &ps, NULL, &sc, &e);
     if (s == CLVR_OK) s = tracer_create(sc, &ts, width, height, out, &e);
     scene_release(sc); /* the tracer holds it */
     return finish(s, &e, msg);
@@ -2221,12 +2225,19 @@ clvr_status clvr_internal_tf_build(const clvr_mesh *m, const char *colormap, con
 }
 
 clvr_status clvr_internal_tracer_create(clvr_context *ctx, clvr_dataset *ds, const clvr_preprocess_settings *ps,
+                                        const float quantize_lo[3], const float quantize_hi[3],
                                         const clvr_render_settings *rs, int shadows, clvr_tracer **out,
                                         double *preprocess_s, clvr_error *err)
 {
     clvr_scene *sc = NULL;
     clvr_tracer *tr = NULL;
-    clvr_status s = scene_create(ctx, ds, NULL, ps, &sc, err);
+    clvr_box qbox;
+    memset(&qbox, 0, sizeof qbox);
+    for (int k = 0; k < 3 && quantize_lo && quantize_hi; ++k) {
+        qbox.lo[k] = quantize_lo[k];
+        qbox.hi[k] = quantize_hi[k];
+    }
+    clvr_status s = scene_create(ctx, ds, NULL, ps, quantize_lo && quantize_hi ? &qbox : NULL, &sc, err);
     if (s == CLVR_OK) {
         clvr_tracer_settings ts;
         clvr_tracer_settings_init(&ts);

@@ -27,10 +27,13 @@ clvr_status clvr_internal_tf_build(const clvr_mesh *m, const char *colormap, con
                                    float lo, float hi, float density, int ramp, clvr_tf *tf, float *auto_density,
                                    clvr_error *err);
 
-/* A scene of ds (settings ps) and a tracer on it with render settings rs
- * (rs->width x rs->height) and shadows asked for; *preprocess_s receives
- * the scene's preprocessing time. */
+/* A scene of ds (settings ps; its curve quantized over [quantize_lo,
+ * quantize_hi], NULL for the mesh's bounds: the MPI ranks share the whole
+ * mesh's box, so their shares are pieces of one Hilbert curve) and a tracer
+ * on it with render settings rs (rs->width x rs->height) and shadows asked
+ * for; *preprocess_s receives the scene's preprocessing time. */
 clvr_status clvr_internal_tracer_create(clvr_context *ctx, clvr_dataset *ds, const clvr_preprocess_settings *ps,
+                                        const float quantize_lo[3], const float quantize_hi[3],
                                         const clvr_render_settings *rs, int shadows, clvr_tracer **out,
                                         double *preprocess_s, clvr_error *err);
 

@@ -404,7 +404,10 @@ static int run(mpi_run *m, const clvr_options *o)
         /* The broadcast table is set on the renderer below; the tracer's own
          * automatic transfer function (at a first clvr_tracer_render, which
          * this driver never calls) is not computed from the share. */
-        s = clvr_internal_tracer_create(ctx, ds, &ps, rs, o->shadows, &tracer, &st.preprocess_s, &err);
+        /* One quantization box for all ranks (the whole mesh's bounds): the
+         * shares' Hilbert curves are pieces of one curve. */
+        s = clvr_internal_tracer_create(ctx, ds, &ps, share.bounds_lo, share.bounds_hi, rs, o->shadows, &tracer,
+                                        &st.preprocess_s, &err);
     }
     if (s == CLVR_OK) {
         renderer = clvr_internal_tracer_renderer(tracer);

@@ -131,8 +131,11 @@ uint32_t clvr_partition_of(const clvr_partition_plan *p, uint64_t g)
     return p->part_of16[g];
 }
 
+/* qbox: the quantization box of the coarse keys and of every partition's
+ * curve (NULL: the mesh's bounds), so that several meshes (MPI ranks'
+ * shares) can be pieces of one curve. */
 static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_elements, int morton,
-                             clvr_partition_plan *out, clvr_error *err)
+                             const clvr_box *qbox, clvr_partition_plan *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     const double t0 = clvr_clock_monotonic_s();
@@ -152,8 +155,8 @@ static clvr_status plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_el
     if (max_elements == 0) max_elements = CLVR_PARTITION_DEFAULT_ELEMENTS;
     out->num_elements = N;
     for (int k = 0; k < 3; ++k) {
-        out->box.lo[k] = m->bounds_lo[k];
-        out->box.hi[k] = m->bounds_hi[k];
+        out->box.lo[k] = qbox ? qbox->lo[k] : m->bounds_lo[k];
+        out->box.hi[k] = qbox ? qbox->hi[k] : m->bounds_hi[k];
     }
 
     /* Pass 1: histogram of the coarse keys, one table per thread. */
@@ -273,7 +276,7 @@ cleanup:
 clvr_status clvr_partition_plan_make(const clvr_mesh *m, uint32_t count, uint64_t max_elements,
                                      clvr_partition_plan *out, clvr_error *err)
 {
-    return plan_make(m, count, max_elements, 0, out, err);
+    return plan_make(m, count, max_elements, 0, NULL, out, err);
 }
 
 /* The reorder of a mapped mesh: p->order, a counting sort of the element
@@ -564,7 +567,7 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
     /* A mapped mesh: whatever earlier passes left mapped goes back to the
      * page cache before the result grows (the pages are the file's). */
     clvr_mesh_release_all_pages(m);
-    CLVR_TRY(plan_make(m, count, max_elements, opt.morton, &plan, err));
+    CLVR_TRY(plan_make(m, count, max_elements, opt.morton, o ? o->quantize_box : NULL, &plan, err));
     if (consume) {
         const double t0 = clvr_clock_monotonic_s();
         clvr_partition_plan_reorder(m, &plan);
