@@ -2258,4 +2258,13 @@ clvr_status clvr_internal_tracer_create(clvr_context *ctx, clvr_dataset *ds, con
     return CLVR_OK;
 }
 
+clvr_status clvr_internal_render_settings(const clvr_tracer_settings *ts, uint32_t width, uint32_t height,
+                                          clvr_render_settings *rs, int *shadows, clvr_error *err)
+{
+    clvr_render_settings_default(rs);
+    rs->width = width;
+    rs->height = height;
+    return settings_to_render("clvr", ts, rs, shadows, err);
+}
+
 clvr_renderer *clvr_internal_tracer_renderer(clvr_tracer *tr) { return tr ? tr->renderer : NULL; }

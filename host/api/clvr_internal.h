@@ -37,6 +37,11 @@ clvr_status clvr_internal_tracer_create(clvr_context *ctx, clvr_dataset *ds, con
                                         const clvr_render_settings *rs, int shadows, clvr_tracer **out,
                                         double *preprocess_s, clvr_error *err);
 
+/* The render settings of ts for a width x height image, checked and
+ * converted as clvr_tracer_create_on does (*shadows: asked for). */
+clvr_status clvr_internal_render_settings(const clvr_tracer_settings *ts, uint32_t width, uint32_t height,
+                                          clvr_render_settings *rs, int *shadows, clvr_error *err);
+
 /* The tracer's renderer (borrowed). */
 clvr_renderer *clvr_internal_tracer_renderer(clvr_tracer *tr);
 

@@ -493,3 +493,17 @@ clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings
 }
 
 const char *clvr_cli_tonemap_name(int tonemap) { return clvr_tonemap_name((clvr_tonemap)tonemap); }
+
+clvr_status clvr_cli_camera(const clvr_options *o, const float lo[3], const float hi[3], clvr_camera *cam,
+                            clvr_error *err)
+{
+    if (o->camera_set)
+        return clvr_camera_look_at(cam, o->camera, o->camera + 3, o->camera + 6, o->fovy, o->width, o->height, err);
+    clvr_camera_view view;
+    clvr_camera_view_default(&view);
+    memcpy(view.up, o->up, sizeof view.up);
+    view.azimuth_deg = o->azimuth;
+    view.elevation_deg = o->elevation;
+    view.zoom = o->zoom;
+    return clvr_camera_frame_view(cam, lo, hi, &view, o->fovy, o->width, o->height, err);
+}

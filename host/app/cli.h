@@ -85,6 +85,12 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
  * --clip-box) as libclvr's settings (s initialised by the caller). */
 clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_error *err);
 
+/* The camera the options ask for over the mesh bounds [lo, hi]: --camera as
+ * given, else the automatic framing moved by --up, --azimuth, --elevation and
+ * --zoom (the time-series driver and the MPI mode frame one shared box). */
+clvr_status clvr_cli_camera(const clvr_options *o, const float lo[3], const float hi[3], clvr_camera *cam,
+                            clvr_error *err);
+
 /* The name of --tonemap's value, as clvr_image_settings.tonemap takes it. */
 const char *clvr_cli_tonemap_name(int tonemap);
 

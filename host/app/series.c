@@ -9,7 +9,6 @@
 #include <string.h>
 #include <strings.h>
 
-#include "camera.h"
 #include "image.h"
 #include "json.h"
 #include "mesh_io.h"
@@ -217,13 +216,7 @@ int clvr_series_run(int argc, char **argv, const clvr_options *o, clvr_main_fn r
     }
     if (fix_camera) {
         clvr_camera cam;
-        clvr_camera_view view;
-        clvr_camera_view_default(&view);
-        memcpy(view.up, o->up, sizeof view.up);
-        view.azimuth_deg = o->azimuth;
-        view.elevation_deg = o->elevation;
-        view.zoom = o->zoom;
-        s = clvr_camera_frame_view(&cam, blo, bhi, &view, o->fovy, o->width, o->height, &err);
+        s = clvr_cli_camera(o, blo, bhi, &cam, &err); /* the automatic framing: fix_camera needs no --camera */
         if (s != CLVR_OK) {
             fprintf(stderr, "clvr: %s\n", err.msg);
             rc = clvr_status_exit_code(s);

@@ -18,7 +18,6 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "camera.h"
 #include "clock.h"
 #include "clvr.h"
 #include "clvr_internal.h"
@@ -366,23 +365,15 @@ static int run(mpi_run *m, const clvr_options *o)
         ps.consume = 1;
         ps.width = o->width;
         ps.height = o->height;
+        /* Every render setting of the command line, converted as the
+         * program converts them (cli.c, then the library's checks). */
+        clvr_tracer_settings ts;
+        clvr_tracer_settings_init(&ts);
         clvr_render_settings rsv;
-        clvr_render_settings_default(&rsv);
-        rsv.width = o->width;
-        rsv.height = o->height;
+        int shadows = 0;
+        s = clvr_cli_tracer_settings(o, &ts, &err);
+        if (s == CLVR_OK) s = clvr_internal_render_settings(&ts, o->width, o->height, &rsv, &shadows, &err);
         clvr_render_settings *rs = &rsv;
-        rs->method = o->method;
-        rs->seed = o->seed;
-        rs->sampler = o->sampler;
-        rs->estimator = o->estimator;
-        rs->urm_steps = o->urm_steps;
-        rs->bins = o->bins;
-        rs->segments = o->segments;
-        rs->macrocells = o->macrocells;
-        memcpy(rs->light_dir, o->light_dir, sizeof rs->light_dir);
-        rs->light_intensity = o->light_intensity;
-        rs->ambient = o->ambient;
-        memcpy(rs->background, o->background, sizeof rs->background);
         /* The region is one more clip box (intersected with --clip-box):
          * camera rays, shadow rays and the light grid's rays are all cut to
          * it (clvr_ray_clip), so the rank contributes exactly the medium
@@ -399,15 +390,14 @@ static int run(mpi_run *m, const clvr_options *o)
         }
         if (empty)
             for (int a = 0; a < 3; ++a) rs->clip_lo[a] = rs->clip_hi[a] = share.region_lo[a];
-        rs->num_clip_planes = o->num_clip_planes;
-        memcpy(rs->clip_planes, o->clip_planes, sizeof rs->clip_planes);
         /* The broadcast table is set on the renderer below; the tracer's own
          * automatic transfer function (at a first clvr_tracer_render, which
          * this driver never calls) is not computed from the share. */
         /* One quantization box for all ranks (the whole mesh's bounds): the
          * shares' Hilbert curves are pieces of one curve. */
-        s = clvr_internal_tracer_create(ctx, ds, &ps, share.bounds_lo, share.bounds_hi, rs, o->shadows, &tracer,
-                                        &st.preprocess_s, &err);
+        if (s == CLVR_OK)
+            s = clvr_internal_tracer_create(ctx, ds, &ps, share.bounds_lo, share.bounds_hi, rs, shadows, &tracer,
+                                            &st.preprocess_s, &err);
     }
     if (s == CLVR_OK) {
         renderer = clvr_internal_tracer_renderer(tracer);
@@ -419,18 +409,7 @@ static int run(mpi_run *m, const clvr_options *o)
     /* The camera frames the whole mesh's bounds, as one process does. */
     if (s == CLVR_OK) {
         clvr_camera cam;
-        if (o->camera_set) {
-            s = clvr_camera_look_at(&cam, o->camera, o->camera + 3, o->camera + 6, o->fovy, o->width, o->height, &err);
-        } else {
-            clvr_camera_view view;
-            clvr_camera_view_default(&view);
-            memcpy(view.up, o->up, sizeof view.up);
-            view.azimuth_deg = o->azimuth;
-            view.elevation_deg = o->elevation;
-            view.zoom = o->zoom;
-            s = clvr_camera_frame_view(&cam, share.bounds_lo, share.bounds_hi, &view, o->fovy, o->width, o->height,
-                                       &err);
-        }
+        s = clvr_cli_camera(o, share.bounds_lo, share.bounds_hi, &cam, &err);
         if (s == CLVR_OK) s = clvr_renderer_set_camera(renderer, &cam, &err);
     }
     s = agree(m, s, &err);
