@@ -358,10 +358,8 @@ static int run(mpi_run *m, const clvr_options *o)
          * a share is heap memory, not a mapped file, and one 2.5M-element
          * partition had put its peak at 1.34 x 1/N of one process's
          * (bench/mpi.sh, 5M mixed, 2 ranks; with this 1.0x). */
-        ps.partitions = o->partitions
-                            ? o->partitions
-                            : (uint32_t)((share.global_elements + CLVR_PARTITION_DEFAULT_ELEMENTS - 1) /
-                                         CLVR_PARTITION_DEFAULT_ELEMENTS);
+        const uint64_t part = clvr_partition_elements(share.global_elements, 0);
+        ps.partitions = o->partitions ? o->partitions : part ? (uint32_t)((share.global_elements + part - 1) / part) : 1;
         ps.consume = 1;
         ps.width = o->width;
         ps.height = o->height;
@@ -448,13 +446,15 @@ static int run(mpi_run *m, const clvr_options *o)
      * only; their product is the global one (docs/mpi-compositing.md). */
     const double render0 = now(), comm0 = m->comm_s;
     if (shadows) {
-        const size_t ng = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
-        grid = malloc(ng * sizeof(float));
-        grid_all = malloc(ng * sizeof(float));
-        s = grid && grid_all ? clvr_renderer_light_grid(renderer, grid, &err)
+        const size_t cap = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
+        uint32_t res = 0;
+        grid = malloc(cap * sizeof(float));
+        grid_all = malloc(cap * sizeof(float));
+        s = grid && grid_all ? clvr_renderer_light_grid(renderer, grid, &res, &err)
                              : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the light grid");
         s = agree(m, s, &err);
         if (s != CLVR_OK) goto done;
+        const size_t ng = (size_t)res * res * res; /* the same on every rank: the same settings */
         t = now();
         MPI_Allreduce(grid, grid_all, (int)ng, MPI_FLOAT, MPI_PROD, m->comm);
         m->comm_s += now() - t;

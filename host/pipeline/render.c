@@ -567,15 +567,14 @@ cleanup:
     return s;
 }
 
-clvr_status clvr_renderer_light_grid(clvr_renderer *r, float *grid, clvr_error *err)
+clvr_status clvr_renderer_light_grid(clvr_renderer *r, float *grid, uint32_t *res, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    const size_t n = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
     if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "light grid before a transfer function");
     CLVR_TRY(upload_frame(r, err));
     CLVR_TRY(ensure_light(r, err));
     if (!r->light_valid) return clvr_error_set(err, CLVR_ERR_INTERNAL, "no light grid: urm with shadows only");
-    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, n * sizeof(float), grid, 0, NULL, NULL));
+    s = clvr_renderer_read_light(r, grid, res, err);
 cleanup:
     return s;
 }
@@ -583,7 +582,7 @@ cleanup:
 clvr_status clvr_renderer_set_light_grid(clvr_renderer *r, const float *grid, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    const size_t n = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
+    const size_t n = (size_t)r->frame.light_res * r->frame.light_res * r->frame.light_res;
     CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, n * sizeof(float), grid, 0, NULL,
                                        NULL));
     r->light_valid = 1;

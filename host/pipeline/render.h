@@ -120,11 +120,12 @@ clvr_status clvr_renderer_mpi_record(clvr_renderer *r, uint32_t frame, uint32_t 
  * from distance pick_t[p] on pixel p's camera ray (< 0: no ray, tau 1). */
 clvr_status clvr_renderer_mpi_shadow(clvr_renderer *r, uint32_t frame, uint32_t rank_key, const float *pick_t,
                                      float *tau, uint64_t *samples, clvr_error *err);
-/* The light grid (light_res^3 floats, CLVR_URM_LIGHT_RES): computed for the
- * current frame and transfer function when out of date, then copied out;
- * and replaced by a given one (the product over ranks), kept until the
- * settings or transfer function change. */
-clvr_status clvr_renderer_light_grid(clvr_renderer *r, float *grid, clvr_error *err);
+/* The light grid (*res = light_res cells per axis, res^3 floats, at most
+ * CLVR_URM_LIGHT_RES^3): computed for the current frame and transfer
+ * function when out of date, then copied out (clvr_renderer_read_light);
+ * and replaced by a given one of the same size (the product over ranks),
+ * kept until the settings or transfer function change. */
+clvr_status clvr_renderer_light_grid(clvr_renderer *r, float *grid, uint32_t *res, clvr_error *err);
 clvr_status clvr_renderer_set_light_grid(clvr_renderer *r, const float *grid, clvr_error *err);
 
 #endif
