@@ -203,6 +203,24 @@ def main():
                 print(f"-n {n}, .bin (distributed loading, automatic transfer function): R = {r:.3f}")
                 check(r < R_MAX, f"mpirun -n {n} on a .bin matches one process", r, f"< {R_MAX}")
 
+        # A .bin whose field is cell data (kiefer_tet10: von Mises stress per
+        # element, averaged onto the vertices) cannot be split by the
+        # distributed loader; every rank reads it whole and keeps its share,
+        # with a note, and the image is still the single process's.
+        cell_bin = os.path.join(tmp, "kiefer.bin")
+        conv = os.path.join(HERE, "..", "tools", "clvr-convert")
+        c = subprocess.run([conv, os.path.join(HERE, "data", "vtk", "kiefer_tet10.vtu"), cell_bin], capture_output=True,
+                           text=True, timeout=TIMEOUT)
+        if check(c.returncode == 0, "clvr-convert kiefer_tet10.vtu", c.stderr[-1000:]):
+            cell_args = (cell_bin,)
+            ref = render_pair(tmp, "single-cell", lambda out, seed: subprocess.run(
+                clvr_args(out, seed, True, cell_args), capture_output=True, text=True, timeout=TIMEOUT, env=mpi_env()))
+            got = render_pair(tmp, "mpi2-cell", lambda out, seed: run_mpi(2, clvr_args(out, seed, True, cell_args)))
+            if ref and got:
+                r = ratio(ref[0], ref[1], got[0], got[1])
+                print(f"-n 2, .bin with a cell field (read whole by every rank): R = {r:.3f}")
+                check(r < R_MAX, "mpirun -n 2 on a .bin with a cell field matches one process", r, f"< {R_MAX}")
+
         # Failures end the job: non-zero status, one message naming the rank, no output.
         out = os.path.join(tmp, "fail.pfm")
         p = run_mpi(3, clvr_args(out, 1, True), {"CLVR_MPI_TEST_FAIL_RANK": "1"}, timeout=120)

@@ -9,6 +9,7 @@
  * failure never leaves the others waiting in a collective. */
 #include "mpi_main.h"
 
+#include <fcntl.h>
 #include <malloc.h>
 #include <math.h>
 #include <mpi.h>
@@ -134,9 +135,25 @@ static clvr_status load_whole(const clvr_options *o, clvr_mesh *m, clvr_error *e
 static clvr_status load_share(mpi_run *m, const clvr_options *o, clvr_mesh *whole, clvr_mpi_share *share,
                               clvr_error *err)
 {
-#ifdef CLVR_HAVE_MPI_LOAD_BIN /* --- the distributed .bin loader (host/mpi/mpi_load.h) --- */
     const size_t len = o->mesh_path ? strlen(o->mesh_path) : 0;
-    if (len > 4 && !strcmp(o->mesh_path + len - 4, ".bin")) {
+    const int is_bin = len > 4 && !strcmp(o->mesh_path + len - 4, ".bin");
+#ifdef CLVR_HAVE_MPI_LOAD_BIN /* --- the distributed .bin loader (host/mpi/mpi_load.h) --- */
+    /* A cell field needs every element around a vertex to average it (or
+     * its own copies of the vertices, --cell-data flat): such a .bin is
+     * read whole and cut like other formats. Rank 0 reads the header and
+     * tells the others, so every rank takes the same path. */
+    int parts = is_bin;
+    if (parts && m->rank == 0) {
+        clvr_bin_layout lay;
+        clvr_error ignored = {0}; /* a bad header: the distributed loader reports it on every rank */
+        const int fd = open(o->mesh_path, O_RDONLY);
+        if (fd >= 0 && clvr_mesh_bin_layout(fd, o->mesh_path, o->scalar_name, &lay, &ignored) == CLVR_OK &&
+            lay.has_scalar && lay.scalar_association == CLVR_FIELD_CELL)
+            parts = 0;
+        if (fd >= 0) close(fd);
+    }
+    MPI_Bcast(&parts, 1, MPI_INT, 0, m->comm);
+    if (parts) {
         clvr_load_options lo = {0};
         lo.scalar_name = o->scalar_name;
         lo.cell_flat = o->cell_flat;
@@ -145,11 +162,19 @@ static clvr_status load_share(mpi_run *m, const clvr_options *o, clvr_mesh *whol
 #endif
     /* Other formats have no offsets to read a part at: every rank reads the
      * file whole, once, and keeps its share. Say so, with the way out. */
-    if (o->mesh_path && m->rank == 0 && m->size > 1 && !o->quiet)
-        fprintf(stderr,
-                "clvr: note: every rank reads %s whole and keeps its share; convert it to .bin "
-                "(tools/clvr-convert) and each rank reads about 1/%d of the file\n",
-                o->mesh_path, m->size);
+    if (o->mesh_path && m->rank == 0 && m->size > 1 && !o->quiet) {
+        if (is_bin)
+            fprintf(stderr,
+                    "clvr: note: every rank reads %s whole and keeps its share: its field is cell data, which "
+                    "needs every element around a vertex; with a point field (--scalar point:NAME) each rank "
+                    "reads about 1/%d of the file\n",
+                    o->mesh_path, m->size);
+        else
+            fprintf(stderr,
+                    "clvr: note: every rank reads %s whole and keeps its share; convert it to .bin "
+                    "(tools/clvr-convert) and each rank reads about 1/%d of the file\n",
+                    o->mesh_path, m->size);
+    }
     clvr_status s = load_whole(o, whole, err);
     s = agree(m, s, err);
     if (s != CLVR_OK) return s;
