@@ -66,6 +66,7 @@ typedef struct config {
     uint32_t estimator; /* CLVR_ESTIMATOR_* */
     uint32_t urm_steps; /* 0: the renderer's default */
     float urm_kappa;    /* 0: the renderer's default */
+    uint32_t light_res; /* 0: the renderer's default (urm with shadows: light grid cells per axis) */
 } config;
 
 typedef struct row {
@@ -151,6 +152,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     rs.estimator = c->estimator;
     if (c->urm_steps) rs.urm_steps = c->urm_steps;
     if (c->urm_kappa > 0.0f) rs.urm_kappa = c->urm_kappa;
+    if (c->light_res) rs.light_res = c->light_res;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
     clvr_camera cam;
@@ -280,10 +282,12 @@ typedef struct conv_point {
 #define MAX_POINTS 128
 #define MAX_EST 8
 
-/* An estimator of a converge run: name[:urm-steps[:urm-kappa]]. */
+/* An estimator of a converge run: name[:urm-steps[:urm-kappa[:light-res]]]
+ * (0 or absent: the renderer's default). */
 typedef struct est_variant {
     uint32_t estimator, urm_steps;
     float urm_kappa;
+    uint32_t light_res;
 } est_variant;
 
 static int parse_variant(const char *s, est_variant *v)
@@ -296,17 +300,21 @@ static int parse_variant(const char *s, est_variant *v)
     v->estimator = clvr_render_estimator_from_name(name);
     v->urm_steps = 0;
     v->urm_kappa = 0.0f;
+    v->light_res = 0;
     if (s[n] == ':') {
         char *end;
         v->urm_steps = (uint32_t)strtoul(s + n + 1, &end, 10);
-        if (*end == ':') v->urm_kappa = strtof(end + 1, NULL);
+        if (*end == ':') v->urm_kappa = strtof(end + 1, &end);
+        if (*end == ':') v->light_res = (uint32_t)strtoul(end + 1, &end, 10);
     }
     return v->estimator < CLVR_ESTIMATOR_COUNT;
 }
 
 static void variant_label(const est_variant *v, char *buf, size_t cap)
 {
-    if (v->urm_steps) snprintf(buf, cap, "%s:%u:%g", clvr_render_estimator_name(v->estimator), v->urm_steps,
+    if (v->light_res) snprintf(buf, cap, "%s:%u:%g:%u", clvr_render_estimator_name(v->estimator), v->urm_steps,
+                               (double)v->urm_kappa, v->light_res);
+    else if (v->urm_steps) snprintf(buf, cap, "%s:%u:%g", clvr_render_estimator_name(v->estimator), v->urm_steps,
                                (double)v->urm_kappa);
     else snprintf(buf, cap, "%s", clvr_render_estimator_name(v->estimator));
 }
@@ -512,6 +520,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
             c.estimator = est[e].estimator;
             if (est[e].urm_steps) c.urm_steps = est[e].urm_steps;
             if (est[e].urm_kappa > 0.0f) c.urm_kappa = est[e].urm_kappa;
+            if (est[e].light_res) c.light_res = est[e].light_res;
             if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, &res[sh][e], &err) != CLVR_OK) goto fail;
             variant_label(&est[e], res[sh][e].label, sizeof res[sh][e].label);
             fprintf(stderr, "bench_render: %s shadows=%d done\n", res[sh][e].label, sh);
@@ -611,7 +620,7 @@ static int usage(void)
             "                    [--sampler ld|independent]\n"
             "                    [--estimator urm|delta] [--urm-steps N] [--urm-kappa K]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
-            "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm]\n"
+            "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
             "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n");
     return 2;
 }
@@ -626,7 +635,7 @@ int main(int argc, char **argv)
     clvr_render_settings defaults;
     clvr_render_settings_default(&defaults);
     uint32_t estimator = defaults.estimator, ref_estimator = CLVR_ESTIMATOR_URM, urm_steps = 0;
-    est_variant conv_est[MAX_EST] = {{CLVR_ESTIMATOR_DELTA, 0, 0.0f}, {CLVR_ESTIMATOR_URM, 0, 0.0f}};
+    est_variant conv_est[MAX_EST] = {{CLVR_ESTIMATOR_DELTA, 0, 0.0f, 0}, {CLVR_ESTIMATOR_URM, 0, 0.0f, 0}};
     uint32_t nconv_est = 2;
     int shadow_lo = 0, shadow_hi = 1;
     float urm_kappa = 0.0f;
@@ -709,13 +718,13 @@ int main(int argc, char **argv)
                 snprintf(mb, sizeof mb, "%s", macro);
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa};
+                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
-                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa};
+                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0};
                 snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
@@ -729,7 +738,7 @@ int main(int argc, char **argv)
         return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
     }
     if (converge) {
-        const config base = {conv_method, 0, 1, "", sampler, ref_estimator, urm_steps, urm_kappa};
+        const config base = {conv_method, 0, 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, json);
         clvr_cl_destroy(&cl);
