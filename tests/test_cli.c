@@ -5,13 +5,20 @@
 #include "clvr_shared.h"
 #include "test_util.h"
 
+/* The parser speaks libclvr's public clvr_result and clvr_message (the
+ * program uses clvr.h alone); the same values as clvr_status and clvr_error
+ * (clvr_api.c asserts it), converted for the checks below. */
 static clvr_status parse(clvr_options *o, clvr_error *err, int n, const char **args)
 {
     char *argv[64];
     if (n + 1 > 64) { fprintf(stderr, "test_cli: too many arguments\n"); exit(1); }
     argv[0] = (char *)"clvr";
     for (int i = 0; i < n; ++i) argv[i + 1] = (char *)args[i];
-    return clvr_cli_parse(n + 1, argv, o, err);
+    clvr_message msg = {0};
+    clvr_result r = clvr_cli_parse(n + 1, argv, o, &msg);
+    err->status = (clvr_status)r;
+    memcpy(err->msg, msg.text, sizeof err->msg);
+    return (clvr_status)r;
 }
 
 #define PARSE(o, err, ...)                                                                  \

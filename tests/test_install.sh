@@ -85,41 +85,69 @@ int main(void)
     return 0;
 }
 EOC
+# The API version of this source tree's clvr.h (1.2: 1002).
+api_major=$(sed -n 's/^#define CLVR_API_VERSION_MAJOR \([0-9]*\)$/\1/p' "$SRC/host/api/clvr.h")
+api_minor=$(sed -n 's/^#define CLVR_API_VERSION_MINOR \([0-9]*\)$/\1/p' "$SRC/host/api/clvr.h")
+api=$((api_major * 1000 + api_minor))
 # pkg-config: compile, link and run against the installed library only.
-if PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --exact-version=1.1.0 clvr; then
+if PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --exact-version="$api_major.$api_minor.0" clvr; then
   ok
   # shellcheck disable=SC2046
   cc "${san[@]}" "$tmp/use.c" -o "$tmp/use_pc" $(PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --cflags --libs clvr) &&
-    LD_LIBRARY_PATH="$P/lib" "$tmp/use_pc" | grep -q "^clvr .* API 1001" && ok || bad "a program built with pkg-config clvr"
+    LD_LIBRARY_PATH="$P/lib" "$tmp/use_pc" | grep -q "^clvr .* API $api\$" && ok || bad "a program built with pkg-config clvr"
 else
-  bad "pkg-config does not find clvr 1.1.0 in $P/lib/pkgconfig"
+  bad "pkg-config does not find clvr $api_major.$api_minor.0 in $P/lib/pkgconfig"
 fi
-# CMake: find_package(clvr 1.1 REQUIRED) and the clvr::clvr target.
+# CMake: find_package(clvr MAJOR.MINOR REQUIRED) and the clvr::clvr target.
 mkdir -p "$tmp/cm"
 cp "$tmp/use.c" "$tmp/cm/use.c"
 cat >"$tmp/cm/CMakeLists.txt" <<EOC
 cmake_minimum_required(VERSION 3.20)
 project(use_clvr C)
-find_package(clvr 1.1 REQUIRED)
+find_package(clvr $api_major.$api_minor REQUIRED)
 add_executable(use use.c)
 target_compile_options(use PRIVATE ${san[*]})
 target_link_options(use PRIVATE ${san[*]})
 target_link_libraries(use PRIVATE clvr::clvr)
 EOC
 if cmake -S "$tmp/cm" -B "$tmp/cm/b" -DCMAKE_PREFIX_PATH="$P" >"$tmp/cm.log" 2>&1 &&
-  cmake --build "$tmp/cm/b" >>"$tmp/cm.log" 2>&1 && "$tmp/cm/b/use" | grep -q "API 1001"; then
+  cmake --build "$tmp/cm/b" >>"$tmp/cm.log" 2>&1 && "$tmp/cm/b/use" | grep -q "API $api\$"; then
   ok
 else
   bad "find_package(clvr): $(grep -m3 -B2 -A3 "error" "$tmp/cm.log")"
 fi
-# The program's --info and --stats modules compile against the installed
-# header alone (no source tree include paths): the program uses clvr.h only.
-if cc -std=c11 -Wall -Werror -c -I"$P/include" -I"$SRC/host/app" "$SRC/host/app/info.c" -o "$tmp/info.o" &&
-  cc -std=c11 -Wall -Werror -D_POSIX_C_SOURCE=200809L -c -I"$P/include" -I"$SRC/host/app" "$SRC/host/app/stats.c" \
-    -o "$tmp/stats.o"; then
+# The installed clvr runs on the installed libclvr (its RPATH, not
+# LD_LIBRARY_PATH or the build tree), and on the MPI module when built with it.
+real_p=$(realpath "$P")
+loads() { # loads LIB: the real path the installed clvr loads LIB from
+  local f
+  f=$(env -u LD_LIBRARY_PATH ldd "$P/bin/clvr" | sed -n "s/^[[:space:]]*$1 => \([^ ]*\) .*/\1/p")
+  [ -n "$f" ] && realpath "$f"
+}
+[ "$(loads "libclvr\.so\.$api_major")" = "$real_p/lib/libclvr.so.$api_major.$api_minor.0" ] && ok ||
+  bad "installed clvr does not load $P/lib/libclvr.so.$api_major: $(ldd "$P/bin/clvr" | grep clvr)"
+if grep -q '^CLVR_MPI:BOOL=ON' "$BUILD/CMakeCache.txt" 2>/dev/null && [ -e "$BUILD/libclvr_mpi.so" ]; then
+  [ -e "$P/lib/libclvr_mpi.so.$api_major" ] && [ -e "$P/include/clvr_mpi.h" ] && ok || bad "libclvr_mpi.so or clvr_mpi.h not installed"
+  [ "$(loads "libclvr_mpi\.so\.$api_major")" = "$real_p/lib/libclvr_mpi.so.$api_major.$api_minor.0" ] && ok ||
+    bad "installed clvr does not load $P/lib/libclvr_mpi.so.$api_major"
+fi
+# The program (all of host/app but the GLFW viewer) builds from the
+# installed headers and library alone, no source tree include paths but its
+# own folder: it uses clvr.h (and clvr_mpi.h) only. Then it runs.
+app=$SRC/host/app
+mpi_flags=()
+[ -e "$P/include/clvr_mpi.h" ] && mpi_flags=(-DCLVR_HAVE_MPI -lclvr_mpi)
+if cc -std=c11 -Wall -Werror -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE "${san[@]}" -I"$P/include" -I"$app" \
+  "$app/main.c" "$app/cli.c" "$app/series.c" "$app/info.c" "$app/stats.c" "$app/message.c" -o "$tmp/clvr_app" \
+  -L"$P/lib" -Wl,-rpath,"$P/lib" -lclvr "${mpi_flags[@]}" -lm 2>"$tmp/app.log"; then
   ok
+  "$tmp/clvr_app" --version | grep -q "^clvr [0-9]" && ok || bad "the program built on the installed library: --version"
+  if "$P/bin/clvr" --list-devices >/dev/null 2>&1; then
+    "$tmp/clvr_app" --device pocl --size 8x8 --spp 1 --quiet -o "$tmp/j.png" && [ -s "$tmp/j.png" ] && ok ||
+      bad "the program built on the installed library does not render"
+  fi
 else
-  bad "host/app/info.c or stats.c does not compile against the installed clvr.h alone"
+  bad "host/app does not build against the installed clvr.h and libclvr alone: $(head -5 "$tmp/app.log")"
 fi
 # The installed Python module finds the installed library (not the build
 # tree's: CLVR_LIBRARY unset, run from $tmp). Not for sanitizer builds.

@@ -3,7 +3,7 @@
  * bit for bit; every kind of broken input returns its specific status and a
  * message naming the file and the problem, never a crash. */
 #include "mesh_io.h"
-#include "series.h"
+#include "series_file.h"
 #include "test_util.h"
 
 #include <errno.h>

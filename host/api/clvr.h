@@ -48,9 +48,12 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 1
+#define CLVR_API_VERSION_MINOR 2
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
- * statistics and dataset information as versioned structs, multi-field files). */
+ * statistics and dataset information as versioned structs, multi-field
+ * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
+ * function file's window: what the clvr program needs beyond 1.1, so that it
+ * uses this header alone). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -576,6 +579,79 @@ CLVR_API clvr_result clvr_image_save_srgb8(const char *path, uint32_t width, uin
 /* The process's resident and peak resident memory in bytes (Linux; 0
  * where unknown). Either pointer may be NULL. */
 CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);
+
+
+/* ======================================================================== *
+ * API 1.2: what a command line or a GUI around the library needs besides
+ * rendering (the clvr program uses only this header). No new structs.
+ * ======================================================================== */
+
+/* --- names of settings (1.2) --------------------------------------------- */
+
+/* The names a setting takes, by index: setting "method" (march, track,
+ * bins, dda), "estimator" (delta, urm), "sampler" (independent, ld),
+ * "tonemap" (none, aces, filmic) or "element_boxes" (auto, on, off: index =
+ * CLVR_ELEMENT_BOXES_*). Static string; NULL for an index past the end or an
+ * unknown setting. Indices are stable within a major version (new names
+ * are appended), so a program may keep a setting as its index. */
+CLVR_API const char *clvr_setting_name(const char *setting, uint32_t index);
+/* The index of name in setting's table (exact match). ERR_USAGE for an
+ * unknown setting, or an unknown name (the message lists the names). */
+CLVR_API clvr_result clvr_setting_index(const char *setting, const char *name, uint32_t *index, clvr_message *msg);
+/* The image size a tracer of the clvr program gets by default (512 x 512).
+ * Either pointer may be NULL. */
+CLVR_API void clvr_default_size(uint32_t *width, uint32_t *height);
+
+/* --- framing without a tracer (1.2) -------------------------------------- */
+
+/* The automatic framing of clvr_tracer_frame for the box [lo, hi] (lo <= hi,
+ * finite) and a width x height image: the eye and the look-at point (the
+ * box's centre). up NULL is +y; zoom > 0; fovy_deg in (0, 180). A camera set
+ * with clvr_tracer_set_camera(eye, target, up, fovy_deg) is then exactly the
+ * framing: several datasets (a time series, the shares of a distributed
+ * mesh) can be framed as one box. Pure arithmetic. ERR_BAD_VALUE (bounds),
+ * ERR_USAGE (the rest). */
+CLVR_API clvr_result clvr_frame_box(const float lo[3], const float hi[3], const float up[3], float azimuth_deg,
+                                    float elevation_deg, float zoom, float fovy_deg, uint32_t width, uint32_t height,
+                                    float eye[3], float target[3], clvr_message *msg);
+
+/* --- transfer function files (1.2) --------------------------------------- */
+
+/* Whether the transfer function file tf_path (docs/transfer-function.md;
+ * "FILE:NAME" for a ParaView preset) fixes its own scalar window (a `range`
+ * line, or a ParaView map's data-space span): *has_window 1 and the window
+ * in *lo, *hi (may be NULL), else 0. Errors: the file's (ERR_IO,
+ * ERR_BAD_FIELD, ...). */
+CLVR_API clvr_result clvr_tf_file_window(const char *tf_path, int *has_window, float *lo, float *hi,
+                                         clvr_message *msg);
+
+/* --- time series (1.2) --------------------------------------------------- */
+
+/* A time series: a ParaView .series file ({"files": [{"name": "step.bin",
+ * "time": 0}, ...]}, as tools/clvr-convert writes for .pvd, .vtu.series and
+ * Exodus time steps), names relative to the file's folder. */
+typedef struct clvr_series clvr_series;
+/* Nonzero when path names a series file (ends in .series, any case). */
+CLVR_API int clvr_path_is_series(const char *path);
+/* Reads the list of steps (not the meshes). Errors: ERR_IO, ERR_FORMAT
+ * (over 1 MiB), ERR_BAD_FIELD (not a series file; a step without a name:
+ * "FILE:LINE:COL: ..."), ERR_NO_MEMORY. */
+CLVR_API clvr_result clvr_series_open(const char *path, clvr_series **out, clvr_message *msg);
+CLVR_API void clvr_series_destroy(clvr_series *se);
+/* Number of steps (>= 1); 0 for NULL. */
+CLVR_API uint32_t clvr_series_count(const clvr_series *se);
+/* Step i's mesh path (static while se lives) and time (its index when the
+ * file gives none). ERR_USAGE for i >= count. Either pointer may be NULL. */
+CLVR_API clvr_result clvr_series_step(const clvr_series *se, uint32_t i, const char **path, double *time,
+                                      clvr_message *msg);
+/* Loads every step in turn (one in memory at a time) with field `field`
+ * (NULL: each file's first; as clvr_load_settings.field): the union of the
+ * steps' bounds (lo, hi; may be NULL) and the field's range over all steps
+ * (*min, *max; may be NULL), what one camera and one colour window for the
+ * whole series need. A step that fails to load: its error, naming the step
+ * ("(step I of FILE)"). */
+CLVR_API clvr_result clvr_series_bounds(const clvr_series *se, const char *field, float lo[3], float hi[3],
+                                        float *min, float *max, clvr_message *msg);
 
 #ifdef __cplusplus
 }

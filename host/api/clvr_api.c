@@ -26,6 +26,7 @@
 #include "preprocess.h"
 #include "render.h"
 #include "scene.h"
+#include "series_file.h"
 #include "status.h"
 #include "tf.h"
 #include "tf_auto.h"
@@ -2268,3 +2269,202 @@ clvr_status clvr_internal_render_settings(const clvr_tracer_settings *ts, uint32
 }
 
 clvr_renderer *clvr_internal_tracer_renderer(clvr_tracer *tr) { return tr ? tr->renderer : NULL; }
+
+/* --- API 1.2: names, framing, transfer function files, time series ------ */
+
+/* The tables are the pipeline's own names in the order of its constants
+ * (clvr_shared.h, image.h, limits_check.h), so that a program keeping a
+ * setting as its index holds the pipeline's value; the asserts catch a
+ * renumbering. */
+_Static_assert(CLVR_SAMPLER_INDEPENDENT == 0 && CLVR_SAMPLER_LD == 1, "sampler names out of order");
+_Static_assert(CLVR_TONEMAP_NONE == 0 && CLVR_TONEMAP_ACES == 1 && CLVR_TONEMAP_FILMIC == 2, "tone curves out of order");
+_Static_assert(CLVR_ELEMENT_BOXES_AUTO == CLVR_EBOX_AUTO && CLVR_ELEMENT_BOXES_ON == CLVR_EBOX_ON &&
+                   CLVR_ELEMENT_BOXES_OFF == CLVR_EBOX_OFF, "element box modes drifted");
+_Static_assert(CLVR_MAX_CLIP == CLVR_MAX_CLIP_PLANES, "clip plane limits differ");
+
+const char *clvr_setting_name(const char *setting, uint32_t index)
+{
+    static const char *samplers[] = {"independent", "ld"};
+    static const char *boxes[] = {"auto", "on", "off"};
+    if (!setting) return NULL;
+    if (!strcmp(setting, "method")) return index < CLVR_RENDER_COUNT ? clvr_render_method_name(index) : NULL;
+    if (!strcmp(setting, "estimator"))
+        return index < CLVR_ESTIMATOR_COUNT ? clvr_render_estimator_name(index) : NULL;
+    if (!strcmp(setting, "sampler")) return index < 2 ? samplers[index] : NULL;
+    if (!strcmp(setting, "tonemap")) return index < CLVR_TONEMAP_COUNT ? clvr_tonemap_name((clvr_tonemap)index) : NULL;
+    if (!strcmp(setting, "element_boxes")) return index < 3 ? boxes[index] : NULL;
+    return NULL;
+}
+
+clvr_result clvr_setting_index(const char *setting, const char *name, uint32_t *index, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_setting_index";
+    if (!setting) return finish(NULL_ARG(fn, "setting"), &e, msg);
+    if (!name) return finish(NULL_ARG(fn, "name"), &e, msg);
+    if (!index) return finish(NULL_ARG(fn, "index"), &e, msg);
+    if (!clvr_setting_name(setting, 0))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown setting '%s'; use method, estimator, sampler, "
+                                     "tonemap or element_boxes", fn, setting),
+                      &e, msg);
+    char list[256] = "";
+    size_t len = 0;
+    for (uint32_t i = 0; clvr_setting_name(setting, i); ++i) {
+        const char *n = clvr_setting_name(setting, i);
+        if (!strcmp(n, name)) {
+            *index = i;
+            return finish(CLVR_OK, &e, msg);
+        }
+        len += (size_t)snprintf(list + len, len < sizeof list ? sizeof list - len : 0, "%s%s", i ? ", " : "", n);
+        if (len >= sizeof list) len = sizeof list - 1;
+    }
+    return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown %s '%s'; use one of %s", fn, setting, name, list),
+                  &e, msg);
+}
+
+void clvr_default_size(uint32_t *width, uint32_t *height)
+{
+    clvr_render_settings rs;
+    clvr_render_settings_default(&rs);
+    if (width) *width = rs.width;
+    if (height) *height = rs.height;
+}
+
+clvr_result clvr_frame_box(const float lo[3], const float hi[3], const float up[3], float azimuth_deg,
+                           float elevation_deg, float zoom, float fovy_deg, uint32_t width, uint32_t height,
+                           float eye[3], float target[3], clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_frame_box";
+    static const float y_up[3] = {0, 1, 0};
+    if (!lo) return finish(NULL_ARG(fn, "lo"), &e, msg);
+    if (!hi) return finish(NULL_ARG(fn, "hi"), &e, msg);
+    if (!eye) return finish(NULL_ARG(fn, "eye"), &e, msg);
+    if (!target) return finish(NULL_ARG(fn, "target"), &e, msg);
+    if (!isfinite(azimuth_deg) || !isfinite(elevation_deg) || (up && !finite3(up)))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: azimuth %g, elevation %g and the up axis must be finite",
+                                     fn, (double)azimuth_deg, (double)elevation_deg),
+                      &e, msg);
+    /* The framing of clvr_tracer_frame (frame_view above), on a box. */
+    clvr_camera_view view;
+    clvr_camera_view_default(&view);
+    memcpy(view.up, up ? up : y_up, sizeof view.up);
+    view.azimuth_deg = azimuth_deg;
+    view.elevation_deg = elevation_deg;
+    view.zoom = zoom;
+    clvr_camera cam;
+    clvr_status s = clvr_camera_frame_view(&cam, lo, hi, &view, fovy_deg, width, height, &e);
+    if (s == CLVR_OK) {
+        memcpy(eye, cam.origin, 3 * sizeof(float));
+        memcpy(target, cam.target, 3 * sizeof(float));
+    }
+    return finish(s, &e, msg);
+}
+
+clvr_result clvr_tf_file_window(const char *tf_path, int *has_window, float *lo, float *hi, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tf_file_window";
+    if (!tf_path) return finish(NULL_ARG(fn, "tf_path"), &e, msg);
+    if (!has_window) return finish(NULL_ARG(fn, "has_window"), &e, msg);
+    clvr_tf t = {0};
+    clvr_status s = clvr_tf_init(&t, NULL, &e);
+    if (s == CLVR_OK) s = clvr_tf_load(&t, tf_path, &e);
+    if (s == CLVR_OK) {
+        *has_window = t.range_set != 0;
+        if (lo) *lo = t.range_set ? t.range_lo : 0.0f;
+        if (hi) *hi = t.range_set ? t.range_hi : 0.0f;
+    }
+    clvr_tf_free(&t);
+    return finish(s, &e, msg);
+}
+
+struct clvr_series {
+    char *path; /* the .series file, for messages */
+    char **paths;
+    double *times;
+    uint32_t n;
+};
+
+int clvr_path_is_series(const char *path) { return clvr_series_is(path); }
+
+clvr_result clvr_series_open(const char *path, clvr_series **out, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_series_open";
+    if (!path) return finish(NULL_ARG(fn, "path"), &e, msg);
+    if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
+    clvr_series *se = calloc(1, sizeof *se);
+    char *copy = strdup(path);
+    if (!se || !copy) {
+        free(se);
+        free(copy);
+        return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", path), &e, msg);
+    }
+    se->path = copy;
+    clvr_status s = clvr_series_read(path, &se->paths, &se->times, &se->n, &e);
+    if (s != CLVR_OK) {
+        clvr_series_destroy(se);
+        return finish(s, &e, msg);
+    }
+    *out = se;
+    return finish(CLVR_OK, &e, msg);
+}
+
+void clvr_series_destroy(clvr_series *se)
+{
+    if (!se) return;
+    clvr_series_free(se->paths, se->times, se->n);
+    free(se->path);
+    free(se);
+}
+
+uint32_t clvr_series_count(const clvr_series *se) { return se ? se->n : 0; }
+
+clvr_result clvr_series_step(const clvr_series *se, uint32_t i, const char **path, double *time, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_series_step";
+    if (!se) return finish(NULL_ARG(fn, "se"), &e, msg);
+    if (i >= se->n)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: step %u of %s, which has %u", fn, i, se->path, se->n),
+                      &e, msg);
+    if (path) *path = se->paths[i];
+    if (time) *time = se->times[i];
+    return finish(CLVR_OK, &e, msg);
+}
+
+clvr_result clvr_series_bounds(const clvr_series *se, const char *field, float lo[3], float hi[3], float *min,
+                               float *max, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_series_bounds";
+    if (!se) return finish(NULL_ARG(fn, "se"), &e, msg);
+    float blo[3] = {0, 0, 0}, bhi[3] = {0, 0, 0}, vlo = 0, vhi = 0;
+    for (uint32_t i = 0; i < se->n; ++i) {
+        clvr_mesh m = {0};
+        clvr_load_options opt = {0};
+        opt.scalar_name = field;
+        opt.map_indices = opt.map_vertices = 1; /* only bounds and range are needed: no copy of a .bin */
+        clvr_status s = clvr_mesh_load(se->paths[i], &opt, &m, &e);
+        if (s != CLVR_OK) {
+            clvr_mesh_free(&m);
+            char first[sizeof e.msg];
+            memcpy(first, e.msg, sizeof first);
+            first[sizeof first - 64] = '\0'; /* room for the step */
+            return finish(clvr_error_set(&e, s, "%s (step %u of %s)", first, i, se->path), &e, msg);
+        }
+        for (int k = 0; k < 3; ++k) {
+            blo[k] = i == 0 || m.bounds_lo[k] < blo[k] ? m.bounds_lo[k] : blo[k];
+            bhi[k] = i == 0 || m.bounds_hi[k] > bhi[k] ? m.bounds_hi[k] : bhi[k];
+        }
+        vlo = i == 0 || m.scalar_min < vlo ? m.scalar_min : vlo;
+        vhi = i == 0 || m.scalar_max > vhi ? m.scalar_max : vhi;
+        clvr_mesh_free(&m);
+    }
+    if (lo) memcpy(lo, blo, sizeof blo);
+    if (hi) memcpy(hi, bhi, sizeof bhi);
+    if (min) *min = vlo;
+    if (max) *max = vhi;
+    return finish(CLVR_OK, &e, msg);
+}

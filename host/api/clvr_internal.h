@@ -1,10 +1,11 @@
 /* clvr_internal.h: what the library's own drivers outside host/api need
- * beyond clvr.h. Today one: the MPI mode (host/mpi/mpi_main.c), which runs
+ * beyond clvr.h. Today one: the MPI mode (host/mpi/mpi_main.c, built into
+ * the module libclvr_mpi.so with its own copy of the pipeline), which runs
  * the renderer's phase kernels on a tracer and sets render settings the
  * public API does not carry (the macrocell and light grids' domain, agreed
  * by all ranks). The clvr program (host/app) does not include this header
  * (tests/test_app_includes.sh checks). Not installed, not exported from
- * libclvr.so. */
+ * libclvr.so or libclvr_mpi.so. */
 #ifndef CLVR_INTERNAL_H
 #define CLVR_INTERNAL_H
 

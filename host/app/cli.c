@@ -1,8 +1,8 @@
+/* cli.c: see cli.h. Only libclvr's public clvr.h: the names of methods,
+ * estimators, samplers, tone curves and element box modes, the defaults and
+ * the framing all come from the library (tests/test_app_includes.sh). */
 #include "cli.h"
-#include "camera.h"
-#include "image.h"
-#include "limits_check.h"
-#include "render.h"
+#include "message.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -150,78 +150,108 @@ void clvr_cli_print_help(FILE *out)
         out);
 }
 
+/* The index of a default setting name; the library's tables hold them. */
+static uint32_t index_of(const char *setting, const char *name)
+{
+    uint32_t i = 0;
+    clvr_setting_index(setting, name, &i, NULL);
+    return i;
+}
+
 static void defaults(clvr_options *o)
 {
-    /* Rendering defaults live in one place, the renderer's. */
-    clvr_render_settings rs;
-    clvr_render_settings_default(&rs);
+    /* Rendering defaults live in one place, the library's (a new tracer's). */
+    clvr_tracer_settings ts;
+    clvr_tracer_settings_init(&ts);
     memset(o, 0, sizeof *o);
     o->output = "clvr.png";
-    o->width = rs.width;
-    o->height = rs.height;
+    clvr_default_size(&o->width, &o->height);
     /* urm reaches about 2% relative RMSE in 8-12 frames on the built-in scene
      * and the 1M-tet bench mesh (bench/converge-all.sh): 16 is a clean image. */
     o->spp = 16;
-    o->seed = rs.seed;
-    o->method = rs.method;
-    o->estimator = rs.estimator;
-    o->urm_steps = rs.urm_steps;
-    o->bins = rs.bins;
-    o->segments = rs.segments;
-    o->macrocells = rs.macrocells;
-    o->shadows = rs.shadows;
-    o->sampler = rs.sampler;
+    o->seed = ts.seed;
+    o->method = index_of("method", ts.method);
+    o->estimator = index_of("estimator", ts.estimator);
+    o->urm_steps = ts.urm_steps;
+    o->bins = ts.bins;
+    o->segments = ts.segments;
+    o->macrocells = ts.macrocells;
+    o->shadows = ts.shadows;
+    o->sampler = index_of("sampler", ts.sampler);
     o->leaf_size = 16;
     o->fovy = 30.0f; /* ParaView's default view angle */
     o->up[1] = 1.0f;
     o->zoom = 1.0f;
-    o->tonemap = CLVR_TONEMAP_ACES;
+    o->tonemap = (int)index_of("tonemap", "aces");
     o->colormap = "cool-warm";
     o->density = 1.0f;
     o->density_auto = 1;
-    memcpy(o->light_dir, rs.light_dir, sizeof o->light_dir);
-    o->light_intensity = rs.light_intensity;
-    o->ambient = rs.ambient;
-    memcpy(o->background, rs.background, sizeof o->background);
+    memcpy(o->light_dir, ts.light_dir, sizeof o->light_dir);
+    o->light_intensity = ts.light_intensity;
+    o->ambient = ts.ambient;
+    memcpy(o->background, ts.background, sizeof o->background);
 }
 
-static clvr_status parse_u64(const char *opt, const char *v, uint64_t lo, uint64_t hi, uint64_t *out, clvr_error *err)
+/* --up's axis: x, y or z with an optional sign (+x, -z) as a unit vector;
+ * -1 for anything else. */
+static int parse_axis(const char *text, float out[3])
+{
+    float sign = 1.0f;
+    if (*text == '-' || *text == '+') sign = *text++ == '-' ? -1.0f : 1.0f;
+    if (!text[0] || text[1] || text[0] < 'x' || text[0] > 'z') return -1;
+    out[0] = out[1] = out[2] = 0.0f;
+    out[text[0] - 'x'] = sign;
+    return 0;
+}
+
+/* A setting with a fixed set of names (clvr_setting_name) by its index. */
+static clvr_result parse_named(const char *opt, const char *setting, const char *v, const char *expects,
+                               uint32_t *out, clvr_message *msg)
+{
+    uint32_t i;
+    if (clvr_setting_index(setting, v, &i, NULL) != CLVR_RESULT_OK)
+        return clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "%s expects %s, got '%s'", opt, expects, v);
+    *out = i;
+    return CLVR_RESULT_OK;
+}
+
+static clvr_result parse_u64(const char *opt, const char *v, uint64_t lo, uint64_t hi, uint64_t *out, clvr_message *msg)
 {
     char *end;
     errno = 0;
     if (!v || !*v || *v == '-')
-        return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects a whole number in [%llu, %llu], got '%s'", opt,
+        return clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "%s expects a whole number in [%llu, %llu], got '%s'", opt,
                               (unsigned long long)lo, (unsigned long long)hi, v ? v : "");
     unsigned long long x = strtoull(v, &end, 10);
     if (errno || *end || x < lo || x > hi)
-        return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects a whole number in [%llu, %llu], got '%s'", opt,
+        return clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "%s expects a whole number in [%llu, %llu], got '%s'", opt,
                               (unsigned long long)lo, (unsigned long long)hi, v);
     *out = x;
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
-static clvr_status parse_u32(const char *opt, const char *v, uint32_t lo, uint32_t hi, uint32_t *out, clvr_error *err)
+static clvr_result parse_u32(const char *opt, const char *v, uint32_t lo, uint32_t hi, uint32_t *out, clvr_message *msg)
 {
     uint64_t x;
-    clvr_status s = parse_u64(opt, v, lo, hi, &x, err);
-    if (s == CLVR_OK) *out = (uint32_t)x;
+    clvr_result s = parse_u64(opt, v, lo, hi, &x, msg);
+    if (s == CLVR_RESULT_OK) *out = (uint32_t)x;
     return s;
 }
 
-static clvr_status parse_float(const char *opt, const char *v, float lo, float hi, float *out, clvr_error *err)
+static clvr_result parse_float(const char *opt, const char *v, float lo, float hi, float *out, clvr_message *msg)
 {
     char *end;
     errno = 0;
     float x = v ? strtof(v, &end) : 0.0f;
     if (!v || !*v || errno || *end || !isfinite(x) || x < lo || x > hi)
-        return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects a number in [%g, %g], got '%s'", opt, lo, hi,
+        return clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "%s expects a number in [%g, %g], got '%s'", opt, lo, hi,
                               v ? v : "");
     *out = x;
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
 /* Parses "a,b,c,..." with exactly n finite numbers. */
-static clvr_status parse_floats(const char *opt, const char *v, int n, float *out, clvr_error *err)
+static clvr_result parse_floats(const char *opt, const char *v, int n, float *out, clvr_message *msg)
 {
     const char *p = v ? v : "";
     for (int i = 0; i < n; ++i) {
@@ -229,24 +259,24 @@ static clvr_status parse_floats(const char *opt, const char *v, int n, float *ou
         errno = 0;
         float x = strtof(p, &end);
         if (end == p || errno || !isfinite(x) || (i + 1 < n ? *end != ',' : *end != 0))
-            return clvr_error_set(err, CLVR_ERR_USAGE, "%s expects %d comma-separated numbers, got '%s'", opt, n,
+            return clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "%s expects %d comma-separated numbers, got '%s'", opt, n,
                                   v ? v : "");
         out[i] = x;
         p = end + 1;
     }
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
-clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *err)
+clvr_result clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_message *msg)
 {
-    clvr_status s = CLVR_OK;
+    clvr_result s = CLVR_RESULT_OK;
     defaults(o);
-    for (int i = 1; i < argc && s == CLVR_OK; ++i) {
+    for (int i = 1; i < argc && s == CLVR_RESULT_OK; ++i) {
         const char *a = argv[i];
         /* value of an option that takes one argument */
 #define NEXT()                                                                                         \
     (i + 1 < argc ? argv[++i]                                                                          \
-                  : (s = clvr_error_set(err, CLVR_ERR_USAGE, "%s needs a value (see clvr --help)", a), \
+                  : (s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "%s needs a value (see clvr --help)", a), \
                      (const char *)NULL))
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) o->help = 1;
         else if (!strcmp(a, "--version")) o->version = 1;
@@ -262,7 +292,7 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             if (v) {
                 if (!strcmp(v, "flat")) o->cell_flat = 1;
                 else if (!strcmp(v, "average")) o->cell_flat = 0;
-                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--cell-data expects flat or average, got '%s'", v);
+                else s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--cell-data expects flat or average, got '%s'", v);
             }
         }
         else if (!strcmp(a, "--kernel-dir")) { const char *v = NEXT(); if (v) o->kernel_dir = v; }
@@ -274,73 +304,63 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
                 unsigned w = 0, h = 0;
                 char tail;
                 if (sscanf(v, "%ux%u%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--size expects WxH with 1 <= W, H <= 16384, got '%s'", v);
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--size expects WxH with 1 <= W, H <= 16384, got '%s'", v);
                 o->width = w;
                 o->height = h;
             }
         }
-        else if (!strcmp(a, "--spp")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 24, &o->spp, err); }
-        else if (!strcmp(a, "--seed")) { const char *v = NEXT(); if (v) s = parse_u64(a, v, 0, UINT64_MAX, &o->seed, err); }
+        else if (!strcmp(a, "--spp")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 24, &o->spp, msg); }
+        else if (!strcmp(a, "--seed")) { const char *v = NEXT(); if (v) s = parse_u64(a, v, 0, UINT64_MAX, &o->seed, msg); }
         else if (!strcmp(a, "--method")) {
             const char *v = NEXT();
             if (v) {
-                uint32_t m = clvr_render_method_from_name(v);
-                if (m == CLVR_RENDER_COUNT) s = clvr_error_set(err, CLVR_ERR_USAGE, "--method expects march, track, bins or dda, got '%s'", v);
-                else { o->method = m; o->method_set = 1; }
+                s = parse_named(a, "method", v, "march, track, bins or dda", &o->method, msg);
+                if (s == CLVR_RESULT_OK) o->method_set = 1;
             }
         }
         else if (!strcmp(a, "--estimator")) {
             const char *v = NEXT();
             if (v) {
-                uint32_t e = clvr_render_estimator_from_name(v);
-                if (e == CLVR_ESTIMATOR_COUNT) s = clvr_error_set(err, CLVR_ERR_USAGE, "--estimator expects urm or delta, got '%s'", v);
-                else o->estimator = e;
+                s = parse_named(a, "estimator", v, "urm or delta", &o->estimator, msg);
             }
         }
-        else if (!strcmp(a, "--urm-steps")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 4096, &o->urm_steps, err); }
-        else if (!strcmp(a, "--step")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 1e-9f, 1e30f, &o->step, err); }
-        else if (!strcmp(a, "--bins")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 32, &o->bins, err); }
-        else if (!strcmp(a, "--segments")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->segments, err); }
-        else if (!strcmp(a, "--macrocells")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->macrocells, err); }
+        else if (!strcmp(a, "--urm-steps")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 4096, &o->urm_steps, msg); }
+        else if (!strcmp(a, "--step")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 1e-9f, 1e30f, &o->step, msg); }
+        else if (!strcmp(a, "--bins")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 32, &o->bins, msg); }
+        else if (!strcmp(a, "--segments")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->segments, msg); }
+        else if (!strcmp(a, "--macrocells")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->macrocells, msg); }
         else if (!strcmp(a, "--shadows")) {
             const char *v = NEXT();
             if (v) {
                 if (!strcmp(v, "on")) o->shadows = 1;
                 else if (!strcmp(v, "off")) o->shadows = 0;
-                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--shadows expects on or off, got '%s'", v);
+                else s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--shadows expects on or off, got '%s'", v);
             }
         }
         else if (!strcmp(a, "--sampler")) {
             const char *v = NEXT();
-            if (v) {
-                if (!strcmp(v, "ld")) o->sampler = CLVR_SAMPLER_LD;
-                else if (!strcmp(v, "independent")) o->sampler = CLVR_SAMPLER_INDEPENDENT;
-                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--sampler expects ld or independent, got '%s'", v);
-            }
+            if (v) s = parse_named(a, "sampler", v, "ld or independent", &o->sampler, msg);
         }
         else if (!strcmp(a, "--leaf-size")) {
             const char *v = NEXT();
             if (v) {
-                s = parse_u32(a, v, 1, 32, &o->leaf_size, err);
-                if (s == CLVR_OK && (o->leaf_size & (o->leaf_size - 1)) != 0 && o->leaf_size != 1)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--leaf-size expects 1, 4, 8, 16 or 32, got '%s'", v);
-                if (s == CLVR_OK && o->leaf_size == 2)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--leaf-size expects 1, 4, 8, 16 or 32, got '%s'", v);
+                s = parse_u32(a, v, 1, 32, &o->leaf_size, msg);
+                if (s == CLVR_RESULT_OK && (o->leaf_size & (o->leaf_size - 1)) != 0 && o->leaf_size != 1)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--leaf-size expects 1, 4, 8, 16 or 32, got '%s'", v);
+                if (s == CLVR_RESULT_OK && o->leaf_size == 2)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--leaf-size expects 1, 4, 8, 16 or 32, got '%s'", v);
             }
         }
-        else if (!strcmp(a, "--sampling-size")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 20, &o->sampling_size, err); }
+        else if (!strcmp(a, "--sampling-size")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1u << 20, &o->sampling_size, msg); }
         else if (!strcmp(a, "--element-boxes")) {
             const char *v = NEXT();
-            if (v) {
-                if (!strcmp(v, "on")) o->element_boxes = CLVR_EBOX_ON;
-                else if (!strcmp(v, "off")) o->element_boxes = CLVR_EBOX_OFF;
-                else if (!strcmp(v, "auto")) o->element_boxes = CLVR_EBOX_AUTO;
-                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--element-boxes expects on, off or auto, got '%s'", v);
-            }
+            uint32_t b;
+            if (v) s = parse_named(a, "element_boxes", v, "on, off or auto", &b, msg);
+            if (v && s == CLVR_RESULT_OK) o->element_boxes = (int)b;
         }
-        else if (!strcmp(a, "--partitions")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 0, 65535u, &o->partitions, err); }
-        else if (!strcmp(a, "--camera")) { const char *v = NEXT(); if (v) { s = parse_floats(a, v, 9, o->camera, err); o->camera_set = 1; } }
-        else if (!strcmp(a, "--fovy")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.1f, 179.0f, &o->fovy, err); }
+        else if (!strcmp(a, "--partitions")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 0, 65535u, &o->partitions, msg); }
+        else if (!strcmp(a, "--camera")) { const char *v = NEXT(); if (v) { s = parse_floats(a, v, 9, o->camera, msg); o->camera_set = 1; } }
+        else if (!strcmp(a, "--fovy")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.1f, 179.0f, &o->fovy, msg); }
         else if (!strcmp(a, "--colormap")) { const char *v = NEXT(); if (v) o->colormap = v; }
         else if (!strcmp(a, "--tf")) { const char *v = NEXT(); if (v) o->tf_file = v; }
         else if (!strcmp(a, "--range")) {
@@ -350,10 +370,10 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
                 o->range_auto_all = 1; /* a series' range over all steps; one mesh: its own range */
                 o->range_set = 0;
             } else if (lo && hi) {
-                s = parse_float("--range LO", lo, -3e38f, 3e38f, &o->range_lo, err);
-                if (s == CLVR_OK) s = parse_float("--range HI", hi, -3e38f, 3e38f, &o->range_hi, err);
-                if (s == CLVR_OK && !(o->range_hi > o->range_lo))
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--range expects LO < HI, got %s %s", lo, hi);
+                s = parse_float("--range LO", lo, -3e38f, 3e38f, &o->range_lo, msg);
+                if (s == CLVR_RESULT_OK) s = parse_float("--range HI", hi, -3e38f, 3e38f, &o->range_hi, msg);
+                if (s == CLVR_RESULT_OK && !(o->range_hi > o->range_lo))
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--range expects LO < HI, got %s %s", lo, hi);
                 o->range_set = 1;
             }
         }
@@ -361,9 +381,9 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             const char *v = NEXT();
             if (v && !strcmp(v, "auto")) o->density_auto = 1;
             else if (v) {
-                s = parse_float(a, v, 0.0f, 1e30f, &o->density, err);
-                if (s != CLVR_OK)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--density expects auto or a number in [0, 1e+30], got '%s'", v);
+                s = parse_float(a, v, 0.0f, 1e30f, &o->density, msg);
+                if (s != CLVR_RESULT_OK)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--density expects auto or a number in [0, 1e+30], got '%s'", v);
                 o->density_auto = 0;
             }
         }
@@ -372,19 +392,19 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             if (v) {
                 if (!strcmp(v, "auto")) o->opacity_ramp = 0;
                 else if (!strcmp(v, "ramp")) o->opacity_ramp = 1;
-                else s = clvr_error_set(err, CLVR_ERR_USAGE, "--opacity expects auto or ramp, got '%s'", v);
+                else s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--opacity expects auto or ramp, got '%s'", v);
             }
         }
         else if (!strcmp(a, "--light")) {
             const char *v = NEXT();
             if (v) {
-                s = parse_floats(a, v, 3, o->light_dir, err);
-                if (s == CLVR_OK && o->light_dir[0] == 0 && o->light_dir[1] == 0 && o->light_dir[2] == 0)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--light expects a non-zero direction, got '%s'", v);
+                s = parse_floats(a, v, 3, o->light_dir, msg);
+                if (s == CLVR_RESULT_OK && o->light_dir[0] == 0 && o->light_dir[1] == 0 && o->light_dir[2] == 0)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--light expects a non-zero direction, got '%s'", v);
             }
         }
-        else if (!strcmp(a, "--light-intensity")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->light_intensity, err); }
-        else if (!strcmp(a, "--ambient")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->ambient, err); }
+        else if (!strcmp(a, "--light-intensity")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->light_intensity, msg); }
+        else if (!strcmp(a, "--ambient")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 0.0f, 1e30f, &o->ambient, msg); }
         else if (!strcmp(a, "--background")) {
             const char *v = NEXT();
             if (v && !strcmp(v, "none")) {
@@ -393,9 +413,9 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
                 memset(o->background, 0, sizeof o->background);
             } else if (v) {
                 o->transparent = 0;
-                s = parse_floats(a, v, 3, o->background, err);
-                if (s != CLVR_OK)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--background expects R,G,B (3 numbers) or none, got '%s'", v);
+                s = parse_floats(a, v, 3, o->background, msg);
+                if (s != CLVR_RESULT_OK)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--background expects R,G,B (3 numbers) or none, got '%s'", v);
             }
         }
         else if (!strcmp(a, "--legend")) o->legend = 1;
@@ -404,12 +424,12 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             const char *v = NEXT();
             if (v) {
                 float q[4];
-                s = parse_floats(a, v, 4, q, err);
-                if (s == CLVR_OK && o->num_clip_planes == CLVR_MAX_CLIP_PLANES)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--clip given more than %u times", CLVR_MAX_CLIP_PLANES);
-                else if (s == CLVR_OK && q[0] == 0.0f && q[1] == 0.0f && q[2] == 0.0f)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--clip expects a nonzero normal nx,ny,nz, got '%s'", v);
-                else if (s == CLVR_OK)
+                s = parse_floats(a, v, 4, q, msg);
+                if (s == CLVR_RESULT_OK && o->num_clip_planes == CLVR_MAX_CLIP)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--clip given more than %u times", CLVR_MAX_CLIP);
+                else if (s == CLVR_RESULT_OK && q[0] == 0.0f && q[1] == 0.0f && q[2] == 0.0f)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--clip expects a nonzero normal nx,ny,nz, got '%s'", v);
+                else if (s == CLVR_RESULT_OK)
                     memcpy(o->clip_planes[o->num_clip_planes++], q, sizeof q);
             }
         }
@@ -417,60 +437,64 @@ clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *e
             const char *v = NEXT();
             if (v) {
                 float b[6];
-                s = parse_floats(a, v, 6, b, err);
-                if (s == CLVR_OK && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--clip-box expects x0 < x1, y0 < y1, z0 < z1, got '%s'",
+                s = parse_floats(a, v, 6, b, msg);
+                if (s == CLVR_RESULT_OK && !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--clip-box expects x0 < x1, y0 < y1, z0 < z1, got '%s'",
                                        v);
-                else if (s == CLVR_OK) {
+                else if (s == CLVR_RESULT_OK) {
                     memcpy(o->clip_lo, b, sizeof o->clip_lo);
                     memcpy(o->clip_hi, b + 3, sizeof o->clip_hi);
                     o->clip_box_set = 1;
                 }
             }
         }
-        else if (!strcmp(a, "--exposure")) { const char *v = NEXT(); if (v) s = parse_float(a, v, -30.0f, 30.0f, &o->exposure, err); }
+        else if (!strcmp(a, "--exposure")) { const char *v = NEXT(); if (v) s = parse_float(a, v, -30.0f, 30.0f, &o->exposure, msg); }
         else if (!strcmp(a, "--tonemap")) {
             const char *v = NEXT();
             if (v) {
-                clvr_tonemap t = clvr_tonemap_parse(v);
-                if (t == CLVR_TONEMAP_COUNT) s = clvr_error_set(err, CLVR_ERR_USAGE, "--tonemap expects aces, filmic or none, got '%s'", v);
-                else o->tonemap = (int)t;
+                uint32_t t;
+                s = parse_named(a, "tonemap", v, "aces, filmic or none", &t, msg);
+                if (s == CLVR_RESULT_OK) o->tonemap = (int)t;
             }
         }
         else if (!strcmp(a, "--up")) {
             const char *v = NEXT();
             if (v) {
-                if (clvr_camera_parse_axis(v, o->up) != 0)
-                    s = clvr_error_set(err, CLVR_ERR_USAGE, "--up expects x, y, z, -x, -y or -z, got '%s'", v);
+                if (parse_axis(v, o->up) != 0)
+                    s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--up expects x, y, z, -x, -y or -z, got '%s'", v);
                 o->view_set = 1;
             }
         }
-        else if (!strcmp(a, "--azimuth")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, -3600.0f, 3600.0f, &o->azimuth, err); o->view_set = 1; } }
-        else if (!strcmp(a, "--elevation")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, -180.0f, 180.0f, &o->elevation, err); o->view_set = 1; } }
-        else if (!strcmp(a, "--zoom")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, 1e-3f, 1e3f, &o->zoom, err); o->view_set = 1; } }
-        else if (!strcmp(a, "--orbit")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 100000, &o->orbit, err); }
-        else if (a[0] == '-' && a[1] != 0) s = clvr_error_set(err, CLVR_ERR_USAGE, "unknown option '%s' (see clvr --help)", a);
-        else if (o->mesh_path) s = clvr_error_set(err, CLVR_ERR_USAGE, "more than one mesh given: '%s' and '%s'", o->mesh_path, a);
+        else if (!strcmp(a, "--azimuth")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, -3600.0f, 3600.0f, &o->azimuth, msg); o->view_set = 1; } }
+        else if (!strcmp(a, "--elevation")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, -180.0f, 180.0f, &o->elevation, msg); o->view_set = 1; } }
+        else if (!strcmp(a, "--zoom")) { const char *v = NEXT(); if (v) { s = parse_float(a, v, 1e-3f, 1e3f, &o->zoom, msg); o->view_set = 1; } }
+        else if (!strcmp(a, "--orbit")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 100000, &o->orbit, msg); }
+        else if (a[0] == '-' && a[1] != 0) s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "unknown option '%s' (see clvr --help)", a);
+        else if (o->mesh_path) s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "more than one mesh given: '%s' and '%s'", o->mesh_path, a);
         else o->mesh_path = a;
 #undef NEXT
     }
     /* The view options move the automatic framing; an explicit --camera has
      * its own eye and up, and silently ignoring them would surprise. */
-    if (s == CLVR_OK && o->camera_set && o->view_set)
-        s = clvr_error_set(err, CLVR_ERR_USAGE,
+    if (s == CLVR_RESULT_OK && o->camera_set && o->view_set)
+        s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE,
                            "--up, --azimuth, --elevation and --zoom adjust the automatic framing; drop them or drop "
                            "--camera");
-    if (s == CLVR_OK && o->orbit && o->view)
-        s = clvr_error_set(err, CLVR_ERR_USAGE, "--orbit renders numbered files; it does not apply to --view");
+    if (s == CLVR_RESULT_OK && o->orbit && o->view)
+        s = clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "--orbit renders numbered files; it does not apply to --view");
     return s;
 }
 
-clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_error *err)
+clvr_result clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_message *msg)
 {
-    (void)err;
-    snprintf(s->method, sizeof s->method, "%s", clvr_render_method_name(o->method));
-    snprintf(s->estimator, sizeof s->estimator, "%s", clvr_render_estimator_name(o->estimator));
-    snprintf(s->sampler, sizeof s->sampler, "%s", o->sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
+    const char *method = clvr_setting_name("method", o->method), *estimator = clvr_setting_name("estimator", o->estimator),
+               *sampler = clvr_setting_name("sampler", o->sampler);
+    if (!method || !estimator || !sampler)
+        return clvr_app_fail(msg, CLVR_RESULT_ERR_USAGE, "render settings: method %u, estimator %u or sampler %u "
+                             "is not an index of clvr_setting_name", o->method, o->estimator, o->sampler);
+    snprintf(s->method, sizeof s->method, "%s", method);
+    snprintf(s->estimator, sizeof s->estimator, "%s", estimator);
+    snprintf(s->sampler, sizeof s->sampler, "%s", sampler);
     s->seed = o->seed;
     s->urm_steps = o->urm_steps;
     s->step = o->step > 0 ? o->step : 0;
@@ -489,21 +513,26 @@ clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings
     }
     s->num_clip_planes = o->num_clip_planes;
     memcpy(s->clip_planes, o->clip_planes, sizeof s->clip_planes);
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
-const char *clvr_cli_tonemap_name(int tonemap) { return clvr_tonemap_name((clvr_tonemap)tonemap); }
-
-clvr_status clvr_cli_camera(const clvr_options *o, const float lo[3], const float hi[3], clvr_camera *cam,
-                            clvr_error *err)
+const char *clvr_cli_tonemap_name(int tonemap)
 {
-    if (o->camera_set)
-        return clvr_camera_look_at(cam, o->camera, o->camera + 3, o->camera + 6, o->fovy, o->width, o->height, err);
-    clvr_camera_view view;
-    clvr_camera_view_default(&view);
-    memcpy(view.up, o->up, sizeof view.up);
-    view.azimuth_deg = o->azimuth;
-    view.elevation_deg = o->elevation;
-    view.zoom = o->zoom;
-    return clvr_camera_frame_view(cam, lo, hi, &view, o->fovy, o->width, o->height, err);
+    const char *n = tonemap >= 0 ? clvr_setting_name("tonemap", (uint32_t)tonemap) : NULL;
+    return n ? n : "?";
+}
+
+clvr_result clvr_cli_view(const clvr_options *o, const float lo[3], const float hi[3], float eye[3], float target[3],
+                          float up[3], clvr_message *msg)
+{
+    if (o->camera_set) {
+        memcpy(eye, o->camera, 3 * sizeof(float));
+        memcpy(target, o->camera + 3, 3 * sizeof(float));
+        memcpy(up, o->camera + 6, 3 * sizeof(float));
+        return CLVR_RESULT_OK;
+    }
+    clvr_result r = clvr_frame_box(lo, hi, o->up, o->azimuth, o->elevation, o->zoom, o->fovy, o->width, o->height, eye,
+                                   target, msg);
+    if (r == CLVR_RESULT_OK) memcpy(up, o->up, 3 * sizeof(float));
+    return r;
 }

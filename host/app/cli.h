@@ -1,6 +1,10 @@
 /* cli.h: clvr's command line, parsed into plain options. Parsing is separate
  * from running so that tests can check every option and every error. The
- * command-line contract is documented in `clvr --help` and the README. */
+ * command-line contract is documented in `clvr --help` and the README. Like
+ * the rest of the program it uses libclvr's public clvr.h alone: settings
+ * with a fixed set of names are kept as their index in clvr_setting_name's
+ * tables. Compiled into the program and into the MPI module
+ * (libclvr_mpi.so), which parses the same command line. */
 #ifndef CLVR_CLI_H
 #define CLVR_CLI_H
 
@@ -8,8 +12,6 @@
 #include <stdio.h>
 
 #include "clvr.h"
-#include "clvr_shared.h"
-#include "status.h"
 
 typedef struct clvr_options {
     /* actions */
@@ -27,20 +29,20 @@ typedef struct clvr_options {
     uint32_t spp;                /* --spp N: frames of 1 sample per pixel */
     uint64_t seed;               /* --seed N */
     /* renderer */
-    uint32_t method;             /* --method: CLVR_RENDER_* (names in clvr_render_method_name) */
-    uint32_t estimator;          /* --estimator: CLVR_ESTIMATOR_* */
+    uint32_t method;             /* --method: index in clvr_setting_name("method", i) */
+    uint32_t estimator;          /* --estimator: index in clvr_setting_name("estimator", i) */
     uint32_t urm_steps;          /* --urm-steps N (urm estimator) */
     int method_set;              /* nonzero when --method was given */
     float step;                  /* --step (march), world units; 0: automatic */
     uint32_t bins, segments;     /* --bins N (<= 32), --segments M */
     uint32_t macrocells;         /* --macrocells R */
     int shadows;                 /* --shadows on|off */
-    uint32_t sampler;            /* --sampler: CLVR_SAMPLER_LD or CLVR_SAMPLER_INDEPENDENT */
+    uint32_t sampler;            /* --sampler: index in clvr_setting_name("sampler", i) */
     /* clustering */
     uint32_t leaf_size;          /* --leaf-size N: 1, 4, 8, 16, 32 */
     uint32_t sampling_size;      /* --sampling-size N: elements per sampling cluster, 0: default */
-    uint32_t partitions;         /* --partitions K: preprocessing partitions, 0: automatic (partition.h) */
-    int element_boxes;           /* --element-boxes: CLVR_EBOX_AUTO (default), _ON, _OFF (limits_check.h) */
+    uint32_t partitions;         /* --partitions K: preprocessing partitions, 0: automatic */
+    int element_boxes;           /* --element-boxes: CLVR_ELEMENT_BOXES_AUTO (default), _ON, _OFF */
     /* scene */
     int camera_set;
     float camera[9];             /* --camera px,py,pz,lx,ly,lz,ux,uy,uz */
@@ -56,7 +58,7 @@ typedef struct clvr_options {
     float range_lo, range_hi;    /* --range lo hi */
     int range_auto_all;          /* --range auto-all: one range over every step of a series */
     float density;               /* --density D (after clvr's main: the automatic one when density_auto) */
-    int density_auto;            /* --density auto (the default): from the mesh's optical depth (tf_auto.h) */
+    int density_auto;            /* --density auto (the default): from the mesh's optical depth */
     int opacity_ramp;            /* --opacity ramp: the linear ramp; auto (default): from the histogram */
     float light_dir[3];          /* --light x,y,z (direction towards the light) */
     float light_intensity;       /* --light-intensity I */
@@ -65,31 +67,34 @@ typedef struct clvr_options {
     int transparent;             /* --background none: PNG alpha from the volume, background black */
     /* display (PNG only; EXR and PFM stay linear) */
     float exposure;              /* --exposure EV */
-    int tonemap;                 /* --tonemap: clvr_tonemap (image.h), default aces */
+    int tonemap;                 /* --tonemap: index in clvr_setting_name("tonemap", i), default aces */
     int legend;                  /* --legend: colour bar, range and field name drawn into the PNG */
     int outline;                 /* --outline: the mesh's bounding box (and the clip box) drawn over the image */
-    /* clipping (kernels/clvr_shared.h clvr_frame: kept where n.p <= d) */
-    uint32_t num_clip_planes;    /* --clip nx,ny,nz,d, repeatable up to CLVR_MAX_CLIP_PLANES */
-    float clip_planes[CLVR_MAX_CLIP_PLANES][4];
+    /* clipping (the medium is kept where n.p <= d) */
+    uint32_t num_clip_planes;    /* --clip nx,ny,nz,d, repeatable up to CLVR_MAX_CLIP */
+    float clip_planes[CLVR_MAX_CLIP][4];
     int clip_box_set;
     float clip_lo[3], clip_hi[3]; /* --clip-box x0,y0,z0,x1,y1,z1 */
 } clvr_options;
 
 /* Fills defaults, then parses argv. On a bad command line returns
- * CLVR_ERR_USAGE with a message naming the option and what it expects. */
-clvr_status clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_error *err);
+ * CLVR_RESULT_ERR_USAGE with a message naming the option and what it
+ * expects. */
+clvr_result clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_message *msg);
 
 /* The render settings of the command line (--method, --estimator,
  * --sampler, --seed, --urm-steps, --step, --bins, --segments, --macrocells,
  * --light, --light-intensity, --ambient, --shadows, --background, --clip,
  * --clip-box) as libclvr's settings (s initialised by the caller). */
-clvr_status clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_error *err);
+clvr_result clvr_cli_tracer_settings(const clvr_options *o, clvr_tracer_settings *s, clvr_message *msg);
 
-/* The camera the options ask for over the mesh bounds [lo, hi]: --camera as
- * given, else the automatic framing moved by --up, --azimuth, --elevation and
- * --zoom (the time-series driver and the MPI mode frame one shared box). */
-clvr_status clvr_cli_camera(const clvr_options *o, const float lo[3], const float hi[3], clvr_camera *cam,
-                            clvr_error *err);
+/* The camera the options ask for over the mesh bounds [lo, hi], as eye,
+ * look-at point and up vector (with --fovy: clvr_tracer_set_camera's
+ * arguments): --camera as given, else the automatic framing
+ * (clvr_frame_box) moved by --up, --azimuth, --elevation and --zoom. The
+ * time-series driver and the MPI mode frame one shared box. */
+clvr_result clvr_cli_view(const clvr_options *o, const float lo[3], const float hi[3], float eye[3], float target[3],
+                          float up[3], clvr_message *msg);
 
 /* The name of --tonemap's value, as clvr_image_settings.tonemap takes it. */
 const char *clvr_cli_tonemap_name(int tonemap);

@@ -15,13 +15,14 @@
 #include "clvr.h"
 #include "cli.h"
 #include "info.h"
+#include "message.h"
 #include "series.h"
 #include "stats.h"
 #ifdef CLVR_HAVE_VIEWER
 #include "viewer.h"
 #endif
 #ifdef CLVR_HAVE_MPI
-#include "mpi_main.h"
+#include "clvr_mpi.h"
 #endif
 
 /* Set by SIGINT/SIGTERM: the render loop stops after the current frame and
@@ -33,12 +34,6 @@ static void on_signal(int sig)
 {
     (void)sig;
     g_interrupted = 1;
-}
-
-static int fail(const clvr_error *err)
-{
-    fprintf(stderr, "clvr: %s\n", err->msg);
-    return clvr_status_exit_code(err->status);
 }
 
 /* A failed library call: its one-line message and the program's exit code. */
@@ -66,7 +61,7 @@ static double now_s(void)
 int main(int argc, char **argv)
 {
     clvr_options o;
-    clvr_error err = {0};
+    clvr_message err = {0};
     clvr_context *ctx = NULL;
     clvr_dataset *ds = NULL;
     clvr_scene *scene = NULL;
@@ -77,18 +72,18 @@ int main(int argc, char **argv)
     char *warnings = NULL;
     clvr_stats stats = {0};
     int rc = 0;
-    clvr_status s;
+    clvr_result s;
 
     s = clvr_cli_parse(argc, argv, &o, &err);
-    if (s != CLVR_OK) {
-        fprintf(stderr, "clvr: %s\n", err.msg);
-        return clvr_status_exit_code(s);
+    if (s != CLVR_RESULT_OK) {
+        fprintf(stderr, "clvr: %s\n", err.text);
+        return clvr_result_exit_code(s);
     }
     if (o.help) { clvr_cli_print_help(stdout); return 0; }
     if (o.version) { printf("clvr %s\n", clvr_version_string()); return 0; }
     if (o.list_devices) {
         char *list = malloc(1u << 20);
-        if (!list) return fail(&(clvr_error){CLVR_ERR_NO_MEMORY, "out of memory"});
+        if (!list) return fail_msg(&(clvr_message){CLVR_RESULT_ERR_NO_MEMORY, "out of memory"});
         clvr_result r = clvr_list_devices(list, 1u << 20, &msg);
         if (r == CLVR_RESULT_OK) fputs(list, stdout);
         free(list);
@@ -96,10 +91,10 @@ int main(int argc, char **argv)
     }
 #ifdef CLVR_HAVE_MPI
     /* Under mpirun (even -n 1): data-parallel rendering (host/mpi). */
-    if (clvr_mpi_launched()) return clvr_mpi_main(argc, argv, &o);
+    if (clvr_mpi_launched()) return clvr_mpi_main(argc, argv);
 #endif
     /* A time series: every step through this main, one range and camera. */
-    if (o.mesh_path && clvr_series_is(o.mesh_path)) return clvr_series_run(argc, argv, &o, main);
+    if (o.mesh_path && clvr_path_is_series(o.mesh_path)) return clvr_series_run(argc, argv, &o, main);
     if (o.kernel_dir) setenv("CLVR_KERNEL_DIR", o.kernel_dir, 1);
     /* Fail on an unwritable output before minutes of work, not after. */
     if (!o.info && !o.view) {
@@ -113,7 +108,7 @@ int main(int argc, char **argv)
     if (o.view && !o.info) {
 #ifdef CLVR_HAVE_VIEWER
         s = clvr_viewer_probe(&err);
-        if (s != CLVR_OK) return fail(&err);
+        if (s != CLVR_RESULT_OK) return fail_msg(&err);
 #else
         fprintf(stderr, "clvr: clvr was built without the viewer (GLFW not found); render to a file with -o\n");
         return 1;
@@ -158,7 +153,7 @@ int main(int argc, char **argv)
     if (!o.quiet) {
         const size_t wsize = 1u << 16;
         warnings = malloc(wsize);
-        if (!warnings) { clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory"); rc = fail(&err); goto cleanup; }
+        if (!warnings) { clvr_app_fail(&err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory"); rc = fail_msg(&err); goto cleanup; }
         TRY(clvr_dataset_warnings(ds, mesh_name, warnings, wsize, NULL, &msg));
         fputs(warnings, stderr);
     }
@@ -242,7 +237,7 @@ int main(int argc, char **argv)
     /* --- renderer with every setting of the command line */
     clvr_tracer_settings ts;
     clvr_tracer_settings_init(&ts);
-    if (clvr_cli_tracer_settings(&o, &ts, &err) != CLVR_OK) { rc = fail(&err); goto cleanup; }
+    if (clvr_cli_tracer_settings(&o, &ts, &err) != CLVR_RESULT_OK) { rc = fail_msg(&err); goto cleanup; }
     TRY(clvr_tracer_create_on(scene, &ts, o.width, o.height, &tracer, &msg));
     clvr_scene_destroy(scene); /* the tracer holds it */
     scene = NULL;
@@ -275,7 +270,7 @@ int main(int argc, char **argv)
 
     /* The legend's colours: the tracer's transfer function, baked. */
     table = malloc((size_t)tfi.table_size * 4 * sizeof(float));
-    if (!table) { clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function"); rc = fail(&err); goto cleanup; }
+    if (!table) { clvr_app_fail(&err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory for the transfer function"); rc = fail_msg(&err); goto cleanup; }
     TRY(clvr_tracer_get_tf_table(tracer, table, (size_t)tfi.table_size * 4, &msg));
     {
         double build_s;
@@ -292,7 +287,7 @@ int main(int argc, char **argv)
         char dev[256];
         TRY(clvr_context_describe(ctx, dev, sizeof dev, NULL, 0, &msg));
         s = clvr_viewer_run(&o, tracer, dev, &err);
-        if (s != CLVR_OK) rc = fail(&err);
+        if (s != CLVR_RESULT_OK) rc = fail_msg(&err);
         goto cleanup;
     }
 #endif
@@ -302,7 +297,7 @@ int main(int argc, char **argv)
     signal(SIGTERM, on_signal);
     size_t npix = (size_t)o.width * o.height;
     pixels = malloc(npix * 4 * sizeof(float));
-    if (!pixels) { clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the image"); rc = fail(&err); goto cleanup; }
+    if (!pixels) { clvr_app_fail(&err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory for the image"); rc = fail_msg(&err); goto cleanup; }
     clvr_image_settings display;
     clvr_image_settings_init(&display);
     display.exposure_ev = o.exposure;
@@ -322,9 +317,9 @@ int main(int argc, char **argv)
         const char *path = o.output;
         if (o.orbit) {
             if (clvr_image_path_numbered(o.output, img, numbered, sizeof numbered, &msg) != CLVR_RESULT_OK) {
-                clvr_error_set(&err, CLVR_ERR_USAGE, "-o %s: name too long for numbered --orbit frames; choose a shorter one",
+                clvr_app_fail(&err, CLVR_RESULT_ERR_USAGE, "-o %s: name too long for numbered --orbit frames; choose a shorter one",
                                o.output);
-                rc = fail(&err);
+                rc = fail_msg(&err);
                 goto cleanup;
             }
             path = numbered;

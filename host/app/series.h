@@ -3,20 +3,12 @@
  * every step to a numbered frame (-o NAME.png gives NAME.0000.png, ...)
  * with one transfer-function range (--range auto-all, the default for a
  * series: the chosen field's range over all steps) and one camera (framing
- * the union of the steps' bounds), so that frames compare. */
+ * the union of the steps' bounds), so that frames compare. clvr.h's
+ * clvr_path_is_series tells a series file. */
 #ifndef CLVR_SERIES_H
 #define CLVR_SERIES_H
 
 #include "cli.h"
-
-/* Nonzero when path names a series file (ends in .series). */
-int clvr_series_is(const char *path);
-
-/* Reads a .series file: {"files": [{"name": N, "time": T}, ...]} with names
- * relative to the file's folder. On success *paths (n strings) and *times
- * are malloc'd (clvr_series_free). */
-clvr_status clvr_series_read(const char *path, char ***paths, double **times, uint32_t *n, clvr_error *err);
-void clvr_series_free(char **paths, double *times, uint32_t n);
 
 /* Runs `run` (clvr's main) once per step with argv rewritten: the series
  * replaced by the step's mesh, -o numbered, --range LO HI over all steps and

@@ -8,6 +8,7 @@
  * callbacks and the CLVR_VIEW_SCRIPT test hook share, so scripted tests
  * drive the same code as a person does. See viewer.h and docs/viewer.md. */
 #include "viewer.h"
+#include "message.h"
 
 #include <GLFW/glfw3.h>
 #include <ctype.h>
@@ -50,8 +51,8 @@ typedef struct viewer {
     float range_lo, range_hi, density; /* the transfer function's window and density, as edited */
     float ext_scale;             /* table extinction per unit opacity (clvr_tf_info) */
     GLFWwindow *win;
-    clvr_error *err;
-    clvr_status status;          /* first failure of an edit; ends the loop */
+    clvr_message *err;
+    clvr_result status;          /* first failure of an edit; ends the loop */
     int quit;
 
     /* Orbit camera: eye and target move, `pole` (the initial up vector) is
@@ -119,9 +120,9 @@ static unsigned name_index(const char *const *names, unsigned n, const char *nam
 static int is_march(const viewer *v) { return !strcmp(v->ts.method, "march"); }
 
 /* A failed library call ends the viewer with its message. */
-static clvr_status lib_fail(viewer *v, const clvr_message *msg)
+static clvr_result lib_fail(viewer *v, const clvr_message *msg)
 {
-    return clvr_error_set(v->err, (clvr_status)msg->result, "%s", msg->text);
+    return clvr_app_fail(v->err, (clvr_result)msg->result, "%s", msg->text);
 }
 
 /* --- small vector helpers ---------------------------------------------- */
@@ -341,7 +342,7 @@ static void print_command_line(viewer *v)
 {
     const clvr_options *o = v->o;
     clvr_options d;
-    clvr_error e;
+    clvr_message e;
     char *argv0[] = {"clvr", NULL};
     clvr_cli_parse(1, argv0, &d, &e);
     char line[8192] = "clvr";
@@ -575,17 +576,17 @@ static void on_scroll(GLFWwindow *w, double xoff, double yoff)
 
 /* --- applying edits ------------------------------------------------------ */
 
-static clvr_status ensure_image(viewer *v, uint32_t w, uint32_t h)
+static clvr_result ensure_image(viewer *v, uint32_t w, uint32_t h)
 {
     size_t n = (size_t)w * h;
-    if (n <= v->img_cap) return CLVR_OK;
+    if (n <= v->img_cap) return CLVR_RESULT_OK;
     float *f = realloc(v->rgba, n * 4 * sizeof(float));
     if (f) v->rgba = f;
     uint8_t *b = f ? realloc(v->rgba8, n * 4) : NULL;
     if (b) v->rgba8 = b;
-    if (!f || !b) return clvr_error_set(v->err, CLVR_ERR_NO_MEMORY, "out of memory for a %ux%u viewer image", w, h);
+    if (!f || !b) return clvr_app_fail(v->err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory for a %ux%u viewer image", w, h);
     v->img_cap = n;
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
 /* The strip texture: the colour map over the strip's scalar range (the data
@@ -628,7 +629,7 @@ static void update_strip(viewer *v)
 }
 
 /* The tracer's transfer function and its baked table, after a change. */
-static clvr_status read_tf(viewer *v)
+static clvr_result read_tf(viewer *v)
 {
     clvr_message msg;
     clvr_tf_info ti;
@@ -636,7 +637,7 @@ static clvr_status read_tf(viewer *v)
     if (clvr_tracer_get_tf(v->tr, &ti, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
     if (ti.table_size != v->table_n) {
         float *t = realloc(v->table, (size_t)ti.table_size * 4 * sizeof(float));
-        if (!t) return clvr_error_set(v->err, CLVR_ERR_NO_MEMORY, "out of memory for the transfer function");
+        if (!t) return clvr_app_fail(v->err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory for the transfer function");
         v->table = t;
         v->table_n = ti.table_size;
     }
@@ -647,12 +648,12 @@ static clvr_status read_tf(viewer *v)
     v->range_hi = ti.range_hi;
     v->density = ti.density;
     v->ext_scale = ti.extinction_scale > 0.0f ? ti.extinction_scale : 1.0f;
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
-static clvr_status apply_edits(viewer *v)
+static clvr_result apply_edits(viewer *v)
 {
-    clvr_status s = CLVR_OK;
+    clvr_result s = CLVR_RESULT_OK;
     clvr_message msg;
     if (v->resized) {
         if (clvr_tracer_set_size(v->tr, v->width, v->height, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
@@ -673,7 +674,7 @@ static clvr_status apply_edits(viewer *v)
         if (clvr_tracer_edit_tf(v->tr, v->map_changed ? v->map_name : NULL, v->range_lo, v->range_hi, v->density,
                                 &msg) != CLVR_RESULT_OK)
             return lib_fail(v, &msg);
-        if ((s = read_tf(v)) != CLVR_OK) return s;
+        if ((s = read_tf(v)) != CLVR_RESULT_OK) return s;
         update_strip(v);
         v->dirty_tf = 0;
     }
@@ -682,14 +683,14 @@ static clvr_status apply_edits(viewer *v)
 }
 
 /* Renders one frame and copies it into the texture. */
-static clvr_status render_frame(viewer *v)
+static clvr_result render_frame(viewer *v)
 {
-    clvr_status s = CLVR_OK;
+    clvr_result s = CLVR_RESULT_OK;
     clvr_message msg;
     clvr_render_stats c;
     c.size = sizeof c;
     if (clvr_tracer_render(v->tr, 1, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
-    if ((s = ensure_image(v, v->width, v->height)) != CLVR_OK) return s;
+    if ((s = ensure_image(v, v->width, v->height)) != CLVR_RESULT_OK) return s;
     if (clvr_tracer_read_image(v->tr, v->rgba, (size_t)v->width * v->height * 4, &msg) != CLVR_RESULT_OK ||
         clvr_tracer_get_render_stats(v->tr, &c, &msg) != CLVR_RESULT_OK)
         return lib_fail(v, &msg);
@@ -901,7 +902,7 @@ static void run_command(viewer *v, char *cmd)
     fflush(stdout);
     int rc = system(cmd);
     if (rc != 0) {
-        v->status = clvr_error_set(v->err, CLVR_ERR_INTERNAL, "%s:%d: '%s' failed (status %d)", v->script_path,
+        v->status = clvr_app_fail(v->err, CLVR_RESULT_ERR_INTERNAL, "%s:%d: '%s' failed (status %d)", v->script_path,
                                    v->script_line, cmd, rc);
         return;
     }
@@ -919,7 +920,7 @@ static void run_command(viewer *v, char *cmd)
 static void run_script(viewer *v)
 {
     char line[1024];
-    while (v->script && v->wait_frames <= 0 && !v->quit && v->status == CLVR_OK) {
+    while (v->script && v->wait_frames <= 0 && !v->quit && v->status == CLVR_RESULT_OK) {
         if (!fgets(line, sizeof line, v->script)) {
             fclose(v->script);
             v->script = NULL;
@@ -978,7 +979,7 @@ static void run_script(viewer *v)
             ok = 0;
         }
         if (!ok)
-            v->status = clvr_error_set(v->err, CLVR_ERR_USAGE,
+            v->status = clvr_app_fail(v->err, CLVR_RESULT_ERR_USAGE,
                                        "%s:%d: unknown script command '%s' (see host/app/viewer.h: frames N, key K, "
                                        "drag B DX DY, scroll D, resize W H, shot F, save F, title, quit)",
                                        v->script_path, v->script_line, tok[0]);
@@ -987,30 +988,30 @@ static void run_script(viewer *v)
 
 /* --- entry points ---------------------------------------------------------- */
 
-static clvr_status no_display(clvr_error *err)
+static clvr_result no_display(clvr_message *err)
 {
     const char *desc = NULL;
     glfwGetError(&desc);
-    return clvr_error_set(err, CLVR_ERR_NO_DISPLAY,
+    return clvr_app_fail(err, CLVR_RESULT_ERR_NO_DISPLAY,
                           "--view cannot open a window (%s); run it on a display (or under xvfb-run), or "
                           "render to a file instead: clvr MESH -o image.png",
                           desc ? desc : "no display");
 }
 
-clvr_status clvr_viewer_probe(clvr_error *err)
+clvr_result clvr_viewer_probe(clvr_message *err)
 {
     if (!glfwInit()) return no_display(err);
     glfwTerminate();
-    return CLVR_OK;
+    return CLVR_RESULT_OK;
 }
 
-clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_error *err)
+clvr_result clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_message *err)
 {
-    clvr_status s = CLVR_OK;
+    clvr_result s = CLVR_RESULT_OK;
     int glfw_up = 0;
     clvr_message msg;
     viewer *v = calloc(1, sizeof *v);
-    if (!v) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the viewer");
+    if (!v) return clvr_app_fail(err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory for the viewer");
     v->o = o;
     v->tr = tr;
     v->device = device ? device : "";
@@ -1027,9 +1028,9 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
         s = lib_fail(v, &msg);
         goto cleanup;
     }
-    if ((s = read_tf(v)) != CLVR_OK) goto cleanup;
+    if ((s = read_tf(v)) != CLVR_RESULT_OK) goto cleanup;
     if (!strcmp(v->map_name, "table")) {
-        s = clvr_error_set(err, CLVR_ERR_USAGE, "the viewer edits a transfer function set by options, not a table");
+        s = clvr_app_fail(err, CLVR_RESULT_ERR_USAGE, "the viewer edits a transfer function set by options, not a table");
         goto cleanup;
     }
     v->data_lo = st.scalar_min;
@@ -1070,7 +1071,7 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
         v->script_path = script;
         v->script = fopen(script, "r");
         if (!v->script) {
-            s = clvr_error_set(err, CLVR_ERR_IO, "CLVR_VIEW_SCRIPT %s: cannot open it", script);
+            s = clvr_app_fail(err, CLVR_RESULT_ERR_IO, "CLVR_VIEW_SCRIPT %s: cannot open it", script);
             goto cleanup;
         }
     }
@@ -1083,7 +1084,7 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
     if (!v->win) {
         const char *desc = NULL;
         glfwGetError(&desc);
-        s = clvr_error_set(err, CLVR_ERR_NO_DISPLAY,
+        s = clvr_app_fail(err, CLVR_RESULT_ERR_NO_DISPLAY,
                            "--view cannot create an OpenGL window (%s); render to a file instead with -o image.png",
                            desc ? desc : "unknown GLFW error");
         goto cleanup;
@@ -1111,16 +1112,16 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
     if (!o->quiet) fprintf(stderr, "clvr: viewer open; press H for the controls, Q to quit\n");
     v->t_title = now_s();
 
-    while (!v->quit && v->status == CLVR_OK && !glfwWindowShouldClose(v->win)) {
+    while (!v->quit && v->status == CLVR_RESULT_OK && !glfwWindowShouldClose(v->win)) {
         int fw, fh;
         glfwGetFramebufferSize(v->win, &fw, &fh);
         int busy = v->resized || v->dirty_settings || v->dirty_camera || v->dirty_tf || v->wait_frames > 0 ||
                    (v->script && v->wait_frames <= 0) || (v->img_spp < CLVR_VIEWER_MAX_SPP && fw > 0 && fh > 0);
         if (busy) glfwPollEvents();
         else glfwWaitEventsTimeout(0.5);
-        if (v->status != CLVR_OK || v->quit) break;
+        if (v->status != CLVR_RESULT_OK || v->quit) break;
         run_script(v);
-        if (v->status != CLVR_OK || v->quit) break;
+        if (v->status != CLVR_RESULT_OK || v->quit) break;
         glfwGetFramebufferSize(v->win, &fw, &fh);
         if (fw > 0 && fh > 0 && ((uint32_t)fw != v->width || (uint32_t)fh != v->height)) {
             v->width = (uint32_t)fw;
@@ -1130,13 +1131,13 @@ clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
         int changed = v->resized || v->dirty_settings || v->dirty_camera || v->dirty_tf;
         if (changed) {
             v->status = apply_edits(v);
-            if (v->status != CLVR_OK) break;
+            if (v->status != CLVR_RESULT_OK) break;
             v->img_spp = 0;
         }
         int rendered = 0;
         if (fw > 0 && fh > 0 && (changed || v->img_spp < CLVR_VIEWER_MAX_SPP)) {
             v->status = render_frame(v);
-            if (v->status != CLVR_OK) break;
+            if (v->status != CLVR_RESULT_OK) break;
             rendered = 1;
         }
         if (v->wait_frames > 0) v->wait_frames--;

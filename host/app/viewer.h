@@ -42,9 +42,9 @@
 
 /* Checks that a window can be opened at all (a display is present and GLFW
  * initialises), so that `clvr --view` fails before the preprocessing.
- * Errors: CLVR_ERR_NO_DEVICE ("no display", with the fix: run under a
+ * Errors: CLVR_RESULT_ERR_NO_DEVICE ("no display", with the fix: run under a
  * display or render to a file with -o). */
-clvr_status clvr_viewer_probe(clvr_error *err);
+clvr_result clvr_viewer_probe(clvr_message *err);
 
 /* Runs the viewer until the window is closed (or Q / Escape, or the script's
  * quit). Takes what main has built:
@@ -56,9 +56,9 @@ clvr_status clvr_viewer_probe(clvr_error *err);
  *           light, camera and transfer function and leaves them in their
  *           last state;
  *   device  the device's name for the status line.
- * Errors: CLVR_ERR_NO_DEVICE (no display / no OpenGL context), any renderer
+ * Errors: CLVR_RESULT_ERR_NO_DEVICE (no display / no OpenGL context), any renderer
  * error. Writes nothing to stdout except help, saved file names and the
  * printed command lines. */
-clvr_status clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_error *err);
+clvr_result clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *device, clvr_message *err);
 
 #endif /* CLVR_VIEWER_H */

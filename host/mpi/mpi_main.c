@@ -6,8 +6,13 @@
  * writes the image (docs/mpi-compositing.md). Every step that can fail on
  * one rank ends in agree(): all ranks learn the first failing rank and its
  * message, rank 0 prints it once, and all return the same exit code, so a
- * failure never leaves the others waiting in a collective. */
-#include "mpi_main.h"
+ * failure never leaves the others waiting in a collective.
+ *
+ * Built into the MPI module libclvr_mpi.so (clvr_mpi.h) with its own
+ * hidden copy of the pipeline, which is why it may use the library's
+ * internal headers; the program (host/app) calls only clvr_mpi.h. */
+#define CLVR_MPI_BUILD 1
+#include "clvr_mpi.h"
 
 #include <fcntl.h>
 #include <malloc.h>
@@ -19,6 +24,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "camera.h"
+#include "cli.h"
 #include "clock.h"
 #include "clvr.h"
 #include "clvr_internal.h"
@@ -31,7 +38,7 @@
 #include "partition.h"
 #include "render.h"
 #include "scene.h"
-#include "series.h"
+#include "series_file.h"
 #include "tf.h"
 #include "tf_auto.h"
 #ifdef CLVR_HAVE_MPI_LOAD_BIN
@@ -394,7 +401,7 @@ static int run(mpi_run *m, const clvr_options *o)
         clvr_tracer_settings_init(&ts);
         clvr_render_settings rsv;
         int shadows = 0;
-        s = clvr_cli_tracer_settings(o, &ts, &err);
+        s = clvr_internal_status(clvr_cli_tracer_settings(o, &ts, &msg), &msg, &err);
         if (s == CLVR_OK) s = clvr_internal_render_settings(&ts, o->width, o->height, &rsv, &shadows, &err);
         clvr_render_settings *rs = &rsv;
         /* The region is one more clip box (intersected with --clip-box):
@@ -432,7 +439,9 @@ static int run(mpi_run *m, const clvr_options *o)
     /* The camera frames the whole mesh's bounds, as one process does. */
     if (s == CLVR_OK) {
         clvr_camera cam;
-        s = clvr_cli_camera(o, share.bounds_lo, share.bounds_hi, &cam, &err);
+        float eye[3], target[3], up[3];
+        s = clvr_internal_status(clvr_cli_view(o, share.bounds_lo, share.bounds_hi, eye, target, up, &msg), &msg, &err);
+        if (s == CLVR_OK) s = clvr_camera_look_at(&cam, eye, target, up, o->fovy, o->width, o->height, &err);
         if (s == CLVR_OK) s = clvr_renderer_set_camera(renderer, &cam, &err);
     }
     s = agree(m, s, &err);
@@ -616,8 +625,20 @@ done:
     return s == CLVR_OK ? 0 : clvr_status_exit_code(s);
 }
 
-int clvr_mpi_main(int argc, char **argv, const clvr_options *o)
+int clvr_mpi_main(int argc, char **argv)
 {
+    /* The program parsed this command line once already (for --help and
+     * friends); the module parses it again, with the same parser (cli.c is
+     * compiled into both), rather than take the program's struct across the
+     * library boundary. A bad command line fails here before MPI starts,
+     * on every rank alike. */
+    clvr_options opts;
+    clvr_message msg = {0};
+    if (clvr_cli_parse(argc, argv, &opts, &msg) != CLVR_RESULT_OK) {
+        fprintf(stderr, "clvr: %s\n", msg.text);
+        return clvr_result_exit_code(msg.result);
+    }
+    const clvr_options *o = &opts;
     int inited = 0;
     MPI_Initialized(&inited);
     if (!inited) MPI_Init(&argc, &argv);
