@@ -522,6 +522,25 @@ clvr_status clvr_partition_pieces(clvr_instance *inst, uint64_t n, uint64_t limi
     memset(c->piece_idx16, 0, sizeof c->piece_idx16);
     memset(c->piece_idx32, 0, sizeof c->piece_idx32);
     memset(c->piece_elements, 0, sizeof c->piece_elements);
+    /* First the one cause no number of pieces mends: an instance cluster
+     * whose own share of an array exceeds the limit. */
+    for (uint64_t i = 0; i < n; ++i) {
+        const clvr_instance *in = &inst[i];
+        const uint64_t slots = (uint64_t)in->num_elements * clvr_cell_vertex_count(in->type);
+        const uint64_t bytes[SN] = {in->num_vertices * size[SV], in->index_bits == 32 ? 0 : slots * size[S16],
+                                    in->index_bits == 32 ? slots * size[S32] : 0,
+                                    element_boxes ? in->num_elements * size[SBOX] : 0};
+        for (int a = 0; a < SN; ++a)
+            if (bytes[a] > limit)
+                return clvr_error_set(
+                    err, CLVR_ERR_DEVICE_MEMORY,
+                    "%s: instance cluster %llu alone needs %llu bytes (%.3f GB) of %s in one buffer but the device "
+                    "allows at most %llu bytes per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE, or CLVR_MAX_ALLOC_BYTES "
+                    "when set); the split arrays are cut only between instance clusters: raise CLVR_MAX_ALLOC_BYTES "
+                    "(a testing knob) or use a device with a larger allocation limit",
+                    name, (unsigned long long)i, (unsigned long long)bytes[a], (double)bytes[a] / 1e9, names[a],
+                    (unsigned long long)limit);
+    }
     for (uint64_t i = 0; i < n; ++i) {
         clvr_instance *in = &inst[i];
         const uint64_t slots = (uint64_t)in->num_elements * clvr_cell_vertex_count(in->type);
@@ -537,14 +556,6 @@ clvr_status clvr_partition_pieces(clvr_instance *inst, uint64_t n, uint64_t limi
                                       "(%llu); the arrays cannot be cut into pieces (a bug: please report it)",
                                       name, (unsigned long long)i, names[a], (unsigned long long)first[a],
                                       (unsigned long long)end[a]);
-            if (count[a] * size[a] > limit)
-                return clvr_error_set(
-                    err, CLVR_ERR_DEVICE_MEMORY,
-                    "%s: instance cluster %llu alone needs %.3f GB of %s in one buffer but the device allows at most "
-                    "%.3f GB per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE, or CLVR_MAX_ALLOC_BYTES when set); the split "
-                    "arrays are cut only between instance clusters: raise CLVR_MAX_ALLOC_BYTES (a testing knob) or "
-                    "use a device with a larger allocation limit",
-                    name, (unsigned long long)i, (double)(count[a] * size[a]) / 1e9, names[a], (double)limit / 1e9);
         }
         int cut = 0;
         for (int a = 0; a < SN; ++a) cut |= (end[a] + count[a] - base[a]) * size[a] > limit;
