@@ -642,8 +642,10 @@ clvr_status clvr_cl_buffer(clvr_cl *cl, cl_mem_flags flags, size_t bytes, void *
     if ((cl_ulong)n > cl->max_alloc_bytes)
         return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
                               "%s needs %.3f GB in one buffer but %s allows at most %.3f GB per buffer "
-                              "(CL_DEVICE_MAX_MEM_ALLOC_SIZE); use a smaller mesh or image, or another --device",
-                              what, (double)n / 1e9, cl->device_name, (double)cl->max_alloc_bytes / 1e9);
+                              "(CL_DEVICE_MAX_MEM_ALLOC_SIZE%s); use a smaller mesh or image, or another --device",
+                              what, (double)n / 1e9, cl->device_name, (double)cl->max_alloc_bytes / 1e9,
+                              cl->device_max_alloc_bytes > cl->max_alloc_bytes ? ", lowered by CLVR_MAX_ALLOC_BYTES"
+                                                                               : "");
     if ((cl_ulong)n + cl->allocated_bytes > cl->global_mem_bytes)
         return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
                               "%s needs %.3f GB more device memory but %s has %.3f GB and %.3f GB is in use; "
