@@ -85,26 +85,31 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     const int parted = PN < N;
     const uint64_t idx_bytes = sat_mul(S, bits == 32 ? 4 : 2);
     const char *idx_name = bits == 32 ? "32-bit indices" : "16-bit indices";
-    struct { uint64_t bytes; const char *name; int per_partition; } cand[] = {
-        {sat_mul(PV, 12), "vertex positions", 1},
-        {sat_mul(PS, 4), "element indices", 1},
-        {sat_mul(PN, 8), "sort keys", 1},
+    struct { uint64_t bytes; const char *name; int per_partition, split; } cand[] = {
+        {sat_mul(PV, 12), "vertex positions", 1, 0},
+        {sat_mul(PS, 4), "element indices", 1, 0},
+        {sat_mul(PN, 8), "sort keys", 1, 0},
         /* (not the clustered vertices: unreferenced vertices are not copied,
          * so 16 V is no lower bound) */
-        {parted ? 0 : idx_bytes, idx_name, 1},
-        {sat_mul(pixels, 16), "image accumulator", 0},
-        {parted ? 0 : ebox, "element boxes", 1},
+        {idx_bytes, idx_name, 1, parted},
+        {sat_mul(pixels, 16), "image accumulator", 0, 0},
+        {ebox, "element boxes", 1, parted},
         /* never split (docs/large-meshes.md): 1/8 of the indices or less */
-        {sat_mul(leaves, sizeof(clvr_box)), "leaf boxes", 0},
-        {sat_mul(N / sampling, sizeof(clvr_sampling_cluster)), "sampling clusters", 0},
+        {sat_mul(leaves, sizeof(clvr_box)), "leaf boxes", 0, 0},
+        {sat_mul(N / sampling, sizeof(clvr_sampling_cluster)), "sampling clusters", 0, 0},
     };
-    out->largest_buffer = cand[0].name;
-    for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i)
+    out->largest_buffer = out->whole_buffer = cand[0].name;
+    for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i) {
         if (cand[i].bytes > out->largest_buffer_bytes) {
             out->largest_buffer_bytes = cand[i].bytes;
             out->largest_buffer = cand[i].name;
-            out->largest_per_partition = cand[i].per_partition;
         }
+        if (!cand[i].split && cand[i].bytes > out->whole_buffer_bytes) {
+            out->whole_buffer_bytes = cand[i].bytes;
+            out->whole_buffer = cand[i].name;
+            out->whole_per_partition = cand[i].per_partition;
+        }
+    }
     if (parted) {
         out->split_bytes = idx_bytes > ebox ? idx_bytes : ebox;
         out->split_array = idx_bytes >= ebox ? idx_name : "element boxes";
@@ -127,21 +132,21 @@ clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const
     clvr_limits_estimate e;
     clvr_limits_estimate_parts(m, o, part_elements, width, height, &e);
     const char *name = what ? what : "mesh";
-    int image_is_it = e.largest_buffer && strcmp(e.largest_buffer, "image accumulator") == 0;
+    int image_is_it = e.whole_buffer && strcmp(e.whole_buffer, "image accumulator") == 0;
     const uint64_t limit = cl->max_alloc_bytes;
     char lowered[96] = "";
     if (cl->device_max_alloc_bytes > limit)
         snprintf(lowered, sizeof lowered, ", lowered from %.3f GB by CLVR_MAX_ALLOC_BYTES",
                  gb(cl->device_max_alloc_bytes));
-    if (e.largest_buffer_bytes > limit) {
+    if (e.whole_buffer_bytes > limit) {
         char fix[256];
         if (image_is_it)
             snprintf(fix, sizeof fix, "render a smaller --size, or use another --device (clvr --list-devices)");
-        else if (e.largest_per_partition) {
+        else if (e.whole_per_partition) {
             /* Partitions whose largest buffer fits (the arrays of instance
              * clusters are then split into pieces). */
             const uint64_t pn = part_elements && part_elements < e.num_elements ? part_elements : e.num_elements;
-            const double per = (double)e.largest_buffer_bytes / (double)(pn ? pn : 1);
+            const double per = (double)e.whole_buffer_bytes / (double)(pn ? pn : 1);
             const uint64_t fit = (uint64_t)((double)limit / per);
             const uint64_t parts = fit ? (e.num_elements + fit - 1) / fit : e.num_elements;
             snprintf(fix, sizeof fix, "preprocess in more partitions (--partitions %llu or more), or use a "
@@ -156,7 +161,7 @@ clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const
             "%s: %llu elements, %llu vertices at %ux%u: the largest buffer (%s) needs %.3f GB but %s allows at most "
             "%.3f GB per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE%s); %s",
             name, (unsigned long long)e.num_elements, (unsigned long long)e.num_vertices, width, height,
-            e.largest_buffer, gb(e.largest_buffer_bytes), cl->device_name, gb(limit), lowered, fix);
+            e.whole_buffer, gb(e.whole_buffer_bytes), cl->device_name, gb(limit), lowered, fix);
     }
     if (e.split_bytes > sat_mul(limit, CLVR_MAX_SPLITS))
         return clvr_error_set(

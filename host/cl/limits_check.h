@@ -38,13 +38,16 @@ typedef struct clvr_limits_estimate {
     uint64_t render_bytes;           /* clustered mesh + BVH + image buffers while rendering */
     uint64_t image_bytes;            /* of render_bytes: the per-pixel buffers */
     uint64_t peak_bytes;             /* max of the two phases */
-    uint64_t largest_buffer_bytes;   /* the largest single buffer of the run that is not split */
+    uint64_t largest_buffer_bytes;   /* the largest array of the run (split or not) */
     const char *largest_buffer;      /* its name, as clvr_cl_buffer reports it */
-    int largest_per_partition;       /* it is one partition's (more partitions make it smaller) */
     /* The arrays of instance clusters (local indices, element boxes) of a
      * mesh preprocessed in more than one partition are cut into pieces at
      * instance boundaries (docs/large-meshes.md); of one partition they are
-     * single buffers and count above. Their largest total: */
+     * single buffers. The largest buffer that is not cut: */
+    uint64_t whole_buffer_bytes;
+    const char *whole_buffer;
+    int whole_per_partition;         /* it is one partition's (more partitions make it smaller) */
+    /* and the cut arrays' largest total (0 in one partition): */
     uint64_t split_bytes;
     const char *split_array;
 } clvr_limits_estimate;
