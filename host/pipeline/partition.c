@@ -488,6 +488,13 @@ static void *grow(grow_array *a, uint64_t more)
                      : mmap(NULL, want, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
         }
         if (q == MAP_FAILED) return NULL;
+        /* Transparent huge pages for the result's arrays (THP is often
+         * "madvise" only): each partition's append writes fresh pages, and
+         * with 4 KiB pages their faults made the merge stage superlinear.
+         * Measured on 100M mixed (24 partitions, interleaved runs, load
+         * 1.5-2): merge 3.0-3.4 s -> 0.47-0.50 s; 10M: 0.109 -> 0.037-0.041
+         * s; peak RSS unchanged (4.12 GB). Advice only: failure is harmless. */
+        (void)madvise(q, want, MADV_HUGEPAGE);
         a->p = q;
         a->mapped = want;
     }
