@@ -8,7 +8,7 @@
 #
 # Usage: bench/scale.sh [--build DIR] [--data DIR] [--out DIR] [--sizes "10M 100M ..."]
 #                       [--tets "791M"] [--spp N] [--size WxH] [--partitions K] [--keep]
-#                       [--element-boxes on|off|auto] [--quiet]
+#                       [--element-boxes on|off|auto] [--max-alloc BYTES] [--quiet]
 #   --build       build directory with clvr and clvr-gen (default: build)
 #   --data        where the generated .bin files go (default: /tmp/clvr-scale); needs
 #                 37 bytes per mixed element and 20 per tet element of disk
@@ -21,6 +21,10 @@
 #   --partitions  passed to clvr (default 0: automatic)
 #   --element-boxes  passed to clvr (default auto: off only where the mesh fits only
 #                 without them)
+#   --max-alloc   run clvr with CLVR_MAX_ALLOC_BYTES=BYTES (docs/large-meshes.md): a
+#                 lower per-buffer limit than the device's, so that the arrays of
+#                 instance clusters are cut into pieces as on a GPU with a small
+#                 CL_DEVICE_MAX_MEM_ALLOC_SIZE (default: unset)
 #   --quiet       pass -q to clvr: no progress and no warnings scan (a pass over
 #                 every element per duplicate-search group: minutes at 500M on 2 cores)
 #   --keep        keep the generated meshes (default: a mesh above 100M elements is
@@ -41,6 +45,7 @@ PARTS=0
 KEEP=0
 EBOX=auto
 QUIET=
+MAXALLOC=
 while [ $# -gt 0 ]; do
   case $1 in
     --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
@@ -54,6 +59,7 @@ while [ $# -gt 0 ]; do
     --keep) KEEP=1; shift ;;
     --element-boxes) EBOX=$2; shift 2 ;;
     --quiet) QUIET=-q; shift ;;
+    --max-alloc) MAXALLOC=$2; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "scale.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
   esac
@@ -98,7 +104,7 @@ run_one() { # KIND SIZE
   load=$(cut -d' ' -f1 /proc/loadavg)
   echo "scale.sh: clvr $file (load average $load)" >&2
   local t0=$(date +%s.%N)
-  nice "$BUILD/clvr" "$file" $QUIET -o "$RUNS/$tag.png" --spp "$SPP" --size "$IMG" --partitions "$PARTS" \
+  env ${MAXALLOC:+CLVR_MAX_ALLOC_BYTES=$MAXALLOC} nice "$BUILD/clvr" "$file" $QUIET -o "$RUNS/$tag.png" --spp "$SPP" --size "$IMG" --partitions "$PARTS" \
     --element-boxes "$EBOX" --stats-json "$RUNS/$tag.json" > "$RUNS/$tag.out" 2> "$RUNS/$tag.err" || rc=$?
   local wall
   wall=$(python3 -c "import time,sys; print(round(time.time()-float(sys.argv[1]),2))" "$t0")
@@ -110,9 +116,10 @@ run_one() { # KIND SIZE
 for s in $SIZES; do run_one mixed "$s"; done
 for s in $TETS; do run_one tets "$s"; done
 
-python3 - "$RUNS" "$OUT/$DATE-scale" "$COMMIT" "$DATE" "$SPP" "$IMG" <<'EOF'
+SUFFIX=${MAXALLOC:+-maxalloc$MAXALLOC}
+python3 - "$RUNS" "$OUT/$DATE-scale$SUFFIX" "$COMMIT" "$DATE" "$SPP" "$IMG" "$MAXALLOC" <<'EOF'
 import json, os, sys
-runs, base, commit, date, spp, img = sys.argv[1:7]
+runs, base, commit, date, spp, img, maxalloc = sys.argv[1:8]
 rows = []
 for line in open(os.path.join(runs, "list")):
     f = line.rstrip("\n").split("\t")
@@ -130,10 +137,12 @@ for line in open(os.path.join(runs, "list")):
         err = open(os.path.join(runs, tag + ".err")).read().strip().splitlines()
         row["error"] = [l for l in err if l.startswith("clvr:")][-1:] or err[-1:]
     rows.append(row)
-json.dump({"benchmark": "scale", "commit": commit, "date": date, "spp": int(spp), "image": img, "runs": rows},
+json.dump({"benchmark": "scale", "commit": commit, "date": date, "spp": int(spp), "image": img,
+           "max_alloc_bytes": int(maxalloc) if maxalloc else None, "runs": rows},
           open(base + ".json", "w"), indent=1)
 with open(base + ".md", "w") as md:
-    md.write(f"bench/scale.sh at clvr commit {commit} ({date}), {img} at {spp} spp, PoCL on the 2-core 24 GiB VM\n\n")
+    md.write(f"bench/scale.sh at clvr commit {commit} ({date}), {img} at {spp} spp, PoCL on the 2-core 24 GiB VM"
+             + (f", CLVR_MAX_ALLOC_BYTES={maxalloc}" if maxalloc else "") + "\n\n")
     md.write("| mesh | elements | partitions | peak RSS GB | resident GB | peak/resident | element boxes GB | load s | load GB/s | "
              "preprocess s | frame s (mean) | render s | load avg |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
     stages = []

@@ -154,6 +154,7 @@ clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_err
     CLVR_TRY(clvr_cl_build(cl, "bvh.cl", "", &out->program, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_build_level", &out->build_level, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_locate_points", &out->locate_points, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_locate_points_split", &out->locate_points_split, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_hits", &out->ray_hits, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_element_boxes", &out->element_boxes, err));
     return CLVR_OK;
@@ -167,6 +168,7 @@ void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
     if (!k) return;
     if (k->build_level) clReleaseKernel(k->build_level);
     if (k->locate_points) clReleaseKernel(k->locate_points);
+    if (k->locate_points_split) clReleaseKernel(k->locate_points_split);
     if (k->ray_hits) clReleaseKernel(k->ray_hits);
     if (k->element_boxes) clReleaseKernel(k->element_boxes);
     if (k->program) clReleaseProgram(k->program);
@@ -248,6 +250,7 @@ void clvr_bvh_device_release(clvr_cl *cl, clvr_bvh_device *b)
     clvr_cl_release(cl, &b->tlas);
     clvr_cl_release(cl, &b->blas);
     clvr_cl_release(cl, &b->ebox);
+    for (uint32_t p = 0; p + 1 < CLVR_MAX_SPLITS; ++p) clvr_cl_release(cl, &b->ebox_more[p]);
     memset(b, 0, sizeof *b);
 }
 
@@ -293,24 +296,47 @@ clvr_status clvr_bvh_element_boxes_host(const clvr_mesh_view *m, uint32_t num_in
     return CLVR_OK;
 }
 
-clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
-                                          cl_mem instances, uint32_t num_instances, cl_mem vertices, cl_mem idx16,
-                                          cl_mem idx32, uint32_t leaf_size, uint32_t num_leaves,
-                                          uint64_t num_elements, clvr_error *err)
+static void ebox_release(clvr_cl *cl, clvr_bvh_device *b)
+{
+    clvr_cl_release(cl, &b->ebox);
+    for (uint32_t p = 0; p + 1 < CLVR_MAX_SPLITS; ++p) clvr_cl_release(cl, &b->ebox_more[p]);
+    b->ebox_bytes = 0;
+}
+
+clvr_status clvr_bvh_element_boxes_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                          cl_mem instances, uint32_t num_instances, const cl_mem *vertices,
+                                          const cl_mem *idx16, const cl_mem *idx32, const uint64_t *piece_elements,
+                                          uint32_t num_pieces, cl_mem dummy, uint32_t leaf_size, uint32_t num_leaves,
+                                          clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_mem status_mem = NULL;
     cl_event evt = NULL;
     cl_uint status = 0;
-    clvr_cl_release(cl, &b->ebox);
-    b->ebox_bytes = num_elements * CLVR_EBOX_BYTES;
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)b->ebox_bytes, NULL, "element boxes", &b->ebox, err));
+    cl_mem out[CLVR_MAX_SPLITS];
+    ebox_release(cl, b);
+    if (num_pieces < 1 || num_pieces > CLVR_MAX_SPLITS)
+        return clvr_error_set(err, CLVR_ERR_INTERNAL, "bvh: %u pieces (1 .. %u)", num_pieces, CLVR_MAX_SPLITS);
+    for (uint32_t p = 0; p < CLVR_MAX_SPLITS; ++p) {
+        if (p >= num_pieces) {
+            out[p] = dummy; /* no leaf names it */
+            continue;
+        }
+        const uint64_t bytes = (piece_elements[p + 1] - piece_elements[p]) * CLVR_EBOX_BYTES;
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)bytes, NULL, "element boxes",
+                                p ? &b->ebox_more[p - 1] : &b->ebox, err));
+        out[p] = p ? b->ebox_more[p - 1] : b->ebox;
+        b->ebox_bytes += bytes;
+    }
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof status, &status,
                             "element box status", &status_mem, err));
     if (num_leaves > 0 && num_instances > 0) {
         CLVR_TRY(CLVR_CL_ARGS(k->element_boxes, err, CLVR_ARG(b->blas), CLVR_ARG(instances), CLVR_ARG(num_instances),
-                              CLVR_ARG(vertices), CLVR_ARG(idx16), CLVR_ARG(idx32), CLVR_ARG(leaf_size),
-                              CLVR_ARG(num_leaves), CLVR_ARG(b->ebox), CLVR_ARG(status_mem)));
+                              CLVR_ARG(leaf_size), CLVR_ARG(num_leaves), CLVR_ARG(status_mem), CLVR_ARG(vertices[0]),
+                              CLVR_ARG(idx16[0]), CLVR_ARG(idx32[0]), CLVR_ARG(out[0]), CLVR_ARG(vertices[1]),
+                              CLVR_ARG(idx16[1]), CLVR_ARG(idx32[1]), CLVR_ARG(out[1]), CLVR_ARG(vertices[2]),
+                              CLVR_ARG(idx16[2]), CLVR_ARG(idx32[2]), CLVR_ARG(out[2]), CLVR_ARG(vertices[3]),
+                              CLVR_ARG(idx16[3]), CLVR_ARG(idx32[3]), CLVR_ARG(out[3])));
         CLVR_TRY(clvr_cl_run1d(cl, k->element_boxes, num_leaves, 64, &evt, err));
         if (evt) {
             CLVR_CL_CHECK(clWaitForEvents(1, &evt));
@@ -325,9 +351,20 @@ clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k
 cleanup:
     if (evt) clReleaseEvent(evt);
     clvr_cl_release(cl, &status_mem);
-    if (s != CLVR_OK) {
-        clvr_cl_release(cl, &b->ebox);
-        b->ebox_bytes = 0;
-    }
+    if (s != CLVR_OK) ebox_release(cl, b);
     return s;
+}
+
+clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                          cl_mem instances, uint32_t num_instances, cl_mem vertices, cl_mem idx16,
+                                          cl_mem idx32, uint32_t leaf_size, uint32_t num_leaves,
+                                          uint64_t num_elements, clvr_error *err)
+{
+    /* One piece; the instance table stands in for the pieces it lacks (never read). */
+    const cl_mem v[CLVR_MAX_SPLITS] = {vertices, instances, instances, instances};
+    const cl_mem i16[CLVR_MAX_SPLITS] = {idx16, instances, instances, instances};
+    const cl_mem i32[CLVR_MAX_SPLITS] = {idx32, instances, instances, instances};
+    const uint64_t pe[2] = {0, num_elements};
+    return clvr_bvh_element_boxes_pieces(cl, k, b, instances, num_instances, v, i16, i32, pe, 1, instances,
+                                         leaf_size, num_leaves, err);
 }

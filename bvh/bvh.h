@@ -48,6 +48,7 @@ typedef struct clvr_bvh_kernels {
     cl_program program;
     cl_kernel build_level;
     cl_kernel locate_points;
+    cl_kernel locate_points_split; /* the same over the pieces of a split mesh (clvr_accel_locate) */
     cl_kernel ray_hits;
     cl_kernel element_boxes;
 } clvr_bvh_kernels;
@@ -60,8 +61,10 @@ typedef struct clvr_bvh_device {
     uint32_t tlas_nodes, blas_nodes;
     uint32_t tlas_root;   /* always 0 */
     double build_seconds; /* kernel time (event profiling) of the bottom-level build */
-    cl_mem ebox;          /* quantized element boxes (clvr_bvh_element_boxes_device), or NULL */
-    uint64_t ebox_bytes;
+    cl_mem ebox;          /* quantized element boxes (clvr_bvh_element_boxes_device), or NULL; piece 0 of
+                             a split mesh's (clvr_bvh_element_boxes_pieces) */
+    cl_mem ebox_more[CLVR_MAX_SPLITS - 1]; /* pieces 1 .. of a split mesh's element boxes, else NULL */
+    uint64_t ebox_bytes;  /* all pieces */
 } clvr_bvh_device;
 
 /* Device build. host_instances (the host copy of the instances buffer) gets
@@ -97,6 +100,18 @@ clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k
                                           cl_mem instances, uint32_t num_instances, cl_mem vertices, cl_mem idx16,
                                           cl_mem idx32, uint32_t leaf_size, uint32_t num_leaves,
                                           uint64_t num_elements, clvr_error *err);
+
+/* The same for a mesh whose vertices and local indices are cut into
+ * num_pieces pieces (clvr_instance.piece; preprocess.h): vertices, idx16
+ * and idx32 hold CLVR_MAX_SPLITS buffers each (`dummy`, a small buffer, for
+ * pieces past num_pieces), piece_elements the num_pieces + 1 element
+ * prefixes. The boxes are cut the same way: b->ebox is piece 0, b->ebox_more
+ * pieces 1 .. num_pieces - 1, each of its own elements. */
+clvr_status clvr_bvh_element_boxes_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                          cl_mem instances, uint32_t num_instances, const cl_mem *vertices,
+                                          const cl_mem *idx16, const cl_mem *idx32, const uint64_t *piece_elements,
+                                          uint32_t num_pieces, cl_mem dummy, uint32_t leaf_size, uint32_t num_leaves,
+                                          clvr_error *err);
 
 /* Bytes of both levels. */
 uint64_t clvr_bvh_bytes(uint32_t tlas_nodes, uint32_t blas_nodes);

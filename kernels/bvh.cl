@@ -25,29 +25,17 @@ __kernel void clvr_bvh_build_level(__global clvr_bvh_node *nodes, __global const
     clvr_bvh_build_node(nodes, prim_boxes, trees[lo], level, i - level_prefix[lo]);
 }
 
-/* Point location for n points (xyz, w ignored): scalar and element id
- * (CLVR_BVH_NOT_FOUND when outside). hints: CLVR_LOCATE_COHERENT or
- * CLVR_LOCATE_INCOHERENT (speed only, same results). chain > 1: each work
- * item takes `chain` consecutive points (the samples of one ray, as a
- * renderer produces them) and carries a ray's hint from one to the next
- * (clvr_locate_hinted): the element found may then differ from the full
- * walk's only where two elements share the point, with the same value. */
-__kernel void clvr_locate_points(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
-                                 uint tlas_root, __global const clvr_bvh_node *blas,
-                                 __global const clvr_instance *instances, __global const float4 *vertices,
-                                 __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
-                                 __global float *scalars, __global uint *element_ids, uint hints,
-                                 __global const uchar *ebox, uint use_ebox, uint chain)
+/* The body of the point-location kernels over view m. */
+inline void clvr_locate_points_in(const clvr_mesh_view *m, __global const float4 *points, uint n, uint hints,
+                                  uint chain, __global float *scalars, __global uint *element_ids)
 {
     const uint g = get_global_id(0);
-    const clvr_mesh_view m = {tlas, blas, instances, vertices, idx16, idx32, tlas_root, leaf_size,
-                              use_ebox ? ebox : NULL};
     if (chain <= 1u) {
         if (g >= n) return;
         const float4 p = points[g];
         float s = 0.0f;
         uint e;
-        clvr_locate(&m, p.x, p.y, p.z, hints, &s, &e);
+        clvr_locate(m, p.x, p.y, p.z, hints, &s, &e);
         scalars[g] = s;
         element_ids[g] = e;
         return;
@@ -60,19 +48,79 @@ __kernel void clvr_locate_points(__global const float4 *points, uint n, __global
         const float4 p = points[i];
         float s = 0.0f;
         uint e = CLVR_BVH_NOT_FOUND;
-        if (!clvr_locate_hinted(&m, p.x, p.y, p.z, &h, &s, &e)) e = CLVR_BVH_NOT_FOUND;
+        if (!clvr_locate_hinted(m, p.x, p.y, p.z, &h, &s, &e)) e = CLVR_BVH_NOT_FOUND;
         scalars[i] = s;
         element_ids[i] = e;
     }
 }
 
-/* Quantized element boxes (locate.h), one work item per leaf cluster.
- * status[0] becomes nonzero when a leaf is not in the slot of the node
- * clvr_leaf_parent names (a tree layout this code does not expect). */
+/* Point location for n points (xyz, w ignored): scalar and element id
+ * (CLVR_BVH_NOT_FOUND when outside). hints: CLVR_LOCATE_COHERENT or
+ * CLVR_LOCATE_INCOHERENT (speed only, same results). chain > 1: each work
+ * item takes `chain` consecutive points (the samples of one ray, as a
+ * renderer produces them) and carries a ray's hint from one to the next
+ * (clvr_locate_hinted): the element found may then differ from the full
+ * walk's only where two elements share the point, with the same value.
+ * For a mesh whose arrays are one piece; clvr_locate_points_split takes the
+ * pieces of a split one. */
+__kernel void clvr_locate_points(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
+                                 uint tlas_root, __global const clvr_bvh_node *blas,
+                                 __global const clvr_instance *instances, __global const float4 *vertices,
+                                 __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
+                                 __global float *scalars, __global uint *element_ids, uint hints,
+                                 __global const uchar *ebox, uint use_ebox, uint chain)
+{
+    const clvr_mesh_view m = {tlas,      blas,      instances, vertices, idx16, idx32, tlas_root,
+                              leaf_size, use_ebox ? ebox : NULL, CLVR_VIEW_ONE_PIECE};
+    clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
+}
+
+/* clvr_locate_points over all CLVR_MAX_SPLITS pieces of the split arrays
+ * (vertices, idx16, idx32, ebox: piece 0; then pieces 1 .. 3 of each;
+ * unused pieces a small dummy buffer). */
+__kernel void clvr_locate_points_split(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
+                                       uint tlas_root, __global const clvr_bvh_node *blas,
+                                       __global const clvr_instance *instances, uint leaf_size,
+                                       __global float *scalars, __global uint *element_ids, uint hints,
+                                       uint use_ebox, uint chain, __global const float4 *vertices,
+                                       __global const ushort *idx16, __global const uint *idx32,
+                                       __global const uchar *ebox, __global const float4 *vertices1,
+                                       __global const ushort *idx16_1, __global const uint *idx32_1,
+                                       __global const uchar *ebox1, __global const float4 *vertices2,
+                                       __global const ushort *idx16_2, __global const uint *idx32_2,
+                                       __global const uchar *ebox2, __global const float4 *vertices3,
+                                       __global const ushort *idx16_3, __global const uint *idx32_3,
+                                       __global const uchar *ebox3)
+{
+    const clvr_mesh_view m = {tlas,
+                              blas,
+                              instances,
+                              vertices,
+                              idx16,
+                              idx32,
+                              tlas_root,
+                              leaf_size,
+                              use_ebox ? ebox : NULL,
+                              {{vertices1, idx16_1, idx32_1, ebox1},
+                               {vertices2, idx16_2, idx32_2, ebox2},
+                               {vertices3, idx16_3, idx32_3, ebox3}}};
+    clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
+}
+
+/* Quantized element boxes (locate.h), one work item per leaf cluster, into
+ * the element boxes of the leaf's piece (ebox0 .. ebox3; pieces the mesh
+ * does not have are never written). status[0] becomes nonzero when a leaf
+ * is not in the slot of the node clvr_leaf_parent names (a tree layout this
+ * code does not expect). */
 __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
-                                 uint num_instances, __global const float4 *vertices, __global const ushort *idx16,
-                                 __global const uint *idx32, uint leaf_size, uint num_leaves, __global uchar *ebox,
-                                 __global uint *status)
+                                 uint num_instances, uint leaf_size, uint num_leaves, __global uint *status,
+                                 __global const float4 *vertices, __global const ushort *idx16,
+                                 __global const uint *idx32, __global uchar *ebox, __global const float4 *vertices1,
+                                 __global const ushort *idx16_1, __global const uint *idx32_1, __global uchar *ebox1,
+                                 __global const float4 *vertices2, __global const ushort *idx16_2,
+                                 __global const uint *idx32_2, __global uchar *ebox2,
+                                 __global const float4 *vertices3, __global const ushort *idx16_3,
+                                 __global const uint *idx32_3, __global uchar *ebox3)
 {
     const uint leaf = get_global_id(0);
     if (leaf >= num_leaves || num_instances == 0) return;
@@ -92,8 +140,20 @@ __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global co
     __global const clvr_bvh_node *n = blas + node;
     const float L[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
     const float H[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
-    const clvr_mesh_view m = {NULL, blas, instances, vertices, idx16, idx32, 0u, leaf_size, NULL};
-    clvr_ebox_build_leaf(&m, &inst, leaf, L, H, ebox);
+    const clvr_mesh_view m = {NULL,
+                              blas,
+                              instances,
+                              vertices,
+                              idx16,
+                              idx32,
+                              0u,
+                              leaf_size,
+                              NULL,
+                              {{vertices1, idx16_1, idx32_1, NULL},
+                               {vertices2, idx16_2, idx32_2, NULL},
+                               {vertices3, idx16_3, idx32_3, NULL}}};
+    __global uchar *out = inst.piece == 1u ? ebox1 : inst.piece == 2u ? ebox2 : inst.piece == 3u ? ebox3 : ebox;
+    clvr_ebox_build_leaf(&m, &inst, leaf, L, H, out);
 }
 
 /* Ray queries over a single-level tree (root 0): rays as origin (w = tmin)

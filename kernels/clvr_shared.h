@@ -140,21 +140,33 @@ CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
  * this many vertices. */
 #define CLVR_INSTANCE_MAX_VERTS16 65536u
 
+/* Most pieces an array of the clustered mesh is cut into (docs/large-meshes.md):
+ * the arrays whose entries belong to instance clusters (clustered vertices,
+ * 16- and 32-bit local indices, element boxes) are cut at instance
+ * boundaries so that no device buffer exceeds CL_DEVICE_MAX_MEM_ALLOC_SIZE.
+ * Kernels take each piece as its own __global pointer (OpenCL 1.2 has no
+ * arrays of buffers), so this is also the number of such arguments. */
+#define CLVR_MAX_SPLITS 4u
+
 typedef struct clvr_instance {
     clvr_box bounds;          /* bounds of its elements (w lanes zero) */
-    clvr_u32 type;            /* CLVR_CELL_* of every element in it */
-    clvr_u32 index_bits;      /* 16: indices in idx16[]; 32: in idx32[] */
+    clvr_u16 type;            /* CLVR_CELL_* of every element in it */
+    clvr_u16 index_bits;      /* 16: indices in idx16[]; 32: in idx32[] */
+    clvr_u32 piece;           /* piece (0 .. CLVR_MAX_SPLITS - 1) of the split arrays that hold its
+                                 vertices, indices and element boxes; 0 when they are not split */
     clvr_u32 first_element;   /* global sorted element id of its first element */
     clvr_u32 num_elements;
-    clvr_u32 first_vertex;    /* into the clustered vertex array (float4 x y z scalar) */
+    clvr_u32 first_vertex;    /* into its piece of the clustered vertices (float4 x y z scalar) */
     clvr_u32 num_vertices;
-    clvr_u64 first_index;     /* into idx16[] or idx32[]; element e's indices start at
+    clvr_u64 first_index;     /* into its piece of idx16[] or idx32[]; element e's indices start at
                                  first_index + (e - first_element) * vertex_count(type),
                                  each relative to first_vertex */
     clvr_u32 first_leaf;      /* its leaf clusters: first_leaf .. first_leaf + num_leaves - 1 */
     clvr_u32 num_leaves;
     clvr_u32 bvh_root;        /* root of its bottom-level tree in the BLAS node array (bvh/) */
-    clvr_u32 pad0;
+    clvr_u32 piece_first_element; /* global sorted id of its piece's first element: element e's
+                                     box is entry e - piece_first_element of the piece's element
+                                     boxes (0 when not split) */
 } clvr_instance;
 CLVR_STATIC_ASSERT(sizeof(clvr_instance) == 80, "clvr_instance layout");
 
@@ -462,7 +474,13 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
     X(clvr_sampling_cluster, sampling)                                                                                 \
     X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
     X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
-    X(uchar, ebox)                          /* quantized element boxes (locate.h) */
+    X(uchar, ebox)                          /* quantized element boxes (locate.h) */                    \
+    /* pieces 1 .. CLVR_MAX_SPLITS - 1 of the split arrays (piece 0 above; a */                                      \
+    /* small dummy buffer where the mesh has fewer pieces) */                                                        \
+    X(float4, vertices1) X(float4, vertices2) X(float4, vertices3)                                                     \
+    X(ushort, idx16_1) X(ushort, idx16_2) X(ushort, idx16_3)                                                           \
+    X(uint, idx32_1) X(uint, idx32_2) X(uint, idx32_3)                                                                 \
+    X(uchar, ebox1) X(uchar, ebox2) X(uchar, ebox3)
 
 /* Samplers, the values of clvr_frame.sampler. independent: every uniform of
  * a frame from the counter-based generator keyed by (pixel, frame, seed),

@@ -14,12 +14,25 @@
 #include "bvh_traverse.h"
 #include "bvh_build.h"
 
+/* One piece of the arrays that are split at instance boundaries
+ * (CLVR_MAX_SPLITS, docs/large-meshes.md): an instance's vertices, local
+ * indices and element boxes all live in the piece its `piece` field names. */
+typedef struct clvr_piece_arrays {
+    CLVR_GLOBAL const clvr_vec4 *vertices;
+    CLVR_GLOBAL const clvr_u16 *idx16;
+    CLVR_GLOBAL const clvr_u32 *idx32;
+    CLVR_GLOBAL const clvr_u8 *ebox;  /* NULL: no element boxes */
+} clvr_piece_arrays;
+
 /* The arrays of a clustered mesh and its two-level tree that point location
  * reads, bundled so that the walk takes one argument instead of eight
  * (kernels build it on the stack from their arguments; the host points it
  * at host arrays). tlas_root: root of the top-level tree in tlas (0 for
  * clvr_bvh builds); each instance's bvh_root is its bottom-level root in
- * blas. leaf_size: elements per leaf cluster, as the clustering used. */
+ * blas. leaf_size: elements per leaf cluster, as the clustering used.
+ * vertices, idx16, idx32 and ebox are piece 0 of the split arrays (the whole
+ * arrays of a mesh that is not split); `more` holds pieces 1 .. 3 (unused
+ * entries may be anything: no instance names them). */
 typedef struct clvr_mesh_view {
     CLVR_GLOBAL const clvr_bvh_node *tlas;
     CLVR_GLOBAL const clvr_bvh_node *blas;
@@ -31,9 +44,34 @@ typedef struct clvr_mesh_view {
     clvr_u32 leaf_size;
     /* Quantized element boxes (CLVR_EBOX_BYTES per sorted element, see
      * clvr_ebox_build_leaf), or NULL: leaves are then scanned without them
-     * (same results, slower). */
+     * (same results, slower). Pieces 1 .. 3 use element boxes exactly when
+     * this (piece 0's) is set. */
     CLVR_GLOBAL const clvr_u8 *ebox;
+    clvr_piece_arrays more[CLVR_MAX_SPLITS - 1u];
 } clvr_mesh_view;
+/* Initializer of `more` for a mesh that is one piece. */
+#define CLVR_VIEW_ONE_PIECE {{0, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}}
+
+/* The arrays of instance inst's piece: picked once when a walk enters the
+ * instance (a branch per instance visited, never per element). Element e's
+ * box is entry e - inst->piece_first_element of the piece's ebox. */
+CLVR_INLINE clvr_piece_arrays clvr_view_piece(const clvr_mesh_view *m, const clvr_instance *inst)
+{
+    clvr_piece_arrays a;
+    switch (inst->piece) {
+    case 1u: a = m->more[0]; break;
+    case 2u: a = m->more[1]; break;
+    case 3u: a = m->more[2]; break;
+    default:
+        a.vertices = m->vertices;
+        a.idx16 = m->idx16;
+        a.idx32 = m->idx32;
+        a.ebox = m->ebox;
+        break;
+    }
+    if (!m->ebox) a.ebox = 0;
+    return a;
+}
 
 /* Global sorted ids of leaf cluster `leaf`'s elements: first (returned) ..
  * *end - 1; an instance's last leaf may hold fewer than leaf_size. */
@@ -47,12 +85,13 @@ CLVR_INLINE clvr_u32 clvr_leaf_elements(const clvr_mesh_view *m, const clvr_inst
 }
 
 /* Loads the vertices of element e (global sorted id, inside instance
- * `inst`) into v[0 .. vertex_count(inst->type) - 1]. */
-CLVR_INLINE void clvr_load_element(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 e, clvr_vec4 *v)
+ * `inst`, whose piece's arrays are a) into v[0 .. vertex_count(inst->type) - 1]. */
+CLVR_INLINE void clvr_load_element_in(const clvr_piece_arrays *a, const clvr_instance *inst, clvr_u32 e,
+                                      clvr_vec4 *v)
 {
-    CLVR_GLOBAL const clvr_vec4 *vertices = m->vertices;
-    CLVR_GLOBAL const clvr_u16 *idx16 = m->idx16;
-    CLVR_GLOBAL const clvr_u32 *idx32 = m->idx32;
+    CLVR_GLOBAL const clvr_vec4 *vertices = a->vertices;
+    CLVR_GLOBAL const clvr_u16 *idx16 = a->idx16;
+    CLVR_GLOBAL const clvr_u32 *idx32 = a->idx32;
     const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
     const clvr_u64 base = inst->first_index + (clvr_u64)(e - inst->first_element) * nv;
     if (inst->index_bits == 16u) {
@@ -62,14 +101,22 @@ CLVR_INLINE void clvr_load_element(const clvr_mesh_view *m, const clvr_instance 
     }
 }
 
+/* clvr_load_element_in with the piece picked from m (for callers that load
+ * one element of an instance, not a walk). */
+CLVR_INLINE void clvr_load_element(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 e, clvr_vec4 *v)
+{
+    const clvr_piece_arrays a = clvr_view_piece(m, inst);
+    clvr_load_element_in(&a, inst, e, v);
+}
+
 /* Loads tet e's 4 vertices (one 8-byte index load on the device for
  * 16-bit instances). */
-CLVR_INLINE void clvr_load_tet(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 e, clvr_vec4 *v)
+CLVR_INLINE void clvr_load_tet(const clvr_piece_arrays *a, const clvr_instance *inst, clvr_u32 e, clvr_vec4 *v)
 {
-    CLVR_GLOBAL const clvr_u16 *idx16 = m->idx16;
-    CLVR_GLOBAL const clvr_u32 *idx32 = m->idx32;
+    CLVR_GLOBAL const clvr_u16 *idx16 = a->idx16;
+    CLVR_GLOBAL const clvr_u32 *idx32 = a->idx32;
     const clvr_u64 base = inst->first_index + (clvr_u64)(e - inst->first_element) * 4u;
-    CLVR_GLOBAL const clvr_vec4 *vb = m->vertices + inst->first_vertex;
+    CLVR_GLOBAL const clvr_vec4 *vb = a->vertices + inst->first_vertex;
     if (inst->index_bits == 16u) {
 #ifdef __OPENCL_VERSION__
         const ushort4 k = vload4(0, idx16 + base);
@@ -85,12 +132,13 @@ CLVR_INLINE void clvr_load_tet(const clvr_mesh_view *m, const clvr_instance *ins
 /* Prefetches the first line of leaf cluster `leaf`'s index block (instance
  * inst): the line its search, or clvr_prefetch_leaf_vertices, stalls on
  * first. */
-CLVR_INLINE void clvr_prefetch_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf)
+CLVR_INLINE void clvr_prefetch_leaf(const clvr_mesh_view *m, const clvr_piece_arrays *a, const clvr_instance *inst,
+                                    clvr_u32 leaf)
 {
     const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
     const clvr_u64 base = inst->first_index + (clvr_u64)(leaf - inst->first_leaf) * m->leaf_size * nv;
-    if (inst->index_bits == 16u) CLVR_PREFETCH(m->idx16 + base);
-    else CLVR_PREFETCH(m->idx32 + base);
+    if (inst->index_bits == 16u) CLVR_PREFETCH(a->idx16 + base);
+    else CLVR_PREFETCH(a->idx32 + base);
 }
 
 /* Prefetches what the search of leaf cluster `leaf` will load first: for
@@ -102,17 +150,18 @@ CLVR_INLINE void clvr_prefetch_leaf(const clvr_mesh_view *m, const clvr_instance
  * random points, leaf clusters of 8, interleaved runs): +9% for the
  * vertices of the leaf being searched, +2% to +7% more for those of its hit
  * siblings too. */
-CLVR_INLINE void clvr_prefetch_leaf_vertices(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf)
+CLVR_INLINE void clvr_prefetch_leaf_vertices(const clvr_mesh_view *m, const clvr_piece_arrays *a,
+                                             const clvr_instance *inst, clvr_u32 leaf)
 {
     if (inst->type != CLVR_CELL_TET) {
-        clvr_prefetch_leaf(m, inst, leaf);
+        clvr_prefetch_leaf(m, a, inst, leaf);
         return;
     }
-    CLVR_GLOBAL const clvr_u16 *idx16 = m->idx16;
-    CLVR_GLOBAL const clvr_u32 *idx32 = m->idx32;
+    CLVR_GLOBAL const clvr_u16 *idx16 = a->idx16;
+    CLVR_GLOBAL const clvr_u32 *idx32 = a->idx32;
     clvr_u32 end;
     const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
-    CLVR_GLOBAL const clvr_vec4 *vb = m->vertices + inst->first_vertex;
+    CLVR_GLOBAL const clvr_vec4 *vb = a->vertices + inst->first_vertex;
     const clvr_u64 base = inst->first_index + (clvr_u64)(first - inst->first_element) * 4u;
     for (clvr_u32 i = 0; i < 4u * (end - first); ++i)
         CLVR_PREFETCH(vb + (inst->index_bits == 16u ? (clvr_u32)idx16[base + i] : idx32[base + i]));
@@ -158,22 +207,25 @@ CLVR_INLINE float clvr_ebox_pos(float x, float lo, float scale)
 }
 
 /* Quantizes the boxes of leaf cluster `leaf`'s elements against the leaf
- * box (lo, hi) into ebox (CLVR_EBOX_BYTES per global sorted element id). */
+ * box (lo, hi) into ebox, the element boxes of inst's piece
+ * (CLVR_EBOX_BYTES per element, from the piece's first element,
+ * inst->piece_first_element). */
 CLVR_INLINE void clvr_ebox_build_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf,
                                       const float *lo, const float *hi, CLVR_GLOBAL clvr_u8 *ebox)
 {
+    const clvr_piece_arrays pa = clvr_view_piece(m, inst);
     clvr_u32 end;
     const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
     float scale[3];
     for (int k = 0; k < 3; ++k) scale[k] = clvr_ebox_scale(lo[k], hi[k]);
     clvr_vec4 v[CLVR_CELL_MAX_VERTS];
     for (clvr_u32 e = first; e < end; ++e) {
-        clvr_load_element(m, inst, e, v);
+        clvr_load_element_in(&pa, inst, e, v);
         float elo[3], ehi[3];
         /* Twice clvr_element_box_test's padding: this box must hold every
          * point that test accepts. */
         const float pad = 2.0f * clvr_element_vertex_box(inst->type, v, elo, ehi);
-        CLVR_GLOBAL clvr_u8 *out = ebox + (clvr_u64)e * CLVR_EBOX_BYTES;
+        CLVR_GLOBAL clvr_u8 *out = ebox + (clvr_u64)(e - inst->piece_first_element) * CLVR_EBOX_BYTES;
         for (int k = 0; k < 3; ++k) {
             const float a = floor(clvr_ebox_pos(elo[k] - pad, lo[k], scale[k])) - 1.0f;
             const float b = ceil(clvr_ebox_pos(ehi[k] + pad, lo[k], scale[k])) + 1.0f;
@@ -189,13 +241,13 @@ CLVR_INLINE void clvr_ebox_build_leaf(const clvr_mesh_view *m, const clvr_instan
  * first rejected by their quantized box (when m->ebox is set), then by
  * their vertex box (cheaper than a solve); tets then take the early-out
  * barycentric test, other types Newton. */
-CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 leaf,
-                                    CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 c, float px, float py, float pz,
-                                    float *scalar, clvr_u32 *element_id)
+CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_arrays *a, const clvr_instance *inst,
+                                    clvr_u32 leaf, CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 c, float px,
+                                    float py, float pz, float *scalar, clvr_u32 *element_id)
 {
     clvr_u32 end;
     const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
-    CLVR_GLOBAL const clvr_u8 *eb = m->ebox;
+    CLVR_GLOBAL const clvr_u8 *eb = a->ebox;
     /* p's step on each axis of the leaf box (floor: a step test that is
      * at least as permissive as the float one). */
     clvr_u32 ix = 0, iy = 0, iz = 0;
@@ -213,7 +265,7 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance
         if (eb) {
             clvr_u32 pass = 0;
             for (clvr_u32 k = 0; k < cnt; ++k) {
-                CLVR_GLOBAL const clvr_u8 *b = eb + (clvr_u64)(base + k) * CLVR_EBOX_BYTES;
+                CLVR_GLOBAL const clvr_u8 *b = eb + (clvr_u64)(base + k - inst->piece_first_element) * CLVR_EBOX_BYTES;
                 pass |= (clvr_u32)((ix >= b[0]) & (iy >= b[1]) & (iz >= b[2]) & (ix <= b[3]) & (iy <= b[4]) &
                                    (iz <= b[5]))
                         << k;
@@ -225,7 +277,7 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance
             mask &= mask - 1u;
             const clvr_u32 e = base + k;
             if (inst->type == CLVR_CELL_TET) {
-                clvr_load_tet(m, inst, e, v);
+                clvr_load_tet(a, inst, e, v);
                 if (!clvr_element_box_test(CLVR_CELL_TET, v, px, py, pz)) continue;
                 if (clvr_tet_sample(v, px, py, pz, scalar)) {
                     *element_id = e;
@@ -233,7 +285,7 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_instance
                 }
                 continue;
             }
-            clvr_load_element(m, inst, e, v);
+            clvr_load_element_in(a, inst, e, v);
             if (!clvr_element_box_test(inst->type, v, px, py, pz)) continue;
             if (clvr_element_sample(inst->type, v, px, py, pz, scalar)) {
                 *element_id = e;
@@ -274,8 +326,9 @@ CLVR_INLINE void clvr_leaf_parent(const clvr_instance *inst, clvr_u32 leaf, clvr
  * points search about 40% of them: 13.0 nodes, 2.45 leaves, 16.1 tets per
  * query on 1M tets, leaves of 8). One level further (a level-1 node's four
  * children, 7 lines) lost 5% and is not done. */
-CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const clvr_instance *inst,
-                                               CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 mask, clvr_u32 level0)
+CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const clvr_piece_arrays *a,
+                                               const clvr_instance *inst, CLVR_GLOBAL const clvr_bvh_node *n,
+                                               clvr_u32 mask, clvr_u32 level0)
 {
     CLVR_GLOBAL const clvr_bvh_node *blas = m->blas;
     for (clvr_u32 c = 0; c < 4; ++c) {
@@ -283,11 +336,12 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
         const clvr_u32 ch = n->child[c];
         if (ch & CLVR_BVH_LEAF_BIT) {
             clvr_u32 end;
-            if (m->ebox) /* the scan reads its boxes first, then a few survivors */
-                CLVR_PREFETCH(m->ebox +
-                              (clvr_u64)clvr_leaf_elements(m, inst, ch & CLVR_BVH_MAX_PRIMS, &end) * CLVR_EBOX_BYTES);
+            if (a->ebox) /* the scan reads its boxes first, then a few survivors */
+                CLVR_PREFETCH(a->ebox + (clvr_u64)(clvr_leaf_elements(m, inst, ch & CLVR_BVH_MAX_PRIMS, &end) -
+                                                   inst->piece_first_element) *
+                                            CLVR_EBOX_BYTES);
             else
-                clvr_prefetch_leaf_vertices(m, inst, ch & CLVR_BVH_MAX_PRIMS);
+                clvr_prefetch_leaf_vertices(m, a, inst, ch & CLVR_BVH_MAX_PRIMS);
             continue;
         }
         CLVR_PREFETCH(blas + ch);
@@ -295,7 +349,7 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
         if (ch >= level0) {
             const clvr_u32 leaf = inst->first_leaf + 4u * (ch - level0);
             for (clvr_u32 j = 0; j < 4u && leaf + j < inst->first_leaf + inst->num_leaves; ++j)
-                clvr_prefetch_leaf(m, inst, leaf + j);
+                clvr_prefetch_leaf(m, a, inst, leaf + j);
         }
     }
 }
@@ -314,6 +368,7 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
                                         clvr_u32 *element_id, clvr_u32 *leaf_found)
 {
     CLVR_GLOBAL const clvr_bvh_node *blas = m->blas;
+    const clvr_piece_arrays a = clvr_view_piece(m, inst); /* once per instance entered */
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = root;
     const int prefetch = (hints & CLVR_LOCATE_INCOHERENT) != 0u;
@@ -322,12 +377,12 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
         CLVR_GLOBAL const clvr_bvh_node *n = blas + ref;
         const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
         if (prefetch)
-            clvr_locate_prefetch_children(m, inst, n, mask, level0);
+            clvr_locate_prefetch_children(m, &a, inst, n, mask, level0);
         for (clvr_u32 c = 0; c < 4; ++c) {
             if (!((mask >> c) & 1u)) continue;
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
-                if (clvr_locate_in_leaf(m, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, scalar, element_id)) {
+                if (clvr_locate_in_leaf(m, &a, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, scalar, element_id)) {
                     *leaf_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
                 }

@@ -52,10 +52,14 @@ __kernel void clvr_grid_clear(__global uint *grid, uint cells)
  * vertices' scalar range, so every cell still bounds every point in it.
  * Instances are sorted by first_element (preprocessing emits them in global
  * element order); each work item finds its own by binary search. */
-__kernel void clvr_grid_splat_elements(__global const clvr_instance *inst, uint ninst,
-                                       __global const float4 *vertices, __global const ushort *idx16,
-                                       __global const uint *idx32, uint nelem, __global const clvr_frame *fp,
-                                       __global uint *grid)
+__kernel void clvr_grid_splat_elements(__global const clvr_instance *inst, uint ninst, uint nelem,
+                                       __global const clvr_frame *fp, __global uint *grid,
+                                       __global const float4 *vertices0, __global const ushort *idx16_0,
+                                       __global const uint *idx32_0, __global const float4 *vertices1,
+                                       __global const ushort *idx16_1, __global const uint *idx32_1,
+                                       __global const float4 *vertices2, __global const ushort *idx16_2,
+                                       __global const uint *idx32_2, __global const float4 *vertices3,
+                                       __global const ushort *idx16_3, __global const uint *idx32_3)
 {
     uint e = get_global_id(0);
     if (e >= nelem || ninst == 0) return;
@@ -68,6 +72,11 @@ __kernel void clvr_grid_splat_elements(__global const clvr_instance *inst, uint 
     const uint type = inst[a].type, nv = clvr_cell_vertex_count(type), first_vertex = inst[a].first_vertex;
     const ulong base = inst[a].first_index + (ulong)(e - inst[a].first_element) * nv;
     const int wide = inst[a].index_bits == 32u;
+    /* The element's piece of the split arrays (docs/large-meshes.md). */
+    const uint piece = inst[a].piece;
+    __global const float4 *vertices = piece == 1u ? vertices1 : piece == 2u ? vertices2 : piece == 3u ? vertices3 : vertices0;
+    __global const ushort *idx16 = piece == 1u ? idx16_1 : piece == 2u ? idx16_2 : piece == 3u ? idx16_3 : idx16_0;
+    __global const uint *idx32 = piece == 1u ? idx32_1 : piece == 2u ? idx32_2 : piece == 3u ? idx32_3 : idx32_0;
     float3 blo = (float3)(INFINITY), bhi = (float3)(-INFINITY);
     float smin = INFINITY, smax = -INFINITY;
     for (uint k = 0; k < nv; ++k) {

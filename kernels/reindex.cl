@@ -74,7 +74,8 @@ __kernel void clvr_pp_inst_write(__global const clvr_pp_instance_rec *recs, __gl
     c.first_leaf = first_leaf[i];
     c.num_leaves = (r.num_elements + leaf_size - 1u) / leaf_size;
     c.bvh_root = CLVR_PP_NO_ROOT;
-    c.pad0 = 0u;
+    c.piece = 0u; /* one piece: host/pipeline/partition.c splits assembled results */
+    c.piece_first_element = 0u;
     inst[i] = c;
     vsrc[i] = r.vsrc;
 }

@@ -24,12 +24,28 @@ inline float4 clvr_volume_tf(const clvr_volume *v, float s)
     return clvr_tf_sample4(v->tf, v->f->tf_size, v->f->tf_lo, v->f->tf_hi, v->f->density, s);
 }
 
+/* The volume's point-location view, all pieces of the split arrays. */
+inline clvr_mesh_view clvr_volume_view(const clvr_volume *v)
+{
+    return (clvr_mesh_view){v->tlas,
+                            v->blas,
+                            v->instances,
+                            v->vertices,
+                            v->idx16,
+                            v->idx32,
+                            v->f->tlas_root,
+                            v->f->leaf_size,
+                            v->ebox,
+                            {{v->vertices1, v->idx16_1, v->idx32_1, v->ebox1},
+                             {v->vertices2, v->idx16_2, v->idx32_2, v->ebox2},
+                             {v->vertices3, v->idx16_3, v->idx32_3, v->ebox3}}};
+}
+
 /* Point location + interpolation + transfer function. */
 inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
 {
     float s;
-    if (!clvr_locate_point((clvr_mesh_view){v->tlas, v->blas, v->instances, v->vertices, v->idx16, v->idx32,
-                                            v->f->tlas_root, v->f->leaf_size, v->ebox}, p.x, p.y, p.z, &s))
+    if (!clvr_locate_point(clvr_volume_view(v), p.x, p.y, p.z, &s))
         return (float4)(0.0f);
     return clvr_volume_tf(v, s);
 }
@@ -38,9 +54,7 @@ inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
 inline float4 clvr_volume_at_hinted(const clvr_volume *v, float3 p, clvr_locate_hint *h)
 {
     float s;
-    if (!clvr_locate_point_hinted((clvr_mesh_view){v->tlas, v->blas, v->instances, v->vertices, v->idx16, v->idx32,
-                                                   v->f->tlas_root, v->f->leaf_size, v->ebox},
-                                  p.x, p.y, p.z, h, &s))
+    if (!clvr_locate_point_hinted(clvr_volume_view(v), p.x, p.y, p.z, h, &s))
         return (float4)(0.0f);
     return clvr_volume_tf(v, s);
 }

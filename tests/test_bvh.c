@@ -347,7 +347,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         float s = 0.0f;
         uint32_t e = 0;
         const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
-                                   leaf_size, NULL};
+                                   leaf_size, NULL, CLVR_VIEW_ONE_PIECE};
         const int ok = clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s, &e);
         found += ok;
         host_e[i] = e;
@@ -373,7 +373,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     uint8_t *ebox = malloc((size_t)c.num_elements * CLVR_EBOX_BYTES + 1);
     {
         const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
-                                   leaf_size, NULL};
+                                   leaf_size, NULL, CLVR_VIEW_ONE_PIECE};
         TU_CHECK_STATUS(clvr_bvh_element_boxes_host(&mv, c.num_instances, c.num_leaves, ebox, err), CLVR_OK, err);
         clvr_mesh_view mve = mv;
         mve.ebox = ebox;

@@ -227,6 +227,26 @@ static int pick(const device_entry *list, unsigned n, const char *spec)
     return -1;
 }
 
+/* CLVR_MAX_ALLOC_BYTES (a testing knob, docs/large-meshes.md): a byte
+ * count that can only lower the largest buffer clvr allocates, so that a
+ * small mesh is cut into several pieces as a large one is on a device with
+ * a small CL_DEVICE_MAX_MEM_ALLOC_SIZE. Unset or empty: the device's. */
+static clvr_status max_alloc_override(clvr_cl *cl, clvr_error *err)
+{
+    const char *env = getenv("CLVR_MAX_ALLOC_BYTES");
+    if (!env || !*env) return CLVR_OK;
+    char *end = NULL;
+    errno = 0;
+    const unsigned long long v = strtoull(env, &end, 10);
+    if (errno || end == env || *end || v < 16 || env[0] == '-')
+        return clvr_error_set(err, CLVR_ERR_USAGE,
+                              "CLVR_MAX_ALLOC_BYTES is '%s'; give a byte count of at least 16 (e.g. 1000000000), or "
+                              "unset it to use the device's CL_DEVICE_MAX_MEM_ALLOC_SIZE",
+                              env);
+    if ((cl_ulong)v < cl->max_alloc_bytes) cl->max_alloc_bytes = (cl_ulong)v;
+    return CLVR_OK;
+}
+
 clvr_status clvr_cl_create(const char *spec, clvr_cl *out, clvr_error *err)
 {
     device_entry *list = NULL;
@@ -260,6 +280,8 @@ clvr_status clvr_cl_create(const char *spec, clvr_cl *out, clvr_error *err)
                                   &out->global_mem_bytes, NULL));
     CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof out->max_alloc_bytes,
                                   &out->max_alloc_bytes, NULL));
+    out->device_max_alloc_bytes = out->max_alloc_bytes;
+    CLVR_TRY(max_alloc_override(out, err));
     CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof out->max_work_group_size,
                                   &out->max_work_group_size, NULL));
     CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof out->compute_units,
@@ -620,8 +642,10 @@ clvr_status clvr_cl_buffer(clvr_cl *cl, cl_mem_flags flags, size_t bytes, void *
     if ((cl_ulong)n > cl->max_alloc_bytes)
         return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
                               "%s needs %.3f GB in one buffer but %s allows at most %.3f GB per buffer "
-                              "(CL_DEVICE_MAX_MEM_ALLOC_SIZE); use a smaller mesh or image, or another --device",
-                              what, (double)n / 1e9, cl->device_name, (double)cl->max_alloc_bytes / 1e9);
+                              "(CL_DEVICE_MAX_MEM_ALLOC_SIZE%s); use a smaller mesh or image, or another --device",
+                              what, (double)n / 1e9, cl->device_name, (double)cl->max_alloc_bytes / 1e9,
+                              cl->device_max_alloc_bytes > cl->max_alloc_bytes ? ", lowered by CLVR_MAX_ALLOC_BYTES"
+                                                                               : "");
     if ((cl_ulong)n + cl->allocated_bytes > cl->global_mem_bytes)
         return clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
                               "%s needs %.3f GB more device memory but %s has %.3f GB and %.3f GB is in use; "

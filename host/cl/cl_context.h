@@ -23,7 +23,8 @@ typedef struct clvr_cl {
     char device_version[128];
     char driver_version[128];
     cl_ulong global_mem_bytes;
-    cl_ulong max_alloc_bytes;
+    cl_ulong max_alloc_bytes;    /* CL_DEVICE_MAX_MEM_ALLOC_SIZE, or CLVR_MAX_ALLOC_BYTES when that is lower */
+    cl_ulong device_max_alloc_bytes; /* CL_DEVICE_MAX_MEM_ALLOC_SIZE as the device reports it */
     size_t max_work_group_size;
     cl_uint compute_units;
     const char *kernel_dir;      /* NULL: embedded sources; else read kernels from this directory */

@@ -4,6 +4,7 @@
 #include "limits_check.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -77,23 +78,42 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     out->render_bytes = sat_add(resident, out->image_bytes);
     out->peak_bytes = max_u64(out->preprocess_peak_bytes, out->render_bytes);
 
-    /* The largest single buffer, named as clvr_cl_buffer names it. */
-    struct { uint64_t bytes; const char *name; } cand[] = {
-        {sat_mul(PV, 12), "vertex positions"},
-        {sat_mul(PS, 4), "element indices"},
-        {sat_mul(PN, 8), "sort keys"},
+    /* The largest single buffer, named as clvr_cl_buffer names it. The
+     * arrays of instance clusters are split into pieces when the mesh is
+     * preprocessed in partitions (host/pipeline/partition.c), so then they
+     * are no candidates; their largest total is split_bytes. */
+    const int parted = PN < N;
+    const uint64_t idx_bytes = sat_mul(S, bits == 32 ? 4 : 2);
+    const char *idx_name = bits == 32 ? "32-bit indices" : "16-bit indices";
+    struct { uint64_t bytes; const char *name; int per_partition, split; } cand[] = {
+        {sat_mul(PV, 12), "vertex positions", 1, 0},
+        {sat_mul(PS, 4), "element indices", 1, 0},
+        {sat_mul(PN, 8), "sort keys", 1, 0},
         /* (not the clustered vertices: unreferenced vertices are not copied,
          * so 16 V is no lower bound) */
-        {sat_mul(S, bits == 32 ? 4 : 2), bits == 32 ? "32-bit indices" : "16-bit indices"},
-        {sat_mul(pixels, 16), "image accumulator"},
-        {ebox, "element boxes"},
+        {idx_bytes, idx_name, 1, parted},
+        {sat_mul(pixels, 16), "image accumulator", 0, 0},
+        {ebox, "element boxes", 1, parted},
+        /* never split (docs/large-meshes.md): 1/8 of the indices or less */
+        {sat_mul(leaves, sizeof(clvr_box)), "leaf boxes", 0, 0},
+        {sat_mul(N / sampling, sizeof(clvr_sampling_cluster)), "sampling clusters", 0, 0},
     };
-    out->largest_buffer = cand[0].name;
-    for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i)
+    out->largest_buffer = out->whole_buffer = cand[0].name;
+    for (size_t i = 0; i < sizeof cand / sizeof cand[0]; ++i) {
         if (cand[i].bytes > out->largest_buffer_bytes) {
             out->largest_buffer_bytes = cand[i].bytes;
             out->largest_buffer = cand[i].name;
         }
+        if (!cand[i].split && cand[i].bytes > out->whole_buffer_bytes) {
+            out->whole_buffer_bytes = cand[i].bytes;
+            out->whole_buffer = cand[i].name;
+            out->whole_per_partition = cand[i].per_partition;
+        }
+    }
+    if (parted) {
+        out->split_bytes = idx_bytes > ebox ? idx_bytes : ebox;
+        out->split_array = idx_bytes >= ebox ? idx_name : "element boxes";
+    }
 }
 
 static double gb(uint64_t b) { return (double)b / 1e9; }
@@ -112,17 +132,47 @@ clvr_status clvr_limits_check_parts(const clvr_cl *cl, const clvr_mesh *m, const
     clvr_limits_estimate e;
     clvr_limits_estimate_parts(m, o, part_elements, width, height, &e);
     const char *name = what ? what : "mesh";
-    int image_is_it = e.largest_buffer && strcmp(e.largest_buffer, "image accumulator") == 0;
-    if (e.largest_buffer_bytes > cl->max_alloc_bytes)
+    int image_is_it = e.whole_buffer && strcmp(e.whole_buffer, "image accumulator") == 0;
+    const uint64_t limit = cl->max_alloc_bytes;
+    char lowered[96] = "";
+    if (cl->device_max_alloc_bytes > limit)
+        snprintf(lowered, sizeof lowered, ", lowered from %.3f GB by CLVR_MAX_ALLOC_BYTES",
+                 gb(cl->device_max_alloc_bytes));
+    if (e.whole_buffer_bytes > limit) {
+        char fix[256];
+        if (image_is_it)
+            snprintf(fix, sizeof fix, "render a smaller --size, or use another --device (clvr --list-devices)");
+        else if (e.whole_per_partition) {
+            /* Partitions whose largest buffer fits (the arrays of instance
+             * clusters are then split into pieces). */
+            const uint64_t pn = part_elements && part_elements < e.num_elements ? part_elements : e.num_elements;
+            const double per = (double)e.whole_buffer_bytes / (double)(pn ? pn : 1);
+            const uint64_t fit = (uint64_t)((double)limit / per);
+            const uint64_t parts = fit ? (e.num_elements + fit - 1) / fit : e.num_elements;
+            snprintf(fix, sizeof fix, "preprocess in more partitions (--partitions %llu or more), or use a "
+                     "smaller (cropped or decimated) mesh or a device with a larger allocation limit (--device, see "
+                     "clvr --list-devices)",
+                     (unsigned long long)(parts > 1 ? parts : 2));
+        } else
+            snprintf(fix, sizeof fix, "use a smaller (cropped or decimated) mesh, a larger --leaf-size, or a device "
+                     "with a larger allocation limit (--device, see clvr --list-devices)");
         return clvr_error_set(
             err, CLVR_ERR_DEVICE_MEMORY,
             "%s: %llu elements, %llu vertices at %ux%u: the largest buffer (%s) needs %.3f GB but %s allows at most "
-            "%.3f GB per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE); %s",
+            "%.3f GB per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE%s); %s",
             name, (unsigned long long)e.num_elements, (unsigned long long)e.num_vertices, width, height,
-            e.largest_buffer, gb(e.largest_buffer_bytes), cl->device_name, gb(cl->max_alloc_bytes),
-            image_is_it ? "render a smaller --size, or use another --device (clvr --list-devices)"
-                        : "use a smaller (cropped or decimated) mesh, or a device with more memory "
-                          "(--device, see clvr --list-devices)");
+            e.whole_buffer, gb(e.whole_buffer_bytes), cl->device_name, gb(limit), lowered, fix);
+    }
+    if (e.split_bytes > sat_mul(limit, CLVR_MAX_SPLITS))
+        return clvr_error_set(
+            err, CLVR_ERR_DEVICE_MEMORY,
+            "%s: %llu elements, %llu vertices: the %s take %.3f GB, which needs %llu pieces of at most %.3f GB "
+            "(CL_DEVICE_MAX_MEM_ALLOC_SIZE%s) but they are cut into at most %u pieces (CLVR_MAX_SPLITS); use a "
+            "smaller (cropped or decimated) mesh or a device with a larger allocation limit (--device, see clvr "
+            "--list-devices)",
+            name, (unsigned long long)e.num_elements, (unsigned long long)e.num_vertices, e.split_array,
+            gb(e.split_bytes), (unsigned long long)((e.split_bytes + limit - 1) / limit), gb(limit), lowered,
+            CLVR_MAX_SPLITS);
     if (e.peak_bytes > cl->global_mem_bytes) {
         int render_is_it = e.render_bytes >= e.preprocess_peak_bytes;
         return clvr_error_set(

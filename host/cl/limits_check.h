@@ -38,8 +38,18 @@ typedef struct clvr_limits_estimate {
     uint64_t render_bytes;           /* clustered mesh + BVH + image buffers while rendering */
     uint64_t image_bytes;            /* of render_bytes: the per-pixel buffers */
     uint64_t peak_bytes;             /* max of the two phases */
-    uint64_t largest_buffer_bytes;   /* the largest single buffer of the run */
+    uint64_t largest_buffer_bytes;   /* the largest array of the run (split or not) */
     const char *largest_buffer;      /* its name, as clvr_cl_buffer reports it */
+    /* The arrays of instance clusters (local indices, element boxes) of a
+     * mesh preprocessed in more than one partition are cut into pieces at
+     * instance boundaries (docs/large-meshes.md); of one partition they are
+     * single buffers. The largest buffer that is not cut: */
+    uint64_t whole_buffer_bytes;
+    const char *whole_buffer;
+    int whole_per_partition;         /* it is one partition's (more partitions make it smaller) */
+    /* and the cut arrays' largest total (0 in one partition): */
+    uint64_t split_bytes;
+    const char *split_array;
 } clvr_limits_estimate;
 
 /* Fills *out for mesh m (only its counts are read), options o (NULL:
@@ -55,7 +65,12 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
                                 uint32_t width, uint32_t height, clvr_limits_estimate *out);
 
 /* Checks the estimate against cl's CL_DEVICE_GLOBAL_MEM_SIZE and
- * CL_DEVICE_MAX_MEM_ALLOC_SIZE. CLVR_ERR_DEVICE_MEMORY names the mesh size,
+ * CL_DEVICE_MAX_MEM_ALLOC_SIZE (cl->max_alloc_bytes: lowered by
+ * CLVR_MAX_ALLOC_BYTES when set). The split arrays pass when they fit in
+ * CLVR_MAX_SPLITS pieces of the limit (the cut at instance boundaries, in
+ * partition.c, refuses the rare mesh that still needs more, or whose one
+ * instance cluster alone exceeds it); a buffer of one partition's scratch
+ * above the limit is refused with the partition count that fits. CLVR_ERR_DEVICE_MEMORY names the mesh size,
  * the bytes needed, what the device has, and what to change: a smaller
  * image, a smaller or cropped mesh, 16-bit instance clusters (index_bits 16,
  * which halve the resident indices) or another --device. `what` names the

@@ -16,10 +16,17 @@ clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, cl
     CLVR_TRY(clvr_bvh_kernels_create(cl, &out->kernels, err));
     CLVR_TRY(clvr_bvh_build_device(cl, &out->kernels, c->host_instances, (uint32_t)c->num_instances, c->instances,
                                    c->leaf_boxes, (uint32_t)c->num_leaves, &out->two_level, err));
-    if (!c->no_element_boxes) /* --element-boxes off: the kernels get a NULL ebox and skip the test */
-        CLVR_TRY(clvr_bvh_element_boxes_device(cl, &out->kernels, &out->two_level, c->instances,
-                                               (uint32_t)c->num_instances, c->vertices, c->idx16, c->idx32,
-                                               c->leaf_size, (uint32_t)c->num_leaves, c->num_elements, err));
+    if (!c->no_element_boxes) { /* --element-boxes off: the kernels get a NULL ebox and skip the test */
+        clvr_clustered_pieces pc;
+        clvr_clustered_get_pieces(c, &pc);
+        const uint64_t one[2] = {0, c->num_elements};
+        const int split = c->num_pieces > 1;
+        CLVR_TRY(clvr_bvh_element_boxes_pieces(cl, &out->kernels, &out->two_level, c->instances,
+                                               (uint32_t)c->num_instances, pc.vertices, pc.idx16, pc.idx32,
+                                               split ? c->piece_elements : one, split ? c->num_pieces : 1,
+                                               pc.vertices[CLVR_MAX_SPLITS - 1], c->leaf_size,
+                                               (uint32_t)c->num_leaves, err));
+    }
     CLVR_TRY(clvr_bvh_build_boxes_device(cl, &out->kernels, c->sampling, (uint32_t)c->num_sampling,
                                          &out->sampling_nodes, err));
     out->sampling_node_count = clvr_bvh_nodes_bound((uint32_t)c->num_sampling);
@@ -42,4 +49,50 @@ void clvr_accel_release(clvr_cl *cl, clvr_accel *a)
 uint64_t clvr_accel_bvh_bytes(const clvr_accel *a)
 {
     return clvr_bvh_bytes(a->two_level.tlas_nodes, a->two_level.blas_nodes);
+}
+
+void clvr_accel_get_ebox_pieces(const clvr_clustered *c, const clvr_accel *a, cl_mem out[CLVR_MAX_SPLITS])
+{
+    clvr_clustered_pieces pc;
+    clvr_clustered_get_pieces(c, &pc);
+    out[0] = a->two_level.ebox; /* NULL: no element boxes (the kernels skip them) */
+    for (uint32_t p = 1; p < CLVR_MAX_SPLITS; ++p)
+        out[p] = a->two_level.ebox_more[p - 1] ? a->two_level.ebox_more[p - 1] : pc.vertices[CLVR_MAX_SPLITS - 1];
+}
+
+clvr_status clvr_accel_locate(clvr_cl *cl, const clvr_clustered *c, const clvr_accel *a, const float *points,
+                              uint32_t n, uint32_t hints, uint32_t chain, float *scalars, uint32_t *element_ids,
+                              clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_mem pts = NULL, sc = NULL, ids = NULL;
+    clvr_clustered_pieces pc;
+    cl_mem eb[CLVR_MAX_SPLITS];
+    clvr_clustered_get_pieces(c, &pc);
+    clvr_accel_get_ebox_pieces(c, a, eb);
+    /* A NULL element-box piece 0 means none: the kernel gets a placeholder and use_ebox 0. */
+    const cl_uint use_ebox = eb[0] != NULL, root = a->tlas_root, leaf = c->leaf_size, nn = n, h = hints,
+                  ch = chain ? chain : 1;
+    if (!eb[0]) eb[0] = pc.vertices[CLVR_MAX_SPLITS - 1];
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, n ? (void *)points : NULL,
+                            "query points", &pts, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)n * 4, NULL, "query scalars", &sc, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)n * 4, NULL, "query element ids", &ids, err));
+    if (n == 0) goto cleanup;
+    cl_kernel k = a->kernels.locate_points_split;
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pts), CLVR_ARG(nn), CLVR_ARG(a->two_level.tlas), CLVR_ARG(root),
+                          CLVR_ARG(a->two_level.blas), CLVR_ARG(c->instances), CLVR_ARG(leaf), CLVR_ARG(sc),
+                          CLVR_ARG(ids), CLVR_ARG(h), CLVR_ARG(use_ebox), CLVR_ARG(ch), CLVR_ARG(pc.vertices[0]),
+                          CLVR_ARG(pc.idx16[0]), CLVR_ARG(pc.idx32[0]), CLVR_ARG(eb[0]), CLVR_ARG(pc.vertices[1]),
+                          CLVR_ARG(pc.idx16[1]), CLVR_ARG(pc.idx32[1]), CLVR_ARG(eb[1]), CLVR_ARG(pc.vertices[2]),
+                          CLVR_ARG(pc.idx16[2]), CLVR_ARG(pc.idx32[2]), CLVR_ARG(eb[2]), CLVR_ARG(pc.vertices[3]),
+                          CLVR_ARG(pc.idx16[3]), CLVR_ARG(pc.idx32[3]), CLVR_ARG(eb[3])));
+    CLVR_TRY(clvr_cl_run1d(cl, k, (n + ch - 1) / ch, 64, NULL, err));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, sc, CL_TRUE, 0, (size_t)n * 4, scalars, 0, NULL, NULL));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, ids, CL_TRUE, 0, (size_t)n * 4, element_ids, 0, NULL, NULL));
+cleanup:
+    clvr_cl_release(cl, &pts);
+    clvr_cl_release(cl, &sc);
+    clvr_cl_release(cl, &ids);
+    return s;
 }

@@ -22,6 +22,17 @@ typedef struct clvr_accel {
 clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, clvr_error *err);
 /* Releases everything; accepts NULL and half-built. */
 void clvr_accel_release(clvr_cl *cl, clvr_accel *a);
+/* The element boxes' buffers piece by piece, as the kernels take them:
+ * out[0] NULL when there are none, pieces c lacks a placeholder. */
+void clvr_accel_get_ebox_pieces(const clvr_clustered *c, const clvr_accel *a, cl_mem out[CLVR_MAX_SPLITS]);
+/* Point location on the device (the clvr_locate_points_split kernel, every
+ * piece of a split mesh): n points as float4 (x, y, z, unused) in, the
+ * interpolated scalar and global sorted element id (CLVR_BVH_NOT_FOUND
+ * outside) per point out. hints, chain: as the kernel (chain 0 or 1: one
+ * point per work item, the full walk). */
+clvr_status clvr_accel_locate(clvr_cl *cl, const clvr_clustered *c, const clvr_accel *a, const float *points,
+                              uint32_t n, uint32_t hints, uint32_t chain, float *scalars, uint32_t *element_ids,
+                              clvr_error *err);
 /* Device bytes of the two-level BVH (the paper's "BVH size"). */
 uint64_t clvr_accel_bvh_bytes(const clvr_accel *a);
 

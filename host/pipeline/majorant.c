@@ -84,9 +84,14 @@ clvr_status clvr_majorants_build_grid(clvr_majorants *m, const clvr_frame *f, cl
     /* Per element, not per sampling cluster: tighter cells (majorant.cl). */
     const clvr_clustered *c = m->mesh;
     cl_uint ninst = (cl_uint)c->num_instances, nelem = (cl_uint)c->num_elements;
-    CLVR_TRY(CLVR_CL_ARGS(m->k_grid_splat_el, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(c->vertices),
-                          CLVR_ARG(c->idx16), CLVR_ARG(c->idx32), CLVR_ARG(nelem), CLVR_ARG(frame),
-                          CLVR_ARG(m->grid_range)));
+    clvr_clustered_pieces pc; /* every piece of a split mesh (clvr_instance.piece) */
+    clvr_clustered_get_pieces(c, &pc);
+    CLVR_TRY(CLVR_CL_ARGS(m->k_grid_splat_el, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(nelem),
+                          CLVR_ARG(frame), CLVR_ARG(m->grid_range), CLVR_ARG(pc.vertices[0]), CLVR_ARG(pc.idx16[0]),
+                          CLVR_ARG(pc.idx32[0]), CLVR_ARG(pc.vertices[1]), CLVR_ARG(pc.idx16[1]),
+                          CLVR_ARG(pc.idx32[1]), CLVR_ARG(pc.vertices[2]), CLVR_ARG(pc.idx16[2]),
+                          CLVR_ARG(pc.idx32[2]), CLVR_ARG(pc.vertices[3]), CLVR_ARG(pc.idx16[3]),
+                          CLVR_ARG(pc.idx32[3])));
     if (nelem) CLVR_TRY(clvr_cl_run1d(cl, m->k_grid_splat_el, nelem, 64, NULL, err));
     m->grid_res = res;
     memcpy(m->grid_lo, f->grid_lo, sizeof m->grid_lo);

@@ -488,6 +488,13 @@ static void *grow(grow_array *a, uint64_t more)
                      : mmap(NULL, want, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
         }
         if (q == MAP_FAILED) return NULL;
+        /* Transparent huge pages for the result's arrays (THP is often
+         * "madvise" only): each partition's append writes fresh pages, and
+         * with 4 KiB pages their faults made the merge stage superlinear.
+         * Measured on 100M mixed (24 partitions, interleaved runs, load
+         * 1.5-2): merge 3.0-3.4 s -> 0.47-0.50 s; 10M: 0.109 -> 0.037-0.041
+         * s; peak RSS unchanged (4.12 GB). Advice only: failure is harmless. */
+        (void)madvise(q, want, MADV_HUGEPAGE);
         a->p = q;
         a->mapped = want;
     }
@@ -503,6 +510,107 @@ static void grow_free(grow_array *a)
 }
 
 enum { ARR_VERTICES, ARR_IDX16, ARR_IDX32, ARR_INSTANCES, ARR_LEAVES, ARR_SAMPLING, ARR_ORDER, ARR_COUNT };
+
+/* ------------------------------------------------------------ pieces */
+
+clvr_status clvr_partition_pieces(clvr_instance *inst, uint64_t n, uint64_t limit, int element_boxes,
+                                  const char *what, clvr_clustered *c, clvr_error *err)
+{
+    /* The split arrays: entry size, total entries, and for instance i its
+     * first entry and entry count. */
+    enum { SV, S16, S32, SBOX, SN };
+    static const char *const names[SN] = {"clustered vertices", "16-bit indices", "32-bit indices", "element boxes"};
+    static const uint64_t size[SN] = {16, 2, 4, 6};
+    const uint64_t total[SN] = {c->num_vertices, c->num_idx16, c->num_idx32, element_boxes ? c->num_elements : 0};
+    const char *name = what ? what : "mesh";
+    uint64_t base[SN] = {0}, end[SN] = {0}; /* the current piece's first entry; the entries so far */
+    uint32_t piece = 0, piece_first_element = 0;
+    memset(c->piece_vertices, 0, sizeof c->piece_vertices);
+    memset(c->piece_idx16, 0, sizeof c->piece_idx16);
+    memset(c->piece_idx32, 0, sizeof c->piece_idx32);
+    memset(c->piece_elements, 0, sizeof c->piece_elements);
+    /* First the one cause no number of pieces mends: an instance cluster
+     * whose own share of an array exceeds the limit. */
+    for (uint64_t i = 0; i < n; ++i) {
+        const clvr_instance *in = &inst[i];
+        const uint64_t slots = (uint64_t)in->num_elements * clvr_cell_vertex_count(in->type);
+        const uint64_t bytes[SN] = {in->num_vertices * size[SV], in->index_bits == 32 ? 0 : slots * size[S16],
+                                    in->index_bits == 32 ? slots * size[S32] : 0,
+                                    element_boxes ? in->num_elements * size[SBOX] : 0};
+        for (int a = 0; a < SN; ++a)
+            if (bytes[a] > limit)
+                return clvr_error_set(
+                    err, CLVR_ERR_DEVICE_MEMORY,
+                    "%s: instance cluster %llu alone needs %llu bytes (%.3f GB) of %s in one buffer but the device "
+                    "allows at most %llu bytes per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE, or CLVR_MAX_ALLOC_BYTES "
+                    "when set); the split arrays are cut only between instance clusters: raise CLVR_MAX_ALLOC_BYTES "
+                    "(a testing knob) or use a device with a larger allocation limit",
+                    name, (unsigned long long)i, (unsigned long long)bytes[a], (double)bytes[a] / 1e9, names[a],
+                    (unsigned long long)limit);
+    }
+    for (uint64_t i = 0; i < n; ++i) {
+        clvr_instance *in = &inst[i];
+        const uint64_t slots = (uint64_t)in->num_elements * clvr_cell_vertex_count(in->type);
+        const int wide = in->index_bits == 32;
+        uint64_t first[SN] = {in->first_vertex, wide ? end[S16] : in->first_index, wide ? in->first_index : end[S32],
+                              in->first_element};
+        uint64_t count[SN] = {in->num_vertices, wide ? 0 : slots, wide ? slots : 0, element_boxes ? in->num_elements : 0};
+        for (int a = 0; a < SN; ++a) {
+            if (a == SBOX && !element_boxes) first[a] = end[a];
+            if (first[a] != end[a]) /* the arrays follow the instance order (preprocessing writes them so) */
+                return clvr_error_set(err, CLVR_ERR_INTERNAL,
+                                      "%s: instance %llu's %s start at %llu, not after the previous instance's "
+                                      "(%llu); the arrays cannot be cut into pieces (a bug: please report it)",
+                                      name, (unsigned long long)i, names[a], (unsigned long long)first[a],
+                                      (unsigned long long)end[a]);
+        }
+        int cut = 0;
+        for (int a = 0; a < SN; ++a) cut |= (end[a] + count[a] - base[a]) * size[a] > limit;
+        if (cut) {
+            if (piece + 1 >= CLVR_MAX_SPLITS) {
+                uint64_t need = 0; /* at least this many pieces, from the largest array */
+                int worst = 0;
+                for (int a = 0; a < SN; ++a) {
+                    const uint64_t k = (total[a] * size[a] + limit - 1) / limit;
+                    if (k > need) need = k, worst = a;
+                }
+                if (need <= CLVR_MAX_SPLITS) need = CLVR_MAX_SPLITS + 1; /* instance boundaries cost the rest */
+                return clvr_error_set(
+                    err, CLVR_ERR_DEVICE_MEMORY,
+                    "%s: the %s take %.3f GB, more than %u pieces of at most %.3f GB (the device's largest buffer, "
+                    "CL_DEVICE_MAX_MEM_ALLOC_SIZE, or CLVR_MAX_ALLOC_BYTES when set) hold (at least %llu needed); "
+                    "use a smaller (cropped or decimated) mesh or a device with a larger allocation limit",
+                    name, names[worst], (double)(total[worst] * size[worst]) / 1e9, CLVR_MAX_SPLITS,
+                    (double)limit / 1e9, (unsigned long long)need);
+            }
+            ++piece;
+            for (int a = 0; a < SN; ++a) base[a] = end[a];
+            piece_first_element = in->first_element;
+            c->piece_vertices[piece] = base[SV];
+            c->piece_idx16[piece] = base[S16];
+            c->piece_idx32[piece] = base[S32];
+            c->piece_elements[piece] = piece_first_element;
+        }
+        for (int a = 0; a < SN; ++a) end[a] += count[a];
+        in->piece = piece;
+        in->piece_first_element = piece_first_element;
+        in->first_vertex -= (uint32_t)base[SV];
+        in->first_index -= wide ? base[S32] : base[S16];
+    }
+    if (end[SV] != total[SV] || end[S16] != total[S16] || end[S32] != total[S32])
+        return clvr_error_set(err, CLVR_ERR_INTERNAL,
+                              "%s: the instances cover %llu vertices and %llu + %llu indices of %llu and %llu + %llu "
+                              "(a bug: please report it)",
+                              name, (unsigned long long)end[SV], (unsigned long long)end[S16],
+                              (unsigned long long)end[S32], (unsigned long long)total[SV],
+                              (unsigned long long)total[S16], (unsigned long long)total[S32]);
+    c->num_pieces = piece + 1;
+    c->piece_vertices[c->num_pieces] = total[SV];
+    c->piece_idx16[c->num_pieces] = total[S16];
+    c->piece_idx32[c->num_pieces] = total[S32];
+    c->piece_elements[c->num_pieces] = c->num_elements;
+    return CLVR_OK;
+}
 
 static clvr_status read_into(clvr_cl *cl, grow_array *a, cl_mem b, uint64_t bytes, const char *what, void **tail,
                              clvr_error *err)
@@ -699,6 +807,10 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
             {ARR_LEAVES, &out->leaf_boxes, "leaf boxes"},        {ARR_SAMPLING, &out->sampling, "sampling clusters"},
             {ARR_ORDER, &out->order, "element order"},
         };
+        /* Arrays of instance clusters above the device's largest buffer
+         * are cut into pieces at instance boundaries (docs/large-meshes.md). */
+        CLVR_TRY(clvr_partition_pieces((clvr_instance *)arr[ARR_INSTANCES].p, out->num_instances, cl->max_alloc_bytes,
+                                       !opt.no_element_boxes, NULL, out, err));
         out->host_instances = malloc((out->num_instances ? out->num_instances : 1) * sizeof(clvr_instance));
         if (!out->host_instances) {
             s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the instance table");
@@ -706,10 +818,29 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         }
         if (out->num_instances)
             memcpy(out->host_instances, arr[ARR_INSTANCES].p, out->num_instances * sizeof(clvr_instance));
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, 16, NULL, "piece placeholder", &out->piece_dummy, err));
         for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) {
             grow_array *a = &arr[bufs[i].a];
             if (bufs[i].a == ARR_ORDER && !opt.keep_order) continue;
-            CLVR_TRY(clvr_cl_buffer(cl, fl, a->used, a->p, bufs[i].what, bufs[i].m, err));
+            const uint64_t *prefix = bufs[i].a == ARR_VERTICES ? out->piece_vertices
+                                     : bufs[i].a == ARR_IDX16  ? out->piece_idx16
+                                     : bufs[i].a == ARR_IDX32  ? out->piece_idx32
+                                                               : NULL;
+            if (prefix && out->num_pieces > 1) {
+                /* One buffer per piece over its range of the host array (on
+                 * a CPU device in place, as the whole array would be). */
+                const uint64_t esize = bufs[i].a == ARR_VERTICES ? 16 : bufs[i].a == ARR_IDX16 ? 2 : 4;
+                cl_mem *more = bufs[i].a == ARR_VERTICES ? out->vertices_more
+                               : bufs[i].a == ARR_IDX16  ? out->idx16_more
+                                                         : out->idx32_more;
+                for (uint32_t p = 0; p < out->num_pieces; ++p) {
+                    const uint64_t bytes = (prefix[p + 1] - prefix[p]) * esize;
+                    CLVR_TRY(clvr_cl_buffer(cl, fl, bytes, bytes ? (char *)a->p + prefix[p] * esize : NULL,
+                                            bufs[i].what, p ? &more[p - 1] : bufs[i].m, err));
+                }
+            } else {
+                CLVR_TRY(clvr_cl_buffer(cl, fl, a->used, a->p, bufs[i].what, bufs[i].m, err));
+            }
             if (cpu && a->used) { /* the buffer lives in the mapping: the result owns it now */
                 out->host_arrays[i] = a->p;
                 out->host_array_bytes[i] = a->mapped;

@@ -136,4 +136,20 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
                                         uint32_t count, uint64_t max_elements, int consume, clvr_clustered *out,
                                         uint32_t *num_partitions, clvr_error *err);
 
+/* Cuts a clustered mesh's split arrays (clustered vertices, 16- and 32-bit
+ * local indices, and the element boxes when element_boxes != 0) into
+ * pieces of at most `limit` bytes each at instance boundaries
+ * (docs/large-meshes.md): a new piece starts at the instance whose arrays
+ * would push any of them past the limit. inst: c's n instances, in global
+ * element order, with offsets into the whole arrays (c's num_vertices,
+ * num_idx16, num_idx32, num_elements give the totals); rewritten to
+ * piece-relative offsets (first_vertex, first_index), piece and
+ * piece_first_element. Sets c->num_pieces and the piece_* prefixes (the
+ * buffers are not touched). Fails with CLVR_ERR_DEVICE_MEMORY, naming the
+ * array, the sizes, the limit and what to do, when one instance alone
+ * exceeds the limit or more than CLVR_MAX_SPLITS pieces would be needed;
+ * `what` names the mesh in the messages (NULL: "mesh"). */
+clvr_status clvr_partition_pieces(clvr_instance *inst, uint64_t n, uint64_t limit, int element_boxes,
+                                  const char *what, clvr_clustered *c, clvr_error *err);
+
 #endif /* CLVR_PARTITION_H */

@@ -483,6 +483,12 @@ void clvr_clustered_release(clvr_cl *cl, clvr_clustered *c)
     clvr_cl_release(cl, &c->vertices);
     clvr_cl_release(cl, &c->idx16);
     clvr_cl_release(cl, &c->idx32);
+    for (uint32_t p = 0; p + 1 < CLVR_MAX_SPLITS; ++p) {
+        clvr_cl_release(cl, &c->vertices_more[p]);
+        clvr_cl_release(cl, &c->idx16_more[p]);
+        clvr_cl_release(cl, &c->idx32_more[p]);
+    }
+    clvr_cl_release(cl, &c->piece_dummy);
     clvr_cl_release(cl, &c->instances);
     clvr_cl_release(cl, &c->leaf_boxes);
     clvr_cl_release(cl, &c->sampling);
@@ -889,6 +895,13 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         }
     }
     clvr_clustered_fill_stats(out, m);
+    /* One piece: the whole arrays (partition.c splits an assembled result). */
+    out->num_pieces = 1;
+    out->piece_vertices[1] = out->num_vertices;
+    out->piece_idx16[1] = out->num_idx16;
+    out->piece_idx32[1] = out->num_idx32;
+    out->piece_elements[1] = out->num_elements;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, 16, NULL, "piece placeholder", &out->piece_dummy, err));
 
 cleanup:
     clvr_cl_release(cl, &pos);
@@ -942,14 +955,62 @@ cleanup:
     return s;
 }
 
+void clvr_clustered_get_pieces(const clvr_clustered *c, clvr_clustered_pieces *out)
+{
+    const cl_mem dummy = c->piece_dummy ? c->piece_dummy : c->instances;
+    out->vertices[0] = c->vertices;
+    out->idx16[0] = c->idx16;
+    out->idx32[0] = c->idx32;
+    for (uint32_t p = 1; p < CLVR_MAX_SPLITS; ++p) {
+        out->vertices[p] = c->vertices_more[p - 1] ? c->vertices_more[p - 1] : dummy;
+        out->idx16[p] = c->idx16_more[p - 1] ? c->idx16_more[p - 1] : dummy;
+        out->idx32[p] = c->idx32_more[p - 1] ? c->idx32_more[p - 1] : dummy;
+    }
+}
+
+/* Reads a split array back whole: piece p's `prefix[p + 1] - prefix[p]`
+ * entries of `size` bytes from bufs[p] into their place. */
+static clvr_status read_pieces(clvr_cl *cl, const cl_mem *bufs, const uint64_t *prefix, uint32_t pieces,
+                               uint64_t size, void **out, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const uint64_t bytes = prefix[pieces] * size;
+    *out = malloc(bytes ? bytes : 1);
+    if (!*out) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory downloading %llu bytes",
+                                     (unsigned long long)bytes);
+    for (uint32_t p = 0; p < pieces; ++p) {
+        const uint64_t n = (prefix[p + 1] - prefix[p]) * size;
+        if (n) CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, bufs[p], CL_TRUE, 0, n, (char *)*out + prefix[p] * size,
+                                                 0, NULL, NULL));
+    }
+cleanup:
+    return s;
+}
+
 clvr_status clvr_clustered_download(clvr_cl *cl, const clvr_clustered *c, clvr_clustered_host *h, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     memset(h, 0, sizeof *h);
-    CLVR_TRY(read_array(cl, c->vertices, c->num_vertices * 16, (void **)&h->vertices, err));
-    CLVR_TRY(read_array(cl, c->idx16, c->num_idx16 * 2, (void **)&h->idx16, err));
-    CLVR_TRY(read_array(cl, c->idx32, c->num_idx32 * 4, (void **)&h->idx32, err));
+    if (c->num_pieces > 1) {
+        clvr_clustered_pieces pc;
+        clvr_clustered_get_pieces(c, &pc);
+        CLVR_TRY(read_pieces(cl, pc.vertices, c->piece_vertices, c->num_pieces, 16, (void **)&h->vertices, err));
+        CLVR_TRY(read_pieces(cl, pc.idx16, c->piece_idx16, c->num_pieces, 2, (void **)&h->idx16, err));
+        CLVR_TRY(read_pieces(cl, pc.idx32, c->piece_idx32, c->num_pieces, 4, (void **)&h->idx32, err));
+    } else {
+        CLVR_TRY(read_array(cl, c->vertices, c->num_vertices * 16, (void **)&h->vertices, err));
+        CLVR_TRY(read_array(cl, c->idx16, c->num_idx16 * 2, (void **)&h->idx16, err));
+        CLVR_TRY(read_array(cl, c->idx32, c->num_idx32 * 4, (void **)&h->idx32, err));
+    }
     CLVR_TRY(read_array(cl, c->instances, c->num_instances * sizeof(clvr_instance), (void **)&h->instances, err));
+    for (uint64_t i = 0; c->num_pieces > 1 && i < c->num_instances; ++i) { /* offsets in the whole arrays */
+        clvr_instance *in = &h->instances[i];
+        const uint32_t p = in->piece < c->num_pieces ? in->piece : 0;
+        in->first_vertex += (uint32_t)c->piece_vertices[p];
+        in->first_index += in->index_bits == 16 ? c->piece_idx16[p] : c->piece_idx32[p];
+        in->piece = 0;
+        in->piece_first_element = 0;
+    }
     CLVR_TRY(read_array(cl, c->leaf_boxes, c->num_leaves * sizeof(clvr_box), (void **)&h->leaf_boxes, err));
     CLVR_TRY(read_array(cl, c->sampling, c->num_sampling * sizeof(clvr_sampling_cluster), (void **)&h->sampling, err));
     if (c->order) CLVR_TRY(read_array(cl, c->order, c->num_elements * 4, (void **)&h->order, err));

@@ -87,6 +87,22 @@ typedef struct clvr_clustered {
                                  (partition.h); unmapped by clvr_clustered_release after the
                                  buffers; NULL otherwise */
     uint64_t host_array_bytes[8]; /* their mapped sizes */
+    /* The arrays whose entries belong to instance clusters are cut at
+     * instance boundaries into num_pieces buffers (docs/large-meshes.md) so
+     * that none exceeds the device's largest allocation: vertices, idx16 and
+     * idx32 above are piece 0 (the whole arrays when num_pieces is 1), the
+     * *_more buffers pieces 1 .. num_pieces - 1 (NULL past them). Piece p
+     * holds the vertices [piece_vertices[p], piece_vertices[p + 1]), the
+     * local indices [piece_idx16[p], ...) and [piece_idx32[p], ...) and the
+     * elements [piece_elements[p], ...) of the whole arrays; instances hold
+     * offsets inside their piece (clvr_instance.piece). num_pieces 0 (a
+     * result made by hand) counts as 1. piece_dummy: a 16-byte buffer the
+     * kernels get for the pieces a mesh does not have. */
+    uint32_t num_pieces;
+    cl_mem vertices_more[CLVR_MAX_SPLITS - 1], idx16_more[CLVR_MAX_SPLITS - 1], idx32_more[CLVR_MAX_SPLITS - 1];
+    cl_mem piece_dummy;
+    uint64_t piece_vertices[CLVR_MAX_SPLITS + 1], piece_idx16[CLVR_MAX_SPLITS + 1],
+        piece_idx32[CLVR_MAX_SPLITS + 1], piece_elements[CLVR_MAX_SPLITS + 1];
     uint32_t num_partitions;  /* partitions it was preprocessed in (1 for clvr_preprocess) */
     uint64_t num_elements, num_vertices, num_idx16, num_idx32, num_instances, num_instances16, num_leaves,
         num_sampling;
@@ -165,7 +181,18 @@ void clvr_pp_workspace_recycle(clvr_cl *cl, clvr_pp_workspace *ws, clvr_clustere
 clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_preprocess_options *o,
                                clvr_pp_workspace *ws, clvr_clustered *out, clvr_error *err);
 
-/* Host copies of every array of a clustered mesh (tests, tools). */
+/* The split arrays' device buffers piece by piece (index 0 .. CLVR_MAX_SPLITS
+ * - 1), c->piece_dummy (or, for a result without one, c->instances) for
+ * the pieces c does not have: what the kernels' piece arguments get. */
+typedef struct clvr_clustered_pieces {
+    cl_mem vertices[CLVR_MAX_SPLITS], idx16[CLVR_MAX_SPLITS], idx32[CLVR_MAX_SPLITS];
+} clvr_clustered_pieces;
+void clvr_clustered_get_pieces(const clvr_clustered *c, clvr_clustered_pieces *out);
+
+/* Host copies of every array of a clustered mesh (tests, tools). A split
+ * mesh is read back whole: its pieces concatenated and its instances'
+ * offsets made global again (piece 0, piece_first_element 0), the same
+ * arrays as the mesh unsplit. */
 typedef struct clvr_clustered_host {
     float *vertices;          /* 4 * num_vertices */
     uint16_t *idx16;          /* num_idx16 */

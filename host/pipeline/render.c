@@ -346,11 +346,18 @@ static volume_bufs volume_of(const clvr_renderer *r)
     const clvr_clustered *m = r->mesh;
     const clvr_accel *b = r->bvh;
     const clvr_majorant_arrays maj = clvr_majorants_arrays(r->maj);
-    return (volume_bufs){.tf = r->tf_buf, .vertices = m->vertices, .idx16 = m->idx16, .idx32 = m->idx32,
+    clvr_clustered_pieces pc; /* the split arrays piece by piece (clvr_instance.piece) */
+    cl_mem eb[CLVR_MAX_SPLITS];
+    clvr_clustered_get_pieces(m, &pc);
+    clvr_accel_get_ebox_pieces(m, b, eb);
+    return (volume_bufs){.tf = r->tf_buf, .vertices = pc.vertices[0], .idx16 = pc.idx16[0], .idx32 = pc.idx32[0],
                          .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas,
                          .grid = maj.cells, .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes,
                          .sampling = m->sampling, .cluster_majorants = maj.clusters, .light = r->light_buf,
-                         .ebox = b->two_level.ebox};
+                         .ebox = eb[0], .vertices1 = pc.vertices[1], .vertices2 = pc.vertices[2],
+                         .vertices3 = pc.vertices[3], .idx16_1 = pc.idx16[1], .idx16_2 = pc.idx16[2],
+                         .idx16_3 = pc.idx16[3], .idx32_1 = pc.idx32[1], .idx32_2 = pc.idx32[2],
+                         .idx32_3 = pc.idx32[3], .ebox1 = eb[1], .ebox2 = eb[2], .ebox3 = eb[3]};
 }
 #define CLVR_VOLUME_ARG(T, name) CLVR_ARG(vol.name),
 
