@@ -267,6 +267,11 @@ static void test_on_device(clvr_context *ctx)
     write_hex(path_in("d.vtk"), lo, hi, 0.0f, 1.0f);
     clvr_dataset *ds = NULL;
     clvr_tracer *tr = NULL;
+    /* The device check from a .bin header (tests/test_memory_e2e.sh has a
+     * refusal): other formats pass, to be checked once loaded. */
+    OK(clvr_context_check_file(ctx, path_in("d.vtk"), 40, 30, 0, &msg));
+    FAILS(clvr_context_check_file(NULL, path_in("d.vtk"), 40, 30, 0, &msg), CLVR_RESULT_ERR_USAGE, "ctx");
+    FAILS(clvr_context_check_file(ctx, NULL, 40, 30, 0, &msg), CLVR_RESULT_ERR_USAGE, "path");
     OK(clvr_dataset_load(path_in("d.vtk"), NULL, &ds, &msg));
     OK(clvr_tracer_create(ctx, ds, NULL, 40, 30, &tr, &msg));
     if (!tr) return;

@@ -70,6 +70,15 @@ rc=$?
 if [ "$rc" -eq 2 ] && grep -q "element-boxes expects on, off or auto" "$tmp/erru"; then ok
 else bad "--element-boxes maybe: exit $rc: $(cat "$tmp/erru")"; fi
 
+# A device allocation limit too small (lowered for the test): the device
+# check runs from the .bin header too, before the mesh is read (no
+# "loading" line), with the numbers and exit code 4 (device memory).
+CLVR_MAX_ALLOC_BYTES=1000000 "$CLVR" "$tmp/m.bin" -o "$tmp/small.png" --spp 1 >"$tmp/out" 2>"$tmp/err"
+rc=$?
+if [ "$rc" -eq 4 ] && grep -q "CL_DEVICE_MAX_MEM_ALLOC_SIZE, lowered" "$tmp/err" && grep -q -- "--partitions" "$tmp/err" \
+   && ! grep -q "clvr: loading" "$tmp/err" && [ ! -e "$tmp/small.png" ]; then ok
+else bad "CLVR_MAX_ALLOC_BYTES=1000000: exit $rc: $(head -c 600 "$tmp/err")"; fi
+
 # An address space too small: clvr's own refusal, from the header. (Not
 # under AddressSanitizer, whose shadow memory alone needs terabytes of
 # address space: such a binary cannot start under ulimit -v at all.)

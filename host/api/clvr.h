@@ -365,6 +365,17 @@ CLVR_API clvr_result clvr_file_check_memory(const char *path, uint32_t width, ui
 CLVR_API clvr_result clvr_dataset_check_memory(const clvr_dataset *ds, const char *name, uint32_t width,
                                                uint32_t height, uint32_t partitions, int element_boxes,
                                                int *resolved, clvr_message *msg);
+/* Device check before reading a mesh file (1.2): a clvr .bin whose header
+ * says its mesh cannot fit ctx's device even in its smallest configuration
+ * (element boxes off; partitions as given, 0: automatic) with a width x
+ * height image fails with the numbers and what to do (ERR_DEVICE_MEMORY):
+ * a buffer that is never split above CL_DEVICE_MAX_MEM_ALLOC_SIZE, arrays
+ * that would need more than 4 pieces, or more than the device's global
+ * memory. On a GPU that is device memory, which clvr_file_check_memory
+ * (host memory) does not see. Other formats: OK (checked again when the
+ * scene is made). */
+CLVR_API clvr_result clvr_context_check_file(clvr_context *ctx, const char *path, uint32_t width, uint32_t height,
+                                             uint32_t partitions, clvr_message *msg);
 
 /* --- preprocessing as its own step (1.1) --------------------------------- */
 

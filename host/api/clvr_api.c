@@ -1670,6 +1670,28 @@ clvr_result clvr_file_check_memory(const char *path, uint32_t width, uint32_t he
                   &e, msg);
 }
 
+clvr_result clvr_context_check_file(clvr_context *ctx, const char *path, uint32_t width, uint32_t height,
+                                    uint32_t partitions, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_context_check_file";
+    if (!ctx) return finish(NULL_ARG(fn, "ctx"), &e, msg);
+    if (!path) return finish(NULL_ARG(fn, "path"), &e, msg);
+    clvr_mesh m;
+    memset(&m, 0, sizeof m);
+    clvr_error perr = {0};
+    if (clvr_mesh_peek_bin(path, &m.num_vertices, m.num_cells, &perr) != CLVR_OK)
+        return finish(CLVR_OK, &e, msg); /* not a .bin, or unreadable: the read will say */
+    /* The smallest run: without the element boxes (AUTO may drop them). */
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    po.no_element_boxes = 1;
+    return finish(clvr_limits_check_parts(&ctx->cl, &m, path, &po,
+                                          clvr_partition_elements(clvr_mesh_num_elements(&m), partitions),
+                                          width ? width : 1, height ? height : 1, &e),
+                  &e, msg);
+}
+
 clvr_result clvr_dataset_check_memory(const clvr_dataset *ds, const char *name, uint32_t width, uint32_t height,
                                       uint32_t partitions, int element_boxes, int *resolved, clvr_message *msg)
 {

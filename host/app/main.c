@@ -120,6 +120,14 @@ int main(int argc, char **argv)
      * (not by the OOM killer or an allocation failure inside the driver). */
     if (o.mesh_path && !o.info && clvr_file_check_memory(o.mesh_path, o.width, o.height, o.partitions, &msg))
         return fail_msg(&msg);
+    /* The device before the mesh, so that a .bin its memory or allocation
+     * limit cannot hold is refused from the header too (a GPU's memory is
+     * not the host's), and a bad --device fails before a long read. */
+    if (!o.info) {
+        TRY(clvr_context_create(o.device, &ctx, &msg));
+        TRY(clvr_context_build_info(ctx, !o.quiet, NULL, NULL, &msg));
+        if (o.mesh_path) TRY(clvr_context_check_file(ctx, o.mesh_path, o.width, o.height, o.partitions, &msg));
+    }
     double t0 = now_s();
     if (!o.quiet && !o.info) fprintf(stderr, "clvr: loading %s\n", o.mesh_path ? o.mesh_path : "the built-in scene");
     if (o.mesh_path) {
@@ -181,9 +189,7 @@ int main(int argc, char **argv)
                 "only without them (--element-boxes on insists)\n",
                 mesh_name);
 
-    /* --- device */
-    TRY(clvr_context_create(o.device, &ctx, &msg));
-    TRY(clvr_context_build_info(ctx, !o.quiet, NULL, NULL, &msg));
+    /* --- device (created before the mesh was read) */
     if (!o.quiet) {
         char dev[256], plat[256];
         TRY(clvr_context_describe(ctx, dev, sizeof dev, plat, sizeof plat, &msg));
