@@ -19,6 +19,7 @@
 #include "partition.h"
 #include "preprocess_stages.h"
 #include "render.h"
+#include "render_fixture.h"
 #include "test_util.h"
 #include "tf.h"
 
@@ -374,45 +375,20 @@ static int render_moments(clvr_cl *cl, const clvr_mesh *m, uint32_t K, uint32_t 
     clvr_error err = {0};
     clvr_clustered c = {0};
     clvr_accel a = {0};
-    clvr_renderer *r = NULL;
     clvr_render_settings set;
     clvr_render_settings_default(&set);
     set.width = W;
     set.height = H;
     set.sampler = CLVR_SAMPLER_INDEPENDENT; /* per-pixel error bars need independent frames */
-    clvr_tf tf = {0};
-    float *table = NULL;
-    size_t np = (size_t)W * H * 4;
-    *mean = malloc(np * sizeof(float));
-    *var = malloc(np * sizeof(float));
     clvr_mesh mm = *m; /* not consumed: a shallow copy is enough */
     clvr_status s = clvr_preprocess_partitioned(cl, &mm, NULL, K, 0, 0, &c, NULL, &err);
     if (s == CLVR_OK) s = clvr_accel_build(cl, &c, &a, &err);
-    if (s == CLVR_OK) s = clvr_renderer_create(cl, &c, &a, &set, &r, &err);
-    if (s == CLVR_OK)
-        s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, 2.0f, m->scalar_min, m->scalar_max, &err);
-    if (s == CLVR_OK) {
-        clvr_tf_set_extent(&tf, m->bounds_lo, m->bounds_hi);
-        uint32_t nt = clvr_tf_table_size(&tf);
-        table = malloc(nt * 4 * sizeof(float));
-        clvr_tf_bake(&tf, table, nt);
-        s = clvr_renderer_set_tf(r, table, nt, tf.range_lo, tf.range_hi, tf.density, &err);
+    if (s == CLVR_OK) s = fx_render_moments(cl, m, &c, &a, &set, n, mean, var, &err);
+    else {
+        *mean = calloc((size_t)W * H * 4, sizeof(float));
+        *var = calloc((size_t)W * H * 4, sizeof(float));
     }
-    clvr_camera cam;
-    if (s == CLVR_OK) s = clvr_camera_frame_box(&cam, m->bounds_lo, m->bounds_hi, 40.0f, W, H, &err);
-    if (s == CLVR_OK) s = clvr_renderer_set_camera(r, &cam, &err);
-    for (uint32_t i = 0; i < n && s == CLVR_OK; ++i) s = clvr_renderer_frame(r, &err);
-    if (s == CLVR_OK) s = clvr_renderer_read_moments(r, *mean, *var, &err);
-    if (s == CLVR_OK)
-        for (size_t i = 0; i < np; ++i) {
-            double mu = (*mean)[i] / n, v = (*var)[i] / n - mu * mu;
-            (*mean)[i] = (float)mu;
-            (*var)[i] = (float)(v > 0 ? v : 0);
-        }
     if (s != CLVR_OK) fprintf(stderr, "render K=%u: %s\n", K, err.msg);
-    free(table);
-    clvr_tf_free(&tf);
-    clvr_renderer_destroy(r);
     clvr_accel_release(cl, &a);
     clvr_clustered_release(cl, &c);
     return s != CLVR_OK;
