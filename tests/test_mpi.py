@@ -235,6 +235,14 @@ def main():
         check(p.returncode != 0 and len(msgs) == 1 and "no-such-dir" in msgs[0] and "rank 0" in msgs[0],
               "an unwritable output on rank 0: one message naming rank 0 and the path",
               f"exit {p.returncode}: {p.stderr[-1500:]}", "non-zero, one message")
+        # A .bin that is not there fails in the distributed loader's own
+        # agreement: one message, naming the file and the rank once.
+        gone = os.path.join(tmp, "no-such-mesh.bin")
+        p = run_mpi(2, clvr_args(out, 1, True, (gone,)), timeout=120)
+        msgs = [l for l in p.stderr.splitlines() if l.startswith("clvr:")]
+        check(p.returncode != 0 and len(msgs) == 1 and gone in msgs[0] and msgs[0].count("rank ") == 1,
+              "a missing .bin: one message naming the file and the rank once", f"exit {p.returncode}: "
+              f"{p.stderr[-1500:]}", "non-zero, one message, 'rank ' once")
         p = run_mpi(2, clvr_args(out, 1, True, ("--estimator", "delta")), timeout=120)
         msgs = [l for l in p.stderr.splitlines() if l.startswith("clvr:")]
         check(p.returncode == 2 and len(msgs) == 1 and "--estimator delta" in msgs[0] and "urm" in msgs[0],

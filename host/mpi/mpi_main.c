@@ -81,7 +81,10 @@ static clvr_status agree(mpi_run *m, clvr_status s, clvr_error *err)
         b.msg[sizeof b.msg - 1] = 0;
         MPI_Bcast(&b, (int)sizeof b, MPI_BYTE, first, m->comm);
         err->status = (clvr_status)b.status;
-        if (m->size > 1) snprintf(err->msg, sizeof err->msg, "rank %d: %s", first, b.msg);
+        /* A message that an inner agreement (clvr_mpi_agree, the loader's)
+         * already attributes ("rank K of N ...") is not prefixed again. */
+        const int ranked = strncmp(b.msg, "rank ", 5) == 0 && b.msg[5] >= '0' && b.msg[5] <= '9';
+        if (m->size > 1 && !ranked) snprintf(err->msg, sizeof err->msg, "rank %d: %s", first, b.msg);
         else memcpy(err->msg, b.msg, sizeof err->msg);
         s = err->status == CLVR_OK ? CLVR_ERR_INTERNAL : err->status;
     }
