@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "mesh_io.h"
+#include "partition.h"
 #include "preprocess_stages.h"
 #include "test_util.h"
 
@@ -527,6 +528,34 @@ static void test_workspace(clvr_cl *cl)
             TU_CHECK(c.vertices == NULL && c.leaf_boxes == NULL && c.instances == NULL);
             clvr_clustered_host_free(&rh);
         }
+    }
+    /* A result assembled on the host (partitions) lives over host mappings
+     * its release unmaps: recycling it must leave the workspace as it was
+     * (a buffer kept there would be written over freed memory next call),
+     * and the next call still gives fresh buffers' result. */
+    {
+        clvr_clustered p = {0}, q = {0}, r = {0};
+        clvr_clustered_host qh = {0}, rh = {0};
+        clvr_mesh mm = ms[0]; /* not consumed: a shallow copy is enough */
+        TU_CHECK_STATUS(clvr_preprocess_partitioned(cl, &mm, NULL, 3, 0, 0, &p, NULL, &err), CLVR_OK, &err);
+        TU_CHECK(p.host_arrays[0] != NULL);
+        clvr_pp_workspace ws2 = {0}; /* empty: it would take any buffer offered */
+        clvr_pp_workspace_recycle(cl, &ws2, &p);
+        TU_CHECK(p.vertices == NULL && p.idx16 == NULL && p.leaf_boxes == NULL);
+        int kept_any = 0;
+        for (int k = 0; k < CLVR_PP_WS_COUNT; ++k) kept_any |= ws2.buf[k] != NULL;
+        TU_CHECK(!kept_any);
+        if (!kept_any) /* (with a buffer over unmapped memory kept, this call would crash) */
+            TU_CHECK_STATUS(clvr_preprocess_ws(cl, &ms[0], NULL, &ws2, &q, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_preprocess(cl, &ms[0], NULL, &r, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_clustered_download(cl, &q, &qh, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_clustered_download(cl, &r, &rh, &err), CLVR_OK, &err);
+        TU_CHECK(same_arrays(&q, &qh, &r, &rh));
+        clvr_clustered_host_free(&qh);
+        clvr_clustered_host_free(&rh);
+        clvr_clustered_release(cl, &q);
+        clvr_clustered_release(cl, &r);
+        clvr_pp_workspace_release(cl, &ws2);
     }
     clvr_clustered_host kh = {0};
     TU_CHECK_STATUS(clvr_clustered_download(cl, &kept, &kh, &err), CLVR_OK, &err);

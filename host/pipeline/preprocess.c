@@ -579,6 +579,13 @@ static clvr_status ws_take(clvr_cl *cl, clvr_pp_workspace *ws, int slot, uint64_
 void clvr_pp_workspace_recycle(clvr_cl *cl, clvr_pp_workspace *ws, clvr_clustered *c)
 {
     if (!c) return;
+    /* A result assembled on the host (partitions, pieces) has its buffers
+     * over host mappings that clvr_clustered_release unmaps: none of them
+     * may outlive it in the workspace. */
+    int host_assembled = 0;
+    for (size_t i = 0; i < sizeof c->host_arrays / sizeof c->host_arrays[0]; ++i)
+        host_assembled |= c->host_arrays[i] != NULL;
+    if (host_assembled) ws = NULL;
     struct { cl_mem *m; int slot; } give[] = {
         {&c->vertices, CLVR_PP_WS_OUT_VERTICES}, {&c->idx16, CLVR_PP_WS_OUT_IDX16},
         {&c->idx32, CLVR_PP_WS_OUT_IDX32}, {&c->leaf_boxes, CLVR_PP_WS_OUT_LEAF_BOXES},
