@@ -1068,27 +1068,16 @@ clvr_result clvr_scene_drop_dataset(clvr_scene *sc, clvr_message *msg)
 
 clvr_scene *clvr_tracer_scene(clvr_tracer *tr) { return tr ? tr->sc : NULL; }
 
+static void settings_from_render(const clvr_render_settings *rs, int shadows, clvr_tracer_settings *s);
+
+/* The renderer's defaults, through the one conversion the tracer's getter
+ * uses too. */
 void clvr_tracer_settings_init(clvr_tracer_settings *s)
 {
     if (!s) return;
     clvr_render_settings rs;
     clvr_render_settings_default(&rs);
-    memset(s, 0, sizeof *s);
-    s->size = sizeof *s;
-    snprintf(s->method, sizeof s->method, "%s", clvr_render_method_name(rs.method));
-    snprintf(s->estimator, sizeof s->estimator, "%s", clvr_render_estimator_name(rs.estimator));
-    snprintf(s->sampler, sizeof s->sampler, "%s", rs.sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
-    s->seed = rs.seed;
-    s->urm_steps = rs.urm_steps;
-    s->step = rs.step > 0 ? rs.step : 0;
-    s->bins = rs.bins;
-    s->segments = rs.segments;
-    s->macrocells = rs.macrocells;
-    memcpy(s->light_dir, rs.light_dir, sizeof s->light_dir);
-    s->light_intensity = rs.light_intensity;
-    s->ambient = rs.ambient;
-    s->shadows = rs.shadows;
-    memcpy(s->background, rs.background, sizeof s->background);
+    settings_from_render(&rs, rs.shadows, s);
 }
 
 /* The public settings onto render settings rs (width, height, grid kept):
@@ -1164,7 +1153,8 @@ static clvr_status settings_to_render(const char *fn, const clvr_tracer_settings
 
 static void settings_from_render(const clvr_render_settings *rs, int shadows, clvr_tracer_settings *s)
 {
-    clvr_tracer_settings_init(s);
+    memset(s, 0, sizeof *s);
+    s->size = sizeof *s;
     snprintf(s->method, sizeof s->method, "%s", clvr_render_method_name(rs->method));
     snprintf(s->estimator, sizeof s->estimator, "%s", clvr_render_estimator_name(rs->estimator));
     snprintf(s->sampler, sizeof s->sampler, "%s", rs->sampler == CLVR_SAMPLER_LD ? "ld" : "independent");
