@@ -524,9 +524,11 @@ static clvr_status read_elements(load_ctx *c, uint64_t g0, uint64_t g1, eslice *
 
 /* The sample's elements in [g0, g1): every one whose global id is a
  * multiple of stride, read one by one (at most 65536 in the whole job),
- * into es with first[t] unused. */
+ * into es with first[t] unused; stride 1 (a small mesh) is the whole
+ * range, read as read_elements reads it. */
 static clvr_status read_sample(load_ctx *c, uint64_t g0, uint64_t g1, uint64_t stride, eslice *es)
 {
+    if (stride == 1) return read_elements(c, g0, g1, es);
     const clvr_bin_layout *L = &c->lay;
     clvr_status s = CLVR_OK;
     memset(es, 0, sizeof *es);
@@ -540,17 +542,11 @@ static clvr_status read_sample(load_ctx *c, uint64_t g0, uint64_t g1, uint64_t s
         if (!es->idx[t])
             return clvr_error_set(&c->e, CLVR_ERR_NO_MEMORY, "%s: cannot allocate the sample", c->path);
         es->count[t] = n;
-        if (stride == 1) { /* contiguous: one read */
-            s = read_at(c, L->cells_offset[t] + (a - t0) * nv * 4u, es->idx[t], n * nv * 4u, clvr_cell_type_name(t));
-            es->first[t] = a - t0;
-        } else {
-            for (uint64_t k = 0; k < n && s == CLVR_OK; ++k)
-                s = read_at(c, L->cells_offset[t] + (first + k * stride - t0) * nv * 4u, es->idx[t] + k * nv,
-                            nv * 4u, clvr_cell_type_name(t));
-            es->first[t] = first - t0; /* messages: approximate position only when stride > 1 */
-        }
-        if (s == CLVR_OK && stride == 1) s = check_indices(c, es, t);
-        else if (s == CLVR_OK) /* check each with its own element number */
+        for (uint64_t k = 0; k < n && s == CLVR_OK; ++k)
+            s = read_at(c, L->cells_offset[t] + (first + k * stride - t0) * nv * 4u, es->idx[t] + k * nv, nv * 4u,
+                        clvr_cell_type_name(t));
+        es->first[t] = first - t0;
+        if (s == CLVR_OK) /* check each with its own element number */
             for (uint64_t k = 0; k < n && s == CLVR_OK; ++k) {
                 eslice one;
                 memset(&one, 0, sizeof one);
