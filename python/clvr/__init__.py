@@ -300,7 +300,22 @@ def _ptr(a):
 # --------------------------------------------------------------------------- objects
 
 
-class Context:
+class _Handle:
+    """An object that owns one libclvr handle (self._h), released by its
+    class's _destroy (bound as a class attribute: module globals may be gone
+    when __del__ runs at exit)."""
+
+    def close(self):
+        """Releases the handle now (also done when the object goes away)."""
+        if getattr(self, "_h", None) and self._h.value:
+            self._destroy(self._h)
+            self._h = _P()
+
+    def __del__(self):
+        self.close()
+
+
+class Context(_Handle):
     """An OpenCL device: "pocl", "cpu", "gpu", "P:D" or part of a name
     (None: the first GPU, else PoCL). Renderers may share one."""
 
@@ -313,22 +328,13 @@ class Context:
         self.platform_name = plat.value.decode("utf-8", "replace")
         self._renderers = 0
 
-    # Bound here: module globals may be gone when __del__ runs at exit.
     _destroy = staticmethod(_lib.clvr_context_destroy)
-
-    def close(self):
-        if getattr(self, "_h", None) and self._h.value:
-            self._destroy(self._h)
-            self._h = _P()
-
-    def __del__(self):
-        self.close()
 
     def __repr__(self):
         return "clvr.Context(%r on %r)" % (self.device_name, self.platform_name)
 
 
-class Mesh:
+class Mesh(_Handle):
     """An unstructured mesh on the host: points, cells of the four types and
     named scalars per point. Build it with from_arrays, from_meshio,
     from_vtk or load. Ownership is stated per constructor: from_arrays
@@ -483,12 +489,7 @@ class Mesh:
 
     def close(self):
         """Releases the mesh (a Renderer made from it keeps libclvr's copy alive)."""
-        if getattr(self, "_h", None) and self._h.value:
-            self._destroy(self._h)
-            self._h = _P()
-
-    def __del__(self):
-        self.close()
+        super().close()
 
     def _counts(self):
         n, nf = _U64(), _U32()
@@ -585,7 +586,7 @@ def _vec3(name, v):
     return _c_float3(*a)
 
 
-class Scene:
+class Scene(_Handle):
     """A mesh preprocessed on a device (Quick Clusters and the trees), as its
     own, timed step; Renderers made from it share it.
 
@@ -609,14 +610,6 @@ class Scene:
         _call(_lib.clvr_scene_create, self.context._h, mesh._h, _b(field), ctypes.byref(ps), ctypes.byref(self._h))
 
     _destroy = staticmethod(_lib.clvr_scene_destroy)
-
-    def close(self):
-        if getattr(self, "_h", None) and self._h.value:
-            self._destroy(self._h)
-            self._h = _P()
-
-    def __del__(self):
-        self.close()
 
     @property
     def stats(self):
@@ -686,7 +679,7 @@ def _settings_apply(ts, kw):
         ts.clip_box = 1 if kw.get("clip_box", True) else 0
 
 
-class Renderer:
+class Renderer(_Handle):
     """The clvr path tracer over one mesh: preprocesses it on the device
     (Quick Clusters) once, then renders progressively.
 
@@ -745,12 +738,7 @@ class Renderer:
 
     def close(self):
         """Releases the device memory now (also done when the object goes away)."""
-        if getattr(self, "_h", None) and self._h.value:
-            self._destroy(self._h)
-            self._h = _P()
-
-    def __del__(self):
-        self.close()
+        super().close()
 
     def __enter__(self):
         return self
