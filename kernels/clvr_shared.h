@@ -486,8 +486,8 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
  * a frame from the counter-based generator keyed by (pixel, frame, seed),
  * frames independent. ld: the first CLVR_LD_DIMS uniforms (sub-pixel
  * position, first free flight of the primary and of the shadow ray, the
- * march offset) from a per-pixel shifted Kronecker sequence over the frame
- * index (kernels/rng.h), the rest as independent; each frame is still
+ * march offset) from a per-pixel Owen-scrambled Sobol' sequence over the
+ * frame index (kernels/rng.h), the rest as independent; each frame is still
  * unbiased, the running mean converges faster, but frames are correlated. */
 #define CLVR_SAMPLER_INDEPENDENT 0u
 #define CLVR_SAMPLER_LD 1u

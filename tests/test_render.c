@@ -846,25 +846,54 @@ static void test_ld_sequence(void)
             for (int b = 0; b < a; ++b) TU_CHECK(fabs(cross[a][b] / P * 12) < 5.0 / sqrt((double)P));
         }
     }
-    /* Over the frames of one pixel: every 2D projection of 256 frames on a
-     * 16x16 grid puts at most 4 points in a cell (independent draws put 8
-     * or more in some cell of these 6 x 64 projections; a Kronecker sequence
-     * spreads them evenly, which is its point). */
-    int worst = 0;
+    /* The direction numbers are the Joe-Kuo ones: recomputed here from
+     * (s, a, m) by the Sobol' recurrence v_k = v_{k-s} ^ (v_{k-s} >> s) ^
+     * sum_j a_j v_{k-j}. */
+    static const uint32_t sk[4] = {1, 2, 3, 3}, ak[4] = {0, 1, 1, 2}, mk[4][3] = {{1}, {1, 3}, {1, 3, 1}, {1, 1, 1}};
+    int bad_dirs = 0;
+    for (int d = 0; d < 4; ++d) {
+        uint32_t v[32];
+        for (uint32_t k = 0; k < 32; ++k) {
+            if (k < sk[d]) {
+                v[k] = mk[d][k] << (31 - k);
+            } else {
+                v[k] = v[k - sk[d]] ^ (v[k - sk[d]] >> sk[d]);
+                for (uint32_t j = 1; j < sk[d]; ++j)
+                    if ((ak[d] >> (sk[d] - 1 - j)) & 1u) v[k] ^= v[k - j];
+            }
+            bad_dirs += v[k] != clvr_sobol_dirs[d][k];
+        }
+    }
+    TU_CHECK_EQ_U64(bad_dirs, 0);
+    /* Over the frames of one pixel: the first 2^k frames (k = 1 .. 8) put
+     * exactly one value in each 1/2^k interval of every dimension, and the
+     * sub-pixel pair (dimensions 0 and 1) in each cell of every 2^-i x
+     * 2^-(k-i) grid (a (0, k, 2)-net). Independent draws, or the Kronecker
+     * sequence this sampler replaced, fail both at k = 1 for most pixels. */
+    int not_strat = 0, not_net = 0;
     for (uint32_t p = 0; p < 64; ++p) {
         float u[256][D];
         for (uint32_t n = 0; n < 256; ++n) clvr_ld_sample(p * 7919u, n, 7, 0, u[n]);
-        for (int a = 0; a < (int)D; ++a)
-            for (int b = 0; b < a; ++b) {
-                int cells[16][16] = {{0}};
-                for (int n = 0; n < 256; ++n) {
-                    int c = ++cells[(int)(u[n][a] * 16)][(int)(u[n][b] * 16)];
-                    worst = c > worst ? c : worst;
-                }
+        for (uint32_t k = 1; k <= 8; ++k) {
+            const uint32_t n = 1u << k;
+            for (int a = 0; a < (int)D; ++a) {
+                uint8_t hit[256] = {0};
+                for (uint32_t i = 0; i < n; ++i) hit[(uint32_t)(u[i][a] * (float)n)]++;
+                for (uint32_t c = 0; c < n; ++c) not_strat += hit[c] != 1;
             }
+            for (uint32_t i = 0; i <= k; ++i) {
+                uint8_t hit[256] = {0};
+                for (uint32_t j = 0; j < n; ++j)
+                    hit[(uint32_t)(u[j][0] * (float)(1u << i)) * (1u << (k - i)) +
+                        (uint32_t)(u[j][1] * (float)(1u << (k - i)))]++;
+                for (uint32_t c = 0; c < n; ++c) not_net += hit[c] != 1;
+            }
+        }
     }
-    if (worst > 4) fprintf(stderr, "ld sequence: %d of 256 frames in one 1/16 x 1/16 cell\n", worst);
-    TU_CHECK(worst <= 4);
+    if (not_strat || not_net)
+        fprintf(stderr, "ld sequence: %d intervals not stratified, %d net cells not hit once\n", not_strat, not_net);
+    TU_CHECK_EQ_U64(not_strat, 0);
+    TU_CHECK_EQ_U64(not_net, 0);
 }
 
 int main(void)
