@@ -1,7 +1,8 @@
 /* bench_walk.c: what a point-location walk does per query, counted on the
  * host with kernels/locate.h's own code (CLVR_WALK_STAT): nodes of the top
  * and bottom trees visited, instances entered, leaf clusters scanned,
- * elements that pass their quantized box and their vertex box, and how often
+ * elements that pass their quantized box, elements given the exact
+ * containment test (barycentric or Newton), and how often
  * a ray's hint (clvr_locate_hinted) held the next sample. Issue #19 asks
  * where the walk's time goes on graded meshes; counts answer that without
  * hardware counters, which the benchmark VMs do not have. The mesh is
@@ -124,7 +125,7 @@ int main(int argc, char **argv)
            "walk, 1 thread\n",
            mesh_path, (unsigned long long)c.num_elements, leaf, nq, order_name, chain);
     printf("| mesh | order | leaf | found | top nodes | bottom nodes | instances | leaves | box-pass elements | "
-           "vertex-box elements | hint held | q/s (host, 1 thread) | load |\n");
+           "exact tests | hint held | q/s (host, 1 thread) | load |\n");
     printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     const char *base = strrchr(mesh_path, '/');
     printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3g | %.2f |\n",

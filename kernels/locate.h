@@ -245,8 +245,8 @@ CLVR_INLINE void clvr_ebox_build_leaf(const clvr_mesh_view *m, const clvr_instan
  * as its parent node n stores it in slot c, holds p); returns 1 and the
  * scalar and element id of the first one that contains p. Candidates are
  * first rejected by their quantized box (when m->ebox is set), then by
- * their vertex box (cheaper than a solve); tets then take the early-out
- * barycentric test, other types Newton. */
+ * their vertex box (cheaper than a solve; tets skip it behind a quantized
+ * box); tets then take the early-out barycentric test, other types Newton. */
 CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_arrays *a, const clvr_instance *inst,
                                     clvr_u32 leaf, CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 c, float px,
                                     float py, float pz, float *scalar, clvr_u32 *element_id)
@@ -285,7 +285,13 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_ar
             CLVR_WALK_STAT(ecand);
             if (inst->type == CLVR_CELL_TET) {
                 clvr_load_tet(a, inst, e, v);
-                if (!clvr_element_box_test(CLVR_CELL_TET, v, px, py, pz)) continue;
+                /* Past its quantized box, a tet goes straight to the
+                 * barycentric test: the float box (padded 1e-4 of the
+                 * extent, more than the test's 1e-5 tolerance reaches
+                 * outside the tet) rejected 5% of the candidates there and
+                 * cost 5% of a urm frame on post-tets. Same answers: that
+                 * box holds every point the test accepts. */
+                if (!eb && !clvr_element_box_test(CLVR_CELL_TET, v, px, py, pz)) continue;
                 CLVR_WALK_STAT(etest);
                 if (clvr_tet_sample(v, px, py, pz, scalar)) {
                     *element_id = e;
