@@ -421,9 +421,13 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 #define CLVR_URM_RR 0.05f
 #endif
 /* Residual points of one interval kept until its end point is known: their
- * count is Poisson with mean at most kappa (0.5 by default), which exceeds 8
- * with probability below 1e-9 (the extra points are then dropped). */
-#define CLVR_URM_MAX_PTS 8
+ * count is Poisson with mean at most CLVR_URM_MAX_MU (the residual rate per
+ * unit s is capped there, which keeps the estimate unbiased: ratio tracking
+ * is, for any rate), so it exceeds 16 with probability below 1e-10; the
+ * extra points would be dropped. With the defaults the mean is at most
+ * 0.5 on camera rays and 2 on the correction shadow ray. */
+#define CLVR_URM_MAX_PTS 16
+#define CLVR_URM_MAX_MU 2.0f
 /* Russian roulette on urm's correction shadow ray (clvr_render_track):
  * traced with probability CLVR_URM_SHADOW_RR_Q where the light grid's spread
  * at the pick is at most CLVR_URM_SHADOW_RR_SPREAD, always elsewhere.
@@ -436,6 +440,22 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 #endif
 #ifndef CLVR_URM_SHADOW_RR_Q
 #define CLVR_URM_SHADOW_RR_Q 0.25f
+#endif
+/* Residual points per unit s, as multiples of the majorant's rate (and of
+ * the kappa / 2 floor below): CLVR_URM_RESIDUAL_RATE on camera and
+ * light-grid rays, CLVR_URM_SHADOW_RESIDUAL_RATE on the correction shadow
+ * ray, whose transmittance error the correction multiplies by the
+ * reservoir's weight (and 1/q under roulette). 256^2, Owen-Sobol frames,
+ * 1/n fit seconds to 2% against rates 1 and 1: tets-1M 0.313 -> 0.243 s
+ * without shadows, 1.24 -> 0.48 s with (2 frames instead of 4); post-tets
+ * 0.083 -> 0.071 and 0.41 -> 0.27 s; comb-tets 3.05 -> 1.94 s. A shadow
+ * rate of 4 gave 0.51 / 0.28 s, 16 no more than 8; the light grid's rate
+ * hardly matters (bench/results/render-converge/2026-11-25-s24-sampler.md). */
+#ifndef CLVR_URM_RESIDUAL_RATE
+#define CLVR_URM_RESIDUAL_RATE 2.0f
+#endif
+#ifndef CLVR_URM_SHADOW_RESIDUAL_RATE
+#define CLVR_URM_SHADOW_RESIDUAL_RATE 8.0f
 #endif
 
 typedef struct clvr_urm {
@@ -451,6 +471,7 @@ typedef struct clvr_urm {
     float T;           /* transmittance estimate at the last quadrature point */
     int alive;
     int emit;          /* 0: transmittance only (shadow ray) */
+    float rate;        /* residual points per unit s over the majorant's rate (CLVR_URM_RESIDUAL_RATE) */
     float3 sum;        /* sum of T sigma / rho * colour */
     float wsum;        /* reservoir: total weight */
     float3 lit;        /* sum of T sigma / rho * colour * G (light grid) */
@@ -488,6 +509,7 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float u
     e->T = 1.0f;
     e->alive = 1;
     e->emit = emit;
+    e->rate = CLVR_URM_RESIDUAL_RATE;
     e->sum = (float3)(0.0f);
     e->wsum = 0.0f;
     e->pick = (float3)(0.0f);
@@ -555,7 +577,7 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
      * because the control (interpolated from neighbouring quadrature points,
      * perhaps in denser segments) can exceed this segment's majorant, and a
      * residual r weighs r^2 / mu in the variance. */
-    const float mu = fmax(m, 0.5f * e->kappa * rho) * inv_rho;
+    const float mu = fmin(e->rate * fmax(m, 0.5f * e->kappa * rho) * inv_rho, CLVR_URM_MAX_MU);
     float left = rho * (b - a);   /* warped length of the segment */
     float t = a;
     for (;;) {
@@ -643,10 +665,11 @@ inline float clvr_urm_end(clvr_urm *e)
 
 /* Transmittance estimate along [t0, t1] (u: the first quadrature offset). */
 inline float clvr_urm_transmittance(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, float u,
-                                    clvr_rng *rng, uint *samples, uint *nulls)
+                                    float rate, clvr_rng *rng, uint *samples, uint *nulls)
 {
     clvr_urm e;
     clvr_urm_begin(v->f, &e, t1 - t0, u, 0.0f, 0, rng);
+    e.rate = rate;
     CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
     return clvr_urm_end(&e);
 }
@@ -657,7 +680,8 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
 {
     float s0 = 0.0f, s1 = INFINITY;
     ++*rays;
-    return clvr_ray_clip(v->f, p, ldir, lo, hi, &s0, &s1) ? clvr_urm_transmittance(v, p, ldir, s0, s1, u, rng, samples, nulls)
+    return clvr_ray_clip(v->f, p, ldir, lo, hi, &s0, &s1) ? clvr_urm_transmittance(v, p, ldir, s0, s1, u, CLVR_URM_SHADOW_RESIDUAL_RATE, rng,
+                                                                    samples, nulls)
                                                    : 1.0f;
 }
 
@@ -677,8 +701,8 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
     float s0 = 0.0f, s1 = INFINITY, sum = 0.0f;
     if (!clvr_ray_clip(f, p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
     for (int k = 0; k < 2; ++k)
-        sum += clvr_urm_transmittance(v, p, ldir, s0, s1, ((float)k + clvr_rng_next(&rng)) * 0.5f, &rng, samples,
-                                      nulls);
+        sum += clvr_urm_transmittance(v, p, ldir, s0, s1, ((float)k + clvr_rng_next(&rng)) * 0.5f,
+                                      CLVR_URM_RESIDUAL_RATE, &rng, samples, nulls);
     return 0.5f * sum;
 }
 
