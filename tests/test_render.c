@@ -326,6 +326,136 @@ static void test_homogeneous(clvr_cl *cl)
     fixture_close(&fx);
 }
 
+/* ---- 1b. a step in extinction against the integral along each ray.
+ * The scalar ramps linearly in x across the unit box (every element type
+ * interpolates it exactly) and the transfer function puts a near-step in
+ * extinction at x = 1/2 (0.3 below, 3 above, over 1/63 of the range), so
+ * urm's control, linear between quadrature points, is wrong in the
+ * interval that holds the step: the residual ratio tracking must carry it.
+ * Expected opacity per pixel: 1 - exp(-integral of sigma along the chord),
+ * the integral by the midpoint rule on 4096 steps (sigma is piecewise linear
+ * in t), averaged over 16 x 16 sub-pixel rays. A urm that drops residual
+ * points (CLVR_URM_MAX_PTS 1) or that tracks a wrong rate fails here, where
+ * the homogeneous box (zero residual) cannot see it. */
+static double step_sigma(double x)
+{
+    const double p = x * 63.0; /* clvr_tf_position over [0, 1], 64 entries */
+    const double f = p <= 31.0 ? 0.0 : p >= 32.0 ? 1.0 : p - 31.0;
+    return 0.3 + f * (3.0 - 0.3);
+}
+
+static double step_opacity(const clvr_camera *cam, float px, float py, int *hit)
+{
+    float o[3], d[3];
+    clvr_camera_ray(cam, px, py, o, d);
+    double t0 = 0, t1 = 1e30;
+    for (int k = 0; k < 3; ++k) {
+        double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
+        if (a > b) { double t = a; a = b; b = t; }
+        t0 = a > t0 ? a : t0;
+        t1 = b < t1 ? b : t1;
+    }
+    *hit = t1 > t0;
+    if (!*hit) return 0.0;
+    const int steps = 4096;
+    const double dt = (t1 - t0) / steps;
+    double tau = 0;
+    for (int i = 0; i < steps; ++i) tau += step_sigma(o[0] + d[0] * (t0 + (i + 0.5) * dt)) * dt;
+    return 1.0 - exp(-tau);
+}
+
+static void test_step_medium(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 4;
+    p.mix = CLVR_SCENE_MIX_CYCLE;
+    p.field = CLVR_SCENE_FIELD_RAMP_X;
+    clvr_mesh m;
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    const uint32_t W = 24, H = 24, N = 400;
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, W, H)) return;
+    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
+    clvr_camera cam;
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    float table[64 * 4];
+    for (int i = 0; i < 64; ++i) {
+        table[4 * i] = table[4 * i + 1] = table[4 * i + 2] = 1.0f;
+        table[4 * i + 3] = i < 32 ? 0.3f : 3.0f;
+    }
+    set_table(&fx, table, 64, 0.0f, 1.0f);
+    fx.set.shadows = 0;
+    fx.set.sampler = CLVR_SAMPLER_INDEPENDENT;
+    /* the expected opacity of every pixel that no silhouette crosses */
+    double *expect = calloc((size_t)W * H, sizeof *expect);
+    if (!expect) { ++tu_fail_; fixture_close(&fx); return; }
+    for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+            int hits = 0, hit;
+            double acc = 0;
+            for (int sy = 0; sy < 16; ++sy)
+                for (int sx = 0; sx < 16; ++sx) {
+                    acc += step_opacity(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16, &hit);
+                    hits += hit;
+                }
+            expect[y * W + x] = hits == 256 && edge_hits(&cam, x, y) == 289 ? acc / 256 : -1.0;
+        }
+    /* Each estimator with dda and track at the defaults, then urm with 2
+     * points per ray and kappa 2: quadrature points far apart, so the
+     * control misses the step by much and the residual points (up to the
+     * rate cap of 2 per interval) carry the answer. */
+    const uint32_t methods[2] = {CLVR_RENDER_DDA, CLVR_RENDER_TRACK};
+    const clvr_render_settings defaults = fx.set;
+    for (uint32_t ci = 0; ci < 2 * CLVR_ESTIMATOR_COUNT + 1; ++ci) {
+        const uint32_t est = ci < 2 * CLVR_ESTIMATOR_COUNT ? ci / 2 : CLVR_ESTIMATOR_URM;
+        const int mi = ci < 2 * CLVR_ESTIMATOR_COUNT ? (int)(ci % 2) : 0;
+        {
+            fx.set.urm_steps = ci < 2 * CLVR_ESTIMATOR_COUNT ? defaults.urm_steps : 2;
+            fx.set.urm_kappa = ci < 2 * CLVR_ESTIMATOR_COUNT ? defaults.urm_kappa : 2.0f;
+            fx.set.estimator = est;
+            fx.set.method = methods[mi];
+            fx.set.macrocells = 7;
+            float *mean, *var;
+            if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
+            int bad = 0, tested = 0;
+            double dsum = 0, vsum = 0;
+            for (size_t i = 0; i < (size_t)W * H; ++i) {
+                if (expect[i] < 0) continue;
+                /* delta's opacity is a 0/1 outcome: its variance is known */
+                const double got = mean[4 * i + 3],
+                             v = est == CLVR_ESTIMATOR_DELTA ? expect[i] * (1.0 - expect[i]) / N : var[4 * i + 3] / N;
+                ++tested;
+                dsum += got - expect[i];
+                vsum += v;
+                if (fabs(got - expect[i]) > K_SIGMA * sqrt(v) + 1e-4) {
+                    if (bad < 3)
+                        fprintf(stderr, "step medium %s %s: pixel %zu opacity %.4f, expected %.4f +- %.4f\n",
+                                clvr_render_estimator_name(est), clvr_render_method_name(methods[mi]), i, got,
+                                expect[i], K_SIGMA * sqrt(v));
+                    ++bad;
+                }
+            }
+            TU_CHECK_EQ_U64(bad, 0);
+            if (tested < 150) fprintf(stderr, "step medium: %d pixels tested\n", tested);
+            TU_CHECK(tested >= 150);
+            /* aggregate: a bias of a few tenths of a percent spread over the image */
+            if (fabs(dsum) > K_SIGMA * sqrt(vsum) + 1e-4 * tested) {
+                fprintf(stderr, "step medium %s %s (%u points, kappa %g): opacity off by %.5f on average (%.1f SE)\n",
+                        clvr_render_estimator_name(est), clvr_render_method_name(methods[mi]), fx.set.urm_steps,
+                        (double)fx.set.urm_kappa, dsum / tested, fabs(dsum) / sqrt(vsum));
+                ++tu_fail_;
+            }
+            free(mean);
+            free(var);
+        }
+    }
+    free(expect);
+    fixture_close(&fx);
+}
+
 /* ---- 1c. the urm light grid (the shadow rays' control variate) against
  * the analytic transmittance toward the light in a homogeneous unit box,
  * exp(-sigma * distance from the cell centre to the box along the light),
@@ -903,6 +1033,7 @@ int main(void)
     test_ld_sequence();
     tu_open_device(&cl);
     test_homogeneous(&cl);
+    test_step_medium(&cl);
     test_light_grid(&cl);
     test_clip(&cl);
     test_majorants(&cl);
