@@ -6,7 +6,8 @@
  * a ray's hint (clvr_locate_hinted) held the next sample. Issue #19 asks
  * where the walk's time goes on graded meshes; counts answer that without
  * hardware counters, which the benchmark VMs do not have. The mesh is
- * clustered by the real preprocessing (on the OpenCL device), then read back.
+ * clustered by the real preprocessing (on the OpenCL device), then read back
+ * with clvr_clustered_download.
  *
  *   bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] [--queries Q]
  *
@@ -34,16 +35,6 @@ static walk_counts g_walk;
 #include "preprocess.h"
 #include "../kernels/locate.h"
 
-static clvr_status read_back(clvr_cl *cl, cl_mem b, size_t bytes, const char *what, void **out, clvr_error *err)
-{
-    clvr_status s = CLVR_OK;
-    *out = malloc(bytes ? bytes : 16);
-    if (!*out) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %s (%zu bytes)", what, bytes);
-    if (bytes) CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, b, CL_TRUE, 0, bytes, *out, 0, NULL, NULL));
-cleanup:
-    return s;
-}
-
 int main(int argc, char **argv)
 {
     const char *mesh_path = NULL, *device = NULL, *order_name = "rays";
@@ -62,7 +53,8 @@ int main(int argc, char **argv)
     }
     const int order = bench_order_from_name(order_name);
     if (!mesh_path || order < 0 || leaf < 1 || leaf > 128 || nq < 1) {
-        fprintf(stderr, "bench_walk: needs --mesh FILE; --order random, sorted or rays; --leaf 1..128; --queries >= 1\n");
+        fprintf(stderr, "bench_walk: needs --mesh FILE; --order random, sorted or rays; --leaf 1..128; "
+                        "--queries >= 1\n");
         return 2;
     }
     clvr_error err = {0};
@@ -80,27 +72,25 @@ int main(int argc, char **argv)
     clvr_preprocess_options_default(&o);
     o.leaf_size = leaf;
     clvr_clustered c;
-    void *vertices = NULL, *idx16 = NULL, *idx32 = NULL, *leaf_boxes = NULL;
+    clvr_clustered_host arrays;
+    memset(&arrays, 0, sizeof arrays);
     clvr_bvh_host hb;
     memset(&hb, 0, sizeof hb);
     uint8_t *ebox = NULL;
     float(*pts)[4] = NULL;
+    /* The host copies of the clustered arrays (a split mesh comes back whole,
+     * its instances' offsets global), under a host-built tree. */
     clvr_status s = clvr_preprocess(&cl, &m, &o, &c, &err);
-    if (s == CLVR_OK && c.num_pieces > 1)
-        s = clvr_error_set(&err, CLVR_ERR_BAD_FIELD, "bench_walk: %s is split into %u pieces; use a smaller mesh",
-                           mesh_path, c.num_pieces);
-    if (s == CLVR_OK) s = read_back(&cl, c.vertices, c.num_vertices * sizeof(clvr_vec4), "vertices", &vertices, &err);
-    if (s == CLVR_OK) s = read_back(&cl, c.idx16, c.num_idx16 * 2, "16-bit indices", &idx16, &err);
-    if (s == CLVR_OK) s = read_back(&cl, c.idx32, c.num_idx32 * 4, "32-bit indices", &idx32, &err);
-    if (s == CLVR_OK) s = read_back(&cl, c.leaf_boxes, c.num_leaves * sizeof(clvr_box), "leaf boxes", &leaf_boxes, &err);
+    if (s == CLVR_OK) s = clvr_clustered_download(&cl, &c, &arrays, &err);
     if (s == CLVR_OK)
-        s = clvr_bvh_build_host(c.host_instances, (uint32_t)c.num_instances, leaf_boxes, (uint32_t)c.num_leaves, &hb,
-                                &err);
-    clvr_mesh_view mv = {hb.tlas, hb.blas, c.host_instances, vertices, idx16, idx32, hb.tlas_root, leaf, NULL,
-                         CLVR_VIEW_ONE_PIECE};
+        s = clvr_bvh_build_host(arrays.instances, (uint32_t)c.num_instances, arrays.leaf_boxes,
+                                (uint32_t)c.num_leaves, &hb, &err);
+    clvr_mesh_view mv = {hb.tlas, hb.blas, arrays.instances, (const clvr_vec4 *)arrays.vertices,
+                         arrays.idx16, arrays.idx32, hb.tlas_root, leaf, NULL, CLVR_VIEW_ONE_PIECE};
     if (s == CLVR_OK && !(ebox = malloc((size_t)c.num_elements * CLVR_EBOX_BYTES + 1)))
         s = clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for element boxes");
-    if (s == CLVR_OK) s = clvr_bvh_element_boxes_host(&mv, (uint32_t)c.num_instances, (uint32_t)c.num_leaves, ebox, &err);
+    if (s == CLVR_OK)
+        s = clvr_bvh_element_boxes_host(&mv, (uint32_t)c.num_instances, (uint32_t)c.num_leaves, ebox, &err);
     if (s == CLVR_OK && !(pts = bench_make_points(&m, nq, order)))
         s = clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u points", nq);
     if (s != CLVR_OK) {
@@ -135,10 +125,7 @@ int main(int argc, char **argv)
     free(pts);
     free(ebox);
     clvr_bvh_host_free(&hb);
-    free(vertices);
-    free(idx16);
-    free(idx32);
-    free(leaf_boxes);
+    clvr_clustered_host_free(&arrays);
     clvr_clustered_release(&cl, &c);
     clvr_cl_destroy(&cl);
     clvr_mesh_free(&m);
