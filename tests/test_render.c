@@ -186,20 +186,29 @@ static void set_table(fixture *fx, const float *table, uint32_t n, float lo, flo
 }
 
 /* ---- 1. homogeneous box against 1 - exp(-sigma d) */
-/* Length of the camera ray through image point (px, py) inside the unit box
- * [0, 1]^3 (slab test in double), 0 when it misses. */
-static double unit_box_chord(const clvr_camera *cam, float px, float py)
+/* The camera ray through image point (px, py) (origin o, direction d) and
+ * its span [t0, t1] inside the unit box [0, 1]^3 (slab test in double);
+ * returns 0 when it misses. */
+static int unit_box_span(const clvr_camera *cam, float px, float py, float *o, float *d, double *t0, double *t1)
 {
-    float o[3], d[3];
     clvr_camera_ray(cam, px, py, o, d);
-    double t0 = 0, t1 = 1e30;
+    *t0 = 0;
+    *t1 = 1e30;
     for (int k = 0; k < 3; ++k) {
         double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
         if (a > b) { double t = a; a = b; b = t; }
-        t0 = a > t0 ? a : t0;
-        t1 = b < t1 ? b : t1;
+        *t0 = a > *t0 ? a : *t0;
+        *t1 = b < *t1 ? b : *t1;
     }
-    return t1 > t0 ? t1 - t0 : 0;
+    return *t1 > *t0;
+}
+
+/* Length of that ray inside the unit box, 0 when it misses. */
+static double unit_box_chord(const clvr_camera *cam, float px, float py)
+{
+    float o[3], d[3];
+    double t0, t1;
+    return unit_box_span(cam, px, py, o, d, &t0, &t1) ? t1 - t0 : 0;
 }
 
 /* Rays through the 17 x 17 lattice of pixel (x, y) including its border
@@ -212,25 +221,34 @@ static int edge_hits(const clvr_camera *cam, uint32_t x, uint32_t y)
     return hits;
 }
 
-static void test_homogeneous(clvr_cl *cl)
+/* The unit box of 4^3 cells, hexes, tets, wedges and pyramids side by
+ * side, with the given scalar field, opened as a w x h fixture seen by *cam
+ * from (2.2, 1.8, 2.6), shadows off. Returns 0 when it is ready. */
+static int open_unit_box(clvr_cl *cl, uint32_t field, uint32_t w, uint32_t h, fixture *fx, clvr_camera *cam)
 {
     clvr_error err = {0};
     clvr_scene_box_params p;
     clvr_scene_box_params_init(&p);
     p.nx = p.ny = p.nz = 4;
-    p.mix = CLVR_SCENE_MIX_CYCLE; /* hexes, tets, wedges and pyramids side by side */
-    p.field = CLVR_SCENE_FIELD_CONSTANT;
-    p.value = 1.0f;
+    p.mix = CLVR_SCENE_MIX_CYCLE;
+    p.field = field;
+    p.value = 1.0f; /* of CLVR_SCENE_FIELD_CONSTANT */
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return 1; }
+    if (fixture_open(fx, cl, &m, w, h)) return 1;
+    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
+    TU_CHECK_STATUS(clvr_camera_look_at(cam, eye, at, up, 35.0f, w, h, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx->r, cam, &err), CLVR_OK, &err);
+    fx->set.shadows = 0;
+    return 0;
+}
+
+static void test_homogeneous(clvr_cl *cl)
+{
     const uint32_t W = 24, H = 24, N = 400;
     fixture fx;
-    if (fixture_open(&fx, cl, &m, W, H)) return;
-    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
     clvr_camera cam;
-    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
-    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
-    fx.set.shadows = 0;
+    if (open_unit_box(cl, CLVR_SCENE_FIELD_CONSTANT, W, H, &fx, &cam)) return;
     /* Cases: each method; then the low-discrepancy sampler; then dda on a
      * fine grid in a thin medium, where every block's optical depth is
      * below CLVR_DDA_DESCEND (tracked as one segment per block) and, with
@@ -347,15 +365,8 @@ static double step_sigma(double x)
 static double step_opacity(const clvr_camera *cam, float px, float py, int *hit)
 {
     float o[3], d[3];
-    clvr_camera_ray(cam, px, py, o, d);
-    double t0 = 0, t1 = 1e30;
-    for (int k = 0; k < 3; ++k) {
-        double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
-        if (a > b) { double t = a; a = b; b = t; }
-        t0 = a > t0 ? a : t0;
-        t1 = b < t1 ? b : t1;
-    }
-    *hit = t1 > t0;
+    double t0, t1;
+    *hit = unit_box_span(cam, px, py, o, d, &t0, &t1);
     if (!*hit) return 0.0;
     const int steps = 4096;
     const double dt = (t1 - t0) / steps;
@@ -366,29 +377,16 @@ static double step_opacity(const clvr_camera *cam, float px, float py, int *hit)
 
 static void test_step_medium(clvr_cl *cl)
 {
-    clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 4;
-    p.mix = CLVR_SCENE_MIX_CYCLE;
-    p.field = CLVR_SCENE_FIELD_RAMP_X;
-    clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
     const uint32_t W = 24, H = 24, N = 400;
     fixture fx;
-    if (fixture_open(&fx, cl, &m, W, H)) return;
-    const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
     clvr_camera cam;
-    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
-    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    if (open_unit_box(cl, CLVR_SCENE_FIELD_RAMP_X, W, H, &fx, &cam)) return;
     float table[64 * 4];
     for (int i = 0; i < 64; ++i) {
         table[4 * i] = table[4 * i + 1] = table[4 * i + 2] = 1.0f;
         table[4 * i + 3] = i < 32 ? 0.3f : 3.0f;
     }
     set_table(&fx, table, 64, 0.0f, 1.0f);
-    fx.set.shadows = 0;
-    fx.set.sampler = CLVR_SAMPLER_INDEPENDENT;
     /* the expected opacity of every pixel that no silhouette crosses */
     double *expect = calloc((size_t)W * H, sizeof *expect);
     if (!expect) { ++tu_fail_; fixture_close(&fx); return; }
