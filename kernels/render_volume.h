@@ -471,7 +471,7 @@ typedef struct clvr_urm {
     float T;           /* transmittance estimate at the last quadrature point */
     int alive;
     int emit;          /* 0: transmittance only (shadow ray) */
-    float rate;        /* residual points per unit s over the majorant's rate (CLVR_URM_RESIDUAL_RATE) */
+    float rate;        /* residual points per unit s over the majorant's rate (CLVR_URM_*RESIDUAL_RATE) */
     float3 sum;        /* sum of T sigma / rho * colour */
     float wsum;        /* reservoir: total weight */
     float3 lit;        /* sum of T sigma / rho * colour * G (light grid) */
@@ -484,7 +484,7 @@ typedef struct clvr_urm {
 } clvr_urm;
 
 inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float u, float u_pick, int emit,
-                           clvr_rng *rng)
+                           float rate, clvr_rng *rng)
 {
     e->pick_u = u_pick;
     e->pick_g = 0.0f;
@@ -509,7 +509,7 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float u
     e->T = 1.0f;
     e->alive = 1;
     e->emit = emit;
-    e->rate = CLVR_URM_RESIDUAL_RATE;
+    e->rate = rate;
     e->sum = (float3)(0.0f);
     e->wsum = 0.0f;
     e->pick = (float3)(0.0f);
@@ -668,8 +668,7 @@ inline float clvr_urm_transmittance(const clvr_volume *v, float3 org, float3 dir
                                     float rate, clvr_rng *rng, uint *samples, uint *nulls)
 {
     clvr_urm e;
-    clvr_urm_begin(v->f, &e, t1 - t0, u, 0.0f, 0, rng);
-    e.rate = rate;
+    clvr_urm_begin(v->f, &e, t1 - t0, u, 0.0f, 0, rate, rng);
     CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
     return clvr_urm_end(&e);
 }
@@ -680,9 +679,8 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
 {
     float s0 = 0.0f, s1 = INFINITY;
     ++*rays;
-    return clvr_ray_clip(v->f, p, ldir, lo, hi, &s0, &s1) ? clvr_urm_transmittance(v, p, ldir, s0, s1, u, CLVR_URM_SHADOW_RESIDUAL_RATE, rng,
-                                                                    samples, nulls)
-                                                   : 1.0f;
+    if (!clvr_ray_clip(v->f, p, ldir, lo, hi, &s0, &s1)) return 1.0f;
+    return clvr_urm_transmittance(v, p, ldir, s0, s1, u, CLVR_URM_SHADOW_RESIDUAL_RATE, rng, samples, nulls);
 }
 
 /* The light grid's value at cell (x, y, z): the mean of 2 urm transmittance
@@ -741,7 +739,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
-        clvr_urm_begin(f, &e, clvr_medium_length(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1, rng);
+        clvr_urm_begin(f, &e, clvr_medium_length(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1,
+                       CLVR_URM_RESIDUAL_RATE, rng);
         CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
                               !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
         const float Tend = clvr_urm_end(&e);
@@ -805,7 +804,7 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
     vstore4((float4)(0.0f), 0, rec->pick);
     if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return;
     clvr_urm e;
-    clvr_urm_begin(f, &e, t1 - t0, u_primary, u_pick, f->shadows ? 2 : 1, rng);
+    clvr_urm_begin(f, &e, t1 - t0, u_primary, u_pick, f->shadows ? 2 : 1, CLVR_URM_RESIDUAL_RATE, rng);
     CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
                           !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
     const float Tend = clvr_urm_end(&e);
