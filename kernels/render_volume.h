@@ -573,10 +573,11 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
 {
     if (!(m > 0.0f)) return 1;
     const float rho = fmax(m * e->inv_kappa, e->rho_min), inv_rho = 1.0f / rho;
-    /* Residual points per unit s: the majorant's rate, but at least kappa/2,
-     * because the control (interpolated from neighbouring quadrature points,
-     * perhaps in denser segments) can exceed this segment's majorant, and a
-     * residual r weighs r^2 / mu in the variance. */
+    /* Residual points per unit s: e->rate times the majorant's rate, but at
+     * least kappa/2 before that factor, because the control (interpolated
+     * from neighbouring quadrature points, perhaps in denser segments) can
+     * exceed this segment's majorant, and a residual r weighs r^2 / mu in
+     * the variance; at most CLVR_URM_MAX_MU (the points kept per interval). */
     const float mu = fmin(e->rate * fmax(m, 0.5f * e->kappa * rho) * inv_rho, CLVR_URM_MAX_MU);
     float left = rho * (b - a);   /* warped length of the segment */
     float t = a;
