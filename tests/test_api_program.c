@@ -20,36 +20,11 @@
 #include <unistd.h>
 
 #include "clvr.h"
+#include "api_check.h"
 
-static int failures;
 static clvr_message msg;
 static char dir[256];
 
-#define CHECK(cond)                                                                                                   \
-    do {                                                                                                              \
-        if (!(cond)) {                                                                                                \
-            ++failures;                                                                                               \
-            fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond);                                  \
-        }                                                                                                             \
-    } while (0)
-#define OK(call)                                                                                                      \
-    do {                                                                                                              \
-        clvr_result r_ = (call);                                                                                      \
-        if (r_ != CLVR_RESULT_OK) {                                                                                   \
-            ++failures;                                                                                               \
-            fprintf(stderr, "%s:%d: %s failed: %s\n", __FILE__, __LINE__, #call, msg.text);                           \
-        }                                                                                                             \
-    } while (0)
-/* A call that must fail with result r and a message containing `says`. */
-#define FAILS(call, r, says)                                                                                          \
-    do {                                                                                                              \
-        clvr_result r_ = (call);                                                                                      \
-        if (r_ != (r) || !strstr(msg.text, (says))) {                                                                 \
-            ++failures;                                                                                               \
-            fprintf(stderr, "%s:%d: %s gave %s '%s'; expected %s with '%s'\n", __FILE__, __LINE__, #call,             \
-                    clvr_result_name(r_), msg.text, clvr_result_name(r), (says));                                     \
-        }                                                                                                             \
-    } while (0)
 
 static const char *path_in(const char *name)
 {
@@ -115,14 +90,14 @@ static void test_names(void)
         }
         CHECK(clvr_setting_name(tables[t].setting, n) == NULL); /* the end */
         /* An unknown name lists every choice. */
-        FAILS(clvr_setting_index(tables[t].setting, "nope", &n, &msg), CLVR_RESULT_ERR_USAGE, "nope");
+        CHECK_FAILS(clvr_setting_index(tables[t].setting, "nope", &n, &msg), CLVR_RESULT_ERR_USAGE, "nope");
         for (uint32_t i = 0; tables[t].names[i]; ++i) CHECK(strstr(msg.text, tables[t].names[i]) != NULL);
     }
     uint32_t i;
     CHECK(clvr_setting_name("colour", 0) == NULL && clvr_setting_name(NULL, 0) == NULL);
-    FAILS(clvr_setting_index("colour", "red", &i, &msg), CLVR_RESULT_ERR_USAGE, "colour");
-    FAILS(clvr_setting_index("method", NULL, &i, &msg), CLVR_RESULT_ERR_USAGE, "name");
-    FAILS(clvr_setting_index("method", "DDA", &i, &msg), CLVR_RESULT_ERR_USAGE, "DDA"); /* exact names */
+    CHECK_FAILS(clvr_setting_index("colour", "red", &i, &msg), CLVR_RESULT_ERR_USAGE, "colour");
+    CHECK_FAILS(clvr_setting_index("method", NULL, &i, &msg), CLVR_RESULT_ERR_USAGE, "name");
+    CHECK_FAILS(clvr_setting_index("method", "DDA", &i, &msg), CLVR_RESULT_ERR_USAGE, "DDA"); /* exact names */
     /* The element box modes' indices are the constants. */
     CHECK(!strcmp(clvr_setting_name("element_boxes", CLVR_ELEMENT_BOXES_AUTO), "auto"));
     CHECK(!strcmp(clvr_setting_name("element_boxes", CLVR_ELEMENT_BOXES_ON), "on"));
@@ -165,12 +140,14 @@ static void test_frame_box(void)
     const float d1[2] = {eye[0] - target[0], eye[1] - target[1]}, d2[2] = {eye2[0] - target2[0], eye2[1] - target2[1]};
     CHECK(fabsf(d1[0] * d2[0] + d1[1] * d2[1]) < 1e-3f * (d1[0] * d1[0] + d1[1] * d1[1] + 1e-6f));
     const float bad_lo[3] = {5, 0, 0};
-    FAILS(clvr_frame_box(bad_lo, hi, NULL, 0, 0, 1, 30, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_BAD_VALUE, "box");
-    FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 0, 30, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "zoom");
-    FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 1, 180, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "view");
-    FAILS(clvr_frame_box(lo, hi, NULL, NAN, 0, 1, 30, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "azimuth");
-    FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 1, 30, 0, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "size");
-    FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 1, 30, 64, 48, NULL, target, &msg), CLVR_RESULT_ERR_USAGE, "eye");
+    CHECK_FAILS(clvr_frame_box(bad_lo, hi, NULL, 0, 0, 1, 30, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_BAD_VALUE,
+                "box");
+    CHECK_FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 0, 30, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "zoom");
+    CHECK_FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 1, 180, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "view");
+    CHECK_FAILS(clvr_frame_box(lo, hi, NULL, NAN, 0, 1, 30, 64, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE,
+                "azimuth");
+    CHECK_FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 1, 30, 0, 48, eye, target, &msg), CLVR_RESULT_ERR_USAGE, "size");
+    CHECK_FAILS(clvr_frame_box(lo, hi, NULL, 0, 0, 1, 30, 64, 48, NULL, target, &msg), CLVR_RESULT_ERR_USAGE, "eye");
 }
 
 static void test_tf_file_window(void)
@@ -211,7 +188,7 @@ static void test_series(void)
     OK(clvr_series_step(se, 1, &p1, &t1, &msg));
     CHECK(p0 && !strcmp(p0, path_in("s0.vtk")) && t0 == 0.5); /* relative to the series' folder */
     CHECK(p1 && !strcmp(p1, path_in("s1.vtk")) && t1 == 2.0);   /* absolute as given */
-    FAILS(clvr_series_step(se, 2, &p0, &t0, &msg), CLVR_RESULT_ERR_USAGE, "step 2");
+    CHECK_FAILS(clvr_series_step(se, 2, &p0, &t0, &msg), CLVR_RESULT_ERR_USAGE, "step 2");
     /* Bounds and range over the steps: each step loaded alone, combined here. */
     float lo[3], hi[3], vmin = 0, vmax = 0;
     OK(clvr_series_bounds(se, NULL, lo, hi, &vmin, &vmax, &msg));
@@ -236,7 +213,7 @@ static void test_series(void)
     CHECK(lo[0] == 0 && lo[2] == -1 && hi[0] == 2 && hi[2] == 1 && vmin == -3.0f && vmax == 1.0f); /* the files' */
     OK(clvr_series_bounds(se, "b", NULL, NULL, &vmin, &vmax, &msg)); /* a field by name */
     CHECK(vmin == 7.0f && vmax == 7.0f);
-    FAILS(clvr_series_bounds(se, "nosuch", lo, hi, &vmin, &vmax, &msg), CLVR_RESULT_ERR_BAD_FIELD, "(step 0 of");
+    CHECK_FAILS(clvr_series_bounds(se, "nosuch", lo, hi, &vmin, &vmax, &msg), CLVR_RESULT_ERR_BAD_FIELD, "(step 0 of");
     clvr_series_destroy(se);
     se = NULL;
     /* A step that cannot be read is named by its index. */
@@ -251,11 +228,11 @@ static void test_series(void)
     /* Not series files. */
     write_text(path_in("bad.series"), "{\"files\": []}");
     se = NULL;
-    FAILS(clvr_series_open(path_in("bad.series"), &se, &msg), CLVR_RESULT_ERR_BAD_FIELD, "not a series file");
+    CHECK_FAILS(clvr_series_open(path_in("bad.series"), &se, &msg), CLVR_RESULT_ERR_BAD_FIELD, "not a series file");
     CHECK(se == NULL);
     write_text(path_in("bad.series"), "{\"files\": [{\"time\": 1}]}");
-    FAILS(clvr_series_open(path_in("bad.series"), &se, &msg), CLVR_RESULT_ERR_BAD_FIELD, "\"name\"");
-    FAILS(clvr_series_open(path_in("none.series"), &se, &msg), CLVR_RESULT_ERR_IO, "none.series");
+    CHECK_FAILS(clvr_series_open(path_in("bad.series"), &se, &msg), CLVR_RESULT_ERR_BAD_FIELD, "\"name\"");
+    CHECK_FAILS(clvr_series_open(path_in("none.series"), &se, &msg), CLVR_RESULT_ERR_IO, "none.series");
     CHECK(se == NULL);
 }
 
@@ -270,8 +247,8 @@ static void test_on_device(clvr_context *ctx)
     /* The device check from a .bin header (tests/test_memory_e2e.sh has a
      * refusal): other formats pass, to be checked once loaded. */
     OK(clvr_context_check_file(ctx, path_in("d.vtk"), 40, 30, 0, &msg));
-    FAILS(clvr_context_check_file(NULL, path_in("d.vtk"), 40, 30, 0, &msg), CLVR_RESULT_ERR_USAGE, "ctx");
-    FAILS(clvr_context_check_file(ctx, NULL, 40, 30, 0, &msg), CLVR_RESULT_ERR_USAGE, "path");
+    CHECK_FAILS(clvr_context_check_file(NULL, path_in("d.vtk"), 40, 30, 0, &msg), CLVR_RESULT_ERR_USAGE, "ctx");
+    CHECK_FAILS(clvr_context_check_file(ctx, NULL, 40, 30, 0, &msg), CLVR_RESULT_ERR_USAGE, "path");
     OK(clvr_dataset_load(path_in("d.vtk"), NULL, &ds, &msg));
     OK(clvr_tracer_create(ctx, ds, NULL, 40, 30, &tr, &msg));
     if (!tr) return;
@@ -289,7 +266,8 @@ static void test_on_device(clvr_context *ctx)
                           e2, t2, &msg));
         CHECK(memcmp(e1, e2, sizeof e1) == 0 && memcmp(t1, t2, sizeof t1) == 0);
     }
-    for (uint32_t i = 0; clvr_setting_name("method", i); ++i) OK(clvr_tracer_set_method(tr, clvr_setting_name("method", i), NULL, &msg));
+    for (uint32_t i = 0; clvr_setting_name("method", i); ++i)
+        OK(clvr_tracer_set_method(tr, clvr_setting_name("method", i), NULL, &msg));
     for (uint32_t i = 0; clvr_setting_name("estimator", i); ++i)
         OK(clvr_tracer_set_method(tr, "dda", clvr_setting_name("estimator", i), &msg));
     clvr_tracer_settings ts;

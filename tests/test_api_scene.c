@@ -25,32 +25,8 @@
 #include <unistd.h>
 
 #include "clvr.h"
+#include "api_check.h"
 
-static int failures;
-#define CHECK(cond)                                                                                                   \
-    do {                                                                                                              \
-        if (!(cond)) {                                                                                                \
-            fprintf(stderr, "%s:%d: CHECK(%s) failed\n", __FILE__, __LINE__, #cond);                                 \
-            ++failures;                                                                                               \
-        }                                                                                                             \
-    } while (0)
-#define CHECK_FAILS(call, want, part)                                                                                 \
-    do {                                                                                                              \
-        clvr_result r_ = (call);                                                                                      \
-        if (r_ != (want) || !strstr(msg.text, (part))) {                                                              \
-            fprintf(stderr, "%s:%d: %s gave %s '%s'; expected %s with '%s'\n", __FILE__, __LINE__, #call,           \
-                    clvr_result_name(r_), msg.text, clvr_result_name(want), part);                                   \
-            ++failures;                                                                                               \
-        }                                                                                                             \
-    } while (0)
-#define OK(call)                                                                                                      \
-    do {                                                                                                              \
-        clvr_result r_ = (call);                                                                                      \
-        if (r_ != CLVR_RESULT_OK) {                                                                                   \
-            fprintf(stderr, "%s:%d: %s failed: %s: %s\n", __FILE__, __LINE__, #call, clvr_result_name(r_), msg.text); \
-            exit(1);                                                                                                  \
-        }                                                                                                             \
-    } while (0)
 
 #define N 7 /* points per axis: 6^3 hexahedra */
 #define W 24
