@@ -381,12 +381,12 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 /* urm: unbiased ray marching (after Kettunen et al. 2021, "An unbiased
  * ray-marching transmittance estimator", with the residual ratio tracking of
  * Novak et al. 2014). Position along the ray is measured in a warped
- * coordinate s with density rho(t) = max(m / kappa, rho_min) where the
+ * coordinate s with density rho(t) = max(m / kappa, rho_0) where the
  * majorant m > 0 (and 0 where m = 0: no medium, nothing to sample), so that
  * one unit of s holds at most kappa of majorant optical depth and a ray gets
- * at least frame.urm_steps units (rho_min: the steps over the length of the
- * ray where m > 0 for camera rays, over the whole clipped ray for shadow and
- * light-grid rays and in MPI mode).
+ * at least frame.urm_steps units. rho_0 spreads those steps: on camera rays
+ * (and MPI regions) in proportion to sqrt(m) (clvr_root_depth), on shadow
+ * and light-grid rays evenly over the clipped ray.
  *  - Emission: quadrature points at s = k + u (u: the frame's uniform, from
  *    the low-discrepancy sampler by default) with weight T(t_k) sigma_k /
  *    rho_k. For any fixed u the sum is a quadrature; over u it is unbiased.
@@ -459,7 +459,8 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 #endif
 
 typedef struct clvr_urm {
-    float rho_min, kappa, inv_kappa;
+    float rho_min, rho_root; /* rho_0 = rho_min + rho_root sqrt(m) */
+    float kappa, inv_kappa;
     float to_quad;     /* warped distance to the next quadrature point */
     float tau_pt;      /* residual-process depth to the next residual point, ~ Exp(1) */
     float s_in;        /* warped distance travelled since the last quadrature point */
@@ -483,7 +484,9 @@ typedef struct clvr_urm {
     clvr_locate_hint hint;
 } clvr_urm;
 
-inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float u, float u_pick, int emit,
+/* span: the clipped ray's length; root: its clvr_root_depth, or 0 to spread
+ * the minimum steps evenly over span. */
+inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float root, float u, float u_pick, int emit,
                            float rate, clvr_rng *rng)
 {
     e->pick_u = u_pick;
@@ -496,7 +499,8 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float u
      * (tets-1M, 128^2, shadows: 2% in 51 instead of 46 frames, at 74% of the
      * lookups). */
     const float steps = emit ? (float)f->urm_steps : fmax(0.5f * (float)f->urm_steps, 1.0f);
-    e->rho_min = steps / fmax(span, 1e-30f);
+    e->rho_min = root > 0.0f ? 0.0f : steps / fmax(span, 1e-30f);
+    e->rho_root = root > 0.0f ? steps / root : 0.0f;
     e->kappa = f->urm_kappa;
     e->inv_kappa = 1.0f / f->urm_kappa;
     e->to_quad = u;
@@ -572,7 +576,7 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
                             clvr_rng *rng, uint *samples, uint *nulls)
 {
     if (!(m > 0.0f)) return 1;
-    const float rho = fmax(m * e->inv_kappa, e->rho_min), inv_rho = 1.0f / rho;
+    const float rho = fmax(m * e->inv_kappa, e->rho_min + e->rho_root * sqrt(m)), inv_rho = 1.0f / rho;
     /* Residual points per unit s: e->rate times the majorant's rate, but at
      * least kappa/2 before that factor, because the control (interpolated
      * from neighbouring quadrature points, perhaps in denser segments) can
@@ -669,7 +673,7 @@ inline float clvr_urm_transmittance(const clvr_volume *v, float3 org, float3 dir
                                     float rate, clvr_rng *rng, uint *samples, uint *nulls)
 {
     clvr_urm e;
-    clvr_urm_begin(v->f, &e, t1 - t0, u, 0.0f, 0, rate, rng);
+    clvr_urm_begin(v->f, &e, t1 - t0, 0.0f, u, 0.0f, 0, rate, rng);
     CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
     return clvr_urm_end(&e);
 }
@@ -684,11 +688,13 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
     return clvr_urm_transmittance(v, p, ldir, s0, s1, u, CLVR_URM_SHADOW_RESIDUAL_RATE, rng, samples, nulls);
 }
 
-/* The light grid's value at cell (x, y, z): the mean of 2 urm transmittance
- * estimates toward the light from the cell centre (offsets stratified). Its
- * noise is frozen into G and costs variance, never bias. tets-1M, 256^2,
- * frames to 2% (1/n fit): 5 (4.0) with 4 estimates, 5 (4.3) with 2, 6 (4.5)
- * with 1; the grid cost about 3 camera frames of CPU time with 4. */
+/* The light grid's value at cell (x, y, z): one urm transmittance estimate
+ * toward the light from the cell centre. Its noise is frozen into G and
+ * costs variance, never bias. 256^2, shadows, seconds to the frame at 2%
+ * against the mean of 2 estimates: tets-1M 0.99 -> 0.79, OpenFOAM igloo
+ * 0.37 -> 0.32, blunt fin 0.25 -> 0.20 (errors within 0.1 point of each
+ * other); on post-tets 2 frames cost 0.50 -> 0.43 s, their error 2.02 ->
+ * 2.06% (bench/results/render-converge/2026-11-25-s25-root.md). */
 inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *samples, uint *nulls)
 {
     const clvr_frame *f = v->f;
@@ -697,29 +703,31 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
     const float3 vlo = vload3(0, f->vol_lo), vhi = vload3(0, f->vol_hi);
     const float3 p = lo + ((float3)((float)x, (float)y, (float)z) + 0.5f) * (hi - lo) / (float)r;
     clvr_rng rng = clvr_rng_make((uint)clvr_grid_index(x, y, z, r), 0x11647u, f->seed_lo, f->seed_hi);
-    float s0 = 0.0f, s1 = INFINITY, sum = 0.0f;
+    float s0 = 0.0f, s1 = INFINITY;
     if (!clvr_ray_clip(f, p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
-    for (int k = 0; k < 2; ++k)
-        sum += clvr_urm_transmittance(v, p, ldir, s0, s1, ((float)k + clvr_rng_next(&rng)) * 0.5f,
-                                      CLVR_URM_RESIDUAL_RATE, &rng, samples, nulls);
-    return 0.5f * sum;
+    return clvr_urm_transmittance(v, p, ldir, s0, s1, clvr_rng_next(&rng), CLVR_URM_RESIDUAL_RATE, &rng, samples,
+                                  nulls);
 }
 
 /* ------------------------------------------------------------ camera rays */
 
-/* The length of [t0, t1) where the majorant is > 0: a camera ray's
- * minimum urm points are spread over the medium, not over the bounding
- * box's chord, so a mesh that fills little of its box (an annulus, a body
- * with a hole) gets as many points per ray as one that fills it. One DDA
- * walk without lookups. 256^2, no shadows, 1/n fit frames to 2%: PLOT3D
- * combustor as tets (a third of its box) 68 -> 40 at 1.3x the frame cost;
- * post-tets 0.86 -> 0.58; meshes that fill their box unchanged
- * (bench/results/render-converge/2026-11-25-s24-sampler.md). */
-inline float clvr_medium_length(const clvr_volume *v, float3 org, float3 dir, float t0, float t1)
+/* The integral of sqrt(m) over [t0, t1) (m: the majorant): a camera ray's
+ * minimum urm points are spread in proportion to sqrt(m), so they go where
+ * the medium is (a mesh that fills little of its box gets as many points per
+ * ray as one that fills it) and more of them where it is denser, at the
+ * same count. One DDA walk without lookups. 256^2, no shadows, error after
+ * 1 / 2 frames against points spread evenly over the medium: OpenFOAM igloo
+ * 7.26 / 5.10% -> 3.29 / 2.27%, AMR-like density 1 15.9 / 10.6% -> 7.3 /
+ * 3.8%, PLOT3D combustor 11.1 / 7.6% -> 8.3 / 5.5%, tets-1M 4.44 / 1.94% ->
+ * 4.13 / 1.65%, post and blunt fin unchanged. Spread in proportion to m
+ * itself did better on the igloo (2.97%) and worse on tets-1M (2.51% after
+ * 2 frames), whose thin parts carry much of the image
+ * (bench/results/render-converge/2026-11-25-s25-root.md). */
+inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float t0, float t1)
 {
-    float len = 0.0f;
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, (len += m > 0.0f ? b - a : 0.0f, 0));
-    return len;
+    float root = 0.0f;
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, (root += m > 0.0f ? sqrt(m) * (b - a) : 0.0f, 0));
+    return root;
 }
 
 /* One camera ray with the frame's estimator. ld: the frame's low-discrepancy
@@ -740,7 +748,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
-        clvr_urm_begin(f, &e, clvr_medium_length(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1,
+        clvr_urm_begin(f, &e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1,
                        CLVR_URM_RESIDUAL_RATE, rng);
         CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
                               !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
@@ -805,7 +813,8 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
     vstore4((float4)(0.0f), 0, rec->pick);
     if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return;
     clvr_urm e;
-    clvr_urm_begin(f, &e, t1 - t0, u_primary, u_pick, f->shadows ? 2 : 1, CLVR_URM_RESIDUAL_RATE, rng);
+    clvr_urm_begin(f, &e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1,
+                   CLVR_URM_RESIDUAL_RATE, rng);
     CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
                           !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
     const float Tend = clvr_urm_end(&e);
