@@ -130,6 +130,26 @@ if grep -q '^CLVR_MPI:BOOL=ON' "$BUILD/CMakeCache.txt" 2>/dev/null && [ -e "$BUI
   [ -e "$P/lib/libclvr_mpi.so.$api_major" ] && [ -e "$P/include/clvr_mpi.h" ] && ok || bad "libclvr_mpi.so or clvr_mpi.h not installed"
   [ "$(loads "libclvr_mpi\.so\.$api_major")" = "$real_p/lib/libclvr_mpi.so.$api_major.$api_minor.0" ] && ok ||
     bad "installed clvr does not load $P/lib/libclvr_mpi.so.$api_major"
+  # pkg-config clvr_mpi: a program calling the module, built with its flags
+  # alone, runs outside mpirun (clvr_mpi_launched() is 0 there).
+  cat >"$tmp/use_mpi.c" <<'EOC'
+#include <clvr_mpi.h>
+#include <stdio.h>
+int main(void)
+{
+    printf("launched %d\n", clvr_mpi_launched());
+    return 0;
+}
+EOC
+  if PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --exact-version="$api_major.$api_minor.0" clvr_mpi; then
+    ok
+    # shellcheck disable=SC2046
+    cc "${san[@]}" "$tmp/use_mpi.c" -o "$tmp/use_mpi" $(PKG_CONFIG_PATH="$P/lib/pkgconfig" pkg-config --cflags --libs clvr_mpi) &&
+      env -u OMPI_COMM_WORLD_SIZE -u PMI_SIZE -u PMIX_RANK LD_LIBRARY_PATH="$P/lib" "$tmp/use_mpi" | grep -q "^launched 0$" &&
+      ok || bad "a program built with pkg-config clvr_mpi"
+  else
+    bad "pkg-config does not find clvr_mpi $api_major.$api_minor.0 in $P/lib/pkgconfig"
+  fi
 fi
 # The program (all of host/app but the GLFW viewer) builds from the
 # installed headers and library alone, no source tree include paths but its

@@ -6,8 +6,8 @@
  * line (`clvr --help`) and carries its own private copy of the pipeline
  * (the ranks run the renderer's phase kernels, which clvr.h does not
  * expose); it exports only the two functions below. Link it with
- * -lclvr_mpi (pkg-config clvr_mpi is not provided; the library sits beside
- * libclvr). */
+ * `pkg-config --cflags --libs clvr_mpi` (or -lclvr_mpi: the library sits
+ * beside libclvr). */
 #ifndef CLVR_MPI_H
 #define CLVR_MPI_H
 
