@@ -27,7 +27,14 @@ installed copy). Proves:
     named in Renderer(field=...) renders the same pixels as from_arrays of
     that field, and other pixels than the first field;
   - Scene (the separate, timed preprocessing with leaf and sampling sizes)
-    and the render settings (get, set, refused with the member's name).
+    and the render settings (get, set, refused with the member's name);
+  - API 1.2: every setting's names (as clvr.h lists them) round-trip
+    through setting_index, unknown ones raise; default_size; frame_box
+    looks at the box's centre from the default direction (turned by the
+    azimuth, nearer with zoom) and is the very camera a Renderer's
+    automatic framing sets; tf_file_window of a file with and without a
+    window; a time series' steps, times and bounds (the union of its
+    meshes'), and the errors of a missing or bad series.
 Exit 77 (skipped) without numpy/meshio/vtk or an OpenCL device."""
 import os
 import subprocess
@@ -368,6 +375,164 @@ def test_scene_settings(ctx):
     raises(lambda: clvr.Scene(m, device=ctx, leaf_size=0), clvr.InputError, "leaf_size", "leaf_size 0")
 
 
+# clvr.h's comment on clvr_setting_name: each setting's names in index order.
+SETTING_NAMES = {"method": ["march", "track", "bins", "dda"], "estimator": ["delta", "urm"],
+                 "sampler": ["independent", "ld"], "tonemap": ["none", "aces", "filmic"],
+                 "element_boxes": ["auto", "on", "off"]}
+
+
+def _write_box_vtk(path, lo, hi, fields):
+    """One hexahedron filling the box [lo, hi], point fields {name: f(x, y, z)} (legacy VTK)."""
+    pts = [(hi[0] if (i ^ (i >> 1)) & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2])
+           for i in range(8)]  # VTK hexahedron order: the bottom face (z lo) round, then the top
+    with open(path, "w") as fh:
+        fh.write("# vtk DataFile Version 3.0\nbox\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 8 float\n")
+        fh.writelines("%.9g %.9g %.9g\n" % p for p in pts)
+        fh.write("CELLS 1 9\n8 0 1 2 3 4 5 6 7\nCELL_TYPES 1\n12\nPOINT_DATA 8\n")
+        for name, f in fields.items():
+            fh.write("SCALARS %s float\nLOOKUP_TABLE default\n" % name)
+            fh.writelines("%.9g\n" % f(*p) for p in pts)
+    return pts
+
+
+def test_api12(ctx):
+    E = clvr.InputError
+    # Names of settings: the header's tables, both ways.
+    for setting, expected in SETTING_NAMES.items():
+        names = clvr.setting_names(setting)
+        check(names == expected, "setting_names(%r) = %r, clvr.h lists %r" % (setting, names, expected))
+        for i, name in enumerate(expected):
+            check(clvr.setting_name(setting, i) == name, "setting_name(%r, %d) = %r, expected %r"
+                  % (setting, i, clvr.setting_name(setting, i), name))
+            got = clvr.setting_index(setting, name)
+            check(got == i, "setting_index(%r, %r) = %r, expected %d" % (setting, name, got, i))
+        check(clvr.setting_name(setting, len(expected)) is None, "setting_name(%r) past the end is None" % setting)
+    e = raises(lambda: clvr.setting_index("method", "magic"), E, "march, track, bins, dda", "unknown method name")
+    check(e is None or e.result == "ERR_USAGE", "unknown name's result: %s" % getattr(e, "result", None))
+    raises(lambda: clvr.setting_index("colour", "aces"), E, "'colour'", "setting_index of an unknown setting")
+    raises(lambda: clvr.setting_names("colour"), E, "'colour'", "setting_names of an unknown setting")
+    check(clvr.setting_name("colour", 0) is None, "setting_name of an unknown setting is None")
+    raises(lambda: clvr.setting_name("method", -1), E, "index", "negative setting index")
+    r = clvr.Renderer(clvr.Mesh.load(os.path.join(DATA, "vtk", "uGridEx.vtk")), device=ctx, width=8, height=8)
+    st = r.settings
+    check(st["method"] in SETTING_NAMES["method"] and st["estimator"] in SETTING_NAMES["estimator"]
+          and st["sampler"] in SETTING_NAMES["sampler"], "the renderer's settings are named in the tables: %r" % st)
+    r.close()
+    check(clvr.default_size() == (512, 512), "default_size() = %r" % (clvr.default_size(),))
+
+    # Framing a box without a tracer.
+    lo, hi = (0.0, -1.0, 2.0), (4.0, 1.0, 3.0)
+    centre = 0.5 * (np.array(lo) + np.array(hi))
+    eye, target = clvr.frame_box(lo, hi)
+    eye, target = np.array(eye), np.array(target)
+    check(np.allclose(target, centre, atol=1e-6), "frame_box target %s is not the box centre %s" % (target, centre))
+    d = eye - target
+    dist = np.linalg.norm(d)
+    default_dir = np.array([1.0, 0.8, 1.6]) / np.linalg.norm([1.0, 0.8, 1.6])  # camera.h: CLVR_CAMERA_VIEW_X/Y/Z
+    check(dist > np.linalg.norm(np.subtract(hi, lo)) / 2 and np.allclose(d / dist, default_dir, atol=1e-5),
+          "frame_box eye %s: expected outside the box along %s" % (eye, default_dir))
+    # Azimuth turns the view about +y: +90 degrees takes (x, z) to (z, -x).
+    e90, t90 = (np.array(v) for v in clvr.frame_box(lo, hi, azimuth=90))
+    d90 = (e90 - t90) / np.linalg.norm(e90 - t90)
+    turned = np.array([default_dir[2], default_dir[1], -default_dir[0]])
+    check(np.allclose(t90, centre, atol=1e-6) and np.allclose(d90, turned, atol=1e-5),
+          "frame_box azimuth 90: direction %s, expected %s" % (d90, turned))
+    # Elevation raises the eye; zoom 2 dollies halfway to the centre; up given as +y is up None.
+    eup = np.array(clvr.frame_box(lo, hi, elevation=30)[0]) - centre
+    check((eup / np.linalg.norm(eup))[1] > default_dir[1] + 0.2, "frame_box elevation 30 raises the eye: %s" % eup)
+    ez = np.array(clvr.frame_box(lo, hi, zoom=2)[0]) - centre
+    check(abs(np.linalg.norm(ez) * 2 / dist - 1) < 1e-5 and np.allclose(ez / np.linalg.norm(ez), default_dir,
+                                                                         atol=1e-5),
+          "frame_box zoom 2: distance %g, expected %g" % (np.linalg.norm(ez), dist / 2))
+    check(clvr.frame_box(lo, hi, up=(0, 1, 0)) == clvr.frame_box(lo, hi), "frame_box up +y == up None")
+    check(clvr.frame_box(lo, hi, width=512, height=512) == clvr.frame_box(lo, hi), "frame_box's default size")
+    wide = np.linalg.norm(np.array(clvr.frame_box(lo, hi, fovy=60)[0]) - centre)
+    check(wide < dist, "a wider fovy frames from nearer: %g vs %g" % (wide, dist))
+    e = raises(lambda: clvr.frame_box(hi, lo), E, "lo <= hi", "frame_box of an inverted box")
+    check(e is None or e.result == "ERR_BAD_VALUE", "inverted box's result: %s" % getattr(e, "result", None))
+    raises(lambda: clvr.frame_box(lo, hi, zoom=0), E, "zoom", "frame_box zoom 0")
+    raises(lambda: clvr.frame_box(lo, hi, width=0), E, "width", "frame_box width 0")
+    # The same camera as a Renderer's automatic framing of a mesh with these bounds.
+    with tempfile.TemporaryDirectory() as tmp:
+        box = os.path.join(tmp, "box.vtk")
+        _write_box_vtk(box, lo, hi, {"s": lambda x, y, z: x})
+        m = clvr.Mesh.load(box)
+    check(m.bounds == (lo, hi), "box mesh bounds %r" % (m.bounds,))
+    with clvr.Renderer(m, device=ctx, width=40, height=24) as r:
+        cam = r.camera
+        fb = clvr.frame_box(*m.bounds, width=40, height=24)
+        check((cam["eye"], cam["target"]) == fb, "the renderer's first camera %r != frame_box %r" % (cam, fb))
+        view = {"azimuth": 30.0, "elevation": -20.0, "zoom": 1.5, "fovy": 40.0, "up": (0, 0, 1)}
+        r.set_camera(view)
+        cam = r.camera
+        fb = clvr.frame_box(*m.bounds, width=40, height=24, **view)
+        check((cam["eye"], cam["target"]) == fb, "set_camera(%r) gives %r, frame_box %r" % (view, cam, fb))
+        check(fb != clvr.frame_box(*m.bounds, width=24, height=40, **view), "frame_box depends on the image shape")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        # Transfer function files: with and without their own window.
+        ranged, plain, pv = (os.path.join(tmp, n) for n in ("ranged.tf", "plain.tf", "map.json"))
+        with open(ranged, "w") as fh:
+            fh.write("colormap viridis\nopacity 0 0\nopacity 1 0.8\nrange -1.5 2.5   # the window\n")
+        with open(plain, "w") as fh:
+            fh.write("colormap viridis\nopacity 0 0\nopacity 1 0.8\n")
+        with open(pv, "w") as fh:
+            fh.write('[{"ColorSpace": "RGB", "Name": "m", "RGBPoints": [-3, 0, 0, 1, 7, 1, 0, 0]}]\n')
+        check(clvr.tf_file_window(ranged) == (-1.5, 2.5), "tf_file_window(range line) = %r"
+              % (clvr.tf_file_window(ranged),))
+        check(clvr.tf_file_window(plain) is None, "tf_file_window(no range) = %r" % (clvr.tf_file_window(plain),))
+        check(clvr.tf_file_window(pv) == (-3.0, 7.0), "tf_file_window(ParaView map) = %r"
+              % (clvr.tf_file_window(pv),))
+        raises(lambda: clvr.tf_file_window(os.path.join(tmp, "nope.tf")), clvr.Error, "nope.tf", "missing TF file")
+
+        # A time series of two meshes (one in a subfolder), fields s and t.
+        os.mkdir(os.path.join(tmp, "sub"))
+        lo0, hi0, lo1, hi1 = (0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (0.5, -1.0, 0.25), (2.0, 0.5, 3.0)
+        _write_box_vtk(os.path.join(tmp, "a.vtk"), lo0, hi0, {"s": lambda x, y, z: x, "t": lambda x, y, z: -z})
+        _write_box_vtk(os.path.join(tmp, "sub", "b.vtk"), lo1, hi1,
+                       {"s": lambda x, y, z: 10 + y, "t": lambda x, y, z: 5 * z})
+        path = os.path.join(tmp, "run.series")
+        with open(path, "w") as fh:
+            fh.write('{"file-series-version": "1.0", "files": [{"name": "a.vtk", "time": 0.5}, '
+                     '{"name": "sub/b.vtk", "time": 2.25}]}\n')
+        check(clvr.is_series(path) and clvr.is_series("X.SERIES") and not clvr.is_series(os.path.join(tmp, "a.vtk"))
+              and not clvr.is_series("series"), "is_series")
+        steps = [(os.path.join(tmp, "a.vtk"), 0.5), (os.path.join(tmp, "sub", "b.vtk"), 2.25)]
+        with clvr.Series(path) as se:
+            check(len(se) == 2, "len(series) = %d" % len(se))
+            check([se.step(0), se.step(1)] == steps, "series steps %r, expected %r" % ([se.step(0), se.step(1)], steps))
+            check(list(se) == steps and se[-1] == steps[1], "iterating / indexing the series: %r" % list(se))
+            raises(lambda: se.step(2), E, "step 2", "series step past the end")
+            raises(lambda: se[2], IndexError, "step 2", "series[2]")
+            meshes = [clvr.Mesh.load(p) for p, _ in steps]
+            blo, bhi, vmin, vmax = se.bounds()
+            want_lo = tuple(min(m.bounds[0][k] for m in meshes) for k in range(3))
+            want_hi = tuple(max(m.bounds[1][k] for m in meshes) for k in range(3))
+            check(all(np.all(np.array(m.bounds[0]) >= blo) and np.all(np.array(m.bounds[1]) <= bhi) for m in meshes)
+                  and (blo, bhi) == (want_lo, want_hi), "series bounds %r, %r; the meshes' union is %r, %r"
+                  % (blo, bhi, want_lo, want_hi))
+            want_s = (min(m.field_range("s")[0] for m in meshes), max(m.field_range("s")[1] for m in meshes))
+            check((vmin, vmax) == want_s == (0.0, 10.5), "series range of s (the first field) %r, expected %r"
+                  % ((vmin, vmax), want_s))
+            tr = se.bounds("t")[2:]
+            check(tr == (-1.0, 15.0), "series range of t %r, expected (-1, 15)" % (tr,))
+            raises(lambda: se.bounds("nope"), clvr.Error, "nope", "series bounds of an unknown field")
+            check("2 steps" in repr(se), repr(se))
+        check(len(se) == 0, "a closed series has no steps")
+        raises(lambda: clvr.Series(os.path.join(tmp, "missing.series")), clvr.Error, "missing.series",
+               "missing series file")
+        bad = os.path.join(tmp, "bad.series")
+        with open(bad, "w") as fh:
+            fh.write('{"steps": []}\n')
+        raises(lambda: clvr.Series(bad), clvr.Error, "not a series file", "a JSON file that is not a series")
+        gone = os.path.join(tmp, "gone.series")
+        with open(gone, "w") as fh:
+            fh.write('{"files": [{"name": "a.vtk"}, {"name": "gone.vtk"}]}\n')
+        with clvr.Series(gone) as se:
+            check([t for _, t in se] == [0.0, 1.0], "a step without a time gets its index: %r" % list(se))
+            raises(lambda: se.bounds(), clvr.Error, "step 1 of", "series with a missing step")
+
+
 def main():
     try:
         ctx = clvr.Context("pocl")
@@ -382,6 +547,7 @@ def main():
         test_borrowing(ctx)
         test_fields(ctx)
         test_scene_settings(ctx)
+        test_api12(ctx)
     if "--quick" not in sys.argv:
         test_program_matches_module(ctx)
         test_same_image(ctx)

@@ -21,6 +21,13 @@ everything); other arrays are converted and the conversion is kept. Failures rai
 clvr.InputError, also a ValueError, for bad arguments and data) carrying
 clvr's one-line message.
 
+Besides rendering (API 1.2): setting_names / setting_name / setting_index
+(the names a setting takes: "method", "estimator", "sampler", "tonemap",
+"element_boxes"), default_size, frame_box (the automatic framing of a box,
+without a Renderer), tf_file_window (a transfer function file's own scalar
+window) and time series: is_series(path) and Series(path) (its steps'
+mesh paths and times, and bounds over all steps).
+
 libclvr is found, in this order: $CLVR_LIBRARY; next to this package (pip
 install); the path recorded by the build tree or `cmake --install`
 (_config.py); the system's loader (libclvr.so.1).
@@ -33,7 +40,8 @@ import warnings
 import numpy as np
 
 __all__ = ["Error", "InputError", "Context", "Mesh", "Scene", "Renderer", "save_image", "list_devices",
-           "api_version", "version", "CELL_TYPES"]
+           "api_version", "version", "CELL_TYPES", "setting_name", "setting_index", "setting_names",
+           "default_size", "frame_box", "tf_file_window", "is_series", "Series"]
 
 API_VERSION_MAJOR = 1
 
@@ -169,6 +177,21 @@ _PROTOS = {
     "clvr_tracer_read_image": (ctypes.c_int, [_P, _P, ctypes.c_size_t, _M]),
     "clvr_tracer_stat": (ctypes.c_int, [_P, _S, ctypes.POINTER(ctypes.c_double), _M]),
     "clvr_image_save": (ctypes.c_int, [_S, _U32, _U32, _P, _F, _S, ctypes.c_int, _M]),
+    # API 1.2
+    "clvr_setting_name": (_S, [_S, _U32]),
+    "clvr_setting_index": (ctypes.c_int, [_S, _S, ctypes.POINTER(_U32), _M]),
+    "clvr_default_size": (None, [ctypes.POINTER(_U32), ctypes.POINTER(_U32)]),
+    "clvr_frame_box": (ctypes.c_int, [_c_float3, _c_float3, _P, _F, _F, _F, _F, _U32, _U32, _c_float3, _c_float3,
+                                      _M]),
+    "clvr_tf_file_window": (ctypes.c_int, [_S, ctypes.POINTER(ctypes.c_int), ctypes.POINTER(_F),
+                                           ctypes.POINTER(_F), _M]),
+    "clvr_path_is_series": (ctypes.c_int, [_S]),
+    "clvr_series_open": (ctypes.c_int, [_S, ctypes.POINTER(_P), _M]),
+    "clvr_series_destroy": (None, [_P]),
+    "clvr_series_count": (_U32, [_P]),
+    "clvr_series_step": (ctypes.c_int, [_P, _U32, ctypes.POINTER(_S), ctypes.POINTER(ctypes.c_double), _M]),
+    "clvr_series_bounds": (ctypes.c_int, [_P, _S, _c_float3, _c_float3, ctypes.POINTER(_F), ctypes.POINTER(_F),
+                                          _M]),
 }
 for _name, (_res, _args) in _PROTOS.items():
     _fn = getattr(_lib, _name)
@@ -893,3 +916,146 @@ def save_png(path, image, **kw):
 
 def save_exr(path, image):
     save_image(path, image)
+
+
+# --------------------------------------------------------------------------- API 1.2
+
+
+def _text(what, v):
+    if not isinstance(v, str):
+        raise InputError("%s must be a string, got %r" % (what, v))
+    return v.encode()
+
+
+def _count(what, v, lo=0):
+    if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not lo <= v <= 0xFFFFFFFF:
+        raise InputError("%s must be a whole number >= %d, got %r" % (what, lo, v))
+    return int(v)
+
+
+def setting_name(setting, index):
+    """The name at index in a setting's table ("method": march, track,
+    bins, dda; "estimator": delta, urm; "sampler": independent, ld;
+    "tonemap": none, aces, filmic; "element_boxes": auto, on, off), or None
+    past the end or for an unknown setting. Indices are stable within a
+    major version (new names are appended)."""
+    n = _lib.clvr_setting_name(_text("setting", setting), _count("index", index))
+    return None if n is None else n.decode()
+
+
+def setting_index(setting, name):
+    """The index of name in setting's table; InputError (ERR_USAGE) for an
+    unknown setting or name (the message lists the names)."""
+    i = _U32()
+    _call(_lib.clvr_setting_index, _text("setting", setting), _text("name", name), ctypes.byref(i))
+    return i.value
+
+
+def setting_names(setting):
+    """Every name of a setting, in index order; InputError for an unknown
+    setting."""
+    b = _text("setting", setting)
+    names = []
+    while True:
+        n = _lib.clvr_setting_name(b, len(names))
+        if n is None:
+            break
+        names.append(n.decode())
+    if not names:  # every setting has a name: libclvr's message for the unknown one
+        _call(_lib.clvr_setting_index, b, b"", ctypes.byref(_U32()))
+    return names
+
+
+def default_size():
+    """(width, height) a tracer of the clvr program gets by default."""
+    w, h = _U32(), _U32()
+    _lib.clvr_default_size(ctypes.byref(w), ctypes.byref(h))
+    return w.value, h.value
+
+
+def frame_box(lo, hi, up=None, azimuth=0.0, elevation=0.0, zoom=1.0, fovy=30.0, width=None, height=None):
+    """The automatic framing of Renderer.set_camera({"azimuth", "elevation",
+    "zoom", "up", "fovy"}) for the box [lo, hi] and a width x height image
+    (None: default_size()), without a Renderer: (eye, target), target the
+    box's centre. set_camera({"eye": eye, "target": target, "up": up,
+    "fovy": fovy}) then sets exactly that camera, so several meshes (a
+    time series' steps) can be framed as one box. up None is +y."""
+    dw, dh = default_size() if width is None or height is None else (None, None)
+    w = _count("width", dw if width is None else width, 1)
+    h = _count("height", dh if height is None else height, 1)
+    u = None if up is None else ctypes.cast(_vec3("up", up), _P)
+    eye, target = _c_float3(), _c_float3()
+    _call(_lib.clvr_frame_box, _vec3("lo", lo), _vec3("hi", hi), u, float(azimuth), float(elevation), float(zoom),
+          float(fovy), w, h, eye, target)
+    return tuple(eye), tuple(target)
+
+
+def tf_file_window(path):
+    """The scalar window (lo, hi) a transfer function file fixes itself (a
+    `range` line, or a ParaView map's data-space span; "FILE:NAME" for a
+    ParaView preset), or None when it leaves the window to the data. The
+    file is read and checked (its errors raise)."""
+    has, lo, hi = ctypes.c_int(), _F(), _F()
+    _call(_lib.clvr_tf_file_window, _b(path), ctypes.byref(has), ctypes.byref(lo), ctypes.byref(hi))
+    return (lo.value, hi.value) if has.value else None
+
+
+def is_series(path):
+    """True when path names a time series file (ends in .series, any case)."""
+    return bool(_lib.clvr_path_is_series(_b(path)))
+
+
+class Series(_Handle):
+    """A time series: a ParaView .series file ({"files": [{"name":
+    "step.bin", "time": 0}, ...]}, as tools/clvr-convert writes), names
+    relative to the file's folder. Only the list of steps is read here;
+    len(s), s.step(i) or s[i] -> (mesh path, time), iteration over the
+    steps, and bounds() loads each step in turn (Mesh.load(path) renders
+    one)."""
+
+    def __init__(self, path):
+        self.path = os.fspath(path)
+        self._h = _P()
+        _call(_lib.clvr_series_open, _b(path), ctypes.byref(self._h))
+
+    _destroy = staticmethod(_lib.clvr_series_destroy)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __len__(self):
+        return _lib.clvr_series_count(self._h)
+
+    def step(self, i):
+        """(mesh path, time) of step i (time: the step's index when the file
+        gives none); InputError for i >= len."""
+        p, t = _S(), ctypes.c_double()
+        _call(_lib.clvr_series_step, self._h, _count("step", i), ctypes.byref(p), ctypes.byref(t))
+        return os.fsdecode(p.value), t.value
+
+    def __getitem__(self, i):
+        n = len(self)
+        if not isinstance(i, (int, np.integer)) or isinstance(i, bool):
+            raise TypeError("series steps are indexed by whole numbers, got %r" % (i,))
+        if not -n <= i < n:
+            raise IndexError("step %d of %s, which has %d" % (i, self.path, n))
+        return self.step(int(i) % n)
+
+    def __iter__(self):
+        return (self.step(i) for i in range(len(self)))
+
+    def bounds(self, field=None):
+        """Loads every step in turn (one in memory at a time): ((xmin, ymin,
+        zmin), (xmax, ymax, zmax), vmin, vmax), the union of the steps'
+        bounds and field's range over all steps (field None: each file's
+        first; as Mesh.load's scalar), what one camera (frame_box) and one
+        colour window for the whole series need."""
+        lo, hi, vmin, vmax = _c_float3(), _c_float3(), _F(), _F()
+        _call(_lib.clvr_series_bounds, self._h, _b(field), lo, hi, ctypes.byref(vmin), ctypes.byref(vmax))
+        return tuple(lo), tuple(hi), vmin.value, vmax.value
+
+    def __repr__(self):
+        return "clvr.Series(%r, %d steps)" % (self.path, len(self))
