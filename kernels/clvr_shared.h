@@ -448,8 +448,15 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #define CLVR_URM_DEFAULT_STEPS 24u
 #define CLVR_URM_DEFAULT_KAPPA 0.25f
 /* urm with shadows: cells per axis of the light grid (a control variate for
- * the shadow rays, kernels/render_volume.h). */
+ * the shadow rays, kernels/render_volume.h): at most CLVR_URM_LIGHT_RES (the
+ * buffer's size), CLVR_URM_DEFAULT_LIGHT_RES by default. 256^2, seconds to
+ * the second shadowed frame, 32 -> 24 per axis: post 0.42 -> 0.39, tets-1M
+ * 0.79 -> 0.69, blunt fin 0.20 -> 0.18, igloo 0.23 -> 0.19, gmsh-point 0.44
+ * -> 0.38, with the error within 0.06 point; 20 and 16 lose 0.2-0.3 point on
+ * post and tets-1M for little more time saved
+ * (bench/results/render-converge/2026-11-25-s25-root.md). */
 #define CLVR_URM_LIGHT_RES 32u
+#define CLVR_URM_DEFAULT_LIGHT_RES 24u
 
 /* Index of macrocell (x, y, z) in a grid of r cells per axis (x fastest):
  * the one definition shared by the majorant kernels and the DDA. */

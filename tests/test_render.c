@@ -774,7 +774,7 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
                 fx.set.light_res = 1;
                 fx.set.seed = 18 + 100 * est;
                 render_stats(&fx, N, &m1, &v1);
-                fx.set.light_res = CLVR_URM_LIGHT_RES;
+                fx.set.light_res = CLVR_URM_DEFAULT_LIGHT_RES;
                 snprintf(what, sizeof what, "%s shadows on: urm dda, 1-cell light grid, vs delta track", name);
                 TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, 4), 0);
                 free(m1);

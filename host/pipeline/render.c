@@ -68,7 +68,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
     s->estimator = CLVR_ESTIMATOR_URM;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
     s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
-    s->light_res = CLVR_URM_LIGHT_RES;
+    s->light_res = CLVR_URM_DEFAULT_LIGHT_RES;
     s->width = s->height = 512;
     s->seed = 1;
     /* Low-discrepancy frames: the progressive image reaches a given error

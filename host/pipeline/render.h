@@ -27,8 +27,9 @@ typedef struct clvr_render_settings {
     uint32_t estimator;        /* CLVR_ESTIMATOR_* (track, bins, dda) */
     uint32_t urm_steps;        /* urm: minimum quadrature points per ray (>= 1) */
     float urm_kappa;           /* urm: largest majorant optical depth between two points (> 0) */
-    uint32_t light_res;        /* urm with shadows: light grid cells per axis, 1..CLVR_URM_LIGHT_RES (the
-                                * default); any keeps the image unbiased, a coarser one is noisier */
+    uint32_t light_res;        /* urm with shadows: light grid cells per axis, 1..CLVR_URM_LIGHT_RES
+                                * (default CLVR_URM_DEFAULT_LIGHT_RES); any keeps the image unbiased, a
+                                * coarser one is noisier */
     uint32_t width, height;
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
