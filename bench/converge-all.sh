@@ -43,14 +43,14 @@ day=$(date -u +%Y-%m-%d)
 
 if want tets-1M; then
   "$ROOT/bench/render-vs-vtk.sh" --build "$BUILD" --data "$DATA" --size "$SIZE" --ref-spp "$REF" \
-    --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "tets-1M-$SIZE"
+    --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "$SIZE"
 fi
 if want post; then
   post=$DATA/post-tets.bin
   [ -f "$post" ] || "$ROOT/tools/clvr-convert" "$ROOT/tests/data/plot3d/postxyz.bin" "$post" --tets \
     --scalar VelocityMagnitude --quiet
   "$ROOT/bench/render-vs-vtk.sh" --build "$BUILD" --data "$DATA" --mesh "$post" --size "$SIZE" --ref-spp "$REF" \
-    --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "post-tets-$SIZE"
+    --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "$SIZE"
 fi
 converge() { # name mesh density
   local out=$ROOT/bench/results/render-converge/$day-$1-$SIZE

@@ -23,7 +23,8 @@
 #   --mesh: any clvr .bin instead (VTK draws its tets only: cut other cells into tets
 #           first, e.g. tools/clvr-convert grid.vts grid.bin --tets).
 # Output: a Markdown table with the ratios on stdout; bench/results/render-vs-vtk/
-# <date>-<slug>[-TAG].md and .json (clvr's and VTK's raw JSON side by side).
+# <date>-<slug>-<mesh>[-TAG].md and .json (clvr's and VTK's raw JSON side by side; <mesh>:
+# the mesh file's name without .bin, so runs on several meshes keep their own files).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=$ROOT/build
@@ -95,10 +96,11 @@ done
 
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 if [ "$COMMIT" != unknown ] && ! git -C "$ROOT" diff --quiet HEAD 2>/dev/null; then COMMIT=$COMMIT-dirty; fi
-/usr/bin/python3 - "$WORK/clvr.json" "$WORK/vtk.json" "$WORK/clvr.md" "$WORK/vtk.md" "$OUT" "$COMMIT" "$TAG" <<'EOF'
+/usr/bin/python3 - "$WORK/clvr.json" "$WORK/vtk.json" "$WORK/clvr.md" "$WORK/vtk.md" "$OUT" "$COMMIT" "$TAG" \
+  "$(basename "$MESH" .bin)" <<'EOF'
 import json, os, re, sys, time, socket
 clvr, vtkr = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
-out, commit, tag = sys.argv[5], sys.argv[6], sys.argv[7]
+out, commit, tag, mesh_name = sys.argv[5], sys.argv[6], sys.argv[7], sys.argv[8]
 fast = min(vtkr["rows"], key=lambda r: r["frame_s"])
 lines = []
 p = lines.append
@@ -155,7 +157,8 @@ p(open(sys.argv[4]).read().strip())
 text = "\n".join(lines) + "\n"
 print(text)
 slug = re.sub(r"[^a-z0-9]+", "-", clvr["device"].lower()).strip("-")[:60]
-base = os.path.join(out, time.strftime("%Y-%m-%d", time.gmtime()) + "-" + slug + tag)
+mesh_slug = re.sub(r"[^A-Za-z0-9]+", "-", mesh_name).strip("-")[:40]
+base = os.path.join(out, time.strftime("%Y-%m-%d", time.gmtime()) + "-" + slug + "-" + mesh_slug + tag)
 open(base + ".md.tmp", "w").write(text); os.replace(base + ".md.tmp", base + ".md")
 json.dump({"bench": "render_vs_vtk", "commit": commit, "clvr": clvr, "vtk": vtkr}, open(base + ".json.tmp", "w"), indent=1)
 os.replace(base + ".json.tmp", base + ".json")
