@@ -721,7 +721,9 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
  * 3.8%, PLOT3D combustor 11.1 / 7.6% -> 8.3 / 5.5%, tets-1M 4.44 / 1.94% ->
  * 4.13 / 1.65%, post and blunt fin unchanged. Spread in proportion to m
  * itself did better on the igloo (2.97%) and worse on tets-1M (2.51% after
- * 2 frames), whose thin parts carry much of the image
+ * 2 frames), whose thin parts carry much of the image. The cost: the
+ * dense AMR-like mesh (density 8) loses 10-35%, its thin parts giving points
+ * to dense ones whose spacing m / kappa already sets
  * (bench/results/render-converge/2026-11-25-s25-root.md). */
 inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float t0, float t1)
 {
