@@ -236,6 +236,18 @@ def _b(s):
     return None if s is None else os.fsencode(s) if isinstance(s, os.PathLike) else str(s).encode()
 
 
+def _text(what, v):
+    if not isinstance(v, str):
+        raise InputError("%s must be a string, got %r" % (what, v))
+    return v.encode()
+
+
+def _count(what, v, lo=0):
+    if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not lo <= v <= 0xFFFFFFFF:
+        raise InputError("%s must be a whole number >= %d, got %r" % (what, lo, v))
+    return int(v)
+
+
 def api_version():
     """libclvr's CLVR_API_VERSION (major * 1000 + minor)."""
     return _lib.clvr_api_version()
@@ -326,7 +338,7 @@ def _ptr(a):
 class _Handle:
     """An object that owns one libclvr handle (self._h), released by its
     class's _destroy (bound as a class attribute: module globals may be gone
-    when __del__ runs at exit)."""
+    when __del__ runs at exit), by close(), or at the end of a with block."""
 
     def close(self):
         """Releases the handle now (also done when the object goes away)."""
@@ -335,6 +347,12 @@ class _Handle:
             self._h = _P()
 
     def __del__(self):
+        self.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
         self.close()
 
 
@@ -678,9 +696,7 @@ def _settings_apply(ts, kw):
         raise InputError("unknown setting(s) %s; use %s" % (sorted(unknown), ", ".join(sorted(names))))
     for k, v in kw.items():
         if k in _SETTINGS_STR:
-            if not isinstance(v, str):
-                raise InputError("%s must be a string, got %r" % (k, v))
-            setattr(ts, k, v.encode())
+            setattr(ts, k, _text(k, v))
         elif k in _SETTINGS_VEC:
             setattr(ts, k, _vec3(k, v))
         elif k == "clip_planes":
@@ -762,12 +778,6 @@ class Renderer(_Handle):
     def close(self):
         """Releases the device memory now (also done when the object goes away)."""
         super().close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     # settings: each restarts the accumulation
 
@@ -921,18 +931,6 @@ def save_exr(path, image):
 # --------------------------------------------------------------------------- API 1.2
 
 
-def _text(what, v):
-    if not isinstance(v, str):
-        raise InputError("%s must be a string, got %r" % (what, v))
-    return v.encode()
-
-
-def _count(what, v, lo=0):
-    if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not lo <= v <= 0xFFFFFFFF:
-        raise InputError("%s must be a whole number >= %d, got %r" % (what, lo, v))
-    return int(v)
-
-
 def setting_name(setting, index):
     """The name at index in a setting's table ("method": march, track,
     bins, dda; "estimator": delta, urm; "sampler": independent, ld;
@@ -1019,12 +1017,6 @@ class Series(_Handle):
         _call(_lib.clvr_series_open, _b(path), ctypes.byref(self._h))
 
     _destroy = staticmethod(_lib.clvr_series_destroy)
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     def __len__(self):
         return _lib.clvr_series_count(self._h)
