@@ -291,6 +291,24 @@ def test_borrowing(ctx):
     check(cp.array_address("points") != pts.ctypes.data, "copy=True: another address")
 
 
+def _write_hex_vtk(path, title, pts, hexes, scalars, vectors=None):
+    """Legacy VTK hexahedra with point fields: scalars {name: values}, vectors {name: rows}."""
+    with open(path, "w") as fh:
+        fh.write("# vtk DataFile Version 3.0\n%s\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS %d float\n"
+                 % (title, len(pts)))
+        fh.writelines("%.9g %.9g %.9g\n" % tuple(p) for p in pts)
+        fh.write("CELLS %d %d\n" % (len(hexes), 9 * len(hexes)))
+        fh.writelines("8 " + " ".join(map(str, h)) + "\n" for h in hexes)
+        fh.write("CELL_TYPES %d\n" % len(hexes) + "12\n" * len(hexes))
+        fh.write("POINT_DATA %d\n" % len(pts))
+        for name, values in scalars.items():
+            fh.write("SCALARS %s float\nLOOKUP_TABLE default\n" % name)
+            fh.writelines("%.9g\n" % v for v in values)
+        for name, rows in (vectors or {}).items():
+            fh.write("VECTORS %s float\n" % name)
+            fh.writelines("%.9g %.9g %.9g\n" % tuple(r) for r in rows)
+
+
 def _write_fields_vtk(path, n=6):
     g = np.linspace(0.0, 1.0, n + 1)
     z, y, x = np.meshgrid(g, g, g, indexing="ij")
@@ -302,19 +320,7 @@ def _write_fields_vtk(path, n=6):
                      1).astype(np.uint32)
     a = pts[:, 0].copy()
     b = (4.0 * (pts[:, 1] - 0.5) ** 2).astype(np.float32)
-    with open(path, "w") as fh:
-        fh.write("# vtk DataFile Version 3.0\nfields\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS %d float\n"
-                 % len(pts))
-        fh.writelines("%.9g %.9g %.9g\n" % tuple(p) for p in pts)
-        fh.write("CELLS %d %d\n" % (len(hexes), 9 * len(hexes)))
-        fh.writelines("8 " + " ".join(map(str, h)) + "\n" for h in hexes)
-        fh.write("CELL_TYPES %d\n" % len(hexes) + "12\n" * len(hexes))
-        fh.write("POINT_DATA %d\nSCALARS a float\nLOOKUP_TABLE default\n" % len(pts))
-        fh.writelines("%.9g\n" % v for v in a)
-        fh.write("SCALARS b float\nLOOKUP_TABLE default\n")
-        fh.writelines("%.9g\n" % v for v in b)
-        fh.write("VECTORS v float\n")
-        fh.writelines("%.9g 0.5 %.9g\n" % (p[2], -p[0]) for p in pts)
+    _write_hex_vtk(path, "fields", pts, hexes, {"a": a, "b": b}, {"v": [(p[2], 0.5, -p[0]) for p in pts]})
     return pts, hexes, a, b
 
 
@@ -385,13 +391,7 @@ def _write_box_vtk(path, lo, hi, fields):
     """One hexahedron filling the box [lo, hi], point fields {name: f(x, y, z)} (legacy VTK)."""
     pts = [(hi[0] if (i ^ (i >> 1)) & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2])
            for i in range(8)]  # VTK hexahedron order: the bottom face (z lo) round, then the top
-    with open(path, "w") as fh:
-        fh.write("# vtk DataFile Version 3.0\nbox\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 8 float\n")
-        fh.writelines("%.9g %.9g %.9g\n" % p for p in pts)
-        fh.write("CELLS 1 9\n8 0 1 2 3 4 5 6 7\nCELL_TYPES 1\n12\nPOINT_DATA 8\n")
-        for name, f in fields.items():
-            fh.write("SCALARS %s float\nLOOKUP_TABLE default\n" % name)
-            fh.writelines("%.9g\n" % f(*p) for p in pts)
+    _write_hex_vtk(path, "box", pts, [range(8)], {name: [f(*p) for p in pts] for name, f in fields.items()})
     return pts
 
 
