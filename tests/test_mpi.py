@@ -27,7 +27,9 @@ CLVR_MPI_TEST_FAIL_RANK), an unwritable output on rank 0 and an option MPI
 mode refuses must end the job with a non-zero status and exactly one message,
 from rank 0, naming the rank, within a timeout, and leave no output.
 
-A generated mixed .bin (clvr-gen) renders the same way through the
+`--method bins` and `--method track` (-n 2 with shadows, -n 3 without) match
+one process with the same method, and the rank-order break is caught with
+each. A generated mixed .bin (clvr-gen) renders the same way through the
 distributed loader with the default automatic transfer function.
 
 Environment: CLVR_BUILD_DIR (clvr, clvr-gen), CLVR_MPIEXEC (mpirun).
@@ -182,6 +184,29 @@ def main():
                 r = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"broken compositing ({hook}, -n {n}): R = {r:.3f}")
                 check(r > R_MAX, f"a compositing broken on purpose ({hook}, -n {n}) is caught", r, f"> {R_MAX}")
+
+        # The other majorant sources: per-ray bins and the one global
+        # majorant (track) restrict to a rank's region the same way as the
+        # macrocell grid, so they must match one process with the same
+        # method too; a broken compositing must be caught with them as well.
+        for method, n, shadows in (("bins", 2, True), ("bins", 3, False), ("track", 2, True), ("track", 3, False)):
+            sh = "shadows" if shadows else "no shadows"
+            margs = ("--method", method)
+            ref = render_pair(tmp, f"single-{method}-{int(shadows)}", lambda out, seed: subprocess.run(
+                clvr_args(out, seed, shadows, margs), capture_output=True, text=True, timeout=TIMEOUT, env=mpi_env()))
+            got = render_pair(tmp, f"mpi{n}-{method}-{int(shadows)}",
+                              lambda out, seed: run_mpi(n, clvr_args(out, seed, shadows, margs))) if ref else None
+            if ref and got:
+                r = ratio(ref[0], ref[1], got[0], got[1])
+                print(f"-n {n}, --method {method}, {sh}: R = {r:.3f}")
+                check(r < R_MAX, f"mpirun -n {n} --method {method} ({sh}) matches one process", r, f"< {R_MAX}")
+            if ref and n == 2:
+                bad = render_pair(tmp, f"broken-{method}", lambda out, seed: run_mpi(
+                    n, clvr_args(out, seed, shadows, margs), {"CLVR_MPI_TEST_BREAK": "order"}))
+                if bad:
+                    r = ratio(ref[0], ref[1], bad[0], bad[1])
+                    print(f"broken compositing (order, -n {n}, --method {method}): R = {r:.3f}")
+                    check(r > R_MAX, f"a broken compositing is caught with --method {method}", r, f"> {R_MAX}")
 
         # A .bin file goes through the distributed loader (each rank reads its
         # part; docs/mpi-loading.md) and the automatic transfer function is
