@@ -10,9 +10,22 @@
  * with clvr_clustered_download.
  *
  *   bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] [--queries Q]
+ *   bench_walk --mesh FILE --per-instance [--order ...] [--queries Q]
  *
  * Prints one markdown row per run; queries/s is one host thread, a relative
- * figure between rows of the same machine, not clvr's device speed. */
+ * figure between rows of the same machine, not clvr's device speed.
+ *
+ * --per-instance asks whether a leaf size chosen per instance cluster would
+ * beat the best single one (issue #19), without building it: the same
+ * queries are timed one by one on builds with leaf clusters of 8, 16 and 32,
+ * twice each, and every query's time goes to the chunk of
+ * CLVR_WALK_CHUNK consecutive sorted elements that holds the element found
+ * (the Hilbert order does not depend on the leaf size, so a chunk is the
+ * same part of the mesh in every build, about one instance cluster). An
+ * oracle picks the best leaf size per chunk from the first pass and is
+ * scored on the second, so that picking the luckiest noise is not counted
+ * as a gain. Queries that find no element keep the best single size. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,19 +48,172 @@ static walk_counts g_walk;
 #include "preprocess.h"
 #include "../kernels/locate.h"
 
+/* One build of the mesh with leaf clusters of `leaf`: the host copies of the
+ * clustered arrays (a split mesh comes back whole, its instances' offsets
+ * global) under a host-built tree, with element boxes. */
+typedef struct walk_build {
+    clvr_clustered c;
+    clvr_clustered_host arrays;
+    clvr_bvh_host hb;
+    uint8_t *ebox;
+    clvr_mesh_view mv;
+} walk_build;
+
+static void walk_build_free(clvr_cl *cl, walk_build *b)
+{
+    free(b->ebox);
+    clvr_bvh_host_free(&b->hb);
+    clvr_clustered_host_free(&b->arrays);
+    clvr_clustered_release(cl, &b->c);
+    memset(b, 0, sizeof *b);
+}
+
+static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, walk_build *b, clvr_error *err)
+{
+    memset(b, 0, sizeof *b);
+    clvr_preprocess_options o;
+    clvr_preprocess_options_default(&o);
+    o.leaf_size = leaf;
+    clvr_status s = clvr_preprocess(cl, m, &o, &b->c, err);
+    if (s == CLVR_OK) s = clvr_clustered_download(cl, &b->c, &b->arrays, err);
+    if (s == CLVR_OK)
+        s = clvr_bvh_build_host(b->arrays.instances, (uint32_t)b->c.num_instances, b->arrays.leaf_boxes,
+                                (uint32_t)b->c.num_leaves, &b->hb, err);
+    const clvr_mesh_view mv = {b->hb.tlas, b->hb.blas, b->arrays.instances, (const clvr_vec4 *)b->arrays.vertices,
+                               b->arrays.idx16, b->arrays.idx32, b->hb.tlas_root, leaf, NULL, CLVR_VIEW_ONE_PIECE};
+    b->mv = mv;
+    if (s == CLVR_OK && !(b->ebox = malloc((size_t)b->c.num_elements * CLVR_EBOX_BYTES + 1)))
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for element boxes");
+    if (s == CLVR_OK)
+        s = clvr_bvh_element_boxes_host(&b->mv, (uint32_t)b->c.num_instances, (uint32_t)b->c.num_leaves, b->ebox,
+                                        err);
+    b->mv.ebox = b->ebox;
+    if (s != CLVR_OK) walk_build_free(cl, b);
+    return s;
+}
+
+/* Sorted elements per chunk of --per-instance: the middle of the 30k-60k
+ * elements of an instance cluster. */
+#define CLVR_WALK_CHUNK 32768u
+#define WALK_SIZES 3
+
+/* --per-instance: per-chunk times of the same queries on builds with leaf
+ * clusters of 8, 16 and 32 (see the file's comment). */
+static int per_instance(clvr_cl *cl, const clvr_mesh *m, const char *mesh_path, float (*pts)[4], uint32_t nq,
+                        const char *order_name, unsigned chain)
+{
+    static const uint32_t sizes[WALK_SIZES] = {8u, 16u, 32u};
+    const uint32_t nchunk = (uint32_t)((clvr_mesh_num_elements(m) + CLVR_WALK_CHUNK - 1) / CLVR_WALK_CHUNK) + 1u; /* last: not found */
+    double *t = calloc((size_t)WALK_SIZES * 2u * nchunk, sizeof *t);
+    uint32_t *hits = calloc(nchunk, sizeof *hits);
+    if (!t || !hits) {
+        free(t);
+        free(hits);
+        fprintf(stderr, "bench_walk: out of memory\n");
+        return 1;
+    }
+    const double load = bench_load1();
+    for (int k = 0; k < WALK_SIZES; ++k) {
+        walk_build b;
+        clvr_error err = {0};
+        if (walk_build_make(cl, m, sizes[k], &b, &err) != CLVR_OK) {
+            fprintf(stderr, "bench_walk: %s\n", err.msg);
+            free(t);
+            free(hits);
+            return 1;
+        }
+        for (int pass = 0; pass < 2; ++pass) {
+            double *tk = t + ((size_t)k * 2u + (size_t)pass) * nchunk;
+            for (uint32_t i = 0; i < nq; i += chain) {
+                clvr_locate_hint h = clvr_locate_hint_none();
+                for (uint32_t j = i; j < i + chain && j < nq; ++j) {
+                    float sc;
+                    uint32_t e;
+                    const double q0 = clvr_clock_monotonic_s();
+                    const int ok = clvr_locate_hinted(&b.mv, pts[j][0], pts[j][1], pts[j][2], &h, &sc, &e);
+                    const double dt = clvr_clock_monotonic_s() - q0;
+                    const uint32_t ch = ok ? e / CLVR_WALK_CHUNK : nchunk - 1u;
+                    tk[ch] += dt;
+                    if (k == 0 && pass == 0) hits[ch]++;
+                }
+            }
+        }
+        walk_build_free(cl, &b);
+    }
+    /* Totals per size (second pass), and the oracle: per chunk, the size
+     * that was fastest in the first pass, timed by the second. */
+    double total[WALK_SIZES] = {0}, oracle = 0.0;
+    int best = 0;
+    for (int k = 0; k < WALK_SIZES; ++k) {
+        for (uint32_t ch = 0; ch < nchunk; ++ch) total[k] += t[((size_t)k * 2u + 1u) * nchunk + ch];
+        if (total[k] < total[best]) best = k;
+    }
+    uint32_t picks[WALK_SIZES] = {0}, used = 0;
+    for (uint32_t ch = 0; ch < nchunk; ++ch) {
+        int pick = best;
+        if (ch + 1u < nchunk && hits[ch]) {
+            for (int k = 0; k < WALK_SIZES; ++k)
+                if (t[(size_t)k * 2u * nchunk + ch] < t[(size_t)pick * 2u * nchunk + ch]) pick = k;
+            picks[pick]++;
+            used++;
+        }
+        oracle += t[((size_t)pick * 2u + 1u) * nchunk + ch];
+    }
+    /* Bookkeeping the smoke test checks: every query counted once, every
+     * total a positive time, the oracle between the chunks' best and worst. */
+    uint64_t counted = 0;
+    double lo = 0.0, hi = 0.0;
+    for (uint32_t ch = 0; ch < nchunk; ++ch) {
+        counted += hits[ch];
+        double a = INFINITY, z = 0.0;
+        for (int k = 0; k < WALK_SIZES; ++k) {
+            const double v = t[((size_t)k * 2u + 1u) * nchunk + ch];
+            a = v < a ? v : a;
+            z = v > z ? v : z;
+        }
+        lo += a;
+        hi += z;
+    }
+    int bad = counted != nq || !(oracle >= lo * (1 - 1e-9) && oracle <= hi * (1 + 1e-9));
+    for (int k = 0; k < WALK_SIZES; ++k) bad |= !(total[k] > 0.0 && isfinite(total[k]));
+    if (bad) {
+        fprintf(stderr, "bench_walk: per-instance bookkeeping is wrong: %llu of %u queries counted, oracle %g outside "
+                        "[%g, %g] or a total not positive\n",
+                (unsigned long long)counted, nq, oracle, lo, hi);
+        free(t);
+        free(hits);
+        return 3;
+    }
+    const char *base = strrchr(mesh_path, '/');
+    printf("# bench_walk --per-instance: %s, %llu elements, %u %s queries (hint per ray of %u), chunks of %u sorted "
+           "elements, host reference walk, 1 thread, each query timed\n",
+           mesh_path, (unsigned long long)clvr_mesh_num_elements(m), nq, order_name, chain, CLVR_WALK_CHUNK);
+    printf("| mesh | order | s, leaf 8 | s, leaf 16 | s, leaf 32 | best single | oracle per chunk | oracle / best | "
+           "chunks picking 8 / 16 / 32 | load |\n");
+    printf("|---|---|---:|---:|---:|---:|---:|---:|---|---:|\n");
+    printf("| %s | %s | %.3f | %.3f | %.3f | %u | %.3f | %.3f | %u / %u / %u of %u | %.2f |\n", base ? base + 1 : mesh_path,
+           order_name, total[0], total[1], total[2], sizes[best], oracle, oracle / total[best], picks[0], picks[1],
+           picks[2], used, load);
+    free(t);
+    free(hits);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *mesh_path = NULL, *device = NULL, *order_name = "rays";
     uint32_t leaf = 8, nq = 480000;
+    int per_inst = 0;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--mesh") && i + 1 < argc) mesh_path = argv[++i];
         else if (!strcmp(argv[i], "--device") && i + 1 < argc) device = argv[++i];
         else if (!strcmp(argv[i], "--leaf") && i + 1 < argc) leaf = (uint32_t)strtoul(argv[++i], NULL, 10);
         else if (!strcmp(argv[i], "--order") && i + 1 < argc) order_name = argv[++i];
         else if (!strcmp(argv[i], "--queries") && i + 1 < argc) nq = (uint32_t)strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(argv[i], "--per-instance")) per_inst = 1;
         else {
             fprintf(stderr, "usage: bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] "
-                            "[--queries Q]\n");
+                            "[--queries Q] [--per-instance]\n");
             return 2;
         }
     }
@@ -66,68 +232,54 @@ int main(int argc, char **argv)
     clvr_cl cl;
     if (clvr_cl_create(device, &cl, &err) != CLVR_OK) {
         fprintf(stderr, "bench_walk: %s\n", err.msg);
+        clvr_mesh_free(&m);
         return 4;
     }
-    clvr_preprocess_options o;
-    clvr_preprocess_options_default(&o);
-    o.leaf_size = leaf;
-    clvr_clustered c;
-    clvr_clustered_host arrays;
-    memset(&arrays, 0, sizeof arrays);
-    clvr_bvh_host hb;
-    memset(&hb, 0, sizeof hb);
-    uint8_t *ebox = NULL;
-    float(*pts)[4] = NULL;
-    /* The host copies of the clustered arrays (a split mesh comes back whole,
-     * its instances' offsets global), under a host-built tree. */
-    clvr_status s = clvr_preprocess(&cl, &m, &o, &c, &err);
-    if (s == CLVR_OK) s = clvr_clustered_download(&cl, &c, &arrays, &err);
-    if (s == CLVR_OK)
-        s = clvr_bvh_build_host(arrays.instances, (uint32_t)c.num_instances, arrays.leaf_boxes,
-                                (uint32_t)c.num_leaves, &hb, &err);
-    clvr_mesh_view mv = {hb.tlas, hb.blas, arrays.instances, (const clvr_vec4 *)arrays.vertices,
-                         arrays.idx16, arrays.idx32, hb.tlas_root, leaf, NULL, CLVR_VIEW_ONE_PIECE};
-    if (s == CLVR_OK && !(ebox = malloc((size_t)c.num_elements * CLVR_EBOX_BYTES + 1)))
-        s = clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for element boxes");
-    if (s == CLVR_OK)
-        s = clvr_bvh_element_boxes_host(&mv, (uint32_t)c.num_instances, (uint32_t)c.num_leaves, ebox, &err);
-    if (s == CLVR_OK && !(pts = bench_make_points(&m, nq, order)))
-        s = clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u points", nq);
-    if (s != CLVR_OK) {
-        fprintf(stderr, "bench_walk: %s\n", err.msg);
+    const unsigned chain = bench_order_chain(order);
+    float(*pts)[4] = bench_make_points(&m, nq, order);
+    if (!pts) {
+        fprintf(stderr, "bench_walk: no memory for %u points\n", nq);
+        clvr_cl_destroy(&cl);
+        clvr_mesh_free(&m);
         return 1;
     }
-    mv.ebox = ebox;
-    const unsigned chain = bench_order_chain(order);
-    const double load = bench_load1(), t0 = clvr_clock_monotonic_s();
-    uint32_t found = 0;
-    for (uint32_t i = 0; i < nq; i += chain) {
-        clvr_locate_hint h = clvr_locate_hint_none();
-        for (uint32_t j = i; j < i + chain && j < nq; ++j) {
-            float sc;
-            uint32_t e;
-            found += (uint32_t)clvr_locate_hinted(&mv, pts[j][0], pts[j][1], pts[j][2], &h, &sc, &e);
+    int rc = 0;
+    if (per_inst) {
+        rc = per_instance(&cl, &m, mesh_path, pts, nq, order_name, chain);
+    } else {
+        walk_build b;
+        if (walk_build_make(&cl, &m, leaf, &b, &err) != CLVR_OK) {
+            fprintf(stderr, "bench_walk: %s\n", err.msg);
+            rc = 1;
+        } else {
+            const double load = bench_load1(), t0 = clvr_clock_monotonic_s();
+            uint32_t found = 0;
+            for (uint32_t i = 0; i < nq; i += chain) {
+                clvr_locate_hint h = clvr_locate_hint_none();
+                for (uint32_t j = i; j < i + chain && j < nq; ++j) {
+                    float sc;
+                    uint32_t e;
+                    found += (uint32_t)clvr_locate_hinted(&b.mv, pts[j][0], pts[j][1], pts[j][2], &h, &sc, &e);
+                }
+            }
+            const double t = clvr_clock_monotonic_s() - t0;
+            const double q = (double)nq;
+            printf("# bench_walk: %s, %llu elements, leaf clusters of %u, %u %s queries (hint per ray of %u), host "
+                   "reference walk, 1 thread\n",
+                   mesh_path, (unsigned long long)b.c.num_elements, leaf, nq, order_name, chain);
+            printf("| mesh | order | leaf | found | top nodes | bottom nodes | instances | leaves | box-pass elements | "
+                   "exact tests | hint held | q/s (host, 1 thread) | load |\n");
+            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+            const char *base = strrchr(mesh_path, '/');
+            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3g | %.2f |\n",
+                   base ? base + 1 : mesh_path, order_name, leaf, found / q, g_walk.tnodes / q, g_walk.bnodes / q,
+                   g_walk.inst / q, g_walk.leaves / q, g_walk.ecand / q, g_walk.etest / q,
+                   g_walk.hint_try ? (double)g_walk.hint_hit / (double)g_walk.hint_try : 0.0, q / t, load);
+            walk_build_free(&cl, &b);
         }
     }
-    const double t = clvr_clock_monotonic_s() - t0;
-    const double q = (double)nq;
-    printf("# bench_walk: %s, %llu elements, leaf clusters of %u, %u %s queries (hint per ray of %u), host reference "
-           "walk, 1 thread\n",
-           mesh_path, (unsigned long long)c.num_elements, leaf, nq, order_name, chain);
-    printf("| mesh | order | leaf | found | top nodes | bottom nodes | instances | leaves | box-pass elements | "
-           "exact tests | hint held | q/s (host, 1 thread) | load |\n");
-    printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-    const char *base = strrchr(mesh_path, '/');
-    printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3g | %.2f |\n",
-           base ? base + 1 : mesh_path, order_name, leaf, found / q, g_walk.tnodes / q, g_walk.bnodes / q,
-           g_walk.inst / q, g_walk.leaves / q, g_walk.ecand / q, g_walk.etest / q,
-           g_walk.hint_try ? (double)g_walk.hint_hit / (double)g_walk.hint_try : 0.0, q / t, load);
     free(pts);
-    free(ebox);
-    clvr_bvh_host_free(&hb);
-    clvr_clustered_host_free(&arrays);
-    clvr_clustered_release(&cl, &c);
     clvr_cl_destroy(&cl);
     clvr_mesh_free(&m);
-    return 0;
+    return rc;
 }
