@@ -29,14 +29,17 @@ from rank 0, naming the rank, within a timeout, and leave no output.
 
 `--method bins` and `--method track` (-n 2 with shadows, -n 3 without) match
 one process with the same method, and the rank-order break is caught with
-each. A generated mixed .bin (clvr-gen) renders the same way through the
+each. Ctrl-C (SIGINT to mpirun, which sends the ranks SIGTERM) must leave the
+image accumulated so far, whole, with a message and a non-zero status. A generated mixed .bin (clvr-gen) renders the same way through the
 distributed loader with the default automatic transfer function.
 
 Environment: CLVR_BUILD_DIR (clvr, clvr-gen), CLVR_MPIEXEC (mpirun).
 """
 
+import math
 import os
 import shutil
+import signal
 import struct
 import subprocess
 import sys
@@ -245,6 +248,39 @@ def main():
                 r = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"-n 2, .bin with a cell field (read whole by every rank): R = {r:.3f}")
                 check(r < R_MAX, "mpirun -n 2 on a .bin with a cell field matches one process", r, f"< {R_MAX}")
+
+        # Ctrl-C: mpirun sends the ranks SIGTERM; they stop after a frame all
+        # of them finished and rank 0 writes what was accumulated (the
+        # single-process program's behaviour). Without the ranks' handler
+        # SIGTERM kills them and no image is left.
+        out = os.path.join(tmp, "interrupted.pfm")
+        cmd = [MPIEXEC, "--oversubscribe", "-n", "2", *clvr_args(out, 1, True)[:-3], "-o", out]
+        cmd[cmd.index("--spp") + 1] = "1000000"
+        proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=mpi_env())
+        err_lines = []
+        try:
+            # Progress lines come about once a second once frames run.
+            for line in proc.stderr:
+                err_lines.append(line)
+                if line.startswith("clvr: frame "):
+                    break
+            proc.send_signal(signal.SIGINT)
+            _, rest = proc.communicate(timeout=60)
+            err_lines.append(rest)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+        text = "".join(err_lines)
+        check(proc.returncode not in (0, None), "Ctrl-C under mpirun ends the job with a non-zero status",
+              proc.returncode, "!= 0")
+        check("interrupted after" in text, "Ctrl-C under mpirun: rank 0 says how many frames the image holds",
+              text[-1500:], "'interrupted after N of M frames'")
+        if check(os.path.exists(out), "Ctrl-C under mpirun leaves the image accumulated so far"):
+            w, h, d = read_pfm(out)
+            check((w, h) == (SIZE, SIZE) and all(math.isfinite(x) for x in d) and max(d) > 0,
+                  "the interrupted image is whole, finite and not black", (w, h, max(d)), (SIZE, SIZE))
+        check(not [f for f in os.listdir(tmp) if f.startswith("interrupted.pfm.tmp")],
+              "no temporary file left by the interrupted write")
 
         # Failures end the job: non-zero status, one message naming the rank, no output.
         out = os.path.join(tmp, "fail.pfm")
