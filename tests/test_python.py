@@ -379,6 +379,18 @@ def test_scene_settings(ctx):
     r1.set_settings(clip_lo=(0, 0, 0), clip_hi=(0.5, 0.5, 0.5))
     check(r1.settings["clip_box"] and r1.settings["clip_hi"] == (0.5, 0.5, 0.5), "clip box set")
     raises(lambda: clvr.Scene(m, device=ctx, leaf_size=0), clvr.InputError, "leaf_size", "leaf_size 0")
+    # Whole-number settings go through one check: no bools, nothing a
+    # ctypes field would wrap silently (seed is 64-bit, the others 32).
+    raises(lambda: clvr.Scene(m, device=ctx, leaf_size=True), clvr.InputError, "leaf_size", "leaf_size True")
+    raises(lambda: clvr.Scene(m, device=ctx, partitions=2 ** 32), clvr.InputError, "partitions", "partitions 2^32")
+    raises(lambda: r1.set_settings(macrocells=2 ** 32 + 32), clvr.InputError, "macrocells",
+           "macrocells 2^32 + 32 (would wrap to 32)")
+    raises(lambda: r1.set_settings(urm_steps=True), clvr.InputError, "urm_steps", "urm_steps True")
+    raises(lambda: r1.set_settings(seed=2 ** 64), clvr.InputError, "seed", "seed 2^64")
+    r1.set_settings(seed=2 ** 40 + 7)
+    check(r1.settings["seed"] == 2 ** 40 + 7, "a 64-bit seed is kept whole: %r" % r1.settings["seed"])
+    raises(lambda: clvr.Renderer(sc, width=True, height=8), clvr.InputError, "width", "width True")
+    raises(lambda: clvr.Renderer(sc, width=8, height=65537), clvr.InputError, "[1, 65536]", "height 65537")
 
 
 # clvr.h's comment on clvr_setting_name: each setting's names in index order.

@@ -242,9 +242,13 @@ def _text(what, v):
     return v.encode()
 
 
-def _count(what, v, lo=0):
-    if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not lo <= v <= 0xFFFFFFFF:
-        raise InputError("%s must be a whole number >= %d, got %r" % (what, lo, v))
+def _count(what, v, lo=0, hi=0xFFFFFFFF):
+    """v as an int in [lo, hi] (hi: the C field's largest value, so that
+    ctypes never wraps it silently); bools are not counts."""
+    if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not lo <= v <= hi:
+        if hi == 0xFFFFFFFF:
+            raise InputError("%s must be a whole number >= %d, got %r" % (what, lo, v))
+        raise InputError("%s must be a whole number in [%d, %d], got %r" % (what, lo, hi, v))
     return int(v)
 
 
@@ -641,8 +645,7 @@ class Scene(_Handle):
         if not isinstance(mesh, Mesh):
             raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load)")
         for what, v in (("leaf_size", leaf_size), ("sampling_size", sampling_size), ("partitions", partitions)):
-            if not isinstance(v, (int, np.integer)) or v < 0:
-                raise InputError("%s must be a whole number >= 0, got %r" % (what, v))
+            _count(what, v)
         self.context = device if isinstance(device, Context) else Context(device)
         self.mesh = mesh
         ps = _PreprocessSettings(ctypes.sizeof(_PreprocessSettings), int(leaf_size), int(sampling_size),
@@ -711,9 +714,7 @@ def _settings_apply(ts, kw):
         elif k in ("step", "light_intensity", "ambient"):
             setattr(ts, k, float(v))
         else:
-            if not isinstance(v, (int, np.integer)) or v < 0:
-                raise InputError("%s must be a whole number >= 0, got %r" % (k, v))
-            setattr(ts, k, int(v))
+            setattr(ts, k, _count(k, v, 0, 0xFFFFFFFFFFFFFFFF if k == "seed" else 0xFFFFFFFF))
     if "clip_lo" in kw or "clip_hi" in kw:
         ts.clip_box = 1 if kw.get("clip_box", True) else 0
 
@@ -736,8 +737,7 @@ class Renderer(_Handle):
             raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load) or a "
                              "clvr.Scene")
         for what, v in (("width", width), ("height", height)):
-            if not isinstance(v, (int, np.integer)) or not 1 <= v <= 65536:
-                raise InputError("%s must be a whole number in [1, 65536], got %r" % (what, v))
+            _count(what, v, 1, 65536)
         ts = _TracerSettings()
         _lib.clvr_tracer_settings_init(ctypes.byref(ts))
         _settings_apply(ts, settings)
