@@ -29,6 +29,9 @@ CLVR_MPI_API int clvr_mpi_launched(void);
  * MPI_COMM_WORLD (MPI is initialised and finalised here unless the caller
  * initialised it): every rank renders its region, rank 0 composites, writes
  * the image and the statistics, and prints every message on stderr.
+ * Installs handlers for SIGINT and SIGTERM for its frames: a signal on any
+ * rank stops all of them after the same frame, and rank 0 writes the image
+ * accumulated so far (exit code 130).
  * Returns the process exit code (the clvr program's codes; the same on
  * every rank). */
 CLVR_MPI_API int clvr_mpi_main(int argc, char **argv);
