@@ -385,8 +385,9 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
  * majorant m > 0 (and 0 where m = 0: no medium, nothing to sample), so that
  * one unit of s holds at most kappa of majorant optical depth and a ray gets
  * at least frame.urm_steps units. rho_0 spreads those steps: on camera rays
- * (and MPI regions) in proportion to sqrt(m) (clvr_root_depth), on shadow
- * and light-grid rays evenly over the clipped ray.
+ * (and MPI regions) in proportion to sqrt(m) times a factor that falls with
+ * the majorant optical depth in front (clvr_urm_front, clvr_root_depth), on
+ * shadow and light-grid rays evenly over the clipped ray.
  *  - Emission: quadrature points at s = k + u (u: the frame's uniform, from
  *    the low-discrepancy sampler by default) with weight T(t_k) sigma_k /
  *    rho_k. For any fixed u the sum is a quadrature; over u it is unbiased.
@@ -608,8 +609,8 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
 {
     if (!(m > 0.0f)) return 1;
     /* Shadow and light-grid rays (rho_root 0) spread evenly: no front. */
-    const float spread = e->rho_root > 0.0f ? e->rho_root * sqrt(m) * clvr_urm_front(e->tau_maj, m, b - a) : 0.0f;
-    const float rho = fmax(m * e->inv_kappa, e->rho_min + spread), inv_rho = 1.0f / rho;
+    const float rho_spread = e->rho_root > 0.0f ? e->rho_root * sqrt(m) * clvr_urm_front(e->tau_maj, m, b - a) : 0.0f;
+    const float rho = fmax(m * e->inv_kappa, e->rho_min + rho_spread), inv_rho = 1.0f / rho;
     e->tau_maj += m * (b - a);
     /* Residual points per unit s: e->rate times the majorant's rate, but at
      * least kappa/2 before that factor, because the control (interpolated
@@ -769,6 +770,19 @@ inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float
     return root;
 }
 
+/* The urm walk of a camera ray (or an MPI region of one) over [t0, t1]:
+ * its minimum points spread by clvr_root_depth, light-grid terms when the
+ * frame has shadows. Returns T(t1); e holds the sums and the pick. */
+inline float clvr_urm_camera(const clvr_volume *v, clvr_urm *e, float3 org, float3 dir, float t0, float t1, float u,
+                             float u_pick, clvr_rng *rng, uint *samples, uint *nulls)
+{
+    const clvr_frame *f = v->f;
+    clvr_urm_begin(f, e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1), u, u_pick, f->shadows ? 2 : 1,
+                   CLVR_URM_RESIDUAL_RATE, rng);
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, !clvr_urm_segment(v, e, org, dir, a, b, m, rng, samples, nulls));
+    return clvr_urm_end(e);
+}
+
 /* One camera ray with the frame's estimator. ld: the frame's low-discrepancy
  * uniforms (CLVR_LD_DIMS), or NULL for the independent sampler; dimension 2
  * drives the camera ray's first free flight (delta) or quadrature offset
@@ -787,11 +801,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
-        clvr_urm_begin(f, &e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1,
-                       CLVR_URM_RESIDUAL_RATE, rng);
-        CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
-                              !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
-        const float Tend = clvr_urm_end(&e);
+        const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, rng, samples, nulls);
         /* Without shadows every point is fully lit: the whole sum, no pick. */
         float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
         if (f->shadows && e.wsum > 0.0f) {
@@ -852,11 +862,7 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
     vstore4((float4)(0.0f), 0, rec->pick);
     if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return;
     clvr_urm e;
-    clvr_urm_begin(f, &e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1), u_primary, u_pick, f->shadows ? 2 : 1,
-                   CLVR_URM_RESIDUAL_RATE, rng);
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
-                          !clvr_urm_segment(v, &e, org, dir, a, b, m, rng, samples, nulls));
-    const float Tend = clvr_urm_end(&e);
+    const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, rng, samples, nulls);
     const float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum +
                      (f->shadows ? f->light_intensity : 0.0f) * e.lit;
     rec->a = t0;
