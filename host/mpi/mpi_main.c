@@ -335,7 +335,7 @@ static int run(mpi_run *m, const clvr_options *o)
     const size_t npix = (size_t)o->width * o->height;
     uint32_t frames = 0;
     double wall_s = 0.0;
-    int rc_stop = 0; /* 130 when stopped by a signal (g_mpi_stop) */
+    int stopped = 0; /* stopped by a signal (g_mpi_stop): exit code 130 */
     clvr_status s = check_options(o, &err);
 
     /* --- output checked by rank 0 before any work */
@@ -555,7 +555,6 @@ static int run(mpi_run *m, const clvr_options *o)
     double last_report = render0;
     signal(SIGINT, on_stop_signal);
     signal(SIGTERM, on_stop_signal);
-    int stopped = 0;
     for (frames = 0; frames < o->spp; ++frames) {
         if (stop_requested(m)) {
             stopped = 1;
@@ -612,8 +611,7 @@ static int run(mpi_run *m, const clvr_options *o)
 
     /* --- image (none when stopped before the first frame) */
     if (stopped && frames == 0) {
-        if (root) fprintf(stderr, "clvr: interrupted before the first frame; %s not written\n", o->output);
-        rc_stop = 130;
+        if (root) fprintf(stderr, "clvr: interrupted before the first frame of %s; not written\n", o->output);
         goto done;
     }
     if (root) {
@@ -625,12 +623,9 @@ static int run(mpi_run *m, const clvr_options *o)
     if (s != CLVR_OK) goto done;
     if (root && !o->quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp, %d ranks)\n", o->output, o->width, o->height,
                                    frames, m->size);
-    if (stopped) {
-        if (root)
-            fprintf(stderr, "clvr: interrupted after %u of %u frames; the image holds what was accumulated\n", frames,
-                    o->spp);
-        rc_stop = 130;
-    }
+    if (stopped && root)
+        fprintf(stderr, "clvr: interrupted after %u of %u frames; the image holds what was accumulated\n", frames,
+                o->spp);
 
     /* --- stats */
     {
@@ -671,7 +666,7 @@ done:
     clvr_tf_free(&tf);
     clvr_mpi_share_free(&share);
     clvr_mesh_free(&whole);
-    return s == CLVR_OK ? rc_stop : clvr_status_exit_code(s);
+    return s != CLVR_OK ? clvr_status_exit_code(s) : stopped ? 130 : 0;
 }
 
 int clvr_mpi_main(int argc, char **argv)
