@@ -254,7 +254,8 @@ def main():
         # single-process program's behaviour). Without the ranks' handler
         # SIGTERM kills them and no image is left.
         out = os.path.join(tmp, "interrupted.pfm")
-        cmd = [MPIEXEC, "--oversubscribe", "-n", "2", *clvr_args(out, 1, True)[:-3], "-o", out]
+        # Not --quiet: the progress lines say when frames are running.
+        cmd = [MPIEXEC, "--oversubscribe", "-n", "2", *[a for a in clvr_args(out, 1, True) if a != "--quiet"]]
         cmd[cmd.index("--spp") + 1] = "1000000"
         proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=mpi_env())
         err_lines = []
