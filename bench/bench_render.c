@@ -21,10 +21,12 @@
  *
  *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
  *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
- *                [--sampler ld|independent]
+ *                [--sampler ld|independent] [--no-hull]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--sampler ld|independent] [--json FILE]
  *
+ * --no-hull: camera rays are not cut to the mesh's boundary crossings
+ * (settings.hull off; the same image in expectation, for A/B runs).
  * --sampler: the renderer's frame sampler (default ld, the renderer's
  * default); --converge renders its reference with independent frames always
  * and the measured run with this sampler.
@@ -67,6 +69,7 @@ typedef struct config {
     uint32_t urm_steps; /* 0: the renderer's default */
     float urm_kappa;    /* 0: the renderer's default */
     uint32_t light_res; /* 0: the renderer's default (urm with shadows: light grid cells per axis) */
+    int no_hull;        /* --no-hull: camera rays keep their whole box interval (render.h settings.hull) */
 } config;
 
 typedef struct row {
@@ -124,6 +127,14 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scen
     s = clvr_preprocess(cl, &m, &po, &g->clustered, err);
     if (s == CLVR_OK) s = clvr_accel_build(cl, &g->clustered, &g->accel, err);
     g->preprocess_s = clvr_clock_monotonic_s() - t0;
+    if (s == CLVR_OK) {
+        const clvr_hull *hl = &g->accel.hull;
+        fprintf(stderr, "bench_render: hull: %u boundary faces of %llu, %.1f MB (faces and tree), %.3f s device, "
+                "empty fraction %.3f, of the clusters' boxes %.3f (%s)\n", hl->num_faces, (unsigned long long)hl->num_slots,
+                ((double)hl->num_faces * sizeof(clvr_hull_face) + (double)hl->num_nodes * sizeof(clvr_bvh_node)) / 1e6,
+                hl->build_s, (double)hl->empty_fraction, (double)hl->box_fraction,
+                hl->kept ? "kept" : hl->boxes_only ? "not built: the mesh fills its box" : "dropped: the mesh fills its box");
+    }
     if (s == CLVR_OK)
         s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, density, m.scalar_min, m.scalar_max, err);
     if (s == CLVR_OK) {
@@ -153,6 +164,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     if (c->urm_steps) rs.urm_steps = c->urm_steps;
     if (c->urm_kappa > 0.0f) rs.urm_kappa = c->urm_kappa;
     if (c->light_res) rs.light_res = c->light_res;
+    rs.hull = !c->no_hull;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
     clvr_camera cam;
@@ -617,7 +629,7 @@ static int usage(void)
     fprintf(stderr,
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
             "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
-            "                    [--sampler ld|independent]\n"
+            "                    [--sampler ld|independent] [--no-hull]\n"
             "                    [--estimator urm|delta] [--urm-steps N] [--urm-kappa K]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
@@ -639,7 +651,7 @@ int main(int argc, char **argv)
     uint32_t nconv_est = 2;
     int shadow_lo = 0, shadow_hi = 1;
     float urm_kappa = 0.0f;
-    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0;
+    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0, no_hull = 0;
     double target = 0.02, budget = 30.0;
     float density = 1.0f;
     for (int i = 1; i < argc; ++i) {
@@ -662,6 +674,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--density") && v) density = (float)atof(argv[++i]);
         else if (!strcmp(a, "--no-shadows")) { shadows = 0; shadow_hi = 0; }
         else if (!strcmp(a, "--only-shadows")) shadow_lo = 1;
+        else if (!strcmp(a, "--no-hull")) no_hull = 1;
         else if (!strcmp(a, "--sampler") && v) {
             const char *sv = argv[++i];
             if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
@@ -718,13 +731,13 @@ int main(int argc, char **argv)
                 snprintf(mb, sizeof mb, "%s", macro);
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0};
+                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
-                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0};
+                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull};
                 snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
@@ -738,7 +751,7 @@ int main(int argc, char **argv)
         return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
     }
     if (converge) {
-        const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0};
+        const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0, no_hull};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, json);
         clvr_cl_destroy(&cl);

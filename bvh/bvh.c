@@ -156,7 +156,12 @@ clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_err
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_locate_points", &out->locate_points, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_locate_points_split", &out->locate_points_split, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_hits", &out->ray_hits, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_span", &out->ray_span, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_element_boxes", &out->element_boxes, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_keys", &out->hull_keys, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_flags", &out->hull_flags, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_faces", &out->hull_faces, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_rays", &out->hull_rays, err));
     return CLVR_OK;
 cleanup:
     clvr_bvh_kernels_destroy(out);
@@ -170,7 +175,11 @@ void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
     if (k->locate_points) clReleaseKernel(k->locate_points);
     if (k->locate_points_split) clReleaseKernel(k->locate_points_split);
     if (k->ray_hits) clReleaseKernel(k->ray_hits);
+    if (k->ray_span) clReleaseKernel(k->ray_span);
     if (k->element_boxes) clReleaseKernel(k->element_boxes);
+    cl_kernel hk[4] = {k->hull_keys, k->hull_flags, k->hull_faces, k->hull_rays};
+    for (int i = 0; i < 4; ++i)
+        if (hk[i]) clReleaseKernel(hk[i]);
     if (k->program) clReleaseProgram(k->program);
     memset(k, 0, sizeof *k);
 }

@@ -6,6 +6,7 @@
 #include "bvh_build.h"
 #include "bvh_traverse.h"
 #include "locate.h"
+#include "hull.h"
 
 /* Builds every node of level `level` of all trees. level_prefix[t] is the
  * number of level-`level` nodes in trees 0 .. t-1 (num_trees + 1 entries),
@@ -179,6 +180,130 @@ __kernel void clvr_bvh_ray_hits(__global const float4 *org, __global const float
     count[i] = c;
     prim_sum[i] = ps;
     len_sum[i] = len;
+}
+
+/* Per ray (origin, direction; w unused): the first entry into and the last
+ * exit from the boxes under a single-level tree (root 0) along [0, inf),
+ * as (t0, t1, 1, 0), or (0, inf, 0, 0) when no box is hit: the layout of
+ * clvr_hull_rays. The hull's first probe runs it over the sampling
+ * clusters' boxes (host/pipeline/hull.c). */
+__kernel void clvr_bvh_ray_span(__global const float4 *org, __global const float4 *dir, uint n,
+                                __global const clvr_bvh_node *nodes, __global float4 *t01)
+{
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const float4 o = org[i], d = dir[i];
+    clvr_bvh_ray_iter it;
+    clvr_bvh_ray_begin(&it, nodes, o.x, o.y, o.z, d.x, d.y, d.z, 0.0f, INFINITY);
+    uint prim;
+    float t0, t1, first = INFINITY, last = -INFINITY;
+    while (clvr_bvh_ray_next(&it, nodes, &prim, &t0, &t1)) {
+        first = fmin(first, t0);
+        last = fmax(last, t1);
+    }
+    t01[i] = first <= last ? (float4)(first, last, 1.0f, 0.0f) : (float4)(0.0f, INFINITY, 0.0f, 0.0f);
+}
+
+/* ------------------------------------------------------------ hull
+ * The boundary faces of a clustered mesh (kernels/hull.h), in three
+ * passes over face slots (face_first: the first slot of each instance,
+ * num_instances + 1 entries; see clvr_hull_slot_face): keys, then, after a
+ * sort of (key, slot) pairs, a flag per slot that has no twin, then, after
+ * a select of the flagged slots, the faces and their boxes. The mesh's
+ * pieces as in clvr_element_boxes. */
+#define CLVR_HULL_PIECE_PARAMS                                                                                         \
+    __global const float4 *vertices, __global const ushort *idx16, __global const uint *idx32,                       \
+        __global const float4 *vertices1, __global const ushort *idx16_1, __global const uint *idx32_1,              \
+        __global const float4 *vertices2, __global const ushort *idx16_2, __global const uint *idx32_2,              \
+        __global const float4 *vertices3, __global const ushort *idx16_3, __global const uint *idx32_3
+#define CLVR_HULL_VIEW(instances)                                                                                      \
+    {NULL,                                                                                                             \
+     NULL,                                                                                                             \
+     instances,                                                                                                        \
+     vertices,                                                                                                         \
+     idx16,                                                                                                            \
+     idx32,                                                                                                            \
+     0u,                                                                                                               \
+     0u,                                                                                                               \
+     NULL,                                                                                                             \
+     {{vertices1, idx16_1, idx32_1, NULL}, {vertices2, idx16_2, idx32_2, NULL}, {vertices3, idx16_3, idx32_3, NULL}}}
+
+/* keys[slot] = clvr_hull_face_key of the face in that slot. */
+__kernel void clvr_hull_keys(__global const clvr_instance *instances, uint num_instances,
+                             __global const uint *face_first, uint num_slots, __global ulong *keys,
+                             CLVR_HULL_PIECE_PARAMS)
+{
+    const uint slot = get_global_id(0);
+    if (slot >= num_slots) return;
+    const clvr_mesh_view m = CLVR_HULL_VIEW(instances);
+    uint i, e, f;
+    clvr_hull_slot_face(instances, face_first, num_instances, slot, &i, &e, &f);
+    const clvr_instance inst = instances[i];
+    clvr_hull_face h;
+    clvr_hull_face_load(&m, &inst, e, f, &h);
+    keys[slot] = clvr_hull_face_key(&h);
+}
+
+/* keys, slots: sorted pairs. flags[slot] = clvr_hull_boundary, with the
+ * two common cases short-cut (the same flags; test_hull compares them with
+ * the reference): a key that no other slot has is a boundary face without
+ * loading it, and a key that exactly two slots share (an interior face
+ * seen from both sides) is decided once, by the first of the two, which
+ * loads each face once instead of each work-item loading both (the flags
+ * pass was half of the hull's build on 1M tets). */
+__kernel void clvr_hull_flags(__global const clvr_instance *instances, uint num_instances,
+                              __global const uint *face_first, uint num_slots, __global const ulong *keys,
+                              __global const uint *slots, __global uint *flags, CLVR_HULL_PIECE_PARAMS)
+{
+    const uint i = get_global_id(0);
+    if (i >= num_slots) return;
+    const ulong key = keys[i];
+    const int prev = i > 0u && keys[i - 1u] == key, next = i + 1u < num_slots && keys[i + 1u] == key;
+    if (!prev && !next) {
+        flags[slots[i]] = 1u;
+        return;
+    }
+    const int prev2 = prev && i > 1u && keys[i - 2u] == key, next2 = next && i + 2u < num_slots && keys[i + 2u] == key;
+    if (prev && !next && !prev2) return; /* the second of a pair: the first decides both */
+    const clvr_mesh_view m = CLVR_HULL_VIEW(instances);
+    if (!prev && next && !next2) {
+        clvr_hull_face a, b;
+        clvr_hull_slot_load(&m, instances, face_first, num_instances, slots[i], &a);
+        clvr_hull_slot_load(&m, instances, face_first, num_instances, slots[i + 1u], &b);
+        const uint boundary = clvr_hull_opposite(&a, &b) ? 0u : 1u;
+        flags[slots[i]] = boundary;
+        flags[slots[i + 1u]] = boundary;
+        return;
+    }
+    flags[slots[i]] = clvr_hull_boundary(&m, instances, face_first, num_instances, num_slots, keys, slots, i);
+}
+
+/* Face k of the hull from boundary slot slots[k]: out[k] and its box. */
+__kernel void clvr_hull_faces(__global const clvr_instance *instances, uint num_instances,
+                              __global const uint *face_first, __global const uint *slots, uint num_faces,
+                              __global clvr_hull_face *out, __global float *boxes, CLVR_HULL_PIECE_PARAMS)
+{
+    const uint k = get_global_id(0);
+    if (k >= num_faces) return;
+    const clvr_mesh_view m = CLVR_HULL_VIEW(instances);
+    clvr_hull_face h;
+    clvr_hull_face_at(&m, instances, face_first, num_instances, slots[k], &h, boxes + 8u * (ulong)k);
+    out[k] = h;
+}
+
+/* Ray queries over a hull (tests compare with brute force): per ray
+ * (origin, direction; w unused), clvr_hull_clip's interval starting from
+ * [0, inf) in t01 (x, y) and its result in z. */
+__kernel void clvr_hull_rays(__global const float4 *org, __global const float4 *dir, uint n,
+                             __global const clvr_bvh_node *nodes, __global const clvr_hull_face *faces,
+                             __global float4 *t01)
+{
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const float4 o = org[i], d = dir[i];
+    float t0 = 0.0f, t1 = INFINITY;
+    const int hit = clvr_hull_clip(nodes, faces, o.x, o.y, o.z, d.x, d.y, d.z, &t0, &t1);
+    t01[i] = (float4)(t0, t1, (float)hit, 0.0f);
 }
 
 /* Layout of the shared bvh structs as the device sees them (the host

@@ -462,6 +462,14 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * the one definition shared by the majorant kernels and the DDA. */
 CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y) * r + x; }
 
+/* A boundary face of the mesh (kernels/hull.h): corners p[0..n-1] in
+ * canonical order (xyz, w 0), p[0][3] = n (3 or 4); a triangle repeats
+ * p[2] in p[3]. 64 bytes. */
+typedef struct clvr_hull_face {
+    float p[4][4];
+} clvr_hull_face;
+CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
+
 /* The device arrays the renderer reads, listed once in kernel-argument
  * order (after the frame and the camera): X(kernel type, name). This list
  * generates the render kernel's parameters and the fields of its
@@ -482,6 +490,8 @@ CLVR_INLINE int clvr_grid_index(int x, int y, int z, int r) { return (z * r + y)
     X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
     X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
     X(uchar, ebox)                          /* quantized element boxes (locate.h) */                    \
+    X(clvr_bvh_node, hull_bvh)              /* tree over the boundary faces (kernels/hull.h) */        \
+    X(clvr_hull_face, hull)                 /* the boundary faces, in the tree's primitive order */    \
     /* pieces 1 .. CLVR_MAX_SPLITS - 1 of the split arrays (piece 0 above; a */                                      \
     /* small dummy buffer where the mesh has fewer pieces) */                                                        \
     X(float4, vertices1) X(float4, vertices2) X(float4, vertices3)                                                     \
@@ -556,7 +566,8 @@ typedef struct clvr_frame {
      * the estimator (not of the sub-pixel position, which every rank must
      * share) so that ranks draw independently; 0 outside MPI mode. */
     clvr_u32 mpi_rank_key;
-    clvr_u32 pad2;
+    clvr_u32 hull_faces;      /* boundary faces in the volume's hull arrays (kernels/hull.h); 0: none,
+                                 rays keep their clipped box interval */
     /* Half-spaces that clip the medium, (nx, ny, nz, d) with a unit normal:
      * points with n.p <= d are kept (ParaView's Clip with its default
      * "Invert": the side the normal points away from). Every ray, camera

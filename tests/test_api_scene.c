@@ -194,7 +194,8 @@ static void test_scene(clvr_context *ctx, const grid *g)
     CHECK(st.leaf_size == 8 && st.sampling_size == 4);
     CHECK(st.leaves >= (st.elements + 7) / 8); /* leaves of at most 8 elements */
     CHECK(st.sampling_clusters >= (st.elements + 3) / 4);
-    CHECK(st.preprocess_s > 0 && st.num_stages >= 2 && !strcmp(st.stage_name[st.num_stages - 1], "bvh"));
+    CHECK(st.preprocess_s > 0 && st.num_stages >= 2 && !strcmp(st.stage_name[st.num_stages - 2], "bvh") &&
+          !strcmp(st.stage_name[st.num_stages - 1], "hull"));
     CHECK(st.bytes_points_after > 0 && st.bytes_bvh > 0 && st.device_bytes > 0);
 
     /* Two tracers on one scene. */

@@ -367,7 +367,7 @@ def test_scene_settings(ctx):
     sc = clvr.Scene(m, device=ctx, leaf_size=1, sampling_size=1)
     st = sc.stats
     check(st["leaf_size"] == 1 and st["leaves"] == 2 and st["elements"] == 2, "scene stats %r" % st)
-    check(st["preprocess_s"] > 0 and list(st["stages"])[-1] == "bvh", "preprocessing timed per stage")
+    check(st["preprocess_s"] > 0 and list(st["stages"])[-2:] == ["bvh", "hull"], "preprocessing timed per stage")
     r1 = clvr.Renderer(sc, width=8, height=8, method="track", estimator="delta", seed=5)
     r2 = clvr.Renderer(sc, width=8, height=8)
     r2.set_settings(method="track", estimator="delta", seed=5)

@@ -254,8 +254,12 @@ CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t
  * "preprocess_s" (wall, kernel compilation excluded), "kernel_build_s",
  * "elements", "points", "instances", "leaves", "sampling_clusters",
  * "device_bytes" (clustered mesh + trees), "density" (the density in use),
- * "range_lo", "range_hi" (the scalar window). Unknown name: ERR_USAGE
- * listing the names. */
+ * "range_lo", "range_hi" (the scalar window), "hull_faces" (the mesh's
+ * boundary faces that camera rays are cut to; 0 when the mesh fills its box
+ * and none are kept), "hull_bytes" (their device memory, faces and tree),
+ * "hull_empty_fraction" (the share of a ray's path through the box that
+ * lies outside the mesh, measured on a fixed set of rays: the saving the
+ * cut is for). Unknown name: ERR_USAGE listing the names. */
 CLVR_API clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg);
 
 /* --- images ------------------------------------------------------------- */
@@ -447,7 +451,8 @@ typedef struct clvr_scene_stats {
     double preprocess_s;            /* wall: upload + clustering + trees, kernel compilation excluded */
     uint32_t num_stages;
     char stage_name[CLVR_STATS_MAX_STAGES][16];
-    double stage_s[CLVR_STATS_MAX_STAGES]; /* device seconds per stage, the trees' build last ("bvh") */
+    double stage_s[CLVR_STATS_MAX_STAGES]; /* device seconds per stage, then the trees ("bvh") and the
+                                              boundary faces ("hull", 0 when none were built) */
     float scalar_min, scalar_max;   /* range of the scene's field */
 } clvr_scene_stats;
 CLVR_API clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg);

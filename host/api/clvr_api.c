@@ -889,6 +889,10 @@ static clvr_status set_tf(clvr_tracer *tr, const char *colormap, const char *tf_
     if (!tr->ds)
         return clvr_error_set(e, CLVR_ERR_USAGE, "clvr_tracer_set_tf: the tracer's dataset was dropped "
                               "(clvr_tracer_drop_dataset); use clvr_tracer_set_tf_table");
+    if (tr->ds->consumed)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "clvr_tracer_set_tf: the dataset's cells were consumed by the "
+                              "scene (clvr_preprocess_settings.consume); use clvr_tracer_set_tf_table, or a scene "
+                              "made without consume");
     clvr_mesh m;
     mesh_view(tr->ds, tr->field, &m);
     clvr_tf tf = {0};
@@ -907,7 +911,9 @@ static clvr_status set_tf(clvr_tracer *tr, const char *colormap, const char *tf_
 static clvr_status ensure_tf(clvr_tracer *tr, clvr_error *e)
 {
     if (tr->tf_state) return CLVR_OK;
-    if (tr->ds) return set_tf(tr, NULL, NULL, NAN, NAN, 0, 0, e);
+    /* A dataset whose cells a scene consumed has no cells left to measure:
+     * the ramp, as without one. */
+    if (tr->ds && !tr->ds->consumed) return set_tf(tr, NULL, NULL, NAN, NAN, 0, 0, e);
     clvr_tf tf = {0};
     clvr_status s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, 1.0f, tr->sc->scalar_lo, tr->sc->scalar_hi,
                                          e);
@@ -1484,7 +1490,8 @@ clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, c
 
 static const char *const stat_names =
     "frames, rays, samples, null_collisions, kernel_s, last_frame_s, preprocess_s, kernel_build_s, elements, points, "
-    "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi";
+    "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi, hull_faces, hull_bytes, "
+    "hull_empty_fraction";
 
 clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg)
 {
@@ -1515,6 +1522,9 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "density")) v = tr->density;
     else if (!strcmp(name, "range_lo")) v = tr->range_lo;
     else if (!strcmp(name, "range_hi")) v = tr->range_hi;
+    else if (!strcmp(name, "hull_faces")) v = tr->sc->accel.hull.kept ? (double)tr->sc->accel.hull.num_faces : 0.0;
+    else if (!strcmp(name, "hull_bytes")) v = (double)clvr_hull_bytes(&tr->sc->accel.hull);
+    else if (!strcmp(name, "hull_empty_fraction")) v = tr->sc->accel.hull.empty_fraction;
     else
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown figure '%.64s'; use one of %s", fn, name,
                                      stat_names),
@@ -1766,7 +1776,7 @@ clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, cl
     d.bytes_sampling = c->bytes_sampling + (uint64_t)a->sampling_node_count * sizeof(clvr_bvh_node);
     d.device_bytes = sc->ctx->cl.allocated_bytes;
     d.preprocess_s = sc->preprocess_s;
-    for (int i = 0; i < CLVR_PP_STAGE_COUNT && d.num_stages < CLVR_STATS_MAX_STAGES - 1; ++i) {
+    for (int i = 0; i < CLVR_PP_STAGE_COUNT && d.num_stages < CLVR_STATS_MAX_STAGES - 2; ++i) {
         snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "%s", clvr_pp_stage_name(i));
         d.stage_s[d.num_stages++] = c->stage_s[i];
     }
@@ -1774,6 +1784,8 @@ clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, cl
     d.scalar_max = sc->scalar_hi;
     snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "bvh");
     d.stage_s[d.num_stages++] = a->two_level.build_seconds;
+    snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "hull");
+    d.stage_s[d.num_stages++] = a->hull.build_s;
     return finish(versioned_out(fn, "clvr_scene_stats", out, &d, sizeof d, &e), &e, msg);
 }
 

@@ -252,6 +252,18 @@ int main(int argc, char **argv)
     clvr_tf_info tfi;
     tfi.size = sizeof tfi;
     TRY(clvr_tracer_get_tf(tracer, &tfi, &msg));
+    {
+        double hf = 0.0, hb = 0.0, he = 0.0;
+        TRY(clvr_tracer_stat(tracer, "hull_faces", &hf, &msg));
+        TRY(clvr_tracer_stat(tracer, "hull_bytes", &hb, &msg));
+        TRY(clvr_tracer_stat(tracer, "hull_empty_fraction", &he, &msg));
+        stats.hull_faces = (uint64_t)hf;
+        stats.bytes_hull = (uint64_t)hb;
+        stats.hull_empty_fraction = he;
+        if (!o.quiet && hf > 0.0)
+            fprintf(stderr, "clvr: camera rays cut to the mesh's %.0f boundary faces (%.1f MB): %.0f%% of a ray's way "
+                    "through the box is outside the mesh\n", hf, hb / 1e6, 100.0 * he);
+    }
 
     /* --- camera */
     if (o.camera_set)

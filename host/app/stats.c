@@ -83,6 +83,8 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 per_element(s->bytes_element_boxes, s->elements));
         fprintf(out, "| sampling clusters | | %.3f MB | | %.2f |\n", s->bytes_sampling / 1e6,
                 per_element(s->bytes_sampling, s->elements));
+        fprintf(out, "| boundary faces (%llu; rays cut to the mesh) | | %.3f MB | | %.2f |\n",
+                (unsigned long long)s->hull_faces, s->bytes_hull / 1e6, per_element(s->bytes_hull, s->elements));
         fprintf(out, "\nclusters: %llu instances (%llu with 16-bit indices), %llu leaves of %u, %llu sampling "
                      "clusters of %u\n",
                 (unsigned long long)s->num_instances, (unsigned long long)s->num_instances16,
@@ -142,6 +144,7 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
         {"bvh_one_per_leaf", (double)s->bytes_bvh_one_per_leaf},
         {"sampling", (double)s->bytes_sampling},
         {"element_boxes", (double)s->bytes_element_boxes},
+        {"hull", (double)s->bytes_hull},
         {"peak_rss", (double)s->bytes_peak_rss},
         {"resident", (double)s->bytes_resident},
     };

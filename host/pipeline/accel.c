@@ -1,10 +1,16 @@
 #include "clock.h"
 #include "accel.h"
 
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
 clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, clvr_error *err)
+{
+    return clvr_accel_build_hull(cl, c, CLVR_HULL_AUTO, out, err);
+}
+
+clvr_status clvr_accel_build_hull(clvr_cl *cl, clvr_clustered *c, int hull_mode, clvr_accel *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     double t0 = clvr_clock_monotonic_s();
@@ -30,6 +36,15 @@ clvr_status clvr_accel_build(clvr_cl *cl, clvr_clustered *c, clvr_accel *out, cl
     CLVR_TRY(clvr_bvh_build_boxes_device(cl, &out->kernels, c->sampling, (uint32_t)c->num_sampling,
                                          &out->sampling_nodes, err));
     out->sampling_node_count = clvr_bvh_nodes_bound((uint32_t)c->num_sampling);
+    s = clvr_hull_build(cl, &out->kernels, c, out->sampling_nodes, hull_mode, &out->hull, err);
+    /* The hull only speeds convergence: a mesh too large for its transient
+     * buffers (or past 2^31 - 1 faces) renders without it, the same image. */
+    if (hull_mode == CLVR_HULL_AUTO && (s == CLVR_ERR_DEVICE_MEMORY || s == CLVR_ERR_OVERFLOW)) {
+        snprintf(out->hull_skipped, sizeof out->hull_skipped, "%s", err->msg);
+        *err = (clvr_error){0};
+        s = CLVR_OK;
+    }
+    if (s != CLVR_OK) goto cleanup;
     out->tlas_root = out->two_level.tlas_root;
     out->build_s = clvr_clock_monotonic_s() - t0;
 cleanup:
@@ -42,6 +57,7 @@ void clvr_accel_release(clvr_cl *cl, clvr_accel *a)
     if (!a) return;
     clvr_bvh_device_release(cl, &a->two_level);
     clvr_cl_release(cl, &a->sampling_nodes);
+    clvr_hull_release(cl, &a->hull);
     clvr_bvh_kernels_destroy(&a->kernels);
     memset(a, 0, sizeof *a);
 }

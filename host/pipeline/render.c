@@ -76,6 +76,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
      * independent frames ask for CLVR_SAMPLER_INDEPENDENT. */
     s->sampler = CLVR_SAMPLER_LD;
     s->shadows = 1;
+    s->hull = 1;
     s->bins = 32;
     s->segments = 4;
     /* 32^3: measured best or near-best with 16-element sampling clusters on
@@ -209,6 +210,10 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->grid_res = set->macrocells;
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
+    {
+        const clvr_hull *hl = &r->bvh->hull;
+        f->hull_faces = set->hull && hl->kept ? hl->num_faces : 0u;
+    }
     f->light_res = set->light_res;
     {
         /* The light grid depends on these fields only (and on the transfer
@@ -354,7 +359,8 @@ static volume_bufs volume_of(const clvr_renderer *r)
                          .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas,
                          .grid = maj.cells, .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes,
                          .sampling = m->sampling, .cluster_majorants = maj.clusters, .light = r->light_buf,
-                         .ebox = eb[0], .vertices1 = pc.vertices[1], .vertices2 = pc.vertices[2],
+                         .ebox = eb[0], .hull_bvh = b->hull.nodes ? b->hull.nodes : r->tf_buf,
+                         .hull = b->hull.faces ? b->hull.faces : r->tf_buf, .vertices1 = pc.vertices[1], .vertices2 = pc.vertices[2],
                          .vertices3 = pc.vertices[3], .idx16_1 = pc.idx16[1], .idx16_2 = pc.idx16[2],
                          .idx16_3 = pc.idx16[3], .idx32_1 = pc.idx32[1], .idx32_2 = pc.idx32[2],
                          .idx32_3 = pc.idx32[3], .ebox1 = eb[1], .ebox2 = eb[2], .ebox3 = eb[3]};

@@ -34,6 +34,13 @@ typedef struct clvr_render_settings {
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
     int shadows;
+    /* Nonzero (default): every camera ray is cut to the part between its
+     * first and last crossing of the mesh's boundary faces, where the
+     * medium can be, when the trees have a hull (accel.h; kept unless the
+     * mesh fills its box, hull.h); 0: to the clip box only. The image's
+     * expected value is the same; the estimators converge faster when the
+     * medium starts inside the box. */
+    int hull;
     float step;                /* march step; <= 0: mesh diagonal / 512 */
     uint32_t bins, segments;   /* bins method (bins <= CLVR_RENDER_MAX_BINS) */
     uint32_t macrocells;       /* dda method: grid resolution per axis */

@@ -1,0 +1,553 @@
+/* test_hull: the mesh's boundary faces and the ray query over them
+ * (kernels/hull.h, host/pipeline/hull.h).
+ * 1. The face tables: every face of every type has distinct slots in range,
+ *    and every edge of an element lies on exactly two of its faces (a
+ *    closed surface), so a wrong slot in a table fails here.
+ * 2. Boundary faces of lattices of 1, 2 and 7 cubes per axis, each type
+ *    and mixed, jittered: the device's faces against the plain-C reference
+ *    bit for bit, and their count against the lattice's (12 n^2 triangles
+ *    of tets, 6 n^2 quads of pyramids and hexahedra, 4 n^2 triangles and
+ *    4 n^2 quads of wedges).
+ * 3. The ray query on the device against brute force over every face, on
+ *    random rays from outside and from inside the box, and against the
+ *    exact entry and exit of the unjittered hex lattice (a cube); rays
+ *    aimed at the lattice's boundary vertices and edges (where faces meet)
+ *    must not slip through.
+ * 4. Renders with and without the hull, same in distribution (per pixel
+ *    and per 4x4 block, difference of means within 5 standard errors), urm
+ *    and delta, on a lattice with a hole and a corner cut away (the medium
+ *    starts inside the box, and a ray leaves and re-enters it), from
+ *    outside and from a camera inside the box, and on two real meshes:
+ *    PLOT3D's post (a flow domain with a cylinder through it) and an FE
+ *    notched specimen.
+ * 5. The automatic mode: no hull for a mesh that fills its box, the hull
+ *    kept for meshes that do not, and the first probe (through the
+ *    clusters' boxes) never above the hull's. */
+#include "accel.h"
+#include "bvh_fixture.h"
+#include "camera.h"
+#include "hull.h"
+#include "mesh_io.h"
+#include "render.h"
+#include "test_util.h"
+#include "tf.h"
+
+#include "../kernels/hull.h"
+
+#include <stdlib.h>
+
+#define K_SIGMA 5.0
+
+/* ------------------------------------------------------------ 1. tables */
+static void test_tables(void)
+{
+    for (clvr_u32 type = 0; type < CLVR_CELL_TYPE_COUNT; ++type) {
+        const clvr_u32 nv = clvr_cell_vertex_count(type), nf = clvr_hull_face_count(type);
+        int edges[8][8] = {{0}};
+        int ok = 1;
+        for (clvr_u32 f = 0; f < nf; ++f) {
+            const clvr_u32 code = clvr_hull_face_code(type, f), n = (code >> 12) == 0xFu ? 3u : 4u;
+            clvr_u32 s[4];
+            for (clvr_u32 k = 0; k < n; ++k) {
+                s[k] = (code >> (4 * k)) & 0xFu;
+                ok &= s[k] < nv;
+                for (clvr_u32 j = 0; j < k; ++j) ok &= s[j] != s[k];
+            }
+            if (!ok) break;
+            for (clvr_u32 k = 0; k < n; ++k) {
+                const clvr_u32 a = s[k], b = s[(k + 1) % n];
+                edges[a][b]++;
+                edges[b][a]++;
+            }
+        }
+        TU_CHECK(ok);
+        int closed = ok;
+        for (int a = 0; a < 8 && ok; ++a)
+            for (int b = 0; b < 8; ++b) closed &= edges[a][b] == 0 || edges[a][b] == 2;
+        TU_CHECK(closed);
+        /* Euler: V - E + F = 2 for each element's surface. */
+        int ne = 0;
+        for (int a = 0; a < 8; ++a)
+            for (int b = a + 1; b < 8; ++b) ne += edges[a][b] > 0;
+        TU_CHECK_EQ_U64((uint64_t)((int)nv - ne + (int)nf), 2);
+    }
+}
+
+/* ------------------------------------------------------------ fixtures */
+typedef struct fx_mesh {
+    clvr_mesh m;
+    clvr_clustered c;
+    clvr_accel a;
+} fx_mesh;
+
+static clvr_status fx_prepare(clvr_cl *cl, fx_mesh *x, clvr_error *err)
+{
+    clvr_preprocess_options o;
+    clvr_preprocess_options_default(&o);
+    clvr_mesh_update_ranges(&x->m);
+    clvr_status s = clvr_preprocess(cl, &x->m, &o, &x->c, err);
+    if (s == CLVR_OK) s = clvr_accel_build_hull(cl, &x->c, CLVR_HULL_ON, &x->a, err);
+    return s;
+}
+
+static void fx_free(clvr_cl *cl, fx_mesh *x)
+{
+    clvr_accel_release(cl, &x->a);
+    clvr_clustered_release(cl, &x->c);
+    clvr_mesh_free(&x->m);
+}
+
+/* The device hull read back: faces and tree. */
+static int read_hull(clvr_cl *cl, const clvr_hull *h, clvr_hull_face **faces, clvr_bvh_node **nodes)
+{
+    *faces = malloc((size_t)h->num_faces * sizeof **faces + 1);
+    *nodes = malloc((size_t)h->num_nodes * sizeof **nodes + 1);
+    if (!*faces || !*nodes) return 0;
+    if (h->num_faces == 0) return 1;
+    return clEnqueueReadBuffer(cl->queue, h->faces, CL_TRUE, 0, (size_t)h->num_faces * sizeof **faces, *faces, 0,
+                               NULL, NULL) == CL_SUCCESS &&
+           clEnqueueReadBuffer(cl->queue, h->nodes, CL_TRUE, 0, (size_t)h->num_nodes * sizeof **nodes, *nodes, 0,
+                               NULL, NULL) == CL_SUCCESS;
+}
+
+/* ------------------------------------------------------------ 2. faces */
+static void test_faces(clvr_cl *cl)
+{
+    static const uint32_t sizes[] = {1, 2, 7};
+    static const char *kinds[] = {"tets", "pyramids", "wedges", "hexes", "mixed"};
+    for (uint32_t kind = 0; kind <= FX_MIXED; ++kind)
+        for (size_t si = 0; si < sizeof sizes / sizeof sizes[0]; ++si) {
+            const uint64_t n = sizes[si];
+            clvr_error err = {0};
+            fx_mesh x = {0};
+            TU_CHECK_STATUS(fx_grid_mesh((uint32_t)n, kind, 0.15f, 1.0f, 0.0f, 11 + n, &x.m, &err), CLVR_OK, &err);
+            TU_CHECK_STATUS(fx_prepare(cl, &x, &err), CLVR_OK, &err);
+            if (err.status != CLVR_OK) {
+                fx_free(cl, &x);
+                continue;
+            }
+            clvr_clustered_host h = {0};
+            TU_CHECK_STATUS(clvr_clustered_download(cl, &x.c, &h, &err), CLVR_OK, &err);
+            clvr_hull_face *rf = NULL;
+            float *rb = NULL;
+            uint32_t rn = 0;
+            TU_CHECK_STATUS(clvr_hull_build_ref(&h, x.c.num_instances, &rf, &rb, &rn, &err), CLVR_OK, &err);
+            clvr_hull_face *df = NULL;
+            clvr_bvh_node *dn = NULL;
+            TU_CHECK(read_hull(cl, &x.a.hull, &df, &dn));
+            TU_CHECK_EQ_U64(x.a.hull.num_faces, rn);
+            TU_CHECK(rn == x.a.hull.num_faces && (rn == 0 || memcmp(df, rf, (size_t)rn * sizeof *rf) == 0));
+            uint64_t tris = 0, quads = 0;
+            for (uint32_t i = 0; i < x.a.hull.num_faces; ++i) {
+                tris += df[i].p[0][3] == 3.0f;
+                quads += df[i].p[0][3] == 4.0f;
+            }
+            const uint64_t n2 = n * n;
+            const uint64_t want_t[] = {12 * n2, 0, 4 * n2, 0}, want_q[] = {0, 6 * n2, 4 * n2, 6 * n2};
+            if (kind != FX_MIXED) {
+                TU_CHECK_EQ_U64(tris, want_t[kind]);
+                TU_CHECK_EQ_U64(quads, want_q[kind]);
+            } else {
+                TU_CHECK(tris + quads >= 6 * n2); /* non-conforming between types: more, never fewer */
+            }
+            printf("%s %llu^3: %llu elements, %llu face slots, %u boundary faces (%llu triangles, %llu quads)\n",
+                   kinds[kind], (unsigned long long)n, (unsigned long long)x.c.num_elements,
+                   (unsigned long long)x.a.hull.num_slots, x.a.hull.num_faces, (unsigned long long)tris,
+                   (unsigned long long)quads);
+            free(rf);
+            free(rb);
+            free(df);
+            free(dn);
+            clvr_clustered_host_free(&h);
+            fx_free(cl, &x);
+        }
+}
+
+/* ------------------------------------------------------------ 3. rays */
+
+/* First and last crossing of the line org + t dir with every face. */
+static void brute(const clvr_hull_face *f, uint32_t n, const float o[3], const float d[3], float *lo, float *hi)
+{
+    const clvr_hull_ray r = clvr_hull_ray_make(o[0], o[1], o[2], d[0], d[1], d[2]);
+    *lo = INFINITY;
+    *hi = -INFINITY;
+    for (uint32_t i = 0; i < n; ++i) clvr_hull_ray_face(&r, &f[i], lo, hi);
+}
+
+static void test_rays(clvr_cl *cl)
+{
+    static const uint32_t kinds[] = {FX_TETS, FX_HEXES, FX_WEDGES, FX_MIXED, FX_HEXES};
+    for (size_t ki = 0; ki < sizeof kinds / sizeof kinds[0]; ++ki) {
+        const int cube = ki == 4; /* unjittered hexes: the hull is the cube [0, 5]^3 */
+        const uint32_t N = 5;
+        clvr_error err = {0};
+        fx_mesh x = {0};
+        TU_CHECK_STATUS(fx_grid_mesh(N, kinds[ki], cube ? 0.0f : 0.35f, 1.0f, 0.0f, 3 + ki, &x.m, &err), CLVR_OK,
+                        &err);
+        TU_CHECK_STATUS(fx_prepare(cl, &x, &err), CLVR_OK, &err);
+        clvr_hull_face *df = NULL;
+        clvr_bvh_node *dn = NULL;
+        if (err.status != CLVR_OK || !read_hull(cl, &x.a.hull, &df, &dn)) {
+            TU_CHECK(0);
+            free(df);
+            free(dn);
+            fx_free(cl, &x);
+            continue;
+        }
+        enum { NR = 2000, NV = 36 };
+        const uint32_t nr = NR + NV;
+        float *org = calloc(4 * nr, sizeof(float)), *dir = calloc(4 * nr, sizeof(float)),
+              *res = calloc(4 * nr, sizeof(float));
+        uint64_t rs = 99 + ki;
+        for (uint32_t i = 0; i < NR; ++i) {
+            /* From a random point on a sphere around the box (or, one ray in
+             * four, inside the box) toward a random point of the box grown by
+             * 20% (some rays miss). */
+            float o[3], t[3];
+            const int inside = i % 4 == 3;
+            for (int c = 0; c < 3; ++c) t[c] = -1.0f + 7.0f * tu_randf(&rs);
+            if (inside) {
+                for (int c = 0; c < 3; ++c) o[c] = 0.2f + 4.6f * tu_randf(&rs);
+            } else {
+                float u[3], l = 0;
+                for (int c = 0; c < 3; ++c) {
+                    u[c] = tu_randf(&rs) - 0.5f;
+                    l += u[c] * u[c];
+                }
+                l = sqrtf(l) + 1e-6f;
+                for (int c = 0; c < 3; ++c) o[c] = 2.5f + 12.0f * u[c] / l;
+            }
+            for (int c = 0; c < 3; ++c) {
+                org[4 * i + c] = o[c];
+                dir[4 * i + c] = t[c] - o[c];
+            }
+        }
+        /* Rays from outside aimed at lattice points inside the bottom face
+         * (where 4 to 8 boundary triangles meet) and at edge midpoints. */
+        for (uint32_t i = 0; i < NV; ++i) {
+            const uint32_t k = NR + i;
+            const float t[3] = {(float)(1 + i % 4), (float)(1 + (i / 4) % 4) - (i % 2 ? 0.5f : 0.0f), 0.0f};
+            const float o[3] = {2.1f + 0.37f * (float)(i % 5), 1.3f + 0.21f * (float)(i % 7), -7.0f};
+            for (int c = 0; c < 3; ++c) {
+                org[4 * k + c] = o[c];
+                dir[4 * k + c] = t[c] - o[c];
+            }
+        }
+        TU_CHECK_STATUS(clvr_hull_rays(cl, &x.a.kernels, &x.a.hull, org, dir, nr, res, &err), CLVR_OK, &err);
+        uint32_t bad_hit = 0, bad_t = 0, slipped = 0, bad_cube = 0, hits = 0;
+        for (uint32_t i = 0; i < nr; ++i) {
+            const float *o = org + 4 * i, *d = dir + 4 * i, *r = res + 4 * i;
+            const int inside = i < NR && i % 4 == 3;
+            float lo, hi;
+            brute(df, x.a.hull.num_faces, o, d, &lo, &hi);
+            /* Crossings ahead of the origin only decide a hit. */
+            const int want_hit = hi >= 0.0f;
+            const int hit = r[2] != 0.0f;
+            hits += hit;
+            if (i >= NR) slipped += !hit;
+            if (hit != want_hit && !inside) {
+                ++bad_hit;
+                if (getenv("HULL_DEBUG"))
+                    fprintf(stderr, "ray %u o %g %g %g d %g %g %g: device %g %g %g, brute %g %g\n", i, o[0], o[1], o[2],
+                            d[0], d[1], d[2], r[0], r[1], r[2], lo, hi);
+            }
+            if (!hit || !want_hit) continue;
+            const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            const float tol = 2e-4f * (15.0f / len);
+            const float w0 = inside ? 0.0f : fmaxf(lo, 0.0f);
+            /* Never cut medium off: t0 at or before the first crossing,
+             * t1 at or after the last; and not far from them. */
+            if (!(r[0] <= w0 + 1e-6f && r[0] >= w0 - tol)) ++bad_t;
+            if (!(r[1] >= hi - 1e-6f && r[1] <= hi + tol)) ++bad_t;
+            if (cube) {
+                /* The cube [0, 5]^3: the slab test's entry and exit. */
+                float a = 0.0f, b = INFINITY;
+                for (int c = 0; c < 3; ++c) {
+                    const float inv = 1.0f / d[c], t0 = (0.0f - o[c]) * inv, t1 = (5.0f - o[c]) * inv;
+                    a = fmaxf(a, fminf(t0, t1));
+                    b = fminf(b, fmaxf(t0, t1));
+                }
+                if (!(fabsf(r[0] - a) <= tol && fabsf(r[1] - b) <= tol)) ++bad_cube;
+            }
+        }
+        printf("rays, lattice kind %u%s: %u of %u hit, %u wrong hit/miss, %u intervals off, %u slipped through, "
+               "%u off the cube\n",
+               kinds[ki], cube ? " (cube)" : "", hits, nr, bad_hit, bad_t, slipped, bad_cube);
+        TU_CHECK(hits > nr / 4 && hits < nr); /* both outcomes occur: the test can fail */
+        TU_CHECK_EQ_U64(bad_hit, 0);
+        TU_CHECK_EQ_U64(bad_t, 0);
+        TU_CHECK_EQ_U64(slipped, 0);
+        TU_CHECK_EQ_U64(bad_cube, 0);
+        free(org);
+        free(dir);
+        free(res);
+        free(df);
+        free(dn);
+        fx_free(cl, &x);
+    }
+}
+
+/* ------------------------------------------------------------ 4. renders */
+
+/* The lattice of n^3 mixed cubes with a ball of radius n/4 around the
+ * centre and the octant above (0.6n, 0.6n, 0.6n) removed. */
+static clvr_status holed_mesh(uint32_t n, clvr_mesh *out, clvr_error *err)
+{
+    clvr_mesh m = {0};
+    clvr_status s = fx_grid_mesh(n, FX_MIXED, 0.25f, 1.0f, 0.0f, 5, &m, err);
+    if (s != CLVR_OK) return s;
+    uint64_t counts[CLVR_CELL_TYPE_COUNT] = {0};
+    const float h = 0.5f * (float)n, r2 = (float)n * (float)n / 16.0f, cut = 0.6f * (float)n;
+    uint8_t *keep[CLVR_CELL_TYPE_COUNT] = {0};
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        keep[t] = malloc(m.num_cells[t] + 1);
+        for (uint64_t e = 0; e < m.num_cells[t]; ++e) {
+            float c[3] = {0, 0, 0};
+            for (uint32_t k = 0; k < nv; ++k)
+                for (int a = 0; a < 3; ++a) c[a] += m.positions[3 * (uint64_t)m.indices[t][e * nv + k] + a] / nv;
+            const float d2 = (c[0] - h) * (c[0] - h) + (c[1] - h) * (c[1] - h) + (c[2] - h) * (c[2] - h);
+            keep[t][e] = !(d2 < r2) && !(c[0] > cut && c[1] > cut && c[2] > cut);
+            counts[t] += keep[t][e];
+        }
+    }
+    s = clvr_mesh_alloc(out, m.num_vertices, counts, err);
+    if (s == CLVR_OK) {
+        memcpy(out->positions, m.positions, m.num_vertices * 3 * sizeof(float));
+        memcpy(out->scalars, m.scalars, m.num_vertices * sizeof(float));
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            uint64_t k = 0;
+            for (uint64_t e = 0; e < m.num_cells[t]; ++e)
+                if (keep[t][e]) memcpy(out->indices[t] + nv * k++, m.indices[t] + nv * e, nv * sizeof(uint32_t));
+        }
+        clvr_mesh_update_ranges(out);
+    }
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(keep[t]);
+    clvr_mesh_free(&m);
+    return s;
+}
+
+/* Per pixel and channel mean and variance of `frames` independent frames;
+ * eye NULL: the automatic camera on the mesh's bounds. */
+static clvr_status moments(clvr_cl *cl, fx_mesh *x, const clvr_render_settings *set, const float *eye,
+                           const float *target, float density, uint32_t frames, float **mean, float **var,
+                           clvr_error *err)
+{
+    const size_t np = (size_t)set->width * set->height * 4;
+    *mean = calloc(np, sizeof(float));
+    *var = calloc(np, sizeof(float));
+    if (!*mean || !*var) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "moments: out of memory");
+    clvr_renderer *r = NULL;
+    clvr_tf tf = {0};
+    float *table = NULL;
+    const clvr_mesh *m = &x->m;
+    clvr_status s = clvr_renderer_create(cl, &x->c, &x->a, set, &r, err);
+    if (s == CLVR_OK)
+        s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, density, m->scalar_min, m->scalar_max, err);
+    if (s == CLVR_OK) {
+        clvr_tf_set_extent(&tf, m->bounds_lo, m->bounds_hi);
+        const uint32_t nt = clvr_tf_table_size(&tf);
+        table = malloc(nt * 4 * sizeof(float));
+        if (!table) s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "moments: out of memory");
+        else {
+            clvr_tf_bake(&tf, table, nt);
+            s = clvr_renderer_set_tf(r, table, nt, tf.range_lo, tf.range_hi, tf.density, err);
+        }
+    }
+    clvr_camera cam;
+    const float up[3] = {0.0f, 1.0f, 0.0f};
+    if (s == CLVR_OK)
+        s = eye ? clvr_camera_look_at(&cam, eye, target, up, 60.0f, set->width, set->height, err)
+                : clvr_camera_frame_box(&cam, m->bounds_lo, m->bounds_hi, 40.0f, set->width, set->height, err);
+    if (s == CLVR_OK) s = clvr_renderer_set_camera(r, &cam, err);
+    for (uint32_t i = 0; i < frames && s == CLVR_OK; ++i) s = clvr_renderer_frame(r, err);
+    if (s == CLVR_OK) s = clvr_renderer_read_moments(r, *mean, *var, err);
+    if (s == CLVR_OK)
+        for (size_t i = 0; i < np; ++i) {
+            const double mu = (*mean)[i] / frames, v = (*var)[i] / frames - mu * mu;
+            (*mean)[i] = (float)mu;
+            (*var)[i] = (float)(v > 0 ? v : 0);
+        }
+    free(table);
+    clvr_tf_free(&tf);
+    clvr_renderer_destroy(r);
+    return s;
+}
+
+/* Renders x with the hull and without (urm and delta, shadows on) and
+ * compares them per pixel and per 4x4 block. */
+static void renders_agree(clvr_cl *cl, fx_mesh *x, const char *name, const float *eye, const float *target,
+                          float density)
+{
+    enum { W = 32, H = 32, FRAMES = 96 };
+    static const uint32_t est[2] = {CLVR_ESTIMATOR_URM, CLVR_ESTIMATOR_DELTA};
+    for (int ei = 0; ei < 2; ++ei) {
+        clvr_error err = {0};
+        float *m[2] = {0}, *v[2] = {0};
+        for (int hull = 0; hull < 2; ++hull) {
+            clvr_render_settings set;
+            clvr_render_settings_default(&set);
+            set.width = W;
+            set.height = H;
+            set.estimator = est[ei];
+            set.shadows = 1;
+            set.hull = hull;
+            set.seed = 1000 + (uint64_t)hull; /* independent images */
+            set.sampler = CLVR_SAMPLER_INDEPENDENT;
+            TU_CHECK_STATUS(moments(cl, x, &set, eye, target, density, FRAMES, &m[hull], &v[hull], &err), CLVR_OK, &err);
+        }
+        size_t bad = 0, bbad = 0;
+        double worst = 0, signal = 0;
+        const size_t np = (size_t)W * H * 4;
+        for (size_t i = 0; i < np; ++i) {
+            const double se = sqrt(v[0][i] / FRAMES + v[1][i] / FRAMES), d = fabs((double)m[0][i] - m[1][i]);
+            if (d > K_SIGMA * se + 1e-5) ++bad;
+            if (i % 4 == 3) signal += m[1][i];
+        }
+        for (uint32_t by = 0; by < H; by += 4)
+            for (uint32_t bx = 0; bx < W; bx += 4)
+                for (size_t ch = 0; ch < 4; ++ch) {
+                    double d = 0, var = 0;
+                    for (uint32_t y = by; y < by + 4; ++y)
+                        for (uint32_t xx = bx; xx < bx + 4; ++xx) {
+                            const size_t i = 4 * ((size_t)y * W + xx) + ch;
+                            d += (double)m[0][i] - m[1][i];
+                            var += v[0][i] / FRAMES + v[1][i] / FRAMES;
+                        }
+                    const double z = var > 0 ? fabs(d) / sqrt(var) : 0.0;
+                    if (z > worst) worst = z;
+                    if (fabs(d) > K_SIGMA * sqrt(var) + 1e-5 * 16) ++bbad;
+                }
+        printf("%s, %s: hull against none: %zu pixels and %zu blocks beyond %.0f sigma, largest block |z| %.2f, "
+               "mean opacity %.3f\n",
+               name, clvr_render_estimator_name(est[ei]), bad, bbad, K_SIGMA, worst, signal / (W * H));
+        TU_CHECK(signal > 0.05 * W * H); /* the medium covers part of the image: the test can fail */
+        TU_CHECK_EQ_U64(bad, 0);
+        TU_CHECK_EQ_U64(bbad, 0);
+        for (int hull = 0; hull < 2; ++hull) {
+            free(m[hull]);
+            free(v[hull]);
+        }
+    }
+}
+
+static void test_renders(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    fx_mesh x = {0};
+    TU_CHECK_STATUS(holed_mesh(12, &x.m, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(fx_prepare(cl, &x, &err), CLVR_OK, &err);
+    if (err.status == CLVR_OK) {
+        printf("holed lattice: %llu elements, %u boundary faces, empty fraction %.3f\n",
+               (unsigned long long)x.c.num_elements, x.a.hull.num_faces, (double)x.a.hull.empty_fraction);
+        renders_agree(cl, &x, "holed lattice", NULL, NULL, 2.0f);
+        /* From inside the box, in the removed octant, looking through the
+         * hole: the start is not cut, the end is. */
+        const float eye[3] = {11.0f, 11.5f, 11.0f}, target[3] = {4.0f, 5.0f, 3.0f};
+        renders_agree(cl, &x, "holed lattice, camera inside the box", eye, target, 2.0f);
+    }
+    fx_free(cl, &x);
+    static const char *files[] = {"vtk/post.vtk", "vtk/notch_stress.vtk"};
+    static const float density[] = {2.0f, 100.0f}; /* the notch is thin at 2 */
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", tu_data_dir(), files[i]);
+        fx_mesh y = {0};
+        TU_CHECK_STATUS(clvr_mesh_load(path, NULL, &y.m, &err), CLVR_OK, &err);
+        if (err.status == CLVR_OK) TU_CHECK_STATUS(fx_prepare(cl, &y, &err), CLVR_OK, &err);
+        if (err.status == CLVR_OK) {
+            printf("%s: %llu elements, %u boundary faces, empty fraction %.3f\n", files[i],
+                   (unsigned long long)y.c.num_elements, y.a.hull.num_faces, (double)y.a.hull.empty_fraction);
+            renders_agree(cl, &y, files[i], NULL, NULL, density[i]);
+        }
+        fx_free(cl, &y);
+    }
+}
+
+/* ------------------------------------------------------------ 5. automatic
+ * CLVR_HULL_AUTO builds nothing for a mesh that fills its box (a lattice)
+ * and keeps the hull of one that does not (post; the holed lattice's
+ * clusters of one cell type span several cells and hide its hole); its
+ * first probe, through the sampling clusters' boxes, never finds more
+ * empty space than the hull's (the boxes contain the mesh): a probe that
+ * did would drop hulls that save time. */
+static void test_auto(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    for (int which = 0; which < 3; ++which) {
+        fx_mesh x = {0};
+        const char *name = which == 0 ? "lattice" : which == 1 ? "holed lattice" : "vtk/post.vtk";
+        clvr_status s;
+        if (which == 0) s = fx_grid_mesh(12, FX_MIXED, 0.25f, 1.0f, 0.0f, 5, &x.m, &err);
+        else if (which == 1) s = holed_mesh(12, &x.m, &err);
+        else {
+            char path[512];
+            snprintf(path, sizeof path, "%s/%s", tu_data_dir(), name);
+            s = clvr_mesh_load(path, NULL, &x.m, &err);
+        }
+        TU_CHECK_STATUS(s, CLVR_OK, &err);
+        clvr_preprocess_options o;
+        clvr_preprocess_options_default(&o);
+        if (s == CLVR_OK) {
+            clvr_mesh_update_ranges(&x.m);
+            s = clvr_preprocess(cl, &x.m, &o, &x.c, &err);
+        }
+        float on_fraction = -1.0f;
+        if (s == CLVR_OK) s = clvr_accel_build_hull(cl, &x.c, CLVR_HULL_ON, &x.a, &err);
+        if (s == CLVR_OK) {
+            on_fraction = x.a.hull.empty_fraction;
+            TU_CHECK(x.a.hull.kept && x.a.hull.num_faces > 0 && x.a.hull.box_fraction == -1.0f);
+            clvr_accel_release(cl, &x.a);
+            s = clvr_accel_build_hull(cl, &x.c, CLVR_HULL_AUTO, &x.a, &err);
+        }
+        TU_CHECK_STATUS(s, CLVR_OK, &err);
+        if (s == CLVR_OK) {
+            const clvr_hull *h = &x.a.hull;
+            printf("auto, %s: box probe %.3f, hull probe %.3f, %s\n", name, (double)h->box_fraction,
+                   (double)on_fraction, h->kept ? "kept" : h->boxes_only ? "not built" : "dropped");
+            TU_CHECK(h->box_fraction >= 0.0f && h->box_fraction <= on_fraction + 1e-6f);
+            /* Each outcome as its probes say. */
+            if (h->boxes_only) {
+                TU_CHECK(h->box_fraction < CLVR_HULL_MIN_BOX_EMPTY);
+                TU_CHECK(!h->kept && !h->faces && !h->nodes && h->num_faces == 0 && clvr_hull_bytes(h) == 0);
+            } else {
+                TU_CHECK(h->box_fraction >= CLVR_HULL_MIN_BOX_EMPTY && h->empty_fraction == on_fraction);
+                TU_CHECK(h->kept == (on_fraction >= CLVR_HULL_MIN_EMPTY));
+            }
+            if (h->kept) TU_CHECK(h->faces && h->nodes && h->num_faces > 0 &&
+                                  clvr_hull_bytes(h) >= (uint64_t)h->num_faces * sizeof(clvr_hull_face));
+            /* The lattice fills its box: nothing is built; post does not. */
+            if (which == 0) TU_CHECK(on_fraction < CLVR_HULL_MIN_EMPTY && h->boxes_only);
+            if (which == 2) TU_CHECK(on_fraction >= CLVR_HULL_MIN_EMPTY && h->kept);
+        }
+        fx_free(cl, &x);
+    }
+    /* Off: nothing at all. */
+    fx_mesh y = {0};
+    TU_CHECK_STATUS(holed_mesh(6, &y.m, &err), CLVR_OK, &err);
+    if (err.status == CLVR_OK) {
+        clvr_preprocess_options o;
+        clvr_preprocess_options_default(&o);
+        clvr_mesh_update_ranges(&y.m);
+        TU_CHECK_STATUS(clvr_preprocess(cl, &y.m, &o, &y.c, &err), CLVR_OK, &err);
+        if (err.status == CLVR_OK) {
+            TU_CHECK_STATUS(clvr_accel_build_hull(cl, &y.c, CLVR_HULL_OFF, &y.a, &err), CLVR_OK, &err);
+            TU_CHECK(!y.a.hull.kept && !y.a.hull.faces && y.a.hull.num_faces == 0);
+        }
+    }
+    fx_free(cl, &y);
+}
+
+int main(void)
+{
+    test_tables();
+    clvr_cl cl;
+    tu_open_device(&cl);
+    test_faces(&cl);
+    test_rays(&cl);
+    test_renders(&cl);
+    test_auto(&cl);
+    clvr_cl_destroy(&cl);
+    return tu_finish("test_hull");
+}
