@@ -133,7 +133,7 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scen
                 "empty fraction %.3f, of the clusters' boxes %.3f (%s)\n", hl->num_faces, (unsigned long long)hl->num_slots,
                 ((double)hl->num_faces * sizeof(clvr_hull_face) + (double)hl->num_nodes * sizeof(clvr_bvh_node)) / 1e6,
                 hl->build_s, (double)hl->empty_fraction, (double)hl->box_fraction,
-                hl->kept ? "kept" : hl->boxes_only ? "not built: the mesh fills its box" : "dropped: the mesh fills its box");
+                hl->kept ? "kept" : hl->boxes_only ? "not built: little empty space in the box" : "dropped: little empty space in the box");
     }
     if (s == CLVR_OK)
         s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, density, m.scalar_min, m.scalar_max, err);

@@ -35,14 +35,45 @@ from vtk.util import numpy_support
 
 
 def read_bin(path):
+    """Positions, the scalar clvr renders by default and the tets of a .bin
+    (docs/bin-format.md). Version 2 (tools/clvr-convert): the point field
+    named in the header (its first field), else the first 1-component point
+    field."""
     with open(path, "rb") as f:
         head = f.read(256)
         if head[:8] != b"CLVRMESH":
             sys.exit(f"vtk_render.py: {path}: not a clvr .bin mesh")
+        version = struct.unpack_from("<I", head, 8)[0]
         nv, nt, npy, nw, nh = struct.unpack_from("<5Q", head, 16)
         pos = np.fromfile(f, dtype="<f4", count=3 * nv).reshape(nv, 3)
-        sc = np.fromfile(f, dtype="<f4", count=nv)
+        if version == 1:
+            sc = np.fromfile(f, dtype="<f4", count=nv)
+            tets = np.fromfile(f, dtype="<u4", count=4 * nt).reshape(nt, 4)
+            return pos, sc, tets, (npy, nw, nh)
+        if version != 2:
+            sys.exit(f"vtk_render.py: {path}: .bin version {version} (1 and 2 are read)")
         tets = np.fromfile(f, dtype="<u4", count=4 * nt).reshape(nt, 4)
+        f.seek(4 * (5 * npy + 6 * nw + 8 * nh), 1)
+        nf = struct.unpack_from("<I", head, 156)[0]
+        want = head[88:152].split(b"\0", 1)[0].decode("utf-8", "replace")
+        table = [f.read(128) for _ in range(nf)]
+        ne = nt + npy + nw + nh
+        sc = None
+        first = None
+        for e in table:
+            name = e[:64].split(b"\0", 1)[0].decode("utf-8", "replace")
+            assoc, comps = struct.unpack_from("<2I", e, 64)
+            count = nv if assoc == 0 else ne
+            data = np.fromfile(f, dtype="<f4", count=count * comps)
+            if assoc == 0 and comps == 1:
+                if name == want and sc is None:
+                    sc = data
+                if first is None:
+                    first = data
+        if sc is None:
+            sc = first
+        if sc is None:
+            sys.exit(f"vtk_render.py: {path}: no 1-component point field to draw (convert with --scalar NAME)")
     return pos, sc, tets, (npy, nw, nh)
 
 

@@ -93,13 +93,12 @@ inline int clvr_ray_clip(const clvr_frame *f, float3 org, float3 dir, float3 lo,
 /* Cuts [t0, t1] to the part of the ray between its first and last crossing
  * of the mesh's boundary faces (kernels/hull.h); 0 when the ray misses the
  * mesh. Camera rays, shadow rays and light-grid rays are all cut. Nothing
- * changes without a hull (or with settings.hull off). 256^2, error after 2
- * frames, no shadows / shadows, against no cut: PLOT3D combustor 4.64 /
- * 5.10% -> 2.03 / 2.42% (13 / 11 frames to 2% -> 3 / 4), kiefer_tet10 4.31
- * -> 3.47%, post 1.37 / 2.04% -> 1.14 / 1.69%, OpenFOAM igloo 2.49 -> 2.20%,
- * blunt fin 1.02 -> 0.96%, at 5-25% more per frame (two tree walks a ray);
- * meshes that fill their box drop the hull (hull.h) and are unchanged
- * (bench/results/render-converge/2026-11-25-s27-hull.md). */
+ * changes without a hull (or with settings.hull off). 256^2, frames to 2%
+ * relative RMSE without / with shadows, against no cut: PLOT3D combustor
+ * 8 / 11 -> 3 / 4, kiefer_tet10 7 / 8 -> 4 / 4, post 2 / 3 -> 2 / 2, at
+ * 8-20% more per frame (two tree walks a ray); meshes with little empty
+ * space in their box build or keep no hull (host/pipeline/hull.h) and are
+ * unchanged (bench/results/render-converge/2026-11-28-s28-hull.md). */
 inline int clvr_volume_hull_clip(const clvr_volume *v, float3 org, float3 dir, float *t0, float *t1)
 {
     const clvr_frame *f = v->f;

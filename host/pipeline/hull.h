@@ -27,7 +27,7 @@ typedef struct clvr_hull {
     uint32_t num_nodes;
     uint64_t num_slots;  /* faces of all elements */
     double build_s;      /* device seconds of the build's kernels (sort and select included) */
-    /* The probe (clvr_hull_probe): the mean fraction of a ray's chord
+    /* The probe (hull.c): the mean fraction of a ray's chord
      * through the mesh's box that lies outside the mesh (before its first
      * or after its last crossing; a ray that misses the mesh counts 1), over
      * a fixed set of rays from 14 directions. Near 0 for a mesh that fills
@@ -57,18 +57,25 @@ typedef struct clvr_hull {
 #define CLVR_HULL_AUTO 1
 #define CLVR_HULL_ON 2
 
-/* Below this empty_fraction, CLVR_HULL_AUTO drops the hull. Measured (bench/results/render-converge/2026-11-25-s27-hull.md):
- * meshes that fill their box (1M tets, the gmsh point-graded box, the
- * AMR-like lattice) give under 0.05 and lose 6-15% a frame with the hull,
- * gaining nothing; the PLOT3D combustor gives about 0.6. */
-#define CLVR_HULL_MIN_EMPTY 0.05f
+/* Below this empty_fraction, CLVR_HULL_AUTO drops the hull: the cut costs
+ * two tree walks a ray (6-20% of a frame) and pays only where enough of the
+ * box in front of the medium is empty. Measured at 256^2, urm, frames to 2%
+ * without / with shadows, no cut -> cut
+ * (bench/results/render-converge/2026-11-28-s28-hull.md): combustor (0.56)
+ * 8 / 11 -> 3 / 4, kiefer_tet10 (0.77) 7 / 8 -> 4 / 4, post (0.23) 2 / 3 ->
+ * 2 / 2, blunt fin (0.13) 2 / 2 -> 2 / 2 at 11% more a frame and a higher
+ * two-frame error (its low-discrepancy frames interleave less well); meshes
+ * that fill their box (1M tets, fire_ug, the built-in scene: under 0.02)
+ * gain nothing. */
+#define CLVR_HULL_MIN_EMPTY 0.15f
 /* Below this box_fraction, CLVR_HULL_AUTO builds no hull. Half the above:
  * the clusters' boxes stick out of the mesh, so their fraction is lower
  * than the hull's: 0.70-0.85 of it on the real tet meshes measured (post
  * 0.169 / 0.230, blunt fin 0.094 / 0.132, combustor 0.489 / 0.563,
- * kiefer_tet10 0.574 / 0.766), near 0 on lattices with a hole of mixed
- * cells (clusters of one type span several cells). */
-#define CLVR_HULL_MIN_BOX_EMPTY 0.025f
+ * kiefer_tet10 0.574 / 0.766), 0.45 on the coarse legacy-VTK post (8750
+ * hexes), near 0 on lattices with a hole of mixed cells (clusters of one
+ * type span several cells). */
+#define CLVR_HULL_MIN_BOX_EMPTY 0.075f
 
 /* face_first[i] = the first face slot of instance i (num_instances + 1
  * entries; the last is the slot count). Fails with CLVR_ERR_OVERFLOW when
