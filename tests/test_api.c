@@ -264,6 +264,13 @@ int main(void)
     OK(clvr_tracer_stat(ta, "elements", &ea, &msg));
     CHECK(dl == da && el == ea && el > 3000);
     CHECK_FAILS(clvr_tracer_stat(ta, "speed", &dl, &msg), CLVR_RESULT_ERR_USAGE, "frames, rays");
+    /* The hull's figures: a mesh that fills its box keeps none. */
+    double hf = -1, hb = -1, he = -1, hs = -1;
+    OK(clvr_tracer_stat(ta, "hull_faces", &hf, &msg));
+    OK(clvr_tracer_stat(ta, "hull_bytes", &hb, &msg));
+    OK(clvr_tracer_stat(ta, "hull_empty_fraction", &he, &msg));
+    OK(clvr_tracer_stat(ta, "hull_skipped", &hs, &msg));
+    CHECK(hf == 0 && hb == 0 && he >= 0 && he < 0.15 && hs == 0);
 
     float *ml = malloc(n * 4), *vl = malloc(n * 4), *ma = malloc(n * 4), *va = malloc(n * 4), *mn = malloc(n * 4),
           *vn = malloc(n * 4);
@@ -309,11 +316,15 @@ int main(void)
     OK(clvr_tracer_read_image(ta, img, n, &msg));
 
     clvr_tracer_destroy(tl);
-    clvr_tracer_destroy(ta);
     clvr_tracer_destroy(tn);
+    /* The context destroyed before its last tracer (Python's collector at
+     * exit may do this): released with the tracer, which still renders
+     * (AddressSanitizer finds a use after free if ctx went first). */
     clvr_dataset_destroy(arrays);
     clvr_dataset_destroy(no_hexes);
     clvr_context_destroy(ctx);
+    OK(clvr_tracer_render(ta, 1, &msg));
+    clvr_tracer_destroy(ta);
     free(img);
     free(ml); free(vl); free(ma); free(va); free(mn); free(vn);
     for (int t = 0; t < 4; ++t) free(b.cells[t]);

@@ -523,6 +523,36 @@ static void test_auto(clvr_cl *cl)
         }
         fx_free(cl, &x);
     }
+    /* Too little free memory for the build's transient buffers (the
+     * device's memory lowered to what is in use plus a little): the
+     * automatic mode renders without a hull and says why; the forced one
+     * fails with the numbers. */
+    {
+        fx_mesh z = {0};
+        char path[512];
+        snprintf(path, sizeof path, "%s/vtk/post.vtk", tu_data_dir());
+        TU_CHECK_STATUS(clvr_mesh_load(path, NULL, &z.m, &err), CLVR_OK, &err);
+        clvr_preprocess_options o;
+        clvr_preprocess_options_default(&o);
+        if (err.status == CLVR_OK) {
+            clvr_mesh_update_ranges(&z.m);
+            TU_CHECK_STATUS(clvr_preprocess(cl, &z.m, &o, &z.c, &err), CLVR_OK, &err);
+        }
+        if (err.status == CLVR_OK) {
+            const cl_ulong saved = cl->global_mem_bytes;
+            cl->global_mem_bytes = cl->allocated_bytes + (1u << 20); /* the trees (a few 100 kB) fit, the build not */
+            TU_CHECK_STATUS(clvr_accel_build_hull(cl, &z.c, CLVR_HULL_AUTO, &z.a, &err), CLVR_OK, &err);
+            printf("auto, post.vtk, 1 MB free: %s\n", z.a.hull_skipped);
+            TU_CHECK(!z.a.hull.kept && !z.a.hull.faces && strstr(z.a.hull_skipped, "face slots"));
+            clvr_accel_release(cl, &z.a);
+            TU_CHECK_STATUS(clvr_accel_build_hull(cl, &z.c, CLVR_HULL_ON, &z.a, &err), CLVR_ERR_DEVICE_MEMORY, &err);
+            TU_CHECK(strstr(err.msg, "free") != NULL);
+            err = (clvr_error){0};
+            clvr_accel_release(cl, &z.a);
+            cl->global_mem_bytes = saved;
+        }
+        fx_free(cl, &z);
+    }
     /* Off: nothing at all. */
     fx_mesh y = {0};
     TU_CHECK_STATUS(holed_mesh(6, &y.m, &err), CLVR_OK, &err);

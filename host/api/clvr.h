@@ -123,7 +123,8 @@ CLVR_API int clvr_result_exit_code(clvr_result r);
  * compiled on first use (seconds on a cold driver cache). Errors:
  * ERR_NO_DEVICE (the message lists the devices), ERR_OPENCL. */
 CLVR_API clvr_result clvr_context_create(const char *device, clvr_context **out, clvr_message *msg);
-/* Destroys ctx. Every tracer of ctx must be destroyed first. */
+/* Destroys ctx. Destroy its tracers and scenes first; where some still
+ * live, ctx is released with the last of them. */
 CLVR_API void clvr_context_destroy(clvr_context *ctx);
 /* Compiles the preprocessing and tree kernels now, by preprocessing a tiny
  * mesh of every element type (PoCL generates code at a kernel's first
@@ -259,7 +260,9 @@ CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t
  * and none are kept), "hull_bytes" (their device memory, faces and tree),
  * "hull_empty_fraction" (the share of a ray's path through the box that
  * lies outside the mesh, measured on a fixed set of rays: the saving the
- * cut is for). Unknown name: ERR_USAGE listing the names. */
+ * cut is for), "hull_skipped" (1 when there was too little memory to build
+ * them: the image is the same, it converges as without the cut). Unknown
+ * name: ERR_USAGE listing the names. */
 CLVR_API clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg);
 
 /* --- images ------------------------------------------------------------- */

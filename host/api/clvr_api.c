@@ -72,7 +72,8 @@ struct clvr_dataset {
 
 struct clvr_context {
     clvr_cl cl;
-    unsigned tracers; /* live tracers; destroying ctx before them is a bug */
+    unsigned tracers; /* live scenes (each tracer holds one) */
+    int closing;      /* clvr_context_destroy came while scenes lived: the last one frees ctx */
 };
 
 
@@ -162,8 +163,13 @@ clvr_result clvr_context_create(const char *device, clvr_context **out, clvr_mes
 void clvr_context_destroy(clvr_context *ctx)
 {
     if (!ctx) return;
-    if (ctx->tracers)
-        fprintf(stderr, "clvr: clvr_context_destroy: %u tracer(s) still alive; destroy them first\n", ctx->tracers);
+    /* Scenes and tracers release their device buffers through ctx: freeing
+     * it under them corrupted the heap when a program (or Python's garbage
+     * collector at exit) destroyed them in the other order. */
+    if (ctx->tracers) {
+        ctx->closing = 1;
+        return;
+    }
     clvr_cl_destroy(&ctx->cl);
     free(ctx);
 }
@@ -757,11 +763,13 @@ struct clvr_tracer {
 static void scene_release(clvr_scene *sc)
 {
     if (!sc || --sc->refs > 0) return;
-    clvr_accel_release(&sc->ctx->cl, &sc->accel);
-    clvr_clustered_release(&sc->ctx->cl, &sc->clustered);
-    --sc->ctx->tracers;
+    clvr_context *ctx = sc->ctx;
+    clvr_accel_release(&ctx->cl, &sc->accel);
+    clvr_clustered_release(&ctx->cl, &sc->clustered);
+    --ctx->tracers;
     dataset_release(sc->ds);
     free(sc);
+    if (ctx->closing && ctx->tracers == 0) clvr_context_destroy(ctx);
 }
 
 static clvr_status apply_settings(clvr_tracer *tr, clvr_error *e)
@@ -1491,7 +1499,7 @@ clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, c
 static const char *const stat_names =
     "frames, rays, samples, null_collisions, kernel_s, last_frame_s, preprocess_s, kernel_build_s, elements, points, "
     "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi, hull_faces, hull_bytes, "
-    "hull_empty_fraction";
+    "hull_empty_fraction, hull_skipped";
 
 clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg)
 {
@@ -1525,6 +1533,7 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "hull_faces")) v = tr->sc->accel.hull.kept ? (double)tr->sc->accel.hull.num_faces : 0.0;
     else if (!strcmp(name, "hull_bytes")) v = (double)clvr_hull_bytes(&tr->sc->accel.hull);
     else if (!strcmp(name, "hull_empty_fraction")) v = tr->sc->accel.hull.empty_fraction;
+    else if (!strcmp(name, "hull_skipped")) v = tr->sc->accel.hull_skipped[0] ? 1.0 : 0.0;
     else
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown figure '%.64s'; use one of %s", fn, name,
                                      stat_names),

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "../../kernels/hull.h"
+#include "limits_check.h"
 #include "preprocess_stages.h"
 
 clvr_status clvr_hull_face_first(const clvr_instance *instances, uint64_t num_instances, uint32_t *face_first,
@@ -221,6 +222,31 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
     const cl_uint ninst = (cl_uint)c->num_instances, nslots = ff[c->num_instances];
     out->num_slots = nslots;
     if (nslots == 0) goto cleanup;
+    {
+        /* The build's transient buffers: keys and slots, twice over for the
+         * sort (24 bytes per face slot), then faces and boxes (96 bytes per
+         * boundary face, counted here as if a tenth of the slots were). 4 to 6
+         * slots per element make this 100-170 bytes per element, several
+         * times what the renderer keeps per element (docs/large-meshes.md),
+         * so on a large mesh it may not fit where the mesh does: then no hull
+         * (CLVR_HULL_AUTO renders without it) rather than a build that runs
+         * the device, or on a CPU device the host, out of memory. Half of
+         * what is free is the most it takes. */
+        const uint64_t need = (uint64_t)nslots * 24u + (uint64_t)nslots / 10u * 96u;
+        uint64_t room = cl->global_mem_bytes > cl->allocated_bytes ? cl->global_mem_bytes - cl->allocated_bytes : 0;
+        if (cl->device_type & CL_DEVICE_TYPE_CPU) {
+            clvr_mem_limits ml;
+            clvr_mem_limits_read(&ml);
+            if (ml.limit < room) room = ml.limit;
+        }
+        if (need > room / 2) {
+            s = clvr_error_set(err, CLVR_ERR_DEVICE_MEMORY,
+                               "hull: the boundary faces' build needs %.1f MB for %u face slots, more than half of the "
+                               "%.1f MB free on %s; the mesh renders without cutting rays to its boundary",
+                               (double)need / 1e6, (unsigned)nslots, (double)room / 1e6, cl->device_name);
+            goto cleanup;
+        }
+    }
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(ninst + 1) * 4, ff,
                             "hull face layout", &ffb, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "hull face keys", &keys, err));
