@@ -506,13 +506,36 @@ CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, 
             return 1;
         }
         /* The rest of the hinted instance next (a ray's next sample is most
-         * often still inside it), then the other instances: no subtree is
-         * searched twice. */
-        if (h->node != inst.bvh_root &&
-            clvr_locate_in_instance(m, &inst, inst.bvh_root, h->node, px, py, pz, CLVR_LOCATE_COHERENT, scalar,
-                                    element_id, &leaf)) {
-            h->node = clvr_locate_hint_node(&inst, leaf);
-            return 1;
+         * often still inside it), from the hinted node upward: its parent's
+         * other children, then its grandparent's, and so on to the root, so
+         * that a sample a few elements away is found in a neighbouring
+         * subtree before a descent from the root; then the other instances.
+         * No subtree is searched twice. The tree is implicit (bvh_build.h):
+         * levels stored root first, node i of a level the parent of nodes
+         * 4i .. 4i + 3 of the level below. Against a descent from the root
+         * (skipping the hinted node): bottom-tree nodes per lookup on
+         * ray-ordered points 20.9 -> 14.4 on the 1M tets, 8.7 -> 7.2 on
+         * post-tets (bench_walk --order rays); on PoCL a urm frame of the 1M
+         * tets -5%, bench_locate --order rays +6%, post and the PLOT3D
+         * meshes within noise (their hints hold 53% and a miss is mostly in
+         * another instance). */
+        clvr_u32 node = h->node;
+        clvr_u32 size = (inst.num_leaves + 3u) / 4u, first = clvr_locate_level0(&inst);
+        if (node < first) { /* the hint is on level 1 */
+            size = (size + 3u) / 4u;
+            first -= size;
+        }
+        while (size > 1u) {
+            const clvr_u32 up = (size + 3u) / 4u, up_first = first - up;
+            const clvr_u32 parent = up_first + (node - first) / 4u;
+            if (clvr_locate_in_instance(m, &inst, parent, node, px, py, pz, CLVR_LOCATE_COHERENT, scalar,
+                                        element_id, &leaf)) {
+                h->node = clvr_locate_hint_node(&inst, leaf);
+                return 1;
+            }
+            node = parent;
+            size = up;
+            first = up_first;
         }
         skip_inst = h->inst;
     }
