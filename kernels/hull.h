@@ -145,8 +145,12 @@ CLVR_INLINE clvr_u32 clvr_hull_face_load(const clvr_mesh_view *m, const clvr_ins
     return n;
 }
 
-/* 64-bit hash of a canonical face's corners (the same face from either
- * side, the same key). */
+/* 32-bit hash of a canonical face's corners (the same face from either
+ * side, the same key), in the low half of a 64-bit key: the sort then runs
+ * over 4 digits instead of 8 (the hull's build on post-tets: sort 0.076 ->
+ * 0.03-0.05 s of 0.18-0.23). Different faces that share a key (a few hundred pairs among millions
+ * of faces) only lengthen a run of equal keys: clvr_hull_boundary compares
+ * corners exactly. */
 CLVR_INLINE clvr_u64 clvr_hull_face_key(const clvr_hull_face *h)
 {
     clvr_u64 x = 0x9E3779B97F4A7C15ull ^ clvr_hull_bits(h->p[0][3]);
@@ -157,7 +161,7 @@ CLVR_INLINE clvr_u64 clvr_hull_face_key(const clvr_hull_face *h)
             x ^= x >> 32;
         }
     x *= 0xc4ceb9fe1a85ec53ull;
-    return x ^ (x >> 29);
+    return (x ^ (x >> 29)) >> 32;
 }
 
 /* a and b are the same face seen from opposite sides: two elements meet

@@ -8,6 +8,8 @@
  *    bit for bit, and their count against the lattice's (12 n^2 triangles
  *    of tets, 6 n^2 quads of pyramids and hexahedra, 4 n^2 triangles and
  *    4 n^2 quads of wedges).
+ *    Keys cut to a few bits, so that many different faces share one: the
+ *    host's and the device's flags agree and are still exact.
  * 3. The ray query on the device against brute force over every face, on
  *    random rays from outside and from inside the box, and against the
  *    exact entry and exit of the unjittered hex lattice (a cube); rays
@@ -161,6 +163,108 @@ static void test_faces(clvr_cl *cl)
             clvr_clustered_host_free(&h);
             fx_free(cl, &x);
         }
+}
+
+/* Keys that collide: the same lattices' face slots with their keys cut to
+ * K_BITS bits, so that runs of equal keys hold many different faces (the
+ * 32-bit keys make a few hundred such pairs per million faces; duplicate
+ * elements make runs too). The flags of clvr_hull_boundary on the host and
+ * of the device's flags pass (whose short cuts handle runs of one and two)
+ * must agree slot for slot and flag exactly the true boundary faces. */
+#define K_BITS 10u
+typedef struct ks_pair {
+    uint64_t key;
+    uint32_t slot;
+} ks_pair;
+static int ks_cmp(const void *a, const void *b)
+{
+    const ks_pair *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->slot < y->slot ? -1 : x->slot > y->slot;
+}
+
+static void test_collisions(clvr_cl *cl)
+{
+    static const uint32_t kinds[] = {FX_TETS, FX_MIXED};
+    for (size_t ki = 0; ki < sizeof kinds / sizeof kinds[0]; ++ki) {
+        clvr_error err = {0};
+        fx_mesh x = {0};
+        TU_CHECK_STATUS(fx_grid_mesh(7, kinds[ki], 0.15f, 1.0f, 0.0f, 41, &x.m, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(fx_prepare(cl, &x, &err), CLVR_OK, &err);
+        clvr_clustered_host h = {0};
+        if (err.status == CLVR_OK) TU_CHECK_STATUS(clvr_clustered_download(cl, &x.c, &h, &err), CLVR_OK, &err);
+        if (err.status != CLVR_OK) {
+            fx_free(cl, &x);
+            continue;
+        }
+        const uint64_t ni = x.c.num_instances;
+        uint32_t *ff = malloc((ni + 1) * sizeof *ff);
+        TU_CHECK_STATUS(clvr_hull_face_first(h.instances, ni, ff, &err), CLVR_OK, &err);
+        const uint32_t n = ff[ni];
+        const clvr_mesh_view m = {NULL, NULL, h.instances, (const clvr_vec4 *)h.vertices, h.idx16, h.idx32, 0, 0,
+                                  NULL, CLVR_VIEW_ONE_PIECE};
+        ks_pair *ks = malloc(n * sizeof *ks);
+        uint64_t *keys = malloc(n * sizeof *keys);
+        uint32_t *slots = malloc(n * sizeof *slots), *hf = malloc(n * sizeof *hf), *df = malloc(n * sizeof *df);
+        for (uint32_t i = 0; i < n; ++i) {
+            clvr_hull_face f;
+            clvr_hull_slot_load(&m, h.instances, ff, (uint32_t)ni, i, &f);
+            ks[i] = (ks_pair){clvr_hull_face_key(&f) >> (32u - K_BITS), i};
+        }
+        qsort(ks, n, sizeof *ks, ks_cmp);
+        uint32_t longest = 0, run = 0, boundary = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            keys[i] = ks[i].key;
+            slots[i] = ks[i].slot;
+            run = i > 0 && keys[i] == keys[i - 1] ? run + 1 : 1;
+            longest = run > longest ? run : longest;
+        }
+        for (uint32_t i = 0; i < n; ++i) {
+            hf[slots[i]] = clvr_hull_boundary(&m, h.instances, ff, (uint32_t)ni, n, keys, slots, i);
+            boundary += hf[slots[i]];
+        }
+        /* Runs stay under CLVR_HULL_RUN, so the host's answer is exact. */
+        TU_CHECK(longest >= 3 && longest <= CLVR_HULL_RUN);
+        TU_CHECK_EQ_U64(boundary, x.a.hull.num_faces);
+        /* The device's flags pass over the same sorted pairs. */
+        cl_mem bff = NULL, bk = NULL, bs = NULL, bf = NULL;
+        clvr_clustered_pieces pc;
+        clvr_clustered_get_pieces(&x.c, &pc);
+        const cl_uint cni = (cl_uint)ni, cn = n;
+        clvr_status s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (ni + 1) * 4, ff, "ff", &bff, &err);
+        if (s == CLVR_OK) s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 8, keys, "k", &bk, &err);
+        if (s == CLVR_OK) s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 4, slots, "s", &bs, &err);
+        if (s == CLVR_OK) s = clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)n * 4, NULL, "f", &bf, &err);
+        cl_kernel k = x.a.kernels.hull_flags;
+        if (s == CLVR_OK)
+            s = CLVR_CL_ARGS(k, &err, CLVR_ARG(x.c.instances), CLVR_ARG(cni), CLVR_ARG(bff), CLVR_ARG(cn), CLVR_ARG(bk),
+                             CLVR_ARG(bs), CLVR_ARG(bf), CLVR_ARG(pc.vertices[0]), CLVR_ARG(pc.idx16[0]),
+                             CLVR_ARG(pc.idx32[0]), CLVR_ARG(pc.vertices[1]), CLVR_ARG(pc.idx16[1]),
+                             CLVR_ARG(pc.idx32[1]), CLVR_ARG(pc.vertices[2]), CLVR_ARG(pc.idx16[2]),
+                             CLVR_ARG(pc.idx32[2]), CLVR_ARG(pc.vertices[3]), CLVR_ARG(pc.idx16[3]),
+                             CLVR_ARG(pc.idx32[3]));
+        if (s == CLVR_OK) s = clvr_cl_run1d(cl, k, n, 64, NULL, &err);
+        if (s == CLVR_OK && clEnqueueReadBuffer(cl->queue, bf, CL_TRUE, 0, (size_t)n * 4, df, 0, NULL, NULL) != CL_SUCCESS)
+            s = CLVR_ERR_OPENCL;
+        TU_CHECK_STATUS(s, CLVR_OK, &err);
+        uint32_t differ = 0;
+        for (uint32_t i = 0; s == CLVR_OK && i < n; ++i) differ += df[i] != hf[i];
+        printf("colliding keys (%u bits), %s 7^3: %u slots, longest run %u, %u boundary faces, %u device flags differ\n",
+               K_BITS, ki == 0 ? "tets" : "mixed", n, longest, boundary, differ);
+        TU_CHECK_EQ_U64(differ, 0);
+        clvr_cl_release(cl, &bff);
+        clvr_cl_release(cl, &bk);
+        clvr_cl_release(cl, &bs);
+        clvr_cl_release(cl, &bf);
+        free(ks);
+        free(keys);
+        free(slots);
+        free(hf);
+        free(df);
+        free(ff);
+        clvr_clustered_host_free(&h);
+        fx_free(cl, &x);
+    }
 }
 
 /* ------------------------------------------------------------ 3. rays */
@@ -575,6 +679,7 @@ int main(void)
     clvr_cl cl;
     tu_open_device(&cl);
     test_faces(&cl);
+    test_collisions(&cl);
     test_rays(&cl);
     test_renders(&cl);
     test_auto(&cl);

@@ -260,7 +260,7 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
     CLVR_TRY(run(cl, k->hull_keys, nslots, &out->build_s, err));
     CLVR_TRY(clvr_pp_create(cl, &pp, err));
     pp_made = 1;
-    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, nslots, 1, 0, &out->build_s, err));
+    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, nslots, 1, 0xffffffffull, &out->build_s, err));
     /* The sort's spare buffers hold the flags (slot order) and the
      * selected slots. */
     cl_mem flags = vals_tmp, sel = keys_tmp;
