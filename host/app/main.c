@@ -256,8 +256,9 @@ int main(int argc, char **argv)
         double hf = 0.0, hb = 0.0, he = 0.0, hs = 0.0;
         TRY(clvr_tracer_stat(tracer, "hull_skipped", &hs, &msg));
         if (!o.quiet && hs > 0.0)
-            fprintf(stderr, "clvr: too little free memory to find the mesh's boundary faces: rays are not cut to the "
-                    "mesh (the same image; it may converge more slowly where the mesh leaves its box empty)\n");
+            fprintf(stderr, "clvr: the device cannot hold the buffers that find the mesh's boundary faces: rays are not "
+                    "cut to the mesh (the same image; it may converge more slowly where the mesh leaves its box "
+                    "empty)\n");
         TRY(clvr_tracer_stat(tracer, "hull_faces", &hf, &msg));
         TRY(clvr_tracer_stat(tracer, "hull_bytes", &hb, &msg));
         TRY(clvr_tracer_stat(tracer, "hull_empty_fraction", &he, &msg));

@@ -231,7 +231,11 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
          * so on a large mesh it may not fit where the mesh does: then no hull
          * (CLVR_HULL_AUTO renders without it) rather than a build that runs
          * the device, or on a CPU device the host, out of memory. Half of
-         * what is free is the most it takes. */
+         * what is free is the most it takes. Its keys are also one buffer
+         * larger than any array of the clustered mesh (32 bytes or more per
+         * element), so a mesh split into pieces below the device's largest
+         * allocation (docs/large-meshes.md) fails here or in that buffer's
+         * allocation and renders without the cut too. */
         const uint64_t need = (uint64_t)nslots * 24u + (uint64_t)nslots / 10u * 96u;
         uint64_t room = cl->global_mem_bytes > cl->allocated_bytes ? cl->global_mem_bytes - cl->allocated_bytes : 0;
         if (cl->device_type & CL_DEVICE_TYPE_CPU) {
