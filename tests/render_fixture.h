@@ -17,13 +17,14 @@
 
 /* Renders n frames of the clustered mesh c (trees a) with the settings set
  * (the caller's size, method, shadows and sampler: CLVR_SAMPLER_INDEPENDENT
- * for per-pixel error bars), the cool-warm transfer function at density 2
- * over m's scalar range and the automatic camera on m's bounds. *mean and
- * *var receive set->width x set->height x 4 floats (allocated even on
- * failure; the caller frees them). */
-static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a,
-                                            const clvr_render_settings *set, uint32_t n, float **mean, float **var,
-                                            clvr_error *err)
+ * for per-pixel error bars), the cool-warm transfer function at `density`
+ * over m's scalar range, and a camera from eye to target (60 degrees, y up)
+ * or, with eye NULL, the automatic camera on m's bounds. *mean and *var
+ * receive set->width x set->height x 4 floats (allocated even on failure;
+ * the caller frees them). */
+static inline clvr_status fx_render_moments_at(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a,
+                                               const clvr_render_settings *set, const float *eye, const float *target,
+                                               float density, uint32_t n, float **mean, float **var, clvr_error *err)
 {
     const size_t np = (size_t)set->width * set->height * 4;
     *mean = calloc(np, sizeof(float));
@@ -34,7 +35,7 @@ static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clv
     float *table = NULL;
     clvr_status s = clvr_renderer_create(cl, c, a, set, &r, err);
     if (s == CLVR_OK)
-        s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, 2.0f, m->scalar_min, m->scalar_max, err);
+        s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, density, m->scalar_min, m->scalar_max, err);
     if (s == CLVR_OK) {
         clvr_tf_set_extent(&tf, m->bounds_lo, m->bounds_hi);
         const uint32_t nt = clvr_tf_table_size(&tf);
@@ -46,8 +47,10 @@ static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clv
         }
     }
     clvr_camera cam;
+    const float up[3] = {0.0f, 1.0f, 0.0f};
     if (s == CLVR_OK)
-        s = clvr_camera_frame_box(&cam, m->bounds_lo, m->bounds_hi, 40.0f, set->width, set->height, err);
+        s = eye ? clvr_camera_look_at(&cam, eye, target, up, 60.0f, set->width, set->height, err)
+                : clvr_camera_frame_box(&cam, m->bounds_lo, m->bounds_hi, 40.0f, set->width, set->height, err);
     if (s == CLVR_OK) s = clvr_renderer_set_camera(r, &cam, err);
     for (uint32_t i = 0; i < n && s == CLVR_OK; ++i) s = clvr_renderer_frame(r, err);
     if (s == CLVR_OK) s = clvr_renderer_read_moments(r, *mean, *var, err);
@@ -61,6 +64,14 @@ static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clv
     clvr_tf_free(&tf);
     clvr_renderer_destroy(r);
     return s;
+}
+
+/* The same at density 2 with the automatic camera. */
+static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a,
+                                            const clvr_render_settings *set, uint32_t n, float **mean, float **var,
+                                            clvr_error *err)
+{
+    return fx_render_moments_at(cl, m, c, a, set, NULL, NULL, 2.0f, n, mean, var, err);
 }
 
 #endif /* CLVR_RENDER_FIXTURE_H */

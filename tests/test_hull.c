@@ -31,6 +31,7 @@
 #include "hull.h"
 #include "mesh_io.h"
 #include "render.h"
+#include "render_fixture.h"
 #include "test_util.h"
 #include "tf.h"
 
@@ -172,16 +173,6 @@ static void test_faces(clvr_cl *cl)
  * of the device's flags pass (whose short cuts handle runs of one and two)
  * must agree slot for slot and flag exactly the true boundary faces. */
 #define K_BITS 10u
-typedef struct ks_pair {
-    uint64_t key;
-    uint32_t slot;
-} ks_pair;
-static int ks_cmp(const void *a, const void *b)
-{
-    const ks_pair *x = a, *y = b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->slot < y->slot ? -1 : x->slot > y->slot;
-}
 
 static void test_collisions(clvr_cl *cl)
 {
@@ -198,24 +189,14 @@ static void test_collisions(clvr_cl *cl)
             continue;
         }
         const uint64_t ni = x.c.num_instances;
-        uint32_t *ff = malloc((ni + 1) * sizeof *ff);
-        TU_CHECK_STATUS(clvr_hull_face_first(h.instances, ni, ff, &err), CLVR_OK, &err);
-        const uint32_t n = ff[ni];
+        uint32_t *ff = malloc((ni + 1) * sizeof *ff), *slots = NULL, n = 0;
+        uint64_t *keys = NULL;
+        TU_CHECK_STATUS(clvr_hull_sorted_slots_ref(&h, ni, K_BITS, ff, &keys, &slots, &n, &err), CLVR_OK, &err);
         const clvr_mesh_view m = {NULL, NULL, h.instances, (const clvr_vec4 *)h.vertices, h.idx16, h.idx32, 0, 0,
                                   NULL, CLVR_VIEW_ONE_PIECE};
-        ks_pair *ks = malloc(n * sizeof *ks);
-        uint64_t *keys = malloc(n * sizeof *keys);
-        uint32_t *slots = malloc(n * sizeof *slots), *hf = malloc(n * sizeof *hf), *df = malloc(n * sizeof *df);
-        for (uint32_t i = 0; i < n; ++i) {
-            clvr_hull_face f;
-            clvr_hull_slot_load(&m, h.instances, ff, (uint32_t)ni, i, &f);
-            ks[i] = (ks_pair){clvr_hull_face_key(&f) >> (32u - K_BITS), i};
-        }
-        qsort(ks, n, sizeof *ks, ks_cmp);
+        uint32_t *hf = malloc(n * sizeof *hf + 1), *df = malloc(n * sizeof *df + 1);
         uint32_t longest = 0, run = 0, boundary = 0;
         for (uint32_t i = 0; i < n; ++i) {
-            keys[i] = ks[i].key;
-            slots[i] = ks[i].slot;
             run = i > 0 && keys[i] == keys[i - 1] ? run + 1 : 1;
             longest = run > longest ? run : longest;
         }
@@ -256,7 +237,6 @@ static void test_collisions(clvr_cl *cl)
         clvr_cl_release(cl, &bk);
         clvr_cl_release(cl, &bs);
         clvr_cl_release(cl, &bf);
-        free(ks);
         free(keys);
         free(slots);
         free(hf);
@@ -438,45 +418,7 @@ static clvr_status moments(clvr_cl *cl, fx_mesh *x, const clvr_render_settings *
                            const float *target, float density, uint32_t frames, float **mean, float **var,
                            clvr_error *err)
 {
-    const size_t np = (size_t)set->width * set->height * 4;
-    *mean = calloc(np, sizeof(float));
-    *var = calloc(np, sizeof(float));
-    if (!*mean || !*var) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "moments: out of memory");
-    clvr_renderer *r = NULL;
-    clvr_tf tf = {0};
-    float *table = NULL;
-    const clvr_mesh *m = &x->m;
-    clvr_status s = clvr_renderer_create(cl, &x->c, &x->a, set, &r, err);
-    if (s == CLVR_OK)
-        s = clvr_tf_from_options(&tf, "cool-warm", NULL, 0, 0, 0, density, m->scalar_min, m->scalar_max, err);
-    if (s == CLVR_OK) {
-        clvr_tf_set_extent(&tf, m->bounds_lo, m->bounds_hi);
-        const uint32_t nt = clvr_tf_table_size(&tf);
-        table = malloc(nt * 4 * sizeof(float));
-        if (!table) s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "moments: out of memory");
-        else {
-            clvr_tf_bake(&tf, table, nt);
-            s = clvr_renderer_set_tf(r, table, nt, tf.range_lo, tf.range_hi, tf.density, err);
-        }
-    }
-    clvr_camera cam;
-    const float up[3] = {0.0f, 1.0f, 0.0f};
-    if (s == CLVR_OK)
-        s = eye ? clvr_camera_look_at(&cam, eye, target, up, 60.0f, set->width, set->height, err)
-                : clvr_camera_frame_box(&cam, m->bounds_lo, m->bounds_hi, 40.0f, set->width, set->height, err);
-    if (s == CLVR_OK) s = clvr_renderer_set_camera(r, &cam, err);
-    for (uint32_t i = 0; i < frames && s == CLVR_OK; ++i) s = clvr_renderer_frame(r, err);
-    if (s == CLVR_OK) s = clvr_renderer_read_moments(r, *mean, *var, err);
-    if (s == CLVR_OK)
-        for (size_t i = 0; i < np; ++i) {
-            const double mu = (*mean)[i] / frames, v = (*var)[i] / frames - mu * mu;
-            (*mean)[i] = (float)mu;
-            (*var)[i] = (float)(v > 0 ? v : 0);
-        }
-    free(table);
-    clvr_tf_free(&tf);
-    clvr_renderer_destroy(r);
-    return s;
+    return fx_render_moments_at(cl, &x->m, &x->c, &x->a, set, eye, target, density, frames, mean, var, err);
 }
 
 /* Renders x with the hull and without (urm and delta, shadows on) and

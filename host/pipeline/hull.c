@@ -56,11 +56,37 @@ static clvr_status run(clvr_cl *cl, cl_kernel k, uint64_t n, double *sec, clvr_e
         CLVR_ARG(pc.idx16[1]), CLVR_ARG(pc.idx32[1]), CLVR_ARG(pc.vertices[2]), CLVR_ARG(pc.idx16[2]),                 \
         CLVR_ARG(pc.idx32[2]), CLVR_ARG(pc.vertices[3]), CLVR_ARG(pc.idx16[3]), CLVR_ARG(pc.idx32[3])
 
-clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
-                           const float *dir, uint32_t n, float *out, clvr_error *err)
+/* n rays (org, dir: 4 floats each) through kernel k over the tree `nodes`:
+ * clvr_hull_rays' layout when faces is a hull's faces, clvr_bvh_ray_span's
+ * (no faces argument) when it is NULL; 4 floats per ray into out. */
+static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
+                                const float *dir, uint32_t n, float *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_mem bo = NULL, bd = NULL, bt = NULL;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, (void *)org, "hull rays", &bo,
+                            err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, (void *)dir, "hull rays", &bd,
+                            err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)n * 16, NULL, "hull ray results", &bt, err));
+    const cl_uint nn = n;
+    if (faces)
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(bo), CLVR_ARG(bd), CLVR_ARG(nn), CLVR_ARG(nodes), CLVR_ARG(faces),
+                              CLVR_ARG(bt)));
+    else
+        CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(bo), CLVR_ARG(bd), CLVR_ARG(nn), CLVR_ARG(nodes), CLVR_ARG(bt)));
+    CLVR_TRY(clvr_cl_run1d(cl, k, n, 64, NULL, err));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, bt, CL_TRUE, 0, (size_t)n * 16, out, 0, NULL, NULL));
+cleanup:
+    clvr_cl_release(cl, &bo);
+    clvr_cl_release(cl, &bd);
+    clvr_cl_release(cl, &bt);
+    return s;
+}
+
+clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
+                           const float *dir, uint32_t n, float *out, clvr_error *err)
+{
     if (n == 0) return CLVR_OK;
     if (h->num_faces == 0) {
         for (uint32_t i = 0; i < n; ++i) {
@@ -71,21 +97,7 @@ clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hu
         }
         return CLVR_OK;
     }
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, (void *)org, "hull rays", &bo,
-                            err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, (void *)dir, "hull rays", &bd,
-                            err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)n * 16, NULL, "hull ray results", &bt, err));
-    const cl_uint nn = n;
-    CLVR_TRY(CLVR_CL_ARGS(k->hull_rays, err, CLVR_ARG(bo), CLVR_ARG(bd), CLVR_ARG(nn), CLVR_ARG(h->nodes),
-                          CLVR_ARG(h->faces), CLVR_ARG(bt)));
-    CLVR_TRY(clvr_cl_run1d(cl, k->hull_rays, n, 64, NULL, err));
-    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, bt, CL_TRUE, 0, (size_t)n * 16, out, 0, NULL, NULL));
-cleanup:
-    clvr_cl_release(cl, &bo);
-    clvr_cl_release(cl, &bd);
-    clvr_cl_release(cl, &bt);
-    return s;
+    return rays_through(cl, k->hull_rays, h->nodes, h->faces, org, dir, n, out, err);
 }
 
 /* The probes of clvr_hull.empty_fraction: 128 rays from each of the 6 axis
@@ -156,32 +168,16 @@ static clvr_status probe(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull
                          const float hi[3], float *fraction, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    cl_mem bo = NULL, bd = NULL, bt = NULL;
     float *org = malloc(PROBE_N * 16), *dir = malloc(PROBE_N * 16), *res = malloc(PROBE_N * 16);
     if (!org || !dir || !res) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "hull: out of host memory for the probe");
         goto cleanup;
     }
     probe_rays(lo, hi, org, dir);
-    if (!tree) {
-        CLVR_TRY(clvr_hull_rays(cl, k, h, org, dir, PROBE_N, res, err));
-    } else {
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, PROBE_N * 16, org, "hull probe rays",
-                                &bo, err));
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, PROBE_N * 16, dir, "hull probe rays",
-                                &bd, err));
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, PROBE_N * 16, NULL, "hull probe results", &bt, err));
-        const cl_uint nn = PROBE_N;
-        CLVR_TRY(CLVR_CL_ARGS(k->ray_span, err, CLVR_ARG(bo), CLVR_ARG(bd), CLVR_ARG(nn), CLVR_ARG(tree),
-                              CLVR_ARG(bt)));
-        CLVR_TRY(clvr_cl_run1d(cl, k->ray_span, PROBE_N, 64, NULL, err));
-        CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, bt, CL_TRUE, 0, PROBE_N * 16, res, 0, NULL, NULL));
-    }
+    if (tree) CLVR_TRY(rays_through(cl, k->ray_span, tree, NULL, org, dir, PROBE_N, res, err));
+    else CLVR_TRY(clvr_hull_rays(cl, k, h, org, dir, PROBE_N, res, err));
     *fraction = probe_fraction(lo, hi, org, dir, res);
 cleanup:
-    clvr_cl_release(cl, &bo);
-    clvr_cl_release(cl, &bd);
-    clvr_cl_release(cl, &bt);
     free(org);
     free(dir);
     free(res);
@@ -318,6 +314,49 @@ static int by_key_then_slot(const void *a, const void *b)
     return x->slot < y->slot ? -1 : x->slot > y->slot;
 }
 
+clvr_status clvr_hull_sorted_slots_ref(const clvr_clustered_host *h, uint64_t num_instances, uint32_t key_bits,
+                                      uint32_t *face_first, uint64_t **keys, uint32_t **slots, uint32_t *n,
+                                      clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    *keys = NULL;
+    *slots = NULL;
+    *n = 0;
+    key_slot *ks = NULL;
+    CLVR_TRY(clvr_hull_face_first(h->instances, num_instances, face_first, err));
+    const uint32_t ns = face_first[num_instances];
+    const clvr_mesh_view m = {NULL, NULL, h->instances, (const clvr_vec4 *)h->vertices, h->idx16, h->idx32, 0, 0,
+                              NULL, CLVR_VIEW_ONE_PIECE};
+    ks = malloc((size_t)ns * sizeof *ks + 1);
+    *keys = malloc((size_t)ns * sizeof **keys + 1);
+    *slots = malloc((size_t)ns * sizeof **slots + 1);
+    if (!ks || !*keys || !*slots) {
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "hull: out of host memory for %u faces", ns);
+        goto cleanup;
+    }
+    const uint32_t shift = key_bits >= 32u ? 0u : 32u - (key_bits ? key_bits : 1u);
+    for (uint32_t i = 0; i < ns; ++i) {
+        clvr_hull_face f;
+        clvr_hull_slot_load(&m, h->instances, face_first, (uint32_t)num_instances, i, &f);
+        ks[i] = (key_slot){clvr_hull_face_key(&f) >> shift, i};
+    }
+    qsort(ks, ns, sizeof *ks, by_key_then_slot);
+    for (uint32_t i = 0; i < ns; ++i) {
+        (*keys)[i] = ks[i].key;
+        (*slots)[i] = ks[i].slot;
+    }
+    *n = ns;
+cleanup:
+    if (s != CLVR_OK) {
+        free(*keys);
+        free(*slots);
+        *keys = NULL;
+        *slots = NULL;
+    }
+    free(ks);
+    return s;
+}
+
 clvr_status clvr_hull_build_ref(const clvr_clustered_host *h, uint64_t num_instances, clvr_hull_face **faces,
                                 float **boxes, uint32_t *num_faces, clvr_error *err)
 {
@@ -325,31 +364,16 @@ clvr_status clvr_hull_build_ref(const clvr_clustered_host *h, uint64_t num_insta
     *faces = NULL;
     *boxes = NULL;
     *num_faces = 0;
-    uint32_t *ff = malloc((size_t)(num_instances + 1) * sizeof *ff), *flags = NULL, *slots = NULL;
+    uint32_t *ff = malloc((size_t)(num_instances + 1) * sizeof *ff), *flags = NULL, *slots = NULL, n = 0;
     uint64_t *keys = NULL;
-    key_slot *ks = NULL;
     if (!ff) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "hull: out of host memory");
-    CLVR_TRY(clvr_hull_face_first(h->instances, num_instances, ff, err));
-    const uint32_t n = ff[num_instances];
+    CLVR_TRY(clvr_hull_sorted_slots_ref(h, num_instances, 32u, ff, &keys, &slots, &n, err));
     const clvr_mesh_view m = {NULL, NULL, h->instances, (const clvr_vec4 *)h->vertices, h->idx16, h->idx32, 0, 0,
                               NULL, CLVR_VIEW_ONE_PIECE};
-    ks = malloc((size_t)n * sizeof *ks + 1);
-    keys = malloc((size_t)n * sizeof *keys + 1);
-    slots = malloc((size_t)n * sizeof *slots + 1);
     flags = malloc((size_t)n * sizeof *flags + 1);
-    if (!ks || !keys || !slots || !flags) {
+    if (!flags) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "hull: out of host memory for %u faces", n);
         goto cleanup;
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        clvr_hull_face f;
-        clvr_hull_slot_load(&m, h->instances, ff, (uint32_t)num_instances, i, &f);
-        ks[i] = (key_slot){clvr_hull_face_key(&f), i};
-    }
-    qsort(ks, n, sizeof *ks, by_key_then_slot);
-    for (uint32_t i = 0; i < n; ++i) {
-        keys[i] = ks[i].key;
-        slots[i] = ks[i].slot;
     }
     uint32_t nb = 0;
     for (uint32_t i = 0; i < n; ++i) {
@@ -379,7 +403,6 @@ cleanup:
         *boxes = NULL;
     }
     free(ff);
-    free(ks);
     free(keys);
     free(slots);
     free(flags);

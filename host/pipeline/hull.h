@@ -100,6 +100,14 @@ void clvr_hull_release(clvr_cl *cl, clvr_hull *h); /* accepts NULL and half-buil
  * none are kept. */
 uint64_t clvr_hull_bytes(const clvr_hull *h);
 
+/* The reference's first steps: every face slot's key cut to its top
+ * key_bits bits (32: the whole key, as the device's build) with the slot,
+ * sorted by key then slot (the device's stable sort's order): *keys and
+ * *slots (*n entries, malloc'd), face_first num_instances + 1 entries
+ * (clvr_hull_face_first). Fewer bits make keys collide (tests). */
+clvr_status clvr_hull_sorted_slots_ref(const clvr_clustered_host *h, uint64_t num_instances, uint32_t key_bits,
+                                      uint32_t *face_first, uint64_t **keys, uint32_t **slots, uint32_t *n,
+                                      clvr_error *err);
 /* The reference: the same faces and boxes (8 floats each) on the host from
  * the host copy of a mesh that is one piece (clvr_clustered_download).
  * *faces and *boxes are malloc'd (NULL when there are none). */
