@@ -106,6 +106,15 @@ inline int clvr_volume_hull_clip(const clvr_volume *v, float3 org, float3 dir, f
     return clvr_hull_clip(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, t0, t1);
 }
 
+/* The part of a ray where the estimators look for medium: the clip box and
+ * planes (clvr_ray_clip), then the hull. Every ray the estimators trace
+ * goes through it (the MPI record, which keeps the box entry for its
+ * compositing order, calls the two apart). */
+inline int clvr_volume_clip(const clvr_volume *v, float3 org, float3 dir, float3 lo, float3 hi, float *t0, float *t1)
+{
+    return clvr_ray_clip(v->f, org, dir, lo, hi, t0, t1) && clvr_volume_hull_clip(v, org, dir, t0, t1);
+}
+
 /* ------------------------------------------------------------ majorant iterators
  * Each method is an iterator over the ray's majorant segments, in order:
  * next(&a, &b, &m) gives [a, b) with a majorant m >= every extinction on it
@@ -736,8 +745,7 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
 {
     float s0 = 0.0f, s1 = INFINITY;
     ++*rays;
-    if (!clvr_ray_clip(v->f, p, ldir, lo, hi, &s0, &s1)) return 1.0f;
-    if (!clvr_volume_hull_clip(v, p, ldir, &s0, &s1)) return 1.0f;
+    if (!clvr_volume_clip(v, p, ldir, lo, hi, &s0, &s1)) return 1.0f;
     return clvr_urm_transmittance(v, p, ldir, s0, s1, u, CLVR_URM_SHADOW_RESIDUAL_RATE, rng, samples, nulls);
 }
 
@@ -757,8 +765,7 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
     const float3 p = lo + ((float3)((float)x, (float)y, (float)z) + 0.5f) * (hi - lo) / (float)r;
     clvr_rng rng = clvr_rng_make((uint)clvr_grid_index(x, y, z, r), 0x11647u, f->seed_lo, f->seed_hi);
     float s0 = 0.0f, s1 = INFINITY;
-    if (!clvr_ray_clip(f, p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
-    if (!clvr_volume_hull_clip(v, p, ldir, &s0, &s1)) return 1.0f;
+    if (!clvr_volume_clip(v, p, ldir, vlo, vhi, &s0, &s1)) return 1.0f;
     return clvr_urm_transmittance(v, p, ldir, s0, s1, clvr_rng_next(&rng), CLVR_URM_RESIDUAL_RATE, &rng, samples,
                                   nulls);
 }
@@ -814,9 +821,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi), ldir = vload3(0, f->light_dir);
     const float4 bg = (float4)(vload3(0, f->background), 0.0f);
     float t0 = 0.0f, t1 = INFINITY;
-    if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return bg;
+    if (!clvr_volume_clip(v, org, dir, lo, hi, &t0, &t1)) return bg;
     const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
-    if (!clvr_volume_hull_clip(v, org, dir, &t0, &t1)) return bg;
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_urm e;
@@ -850,7 +856,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         const float3 p = org + dir * t;
         float s0 = 0.0f, s1 = INFINITY;
         ++*rays;
-        if (clvr_ray_clip(f, p, ldir, lo, hi, &s0, &s1) && clvr_volume_hull_clip(v, p, ldir, &s0, &s1)) {
+        if (clvr_volume_clip(v, p, ldir, lo, hi, &s0, &s1)) {
             float ts;
             float4 m2;
             const float u_shadow = ld ? ld[3] : clvr_rng_next(rng);
