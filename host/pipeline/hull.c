@@ -39,18 +39,6 @@ uint64_t clvr_hull_bytes(const clvr_hull *h)
     return (uint64_t)h->num_faces * sizeof(clvr_hull_face) + (uint64_t)h->num_nodes * sizeof(clvr_bvh_node);
 }
 
-static clvr_status run(clvr_cl *cl, cl_kernel k, uint64_t n, double *sec, clvr_error *err)
-{
-    cl_event ev = NULL;
-    clvr_status s = clvr_cl_run1d(cl, k, (size_t)n, 64, &ev, err);
-    if (s == CLVR_OK && ev) {
-        clWaitForEvents(1, &ev);
-        *sec += clvr_cl_event_seconds(ev);
-    }
-    if (ev) clReleaseEvent(ev);
-    return s;
-}
-
 #define PIECE_ARGS(pc)                                                                                                 \
     CLVR_ARG(pc.vertices[0]), CLVR_ARG(pc.idx16[0]), CLVR_ARG(pc.idx32[0]), CLVR_ARG(pc.vertices[1]),                  \
         CLVR_ARG(pc.idx16[1]), CLVR_ARG(pc.idx32[1]), CLVR_ARG(pc.vertices[2]), CLVR_ARG(pc.idx16[2]),                 \
@@ -195,12 +183,8 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
     int pp_made = 0;
     out->box_fraction = -1.0f;
     if (c->num_instances == 0 || mode == CLVR_HULL_OFF) return CLVR_OK;
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint64_t i = 0; i < c->num_instances; ++i)
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = fminf(lo[a], c->host_instances[i].bounds.lo[a]);
-            hi[a] = fmaxf(hi[a], c->host_instances[i].bounds.hi[a]);
-        }
+    /* The box the renderer clips rays to (render.c: the mesh's bounds). */
+    const float *lo = c->bounds.lo, *hi = c->bounds.hi;
     if (mode == CLVR_HULL_AUTO && cluster_tree) {
         /* The clusters' boxes contain the mesh, so their empty fraction is at
          * most the hull's: a mesh that fills its box shows it here already,
@@ -255,18 +239,18 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "hull face slots", &vals_tmp, err));
     clvr_clustered_pieces pc;
     clvr_clustered_get_pieces(c, &pc);
-    CLVR_TRY(CLVR_CL_ARGS(k->hull_keys, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb), CLVR_ARG(nslots),
-                          CLVR_ARG(keys), PIECE_ARGS(pc)));
-    CLVR_TRY(run(cl, k->hull_keys, nslots, &out->build_s, err));
     CLVR_TRY(clvr_pp_create(cl, &pp, err));
     pp_made = 1;
+    CLVR_TRY(CLVR_CL_ARGS(k->hull_keys, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb), CLVR_ARG(nslots),
+                          CLVR_ARG(keys), PIECE_ARGS(pc)));
+    CLVR_TRY(clvr_pp_launch(&pp, k->hull_keys, nslots, 64, &out->build_s, err));
     CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, nslots, 1, 0xffffffffull, &out->build_s, err));
     /* The sort's spare buffers hold the flags (slot order) and the
      * selected slots. */
     cl_mem flags = vals_tmp, sel = keys_tmp;
     CLVR_TRY(CLVR_CL_ARGS(k->hull_flags, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb),
                           CLVR_ARG(nslots), CLVR_ARG(keys), CLVR_ARG(vals), CLVR_ARG(flags), PIECE_ARGS(pc)));
-    CLVR_TRY(run(cl, k->hull_flags, nslots, &out->build_s, err));
+    CLVR_TRY(clvr_pp_launch(&pp, k->hull_flags, nslots, 64, &out->build_s, err));
     uint32_t nb = 0;
     CLVR_TRY(clvr_pp_select(&pp, flags, NULL, sel, nslots, &nb, &out->build_s, err));
     clvr_cl_release(cl, &keys);
@@ -279,7 +263,7 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
     const cl_uint ncl = nb;
     CLVR_TRY(CLVR_CL_ARGS(k->hull_faces, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb), CLVR_ARG(sel),
                           CLVR_ARG(ncl), CLVR_ARG(out->faces), CLVR_ARG(boxes), PIECE_ARGS(pc)));
-    CLVR_TRY(run(cl, k->hull_faces, nb, &out->build_s, err));
+    CLVR_TRY(clvr_pp_launch(&pp, k->hull_faces, nb, 64, &out->build_s, err));
     CLVR_TRY(clvr_bvh_build_boxes_device(cl, k, boxes, nb, &out->nodes, err));
     out->num_faces = nb;
     out->num_nodes = clvr_bvh_nodes_bound(nb);

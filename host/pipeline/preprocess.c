@@ -185,8 +185,7 @@ uint32_t clvr_pp_tiles(const clvr_pp *pp, uint64_t n)
     return t ? (uint32_t)t : 1u;
 }
 
-/* Runs k over n items (local size `local`), adding device time to *sec. */
-static clvr_status launch(clvr_pp *pp, cl_kernel k, uint64_t n, size_t local, double *sec, clvr_error *err)
+clvr_status clvr_pp_launch(clvr_pp *pp, cl_kernel k, uint64_t n, size_t local, double *sec, clvr_error *err)
 {
     cl_event ev = NULL;
     clvr_status s = clvr_cl_run1d(pp->cl, k, (size_t)n, local, sec ? &ev : NULL, err);
@@ -212,7 +211,7 @@ clvr_status clvr_pp_bounds(clvr_pp *pp, cl_mem pos, cl_mem scal, uint64_t n, clv
     cl_kernel k = pp->bounds_tiles;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(scal), CLVR_ARG(nn), CLVR_ARG(chunk), CLVR_ARG(tiles),
                           CLVR_ARG(part)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     host = malloc(tiles * sizeof *host);
     if (!host) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for bounds"); goto cleanup; }
     CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, part, CL_TRUE, 0, tiles * sizeof *host, host, 0, NULL, NULL));
@@ -242,7 +241,7 @@ clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layo
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(idx), CLVR_ARG(slot0), CLVR_ARG(count), CLVR_ARG(first),
                               CLVR_ARG(gx), CLVR_ARG(gy), CLVR_ARG(gz), CLVR_ARG(scale), CLVR_ARG(mo), CLVR_ARG(t),
                               CLVR_ARG(keys), CLVR_ARG(vbuf), CLVR_ARG(with_vals)));
-        CLVR_TRY(launch(pp, k, (count + 1u) / 2u, 64, sec, err)); /* two elements per work-item */
+        CLVR_TRY(clvr_pp_launch(pp, k, (count + 1u) / 2u, 64, sec, err)); /* two elements per work-item */
     }
 cleanup:
     return s;
@@ -258,10 +257,10 @@ static clvr_status tile_sums(clvr_pp *pp, cl_mem in, uint64_t n, cl_uint tiles, 
     cl_kernel k = pp->scan_reduce;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(in), CLVR_ARG(nn), CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(f),
                           CLVR_ARG(sums)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     k = pp->scan_sums;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(sums), CLVR_ARG(tiles)));
-    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, 1, 1, sec, err));
 cleanup:
     return s;
 }
@@ -280,7 +279,7 @@ clvr_status clvr_pp_scan(clvr_pp *pp, cl_mem in, cl_mem out, uint64_t n, uint32_
     cl_kernel k = pp->scan_apply;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(in), CLVR_ARG(out), CLVR_ARG(nn), CLVR_ARG(chunk), CLVR_ARG(tiles),
                           CLVR_ARG(sums)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     if (total)
         CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, sums, CL_TRUE, tiles * sizeof(cl_uint), sizeof(cl_uint),
                                           total, 0, NULL, NULL));
@@ -305,7 +304,7 @@ clvr_status clvr_pp_select(clvr_pp *pp, cl_mem flags, cl_mem values, cl_mem out,
     cl_mem vals = values ? values : flags; /* any valid buffer when ids are selected */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(flags), CLVR_ARG(vals), CLVR_ARG(use_ids), CLVR_ARG(nn), CLVR_ARG(chunk),
                           CLVR_ARG(tiles), CLVR_ARG(sums), CLVR_ARG(out)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, sums, CL_TRUE, tiles * sizeof(cl_uint), sizeof(cl_uint), count, 0,
                                       NULL, NULL));
 cleanup:
@@ -325,19 +324,19 @@ static clvr_status radix_count(clvr_pp *pp, cl_mem keys, cl_ulong n, cl_ulong ch
     cl_kernel k = pp->radix_hist;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(keys), CLVR_ARG(n), CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(shift),
                           CLVR_ARG(hist)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     /* The histogram table is scanned with scan.cl's kernels: one tile is enough for it. */
     k = pp->scan_reduce;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(hist), CLVR_ARG(hn), CLVR_ARG(hn), CLVR_ARG(one), CLVR_ARG(noflags),
                           CLVR_ARG(sums)));
-    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, 1, 1, sec, err));
     k = pp->scan_sums;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(sums), CLVR_ARG(one)));
-    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, 1, 1, sec, err));
     k = pp->scan_apply;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(hist), CLVR_ARG(hist), CLVR_ARG(hn), CLVR_ARG(hn), CLVR_ARG(one),
                           CLVR_ARG(sums)));
-    CLVR_TRY(launch(pp, k, 1, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, 1, 1, sec, err));
 cleanup:
     return s;
 }
@@ -359,7 +358,7 @@ static clvr_status radix_scatter(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem
     cl_kernel k = pp->radix_scatter;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(*keys), CLVR_ARG(*vals), CLVR_ARG(n), CLVR_ARG(chunk), CLVR_ARG(tiles),
                           CLVR_ARG(shift), CLVR_ARG(hist), CLVR_ARG(*keys_tmp), CLVR_ARG(*vals_tmp), CLVR_ARG(iota)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     swap_pairs(keys, vals, keys_tmp, vals_tmp);
 cleanup:
     return s;
@@ -376,7 +375,7 @@ static clvr_status sort_varying(clvr_pp *pp, cl_mem keys, cl_ulong n, cl_ulong c
     CLVR_TRY(clvr_cl_buffer(pp->cl, CL_MEM_READ_WRITE, 2 * tiles * sizeof(cl_ulong), NULL, "sort and/or", &andor, err));
     cl_kernel k = pp->radix_andor;
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(keys), CLVR_ARG(n), CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(andor)));
-    CLVR_TRY(launch(pp, k, tiles, 1, sec, err));
+    CLVR_TRY(clvr_pp_launch(pp, k, tiles, 1, sec, err));
     ao = malloc(2 * tiles * sizeof *ao);
     if (!ao) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory in sort"); goto cleanup; }
     CLVR_CL_CHECK(clEnqueueReadBuffer(pp->cl->queue, andor, CL_TRUE, 0, 2 * tiles * sizeof *ao, ao, 0, NULL, NULL));
@@ -446,7 +445,7 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
             cl_kernel k = pp->radix_buckets;
             CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(*keys), CLVR_ARG(*vals), CLVR_ARG(*keys_tmp), CLVR_ARG(*vals_tmp),
                                   CLVR_ARG(hist), CLVR_ARG(tiles), CLVR_ARG(nn), CLVR_ARG(digits)));
-            CLVR_TRY(launch(pp, k, CLVR_PP_RADIX, 1, sec, err));
+            CLVR_TRY(clvr_pp_launch(pp, k, CLVR_PP_RADIX, 1, sec, err));
             if (passes & 1u) swap_pairs(keys, vals, keys_tmp, vals_tmp);
             goto cleanup;
         }
@@ -466,7 +465,7 @@ done:
         cl_uint n32 = (cl_uint)n;
         cl_kernel ki = pp->iota;
         CLVR_TRY(CLVR_CL_ARGS(ki, err, CLVR_ARG(*vals), CLVR_ARG(n32)));
-        CLVR_TRY(launch(pp, ki, n, 64, sec, err));
+        CLVR_TRY(clvr_pp_launch(pp, ki, n, 64, sec, err));
     }
 cleanup:
     free(table);
@@ -737,7 +736,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         cl_ulong chunk = (N + tiles - 1) / tiles;
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(vals), CLVR_ARG(idx_in), CLVR_ARG(idx_sorted), CLVR_ARG(n32),
                               CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(tl)));
-        CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_GATHER], err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_GATHER], err));
     }
     if (opt.keep_order) {
         ws_detach(ws, vals);
@@ -761,7 +760,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(scal), CLVR_ARG(idx_sorted), CLVR_ARG(ncl),
                               CLVR_ARG(size), CLVR_ARG(c1), CLVR_ARG(c2), CLVR_ARG(c3), CLVR_ARG(tl), CLVR_ARG(n32),
                               CLVR_ARG(out->sampling)));
-        CLVR_TRY(launch(&pp, k, nc, 64, &st[CLVR_PP_STAGE_SAMPLING], err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, nc, 64, &st[CLVR_PP_STAGE_SAMPLING], err));
     }
 
     /* --- greedy instance split with local re-indexing. The scratch vertex
@@ -815,7 +814,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
                                   CLVR_ARG(out->idx32), CLVR_ARG(b32), CLVR_ARG(segbuf), CLVR_ARG(nseg), CLVR_ARG(tl),
                                   CLVR_ARG(vl), CLVR_ARG(me), CLVR_ARG(tk), CLVR_ARG(lc), CLVR_ARG(rec_max),
                                   CLVR_ARG(recs), CLVR_ARG(rec_counts)));
-            CLVR_TRY(launch(&pp, k, nseg, 1, &st[CLVR_PP_STAGE_SPLIT], err));
+            CLVR_TRY(clvr_pp_launch(&pp, k, nseg, 1, &st[CLVR_PP_STAGE_SPLIT], err));
         }
         ws_drop(cl, ws, &tk);
         clvr_cl_release(cl, &segbuf);
@@ -828,7 +827,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         cl_uint ns = (cl_uint)nslots;
         cl_kernel k = pp.rec_flags;
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(rec_counts), CLVR_ARG(ns), CLVR_ARG(rec_max), CLVR_ARG(flags)));
-        CLVR_TRY(launch(&pp, k, nslots, 64, si, err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, nslots, 64, si, err));
         uint32_t ninst = 0;
         CLVR_TRY(clvr_pp_select(&pp, flags, NULL, sel, nslots, &ninst, si, err));
         out->num_instances = ninst;
@@ -838,7 +837,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         k = pp.inst_counts;
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(recs), CLVR_ARG(sel), CLVR_ARG(ni), CLVR_ARG(leaf), CLVR_ARG(nverts),
                               CLVR_ARG(nleaves)));
-        CLVR_TRY(launch(&pp, k, ninst, 64, si, err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, ninst, 64, si, err));
         uint32_t total_v = 0, total_l = 0;
         CLVR_TRY(clvr_pp_scan(&pp, nverts, nverts, ninst, &total_v, si, err));
         CLVR_TRY(clvr_pp_scan(&pp, nleaves, nleaves, ninst, &total_l, si, err));
@@ -852,7 +851,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         cl_int b32 = bits32;
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(recs), CLVR_ARG(sel), CLVR_ARG(ni), CLVR_ARG(nverts), CLVR_ARG(nleaves),
                               CLVR_ARG(leaf), CLVR_ARG(b32), CLVR_ARG(tl), CLVR_ARG(out->instances), CLVR_ARG(vsrc)));
-        CLVR_TRY(launch(&pp, k, ninst, 64, si, err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, ninst, 64, si, err));
     }
 
     /* --- clustered vertices */
@@ -866,7 +865,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(scal), CLVR_ARG(vmap), CLVR_ARG(out->instances),
                               CLVR_ARG(vsrc), CLVR_ARG(ni), CLVR_ARG(nv), CLVR_ARG(chunk), CLVR_ARG(tiles),
                               CLVR_ARG(out->vertices)));
-        CLVR_TRY(launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_VERTICES], err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_VERTICES], err));
     }
     ws_drop(cl, ws, &vmap);
     clvr_cl_release(cl, &pos);
@@ -881,10 +880,10 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(out->vertices), CLVR_ARG(out->idx16), CLVR_ARG(out->idx32),
                               CLVR_ARG(out->instances), CLVR_ARG(ni), CLVR_ARG(nl), CLVR_ARG(leaf),
                               CLVR_ARG(out->leaf_boxes)));
-        CLVR_TRY(launch(&pp, k, nl, 64, &st[CLVR_PP_STAGE_LEAVES], err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, nl, 64, &st[CLVR_PP_STAGE_LEAVES], err));
         k = pp.instance_bounds;
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(out->instances), CLVR_ARG(ni), CLVR_ARG(out->leaf_boxes)));
-        CLVR_TRY(launch(&pp, k, ni, 64, &st[CLVR_PP_STAGE_LEAVES], err));
+        CLVR_TRY(clvr_pp_launch(&pp, k, ni, 64, &st[CLVR_PP_STAGE_LEAVES], err));
     }
     out->host_instances = malloc(out->num_instances * sizeof(clvr_instance));
     if (!out->host_instances) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory for the instance table"); goto cleanup; }

@@ -54,6 +54,9 @@ float clvr_pp_scale(const clvr_box *b);
  * (not written: clvr_pp_sort can make them, iota_vals). */
 clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layout *l, const clvr_box *b,
                          int morton, cl_mem keys, cl_mem vals, double *sec, clvr_error *err);
+/* Runs k over n items (local size `local`), adding its device time to
+ * *sec (NULL: not timed). */
+clvr_status clvr_pp_launch(clvr_pp *pp, cl_kernel k, uint64_t n, size_t local, double *sec, clvr_error *err);
 /* Exclusive scan of n uints (in may equal out); *total = sum (may be NULL). */
 clvr_status clvr_pp_scan(clvr_pp *pp, cl_mem in, cl_mem out, uint64_t n, uint32_t *total, double *sec,
                          clvr_error *err);
