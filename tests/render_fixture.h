@@ -5,6 +5,7 @@
 #ifndef CLVR_RENDER_FIXTURE_H
 #define CLVR_RENDER_FIXTURE_H
 
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 
@@ -72,6 +73,44 @@ static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clv
                                             clvr_error *err)
 {
     return fx_render_moments_at(cl, m, c, a, set, NULL, NULL, 2.0f, n, mean, var, err);
+}
+
+/* Two moment images of n frames each (fx_render_moments) compared in
+ * distribution: pixels and 4x4 pixel blocks (per channel) whose difference
+ * of means exceeds k_sigma standard errors, plus a float-rounding floor of
+ * 1e-5 per pixel (a small bias spread over many pixels shows in the
+ * blocks); the largest block |z|; and the summed opacity (alpha) of a's
+ * means, for a test to check that the volume covers part of the image. */
+typedef struct fx_moments_diff {
+    size_t pixels, blocks;
+    double worst_block_z, opacity;
+} fx_moments_diff;
+
+static inline fx_moments_diff fx_compare_moments(const float *ma, const float *va, const float *mb, const float *vb,
+                                                 uint32_t W, uint32_t H, uint32_t n, double k_sigma)
+{
+    fx_moments_diff r = {0, 0, 0.0, 0.0};
+    const size_t np = (size_t)W * H * 4;
+    for (size_t i = 0; i < np; ++i) {
+        const double se = sqrt(va[i] / n + vb[i] / n), d = fabs((double)ma[i] - mb[i]);
+        if (d > k_sigma * se + 1e-5) ++r.pixels;
+        if (i % 4 == 3) r.opacity += ma[i];
+    }
+    for (uint32_t by = 0; by < H; by += 4)
+        for (uint32_t bx = 0; bx < W; bx += 4)
+            for (size_t c = 0; c < 4; ++c) {
+                double d = 0, v = 0;
+                for (uint32_t y = by; y < by + 4; ++y)
+                    for (uint32_t x = bx; x < bx + 4; ++x) {
+                        const size_t i = 4 * ((size_t)y * W + x) + c;
+                        d += (double)ma[i] - mb[i];
+                        v += va[i] / n + vb[i] / n;
+                    }
+                const double z = v > 0 ? fabs(d) / sqrt(v) : 0.0;
+                if (z > r.worst_block_z) r.worst_block_z = z;
+                if (fabs(d) > k_sigma * sqrt(v) + 1e-5 * 16) ++r.blocks;
+            }
+    return r;
 }
 
 #endif /* CLVR_RENDER_FIXTURE_H */
