@@ -83,12 +83,19 @@ typedef struct fx_mesh {
     clvr_accel a;
 } fx_mesh;
 
-static clvr_status fx_prepare(clvr_cl *cl, fx_mesh *x, clvr_error *err)
+/* x's mesh clustered with the default options (no trees yet). */
+static clvr_status fx_hull_cluster(clvr_cl *cl, fx_mesh *x, clvr_error *err)
 {
     clvr_preprocess_options o;
     clvr_preprocess_options_default(&o);
     clvr_mesh_update_ranges(&x->m);
-    clvr_status s = clvr_preprocess(cl, &x->m, &o, &x->c, err);
+    return clvr_preprocess(cl, &x->m, &o, &x->c, err);
+}
+
+/* Clustered, with every tree and the hull always kept (CLVR_HULL_ON). */
+static clvr_status fx_prepare(clvr_cl *cl, fx_mesh *x, clvr_error *err)
+{
+    clvr_status s = fx_hull_cluster(cl, x, err);
     if (s == CLVR_OK) s = clvr_accel_build_hull(cl, &x->c, CLVR_HULL_ON, &x->a, err);
     return s;
 }
@@ -514,14 +521,8 @@ static void test_auto(clvr_cl *cl)
             s = clvr_mesh_load(path, NULL, &x.m, &err);
         }
         TU_CHECK_STATUS(s, CLVR_OK, &err);
-        clvr_preprocess_options o;
-        clvr_preprocess_options_default(&o);
-        if (s == CLVR_OK) {
-            clvr_mesh_update_ranges(&x.m);
-            s = clvr_preprocess(cl, &x.m, &o, &x.c, &err);
-        }
         float on_fraction = -1.0f;
-        if (s == CLVR_OK) s = clvr_accel_build_hull(cl, &x.c, CLVR_HULL_ON, &x.a, &err);
+        if (s == CLVR_OK) s = fx_prepare(cl, &x, &err);
         if (s == CLVR_OK) {
             on_fraction = x.a.hull.empty_fraction;
             TU_CHECK(x.a.hull.kept && x.a.hull.num_faces > 0 && x.a.hull.box_fraction == -1.0f);
@@ -559,12 +560,7 @@ static void test_auto(clvr_cl *cl)
         char path[512];
         snprintf(path, sizeof path, "%s/vtk/post.vtk", tu_data_dir());
         TU_CHECK_STATUS(clvr_mesh_load(path, NULL, &z.m, &err), CLVR_OK, &err);
-        clvr_preprocess_options o;
-        clvr_preprocess_options_default(&o);
-        if (err.status == CLVR_OK) {
-            clvr_mesh_update_ranges(&z.m);
-            TU_CHECK_STATUS(clvr_preprocess(cl, &z.m, &o, &z.c, &err), CLVR_OK, &err);
-        }
+        if (err.status == CLVR_OK) TU_CHECK_STATUS(fx_hull_cluster(cl, &z, &err), CLVR_OK, &err);
         if (err.status == CLVR_OK) {
             const cl_ulong saved = cl->global_mem_bytes;
             cl->global_mem_bytes = cl->allocated_bytes + (1u << 20); /* the trees (a few 100 kB) fit, the build not */
@@ -584,10 +580,7 @@ static void test_auto(clvr_cl *cl)
     fx_mesh y = {0};
     TU_CHECK_STATUS(holed_mesh(6, &y.m, &err), CLVR_OK, &err);
     if (err.status == CLVR_OK) {
-        clvr_preprocess_options o;
-        clvr_preprocess_options_default(&o);
-        clvr_mesh_update_ranges(&y.m);
-        TU_CHECK_STATUS(clvr_preprocess(cl, &y.m, &o, &y.c, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(fx_hull_cluster(cl, &y, &err), CLVR_OK, &err);
         if (err.status == CLVR_OK) {
             TU_CHECK_STATUS(clvr_accel_build_hull(cl, &y.c, CLVR_HULL_OFF, &y.a, &err), CLVR_OK, &err);
             TU_CHECK(!y.a.hull.kept && !y.a.hull.faces && y.a.hull.num_faces == 0);

@@ -8,9 +8,10 @@
  * key-value radix sort of (key, slot), a flag per slot without a twin,
  * a select of the flagged slots (element order, so the faces follow the
  * elements' Hilbert curve), the faces and their boxes, and a 4-wide tree
- * over them. Transient device memory: about 28 bytes per face slot (4 to 6
- * slots per element); kept: 64 bytes per boundary face and the tree's
- * nodes (112 bytes per 3 faces or so). */
+ * over them. Transient device memory: 24 bytes per face slot (4 to 6
+ * slots per element: keys and slots, twice over for the sort); kept: 64
+ * bytes per boundary face and the tree's nodes (112 bytes per 3 faces or
+ * so). */
 #ifndef CLVR_HULL_BUILD_H
 #define CLVR_HULL_BUILD_H
 
