@@ -243,6 +243,31 @@ int main(void)
 
     clvr_dataset *loaded = NULL, *arrays = dataset_from(&b, 1), *no_hexes = dataset_from(&b, 0);
     OK(clvr_dataset_load(bin, NULL, &loaded, &msg));
+    {
+        /* A scene that consumed its file's cells (the clvr program's way):
+         * the tracer's automatic transfer function, made at its first use
+         * (here a figure asked before any transfer function), cannot measure
+         * cells that are gone; it is the ramp over the field's range, not a
+         * read of freed lists (which AddressSanitizer reports), and asking
+         * for a dataset-made transfer function says why it cannot be. */
+        clvr_dataset *once = NULL;
+        clvr_scene *sc = NULL;
+        clvr_tracer *tc = NULL;
+        OK(clvr_dataset_load(bin, NULL, &once, &msg));
+        clvr_preprocess_settings ps;
+        clvr_preprocess_settings_init(&ps);
+        ps.consume = 1;
+        OK(clvr_scene_create(ctx, once, NULL, &ps, &sc, &msg));
+        clvr_dataset_destroy(once);
+        OK(clvr_tracer_create_on(sc, NULL, W, H, &tc, &msg));
+        clvr_scene_destroy(sc);
+        double d = 0;
+        OK(clvr_tracer_stat(tc, "density", &d, &msg));
+        CHECK(d > 0);
+        CHECK_FAILS(clvr_tracer_set_tf(tc, "viridis", NULL, NAN, NAN, 1, 0, &msg), CLVR_RESULT_ERR_USAGE, "consumed");
+        OK(clvr_tracer_render(tc, 1, &msg));
+        clvr_tracer_destroy(tc);
+    }
     unlink(bin);
     clvr_tracer *tl = NULL, *ta = NULL, *tn = NULL;
     OK(clvr_tracer_create(ctx, loaded, NULL, W, H, &tl, &msg));

@@ -83,7 +83,7 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 per_element(s->bytes_element_boxes, s->elements));
         fprintf(out, "| sampling clusters | | %.3f MB | | %.2f |\n", s->bytes_sampling / 1e6,
                 per_element(s->bytes_sampling, s->elements));
-        fprintf(out, "| boundary faces (%llu; rays cut to the mesh) | | %.3f MB | | %.2f |\n",
+        fprintf(out, "| boundary faces rays are cut to (%llu; 0: none kept) | | %.3f MB | | %.2f |\n",
                 (unsigned long long)s->hull_faces, s->bytes_hull / 1e6, per_element(s->bytes_hull, s->elements));
         fprintf(out, "\nclusters: %llu instances (%llu with 16-bit indices), %llu leaves of %u, %llu sampling "
                      "clusters of %u\n",
