@@ -306,6 +306,29 @@ __kernel void clvr_hull_rays(__global const float4 *org, __global const float4 *
     t01[i] = (float4)(t0, t1, (float)hit, 0.0f);
 }
 
+/* clvr_hull_gaps per ray (tests compare with brute force): CLVR_HULL_GAP_STRIDE
+ * floats per ray into out: the cut of [0, inf) (t0, t1), the result (gaps,
+ * -1 miss, -2 too many crossings), 0, then the gaps' ends. */
+__kernel void clvr_hull_gap_rays(__global const float4 *org, __global const float4 *dir, uint n,
+                                 __global const clvr_bvh_node *nodes, __global const clvr_hull_face *faces,
+                                 __global float *out)
+{
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const float4 o = org[i], d = dir[i];
+    float t0 = 0.0f, t1 = INFINITY, glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
+    const int r = clvr_hull_gaps(nodes, faces, o.x, o.y, o.z, d.x, d.y, d.z, &t0, &t1, glo, ghi);
+    __global float *w = out + (ulong)i * CLVR_HULL_GAP_STRIDE;
+    w[0] = t0;
+    w[1] = t1;
+    w[2] = (float)r;
+    w[3] = 0.0f;
+    for (int k = 0; k < r; ++k) {
+        w[4 + 2 * k] = glo[k];
+        w[5 + 2 * k] = ghi[k];
+    }
+}
+
 /* Layout of the shared bvh structs as the device sees them (the host
  * compares with its own sizeof/offsetof). */
 __kernel void clvr_bvh_sizes(__global uint *out)

@@ -426,4 +426,135 @@ CLVR_INLINE int clvr_hull_clip(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
     return *t0 <= *t1;
 }
 
+/* ------------------------------------------------------------ every crossing
+ * The first and last crossings cut a ray to the mesh's extent; between
+ * them a ray through a mesh that is not convex (the combustor's duct, the
+ * post's cylinder, kiefer's hollows) leaves the medium and comes back. In
+ * such a gap the extinction is 0 like outside, but the macrocells that
+ * straddle the boundary give it a majorant, so the estimators spend points
+ * there, and urm's control (linear between its quadrature points) jumps
+ * across each boundary. clvr_hull_gaps finds every crossing instead (one
+ * walk without pruning), so that the renderer can give each gap that lies
+ * outside the mesh the majorant 0. */
+#ifndef CLVR_HULL_MAX_HITS
+#define CLVR_HULL_MAX_HITS 16
+#endif
+/* Floats per ray of the test kernel clvr_hull_gap_rays. */
+#define CLVR_HULL_GAP_STRIDE (4 + 2 * CLVR_HULL_MAX_HITS)
+
+/* Every face the ray r crosses under `nodes`: the distances [lo[i], hi[i]]
+ * where it may cross face i (a quad's tetrahedron gives an interval, a
+ * triangle one point), sorted by lo; returns their count, or -1 past
+ * `max`. */
+CLVR_INLINE int clvr_hull_hits(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOBAL const clvr_hull_face *faces,
+                               const clvr_hull_ray *r, float dx, float dy, float dz, float *lo, float *hi, int max)
+{
+    const float ix = clvr_bvh_safe_inv(dx), iy = clvr_bvh_safe_inv(dy), iz = clvr_bvh_safe_inv(dz);
+    clvr_u32 stack[CLVR_BVH_STACK_SIZE];
+    clvr_u32 sp = 1;
+    int n = 0;
+    stack[0] = 0u;
+    while (sp > 0u) {
+        const clvr_u32 ref = stack[--sp];
+        if (ref & CLVR_BVH_LEAF_BIT) {
+            float a = INFINITY, b = -INFINITY;
+            clvr_hull_ray_face(r, faces + (ref & CLVR_BVH_MAX_PRIMS), &a, &b);
+            if (!(a <= b)) continue;
+            if (n == max) return -1;
+            int j = n++;
+            for (; j > 0 && lo[j - 1] > a; --j) {
+                lo[j] = lo[j - 1];
+                hi[j] = hi[j - 1];
+            }
+            lo[j] = a;
+            hi[j] = b;
+            continue;
+        }
+        CLVR_GLOBAL const clvr_bvh_node *nd = nodes + ref;
+        for (int c = 0; c < 4; ++c) {
+            if (!(nd->lo_x[c] <= nd->hi_x[c])) continue;
+            const float ax = (nd->lo_x[c] - r->o[0]) * ix, bx = (nd->hi_x[c] - r->o[0]) * ix;
+            const float ay = (nd->lo_y[c] - r->o[1]) * iy, by = (nd->hi_y[c] - r->o[1]) * iy;
+            const float az = (nd->lo_z[c] - r->o[2]) * iz, bz = (nd->hi_z[c] - r->o[2]) * iz;
+            const float a = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+            const float b = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+            if (!(a <= b) || sp >= CLVR_BVH_STACK_SIZE) continue;
+            stack[sp++] = nd->child[c];
+        }
+    }
+    return n;
+}
+
+/* clvr_hull_clip, and the candidate gaps: the stretches of [*t0, *t1]
+ * between two consecutive crossings (after merging crossings that overlap
+ * or lie within the clip's margin of each other), and, when the origin is
+ * inside the faces' box, the stretch before the first crossing: each lies
+ * wholly inside or wholly outside the mesh (only a crossing separates
+ * them), which the caller decides by one lookup at its middle. Writes at
+ * most CLVR_HULL_MAX_HITS gaps [glo[i], ghi[i]] in order and returns their
+ * count; -1 when the ray misses the mesh (as clvr_hull_clip's 0); -2 when
+ * it crosses more faces than CLVR_HULL_MAX_HITS (the caller then takes
+ * clvr_hull_clip). */
+CLVR_INLINE int clvr_hull_gaps(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOBAL const clvr_hull_face *faces,
+                               float ox, float oy, float oz, float dx, float dy, float dz, float *t0, float *t1,
+                               float *glo, float *ghi)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int c = 0; c < 4; ++c) {
+        lo[0] = fmin(lo[0], nodes->lo_x[c]);
+        lo[1] = fmin(lo[1], nodes->lo_y[c]);
+        lo[2] = fmin(lo[2], nodes->lo_z[c]);
+        hi[0] = fmax(hi[0], nodes->hi_x[c]);
+        hi[1] = fmax(hi[1], nodes->hi_y[c]);
+        hi[2] = fmax(hi[2], nodes->hi_z[c]);
+    }
+    const int outside = ox < lo[0] || oy < lo[1] || oz < lo[2] || ox > hi[0] || oy > hi[1] || oz > hi[2];
+    const float ix = clvr_bvh_safe_inv(dx), iy = clvr_bvh_safe_inv(dy), iz = clvr_bvh_safe_inv(dz);
+    const float ax = (lo[0] - ox) * ix, bx = (hi[0] - ox) * ix, ay = (lo[1] - oy) * iy, by = (hi[1] - oy) * iy;
+    const float az = (lo[2] - oz) * iz, bz = (hi[2] - oz) * iz;
+    const float ta = fmax(fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz)), 0.0f);
+    const float tb = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    if (!(ta <= tb)) return -1;
+    const float s = outside ? ta : 0.0f;
+    const clvr_hull_ray r = clvr_hull_ray_make(ox + dx * s, oy + dy * s, oz + dz * s, dx, dy, dz);
+    float hlo[CLVR_HULL_MAX_HITS], hhi[CLVR_HULL_MAX_HITS];
+    const int n = clvr_hull_hits(nodes, faces, &r, dx, dy, dz, hlo, hhi, CLVR_HULL_MAX_HITS);
+    if (n < 0) return -2;
+    if (n == 0) return outside ? -1 : 0;
+    /* From inside, crossings behind the origin only bound the end (as in
+     * clvr_hull_clip: if all are behind, the ray misses); gaps start at the
+     * first crossing ahead. */
+    int k = 0;
+    while (!outside && k < n - 1 && hhi[k] < 0.0f) ++k;
+    const float pad = 1e-5f * (tb - ta) + 1e-6f * fabs(s);
+    int ng = 0;
+    if (outside) *t0 = fmax(*t0, s + hlo[k] - pad);
+    else if (hlo[k] - pad > *t0 - s) { /* from inside: before the first crossing */
+        glo[ng] = *t0;
+        ghi[ng++] = s + hlo[k] - pad;
+    }
+    float end = hhi[k];
+    for (int j = 0; j < k; ++j) end = fmax(end, hhi[j]); /* behind the origin: below 0, as the walk's last */
+    /* The stretch after the first crossing of a ray from outside is medium
+     * (the ray enters there), and so is the one before the last crossing
+     * (it leaves there): they are no candidates. Keeping a stretch as medium
+     * is always safe; only a gap must be free of it. */
+    const int first = ng;
+    int skip_first = outside;
+    for (++k; k < n; ++k) {
+        if (hlo[k] - end > 2.0f * pad) { /* a stretch between two crossings */
+            if (skip_first) {
+                skip_first = 0;
+            } else {
+                glo[ng] = s + end + pad;
+                ghi[ng++] = s + hlo[k] - pad;
+            }
+        }
+        end = fmax(end, hhi[k]);
+    }
+    if (ng > first) --ng; /* the last stretch ends at the last crossing */
+    *t1 = fmin(*t1, s + end + pad);
+    return *t0 <= *t1 ? ng : -1;
+}
+
 #endif /* CLVR_HULL_H */

@@ -115,6 +115,59 @@ inline int clvr_volume_clip(const clvr_volume *v, float3 org, float3 dir, float3
     return clvr_ray_clip(v->f, org, dir, lo, hi, t0, t1) && clvr_volume_hull_clip(v, org, dir, t0, t1);
 }
 
+/* The stretches of a camera ray between two hull crossings that lie
+ * outside the mesh (kernels/hull.h, clvr_hull_gaps): their extinction is
+ * 0, so urm treats them as majorant 0 (it spends no points there, and its
+ * control bridges them instead of jumping across the two boundaries). In
+ * order, disjoint. 256^2, urm, error after 1 / 2 / 3 / 4 frames without
+ * shadows, against the first and last crossing only: kiefer_tet10 7.74 /
+ * 3.43 / 2.94 / 1.78% -> 7.14 / 2.82 / 2.61 / 1.17%, PLOT3D combustor 4.60 /
+ * 2.03% -> 4.55 / 1.98% (2% in 2 frames instead of 3), post unchanged, at
+ * about the same cost per frame (one walk without pruning instead of two
+ * pruned ones; bench/results/render-converge/2026-11-28-s29-gaps.md). The
+ * shadow rays keep the two walks: gaps there cost the combustor 10% a
+ * frame for no lower error. */
+typedef struct clvr_gaps {
+    int n;
+    float lo[CLVR_HULL_MAX_HITS], hi[CLVR_HULL_MAX_HITS];
+} clvr_gaps;
+
+/* Candidate gaps shorter than this fraction of the clipped ray are kept as
+ * medium without a lookup: most are the slivers between two triangulations
+ * of a non-planar quad that meshes cut into tets leave inside (PLOT3D
+ * combustor and post: 0.28 and 0.38 candidates per camera ray, 0.003 and
+ * 0.002 of them outside the mesh). */
+#define CLVR_GAP_MIN 0.01f
+
+/* clvr_volume_clip for a camera ray, with the gaps that lie outside the
+ * mesh in *g (none without a hull, or past CLVR_HULL_MAX_HITS crossings).
+ * A candidate gap lies wholly inside or outside the mesh; one lookup at its
+ * middle tells which (a point within the element tolerance of a face counts
+ * inside: the gap is then kept, which costs points, never bias). */
+inline int clvr_volume_clip_gaps(const clvr_volume *v, float3 org, float3 dir, float3 lo, float3 hi, float *t0,
+                                 float *t1, clvr_gaps *g)
+{
+    const clvr_frame *f = v->f;
+    g->n = 0;
+    if (!clvr_ray_clip(f, org, dir, lo, hi, t0, t1)) return 0;
+    if (f->hull_faces == 0u) return 1;
+    float glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
+    const int n = clvr_hull_gaps(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, t0, t1, glo, ghi);
+    if (n == -1) return 0;
+    if (n == -2) return clvr_volume_hull_clip(v, org, dir, t0, t1);
+    const float shortest = CLVR_GAP_MIN * (*t1 - *t0);
+    for (int i = 0; i < n; ++i) {
+        const float a = fmax(glo[i], *t0), b = fmin(ghi[i], *t1);
+        if (!(b - a > shortest)) continue;
+        const float3 p = org + dir * (0.5f * (glo[i] + ghi[i]));
+        float sc;
+        if (clvr_locate_point(clvr_volume_view(v), p.x, p.y, p.z, &sc)) continue;
+        g->lo[g->n] = a;
+        g->hi[g->n++] = b;
+    }
+    return 1;
+}
+
 /* ------------------------------------------------------------ majorant iterators
  * Each method is an iterator over the ray's majorant segments, in order:
  * next(&a, &b, &m) gives [a, b) with a majorant m >= every extinction on it
@@ -718,6 +771,32 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
     }
 }
 
+/* The next piece [*a, *c) of [*a, b) outside the gaps (*gi: the first gap
+ * that may still matter, advanced as the walk goes); 0 when none is left. */
+inline int clvr_gaps_next(const clvr_gaps *g, int *gi, float *a, float b, float *c)
+{
+    while (*a < b) {
+        while (*gi < g->n && g->hi[*gi] <= *a) ++*gi;
+        if (*gi < g->n && g->lo[*gi] <= *a) {
+            *a = fmin(b, g->hi[*gi]);
+            continue;
+        }
+        *c = *gi < g->n ? fmin(b, g->lo[*gi]) : b;
+        return 1;
+    }
+    return 0;
+}
+
+/* clvr_urm_segment over [a, b) minus the gaps. */
+inline int clvr_urm_segment_gaps(const clvr_volume *v, clvr_urm *e, float3 org, float3 dir, float a, float b, float m,
+                                 const clvr_gaps *g, int *gi, clvr_rng *rng, uint *samples, uint *nulls)
+{
+    float c;
+    for (; clvr_gaps_next(g, gi, &a, b, &c); a = c)
+        if (!clvr_urm_segment(v, e, org, dir, a, c, m, rng, samples, nulls)) return 0;
+    return 1;
+}
+
 /* Closes the last interval at the ray's exit; returns T(t1). */
 inline float clvr_urm_end(clvr_urm *e)
 {
@@ -772,6 +851,22 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
 
 /* ------------------------------------------------------------ camera rays */
 
+/* clvr_root_depth's term of [a, b) of majorant m (tau: the depth in front). */
+inline void clvr_root_piece(float a, float b, float m, float *root, float *tau)
+{
+    if (!(m > 0.0f) || !(a < b)) return;
+    *root += sqrt(m) * (b - a) * clvr_urm_front(*tau, m, b - a);
+    *tau += m * (b - a);
+}
+
+/* One segment [a, b) of majorant m minus the gaps (as clvr_urm_segment_gaps). */
+inline int clvr_root_segment(float a, float b, float m, const clvr_gaps *g, int *gi, float *root, float *tau)
+{
+    float c;
+    for (; clvr_gaps_next(g, gi, &a, b, &c); a = c) clvr_root_piece(a, c, m, root, tau);
+    return 0;
+}
+
 /* The integral of sqrt(m) times the front factor (clvr_urm_front) over
  * [t0, t1) (m: the majorant): a camera ray's minimum urm points are spread
  * in proportion to that. sqrt(m) alone (before the front factor) put them where
@@ -786,13 +881,13 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
  * 2 frames), whose thin parts carry much of the image. The cost: the
  * dense AMR-like mesh (density 8) loses 10-35%, its thin parts giving points
  * to dense ones whose spacing m / kappa already sets
- * (bench/results/render-converge/2026-11-25-s25-root.md). */
-inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float t0, float t1)
+ * (bench/results/render-converge/2026-11-25-s25-root.md). g: the ray's
+ * gaps, which hold no depth. */
+inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, const clvr_gaps *g)
 {
     float root = 0.0f, tau = 0.0f;
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
-                          (root += m > 0.0f ? sqrt(m) * (b - a) * clvr_urm_front(tau, m, b - a) : 0.0f,
-                           tau += m > 0.0f ? m * (b - a) : 0.0f, 0));
+    int gi = 0;
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, clvr_root_segment(a, b, m, g, &gi, &root, &tau));
     return root;
 }
 
@@ -800,12 +895,14 @@ inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float
  * its minimum points spread by clvr_root_depth, light-grid terms when the
  * frame has shadows. Returns T(t1); e holds the sums and the pick. */
 inline float clvr_urm_camera(const clvr_volume *v, clvr_urm *e, float3 org, float3 dir, float t0, float t1, float u,
-                             float u_pick, clvr_rng *rng, uint *samples, uint *nulls)
+                             float u_pick, const clvr_gaps *g, clvr_rng *rng, uint *samples, uint *nulls)
 {
     const clvr_frame *f = v->f;
-    clvr_urm_begin(f, e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1), u, u_pick, f->shadows ? 2 : 1,
+    clvr_urm_begin(f, e, t1 - t0, clvr_root_depth(v, org, dir, t0, t1, g), u, u_pick, f->shadows ? 2 : 1,
                    CLVR_URM_RESIDUAL_RATE, rng);
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, !clvr_urm_segment(v, e, org, dir, a, b, m, rng, samples, nulls));
+    int gi = 0;
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m,
+                          !clvr_urm_segment_gaps(v, e, org, dir, a, b, m, g, &gi, rng, samples, nulls));
     return clvr_urm_end(e);
 }
 
@@ -821,13 +918,14 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
     const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi), ldir = vload3(0, f->light_dir);
     const float4 bg = (float4)(vload3(0, f->background), 0.0f);
     float t0 = 0.0f, t1 = INFINITY;
-    if (!clvr_volume_clip(v, org, dir, lo, hi, &t0, &t1)) return bg;
     const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
+        clvr_gaps g;
+        if (!clvr_volume_clip_gaps(v, org, dir, lo, hi, &t0, &t1, &g)) return bg;
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
-        const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, rng, samples, nulls);
+        const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, &g, rng, samples, nulls);
         /* Without shadows every point is fully lit: the whole sum, no pick. */
         float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
         if (f->shadows && e.wsum > 0.0f) {
@@ -850,6 +948,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
 
     float t;
     float4 med;
+    if (!clvr_volume_clip(v, org, dir, lo, hi, &t0, &t1)) return bg;
     if (!clvr_delta_track(v, org, dir, t0, t1, u_primary, rng, &t, &med, samples, nulls)) return bg;
     float light = 1.0f;
     if (f->shadows) {
@@ -893,7 +992,9 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
         return;
     }
     clvr_urm e;
-    const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, rng, samples, nulls);
+    clvr_gaps g;
+    g.n = 0;
+    const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, &g, rng, samples, nulls);
     const float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum +
                      (f->shadows ? f->light_intensity : 0.0f) * e.lit;
     rec->a = a;

@@ -14,11 +14,16 @@
  *    random rays from outside and from inside the box, and against the
  *    exact entry and exit of the unjittered hex lattice (a cube); rays
  *    aimed at the lattice's boundary vertices and edges (where faces meet)
- *    must not slip through.
+ *    must not slip through. Every crossing (clvr_hull_gaps): no face is
+ *    crossed inside a gap, each gap ends at a crossing, the cut is
+ *    clvr_hull_clip's, and a ray with more crossings than it keeps says so;
+ *    on a lattice with a hole (gaps through it occur) and on a sieve of
+ *    slabs (rays past CLVR_HULL_MAX_HITS crossings occur).
  * 4. Renders with and without the hull, same in distribution (per pixel
  *    and per 4x4 block, difference of means within 5 standard errors), urm
  *    and delta, on a lattice with a hole and a corner cut away (the medium
- *    starts inside the box, and a ray leaves and re-enters it), from
+ *    starts inside the box, and a ray leaves and re-enters it: urm's camera
+ *    rays skip the stretches between crossings that lie outside), from
  *    outside and from a camera inside the box, and on two real meshes:
  *    PLOT3D's post (a flow domain with a cylinder through it) and an FE
  *    notched specimen.
@@ -380,43 +385,213 @@ static void test_rays(clvr_cl *cl)
 
 /* ------------------------------------------------------------ 4. renders */
 
+/* out: the cells of m whose centroid c passes keep(c, ctx) (m is freed). */
+static clvr_status filter_mesh(clvr_mesh *m, int (*keep_cell)(const float *c, const float *ctx), const float *ctx,
+                               clvr_mesh *out, clvr_error *err)
+{
+    uint64_t counts[CLVR_CELL_TYPE_COUNT] = {0};
+    uint8_t *keep[CLVR_CELL_TYPE_COUNT] = {0};
+    clvr_status s = CLVR_OK;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        keep[t] = malloc(m->num_cells[t] + 1);
+        if (!keep[t]) {
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory filtering a test mesh");
+            goto cleanup;
+        }
+        for (uint64_t e = 0; e < m->num_cells[t]; ++e) {
+            float c[3] = {0, 0, 0};
+            for (uint32_t k = 0; k < nv; ++k)
+                for (int a = 0; a < 3; ++a) c[a] += m->positions[3 * (uint64_t)m->indices[t][e * nv + k] + a] / nv;
+            keep[t][e] = (uint8_t)keep_cell(c, ctx);
+            counts[t] += keep[t][e];
+        }
+    }
+    s = clvr_mesh_alloc(out, m->num_vertices, counts, err);
+    if (s == CLVR_OK) {
+        memcpy(out->positions, m->positions, m->num_vertices * 3 * sizeof(float));
+        memcpy(out->scalars, m->scalars, m->num_vertices * sizeof(float));
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            const uint32_t nv = clvr_cell_vertex_count(t);
+            uint64_t k = 0;
+            for (uint64_t e = 0; e < m->num_cells[t]; ++e)
+                if (keep[t][e]) memcpy(out->indices[t] + nv * k++, m->indices[t] + nv * e, nv * sizeof(uint32_t));
+        }
+        clvr_mesh_update_ranges(out);
+    }
+cleanup:
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(keep[t]);
+    clvr_mesh_free(m);
+    return s;
+}
+
+/* ctx: n. Outside the ball of radius n/4 around the centre and the octant
+ * above (0.6n, 0.6n, 0.6n). */
+static int keep_holed(const float *c, const float *ctx)
+{
+    const float n = ctx[0], h = 0.5f * n, r2 = n * n / 16.0f, cut = 0.6f * n;
+    const float d2 = (c[0] - h) * (c[0] - h) + (c[1] - h) * (c[1] - h) + (c[2] - h) * (c[2] - h);
+    return !(d2 < r2) && !(c[0] > cut && c[1] > cut && c[2] > cut);
+}
+
+/* Every other slab of cells across x. */
+static int keep_sieve(const float *c, const float *ctx)
+{
+    (void)ctx;
+    return ((int)floorf(c[0])) % 2 == 0;
+}
+
 /* The lattice of n^3 mixed cubes with a ball of radius n/4 around the
  * centre and the octant above (0.6n, 0.6n, 0.6n) removed. */
 static clvr_status holed_mesh(uint32_t n, clvr_mesh *out, clvr_error *err)
 {
     clvr_mesh m = {0};
+    const float ctx[1] = {(float)n};
     clvr_status s = fx_grid_mesh(n, FX_MIXED, 0.25f, 1.0f, 0.0f, 5, &m, err);
     if (s != CLVR_OK) return s;
-    uint64_t counts[CLVR_CELL_TYPE_COUNT] = {0};
-    const float h = 0.5f * (float)n, r2 = (float)n * (float)n / 16.0f, cut = 0.6f * (float)n;
-    uint8_t *keep[CLVR_CELL_TYPE_COUNT] = {0};
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        const uint32_t nv = clvr_cell_vertex_count(t);
-        keep[t] = malloc(m.num_cells[t] + 1);
-        for (uint64_t e = 0; e < m.num_cells[t]; ++e) {
-            float c[3] = {0, 0, 0};
-            for (uint32_t k = 0; k < nv; ++k)
-                for (int a = 0; a < 3; ++a) c[a] += m.positions[3 * (uint64_t)m.indices[t][e * nv + k] + a] / nv;
-            const float d2 = (c[0] - h) * (c[0] - h) + (c[1] - h) * (c[1] - h) + (c[2] - h) * (c[2] - h);
-            keep[t][e] = !(d2 < r2) && !(c[0] > cut && c[1] > cut && c[2] > cut);
-            counts[t] += keep[t][e];
+    return filter_mesh(&m, keep_holed, ctx, out, err);
+}
+
+/* ------------------------------------------------------------ 3b. gaps */
+
+/* clvr_hull_gaps on the device against brute force over every face: random
+ * rays from outside and inside the box through the holed lattice (a ray
+ * through the ball leaves the medium and comes back) and through a sieve
+ * of slabs (a ray along x crosses more faces than CLVR_HULL_MAX_HITS). */
+static void test_gaps(clvr_cl *cl)
+{
+    for (int which = 0; which < 2; ++which) {
+        const uint32_t N = which == 0 ? 8u : 36u;
+        clvr_error err = {0};
+        fx_mesh x = {0};
+        if (which == 0) {
+            TU_CHECK_STATUS(holed_mesh(N, &x.m, &err), CLVR_OK, &err);
+        } else {
+            clvr_mesh m = {0};
+            TU_CHECK_STATUS(fx_grid_mesh(N, FX_HEXES, 0.0f, 1.0f, 0.0f, 7, &m, &err), CLVR_OK, &err);
+            if (err.status == CLVR_OK) TU_CHECK_STATUS(filter_mesh(&m, keep_sieve, NULL, &x.m, &err), CLVR_OK, &err);
         }
-    }
-    s = clvr_mesh_alloc(out, m.num_vertices, counts, err);
-    if (s == CLVR_OK) {
-        memcpy(out->positions, m.positions, m.num_vertices * 3 * sizeof(float));
-        memcpy(out->scalars, m.scalars, m.num_vertices * sizeof(float));
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-            const uint32_t nv = clvr_cell_vertex_count(t);
-            uint64_t k = 0;
-            for (uint64_t e = 0; e < m.num_cells[t]; ++e)
-                if (keep[t][e]) memcpy(out->indices[t] + nv * k++, m.indices[t] + nv * e, nv * sizeof(uint32_t));
+        if (err.status == CLVR_OK) TU_CHECK_STATUS(fx_prepare(cl, &x, &err), CLVR_OK, &err);
+        clvr_hull_face *df = NULL;
+        clvr_bvh_node *dn = NULL;
+        if (err.status != CLVR_OK || !read_hull(cl, &x.a.hull, &df, &dn) || x.a.hull.num_faces == 0) {
+            TU_CHECK(0);
+            free(df);
+            free(dn);
+            fx_free(cl, &x);
+            continue;
         }
-        clvr_mesh_update_ranges(out);
+        enum { NR = 1500 };
+        const float L = (float)N;
+        float *org = calloc(4 * NR, sizeof(float)), *dir = calloc(4 * NR, sizeof(float));
+        float *res = calloc((size_t)NR * CLVR_HULL_GAP_STRIDE, sizeof(float)), *clip = calloc(4 * NR, sizeof(float));
+        float *hlo = malloc(x.a.hull.num_faces * sizeof(float)), *hhi = malloc(x.a.hull.num_faces * sizeof(float));
+        uint64_t rs = 71 + (uint64_t)which;
+        for (uint32_t i = 0; i < NR; ++i) {
+            float o[3], t[3];
+            const int inside = i % 4 == 3;
+            for (int c = 0; c < 3; ++c) t[c] = L * (-0.1f + 1.2f * tu_randf(&rs));
+            if (which == 1 && i % 3 == 0) t[1] = t[2] = 0.5f * L; /* along x, nearly */
+            if (inside) {
+                for (int c = 0; c < 3; ++c) o[c] = L * (0.05f + 0.9f * tu_randf(&rs));
+            } else {
+                float u[3], l = 0;
+                for (int c = 0; c < 3; ++c) {
+                    u[c] = tu_randf(&rs) - 0.5f;
+                    l += u[c] * u[c];
+                }
+                l = sqrtf(l) + 1e-6f;
+                for (int c = 0; c < 3; ++c) o[c] = 0.5f * L + 2.5f * L * u[c] / l;
+                if (which == 1 && i % 3 == 0) {
+                    o[0] = -2.0f * L;
+                    o[1] = 0.5f * L + 0.3f * L * (tu_randf(&rs) - 0.5f);
+                    o[2] = 0.5f * L + 0.3f * L * (tu_randf(&rs) - 0.5f);
+                }
+            }
+            for (int c = 0; c < 3; ++c) {
+                org[4 * i + c] = o[c];
+                dir[4 * i + c] = t[c] - o[c];
+            }
+        }
+        TU_CHECK_STATUS(clvr_hull_gap_rays(cl, &x.a.kernels, &x.a.hull, org, dir, NR, res, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(clvr_hull_rays(cl, &x.a.kernels, &x.a.hull, org, dir, NR, clip, &err), CLVR_OK, &err);
+        uint32_t with_gaps = 0, gaps = 0, overflow = 0, bad_clip = 0, crossed = 0, missed = 0, bad_overflow = 0;
+        uint32_t in_ball = 0; /* holed lattice: gaps through the removed ball, which the renderer must skip */
+        for (uint32_t i = 0; i < NR && err.status == CLVR_OK; ++i) {
+            const float *o = org + 4 * i, *d = dir + 4 * i, *r = res + (size_t)i * CLVR_HULL_GAP_STRIDE;
+            const clvr_hull_ray ray = clvr_hull_ray_make(o[0], o[1], o[2], d[0], d[1], d[2]);
+            uint32_t nh = 0, all = 0;
+            for (uint32_t f = 0; f < x.a.hull.num_faces; ++f) {
+                float a = INFINITY, b = -INFINITY;
+                clvr_hull_ray_face(&ray, &df[f], &a, &b);
+                if (!(a <= b)) continue;
+                ++all;
+                if (b < 0.0f) continue; /* behind the origin */
+                hlo[nh] = a;
+                hhi[nh++] = b;
+            }
+            const int ng = (int)r[2];
+            if (ng == -2) { /* too many crossings: the caller takes clvr_hull_clip */
+                ++overflow;
+                if (all <= CLVR_HULL_MAX_HITS) ++bad_overflow;
+                continue;
+            }
+            const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            const float tol = 2e-4f * (3.0f * L / len);
+            /* The cut is clvr_hull_clip's (the same interval, or a miss). */
+            int off = (ng >= 0) != (clip[4 * i + 2] != 0.0f);
+            for (int e = 0; e < 2 && !off && ng >= 0; ++e)
+                off = !(r[e] == clip[4 * i + e] || fabsf(r[e] - clip[4 * i + e]) <= tol); /* == : both infinite */
+            if (off && getenv("HULL_DEBUG"))
+                fprintf(stderr, "gap ray %u (%s): gaps %d [%g, %g], clip %g [%g, %g]\n", i, i % 4 == 3 ? "inside" : "outside",
+                        ng, r[0], r[1], clip[4 * i + 2], clip[4 * i], clip[4 * i + 1]);
+            bad_clip += (uint32_t)off;
+            if (ng <= 0) continue;
+            ++with_gaps;
+            gaps += (uint32_t)ng;
+            for (int g = 0; g < ng; ++g) {
+                const float a = r[4 + 2 * g], b = r[5 + 2 * g];
+                float mid2 = 0.0f;
+                for (int c = 0; c < 3; ++c) {
+                    const float q = o[c] + 0.5f * (a + b) * d[c] - 0.5f * L;
+                    mid2 += q * q;
+                }
+                in_ball += which == 0 && mid2 < (0.25f * L - 1.0f) * (0.25f * L - 1.0f);
+                /* No face is crossed inside a gap (what keeps the image
+                 * unbiased), and a crossing lies within tol of each end. */
+                int near_a = 0, near_b = 0;
+                for (uint32_t h = 0; h < nh; ++h) {
+                    if (hhi[h] >= a && hlo[h] <= b) ++crossed;
+                    near_a |= fabsf(hhi[h] - a) <= tol;
+                    near_b |= fabsf(hlo[h] - b) <= tol;
+                }
+                const int from_inside = which >= 0 && g == 0 && fabsf(a - r[0]) <= tol; /* before the first crossing */
+                missed += !(near_a || from_inside) || !near_b;
+                if (!(a < b) || (g > 0 && !(a > r[3 + 2 * g]))) ++missed; /* empty, or out of order */
+            }
+        }
+        printf("gaps, %s: %u of %u rays with gaps (%u gaps), %u past %d crossings; %u cuts off clvr_hull_clip, %u "
+               "crossings inside a gap, %u gap ends off a crossing, %u overflows without cause, %u gaps through the "
+               "ball\n",
+               which == 0 ? "holed lattice" : "sieve", with_gaps, NR, gaps, overflow, CLVR_HULL_MAX_HITS, bad_clip,
+               crossed, missed, bad_overflow, in_ball);
+        TU_CHECK(with_gaps > NR / 20); /* gaps occur: the test can fail */
+        if (which == 0) TU_CHECK(in_ball > NR / 50); /* and some lie outside the mesh (test_renders' image) */
+        if (which == 1) TU_CHECK(overflow > 0);
+        TU_CHECK_EQ_U64(bad_clip, 0);
+        TU_CHECK_EQ_U64(crossed, 0);
+        TU_CHECK_EQ_U64(missed, 0);
+        TU_CHECK_EQ_U64(bad_overflow, 0);
+        free(org);
+        free(dir);
+        free(res);
+        free(clip);
+        free(hlo);
+        free(hhi);
+        free(df);
+        free(dn);
+        fx_free(cl, &x);
     }
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) free(keep[t]);
-    clvr_mesh_free(&m);
-    return s;
 }
 
 /* Per pixel and channel mean and variance of `frames` independent frames;
@@ -597,6 +772,7 @@ int main(void)
     test_faces(&cl);
     test_collisions(&cl);
     test_rays(&cl);
+    test_gaps(&cl);
     test_renders(&cl);
     test_auto(&cl);
     clvr_cl_destroy(&cl);

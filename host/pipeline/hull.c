@@ -47,8 +47,8 @@ uint64_t clvr_hull_bytes(const clvr_hull *h)
 /* n rays (org, dir: 4 floats each) through kernel k over the tree `nodes`:
  * clvr_hull_rays' layout when faces is a hull's faces, clvr_bvh_ray_span's
  * (no faces argument) when it is NULL; 4 floats per ray into out. */
-static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
-                                const float *dir, uint32_t n, float *out, clvr_error *err)
+static clvr_status rays_through_n(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
+                                  const float *dir, uint32_t n, size_t out_floats, float *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_mem bo = NULL, bd = NULL, bt = NULL;
@@ -56,7 +56,8 @@ static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem f
                             err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, (void *)dir, "hull rays", &bd,
                             err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)n * 16, NULL, "hull ray results", &bt, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)n * out_floats * sizeof(float), NULL, "hull ray results",
+                            &bt, err));
     const cl_uint nn = n;
     if (faces)
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(bo), CLVR_ARG(bd), CLVR_ARG(nn), CLVR_ARG(nodes), CLVR_ARG(faces),
@@ -64,12 +65,27 @@ static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem f
     else
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(bo), CLVR_ARG(bd), CLVR_ARG(nn), CLVR_ARG(nodes), CLVR_ARG(bt)));
     CLVR_TRY(clvr_cl_run1d(cl, k, n, 64, NULL, err));
-    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, bt, CL_TRUE, 0, (size_t)n * 16, out, 0, NULL, NULL));
+    CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, bt, CL_TRUE, 0, (size_t)n * out_floats * sizeof(float), out, 0, NULL,
+                                      NULL));
 cleanup:
     clvr_cl_release(cl, &bo);
     clvr_cl_release(cl, &bd);
     clvr_cl_release(cl, &bt);
     return s;
+}
+
+static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
+                                const float *dir, uint32_t n, float *out, clvr_error *err)
+{
+    return rays_through_n(cl, k, nodes, faces, org, dir, n, 4, out, err);
+}
+
+clvr_status clvr_hull_gap_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
+                               const float *dir, uint32_t n, float *out, clvr_error *err)
+{
+    if (n == 0) return CLVR_OK;
+    if (h->num_faces == 0) return clvr_error_set(err, CLVR_ERR_USAGE, "clvr_hull_gap_rays: the hull has no faces");
+    return rays_through_n(cl, k->hull_gap_rays, h->nodes, h->faces, org, dir, n, CLVR_HULL_GAP_STRIDE, out, err);
 }
 
 clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,

@@ -96,6 +96,12 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
 clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
                            const float *dir, uint32_t n, float *out, clvr_error *err);
 
+/* The same rays through clvr_hull_gaps (kernels/hull.h) on the device:
+ * CLVR_HULL_GAP_STRIDE floats per ray into out (see clvr_hull_gap_rays in
+ * kernels/bvh.cl). Needs a hull with faces. */
+clvr_status clvr_hull_gap_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
+                               const float *dir, uint32_t n, float *out, clvr_error *err);
+
 void clvr_hull_release(clvr_cl *cl, clvr_hull *h); /* accepts NULL and half-built */
 /* Device bytes the renderer keeps for the hull: faces and tree, 0 when
  * none are kept. */
