@@ -6,14 +6,16 @@
 #     run (bench/render-vs-vtk.sh);
 #   - the built-in scene, a real mixed-element mesh (tests/data/vtk/notch_stress.vtk,
 #     hexes and wedges) and the AMR-like mesh of `clvr-gen amr` at density 1 (thin)
-#     and 8 (dense): clvr alone (`bench_render --converge`), as VTK's mappers draw
-#     tets only.
+#     and 8 (dense), each against VTK twice: clvr on the cells as they are while VTK
+#     draws them cut into tets (its mappers take tets only; vtkDataSetTriangleFilter,
+#     as ParaView does), and both on the same cut tets (bench/tetrahedralize.py; the
+#     stricter reading, issue 14's check on unseen meshes).
 # Usage: bench/converge-all.sh [--build DIR] [--data DIR] [--size WxH] [--ref-spp R]
 #                              [--max-spp M] [--estimators LIST] [--only NAME,...]
 #   defaults: build, /tmp/clvr-bench, 256x256 (the size issue 14 checks unseen meshes
 #   at), 128, 256, delta,urm, every mesh (names: tets-1M post default notch amr-d1 amr-d8)
-# Output: bench/results/render-converge/<date>-<mesh>.md and .json, and the
-# render-vs-vtk files for the VTK rows.
+# Output: the render-vs-vtk files (bench/results/render-vs-vtk/), one per mesh and,
+# for the mixed and hex meshes, one more for their cut into tets (<mesh>-cut).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=$ROOT/build
@@ -37,9 +39,8 @@ while [ $# -gt 0 ]; do
   esac
 done
 cmake --build "$BUILD" -j2 --target bench_render clvr-gen >/dev/null
-mkdir -p "$DATA" "$ROOT/bench/results/render-converge"
+mkdir -p "$DATA"
 want() { case ",$ONLY," in *",$1,"*) return 0 ;; *) return 1 ;; esac; }
-day=$(date -u +%Y-%m-%d)
 
 if want tets-1M; then
   "$ROOT/bench/render-vs-vtk.sh" --build "$BUILD" --data "$DATA" --size "$SIZE" --ref-spp "$REF" \
@@ -52,21 +53,29 @@ if want post; then
   "$ROOT/bench/render-vs-vtk.sh" --build "$BUILD" --data "$DATA" --mesh "$post" --size "$SIZE" --ref-spp "$REF" \
     --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "$SIZE"
 fi
-converge() { # name mesh density
-  local out=$ROOT/bench/results/render-converge/$day-$1-$SIZE
-  echo "converge-all.sh: $1 ($2, density $3); $(uptime)" >&2
-  "$BUILD/bench_render" --converge --mesh "$2" --density "$3" --size "$SIZE" --ref-spp "$REF" --max-spp "$MAXSPP" \
-    --estimators "$EST" --json "$out.json.tmp" >"$out.md.tmp"
-  mv "$out.json.tmp" "$out.json"
-  mv "$out.md.tmp" "$out.md"
-  cat "$out.md"
+vs_vtk() { # mesh.bin density tag: native cells, then the same cut into tets
+  echo "converge-all.sh: $1 (density $2); $(uptime)" >&2
+  "$ROOT/bench/render-vs-vtk.sh" --build "$BUILD" --data "$DATA" --mesh "$1" --density "$2" --size "$SIZE" \
+    --ref-spp "$REF" --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "$3"
+  local cut=${1%.bin}-cut.bin
+  [ -f "$cut" ] || /usr/bin/python3 "$ROOT/bench/tetrahedralize.py" "$1" "$cut"
+  "$ROOT/bench/render-vs-vtk.sh" --build "$BUILD" --data "$DATA" --mesh "$cut" --density "$2" --size "$SIZE" \
+    --ref-spp "$REF" --max-spp "$MAXSPP" --estimators "$EST" --mappers raycast --tag "$3"
 }
-want default && converge default default 1
-want notch && converge notch "$ROOT/tests/data/vtk/notch_stress.vtk" 1
+if want default; then
+  def=$DATA/default.bin # the built-in scene: clvr-gen mixed at 56^3 cubes
+  [ -f "$def" ] || "$BUILD/clvr-gen" mixed "$def" --elements 275k --quiet
+  vs_vtk "$def" 1 "$SIZE"
+fi
+if want notch; then
+  notch=$DATA/notch.bin
+  [ -f "$notch" ] || "$ROOT/tools/clvr-convert" "$ROOT/tests/data/vtk/notch_stress.vtk" "$notch" --quiet
+  vs_vtk "$notch" 1 "$SIZE"
+fi
 if want amr-d1 || want amr-d8; then
   amr=$DATA/amr-1M.bin
   [ -f "$amr" ] || "$BUILD/clvr-gen" amr "$amr" --elements 1M --quiet
-  want amr-d1 && converge amr-1M-density1 "$amr" 1
-  want amr-d8 && converge amr-1M-density8 "$amr" 8
+  want amr-d1 && vs_vtk "$amr" 1 "$SIZE-density1"
+  want amr-d8 && vs_vtk "$amr" 8 "$SIZE-density8"
 fi
 exit 0

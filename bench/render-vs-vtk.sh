@@ -20,8 +20,9 @@
 #                               [--estimators LIST] [--tag NAME]
 #   defaults: build, /tmp/clvr-bench, 1M (tets of clvr-gen cellvar), 512x512, 128, 256, 3,
 #             raycast,pt,zsweep, ld, 1, delta,urm
-#   --mesh: any clvr .bin instead (VTK draws its tets only: cut other cells into tets
-#           first, e.g. tools/clvr-convert grid.vts grid.bin --tets).
+#   --mesh: any clvr .bin instead. VTK's mappers draw tets only: bench/vtk_render.py
+#           cuts a mesh with other cells into tets with vtkDataSetTriangleFilter first,
+#           as ParaView does (timed apart), while clvr renders the cells as they are.
 # Output: a Markdown table with the ratios on stdout; bench/results/render-vs-vtk/
 # <date>-<slug>-<mesh>[-TAG].md and .json (clvr's and VTK's raw JSON side by side; <mesh>:
 # the mesh file's name without .bin, so runs on several meshes keep their own files).
@@ -106,7 +107,9 @@ lines = []
 p = lines.append
 p(f"# clvr vs VTK unstructured volume mappers")
 p("")
-p(f"mesh `{os.path.basename(clvr['mesh'])}` ({clvr['elements']} elements, {vtkr['tets']} tets drawn by VTK), "
+cut = (f", cut into {vtkr['tets']} tets for VTK by vtkDataSetTriangleFilter in {vtkr['tetrahedralize_s']:.1f} s"
+       if vtkr.get('tetrahedralize_s', 0) > 0 else f", {vtkr['tets']} tets drawn by VTK")
+p(f"mesh `{os.path.basename(clvr['mesh'])}` ({clvr['elements']} elements{cut}), "
   f"{clvr['width']}x{clvr['height']}, density {clvr['density']}, clvr `{clvr['method']}` ({clvr['sampler']} frames) "
   f"on {clvr['device']} (driver {clvr['driver']}), VTK {vtkr['vtk']}, commit {commit}, "
   f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}, host {socket.gethostname()}, {os.cpu_count()} cores")
