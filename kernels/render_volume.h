@@ -139,17 +139,16 @@ typedef struct clvr_gaps {
  * 0.002 of them outside the mesh). */
 #define CLVR_GAP_MIN 0.01f
 
-/* clvr_volume_clip for a camera ray, with the gaps that lie outside the
- * mesh in *g (none without a hull, or past CLVR_HULL_MAX_HITS crossings).
+/* clvr_volume_hull_clip for a camera ray, with the gaps that lie outside
+ * the mesh in *g (none without a hull, or past CLVR_HULL_MAX_HITS crossings);
+ * clvr_volume_clip_gaps: the clip box and planes first, as clvr_volume_clip.
  * A candidate gap lies wholly inside or outside the mesh; one lookup at its
  * middle tells which (a point within the element tolerance of a face counts
  * inside: the gap is then kept, which costs points, never bias). */
-inline int clvr_volume_clip_gaps(const clvr_volume *v, float3 org, float3 dir, float3 lo, float3 hi, float *t0,
-                                 float *t1, clvr_gaps *g)
+inline int clvr_volume_hull_gaps(const clvr_volume *v, float3 org, float3 dir, float *t0, float *t1, clvr_gaps *g)
 {
     const clvr_frame *f = v->f;
     g->n = 0;
-    if (!clvr_ray_clip(f, org, dir, lo, hi, t0, t1)) return 0;
     if (f->hull_faces == 0u) return 1;
     float glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
     const int n = clvr_hull_gaps(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, t0, t1, glo, ghi);
@@ -166,6 +165,13 @@ inline int clvr_volume_clip_gaps(const clvr_volume *v, float3 org, float3 dir, f
         g->hi[g->n++] = b;
     }
     return 1;
+}
+
+inline int clvr_volume_clip_gaps(const clvr_volume *v, float3 org, float3 dir, float3 lo, float3 hi, float *t0,
+                                 float *t1, clvr_gaps *g)
+{
+    g->n = 0;
+    return clvr_ray_clip(v->f, org, dir, lo, hi, t0, t1) && clvr_volume_hull_gaps(v, org, dir, t0, t1, g);
 }
 
 /* ------------------------------------------------------------ majorant iterators
@@ -987,13 +993,12 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
     vstore4((float4)(0.0f), 0, rec->pick);
     if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return;
     const float a = t0;
-    if (!clvr_volume_hull_clip(v, org, dir, &t0, &t1)) {
+    clvr_gaps g;
+    if (!clvr_volume_hull_gaps(v, org, dir, &t0, &t1, &g)) {
         rec->a = a;
         return;
     }
     clvr_urm e;
-    clvr_gaps g;
-    g.n = 0;
     const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, &g, rng, samples, nulls);
     const float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum +
                      (f->shadows ? f->light_intensity : 0.0f) * e.lit;
