@@ -21,10 +21,12 @@
  *
  *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
  *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
- *                [--sampler ld|independent] [--no-hull]
+ *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--sampler ld|independent] [--json FILE]
  *
+ * --pixel-filter: the image the frames converge to (render.h; the
+ * reference of --converge uses it too), box (default) or point.
  * --no-hull: camera rays are not cut to the mesh's boundary crossings
  * (settings.hull off; the same image in expectation, for A/B runs).
  * --sampler: the renderer's frame sampler (default ld, the renderer's
@@ -70,6 +72,7 @@ typedef struct config {
     float urm_kappa;    /* 0: the renderer's default */
     uint32_t light_res; /* 0: the renderer's default (urm with shadows: light grid cells per axis) */
     int no_hull;        /* --no-hull: camera rays keep their whole box interval (render.h settings.hull) */
+    uint32_t pixel_filter; /* CLVR_PIXEL_*: --pixel-filter (the reference's too) */
 } config;
 
 typedef struct row {
@@ -165,6 +168,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     if (c->urm_kappa > 0.0f) rs.urm_kappa = c->urm_kappa;
     if (c->light_res) rs.light_res = c->light_res;
     rs.hull = !c->no_hull;
+    rs.pixel_filter = c->pixel_filter;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
     clvr_camera cam;
@@ -512,10 +516,10 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     clvr_camera cam;
     int rc = 1;
     printf("# bench_render --converge: %s, %s, %ux%u, density %g, reference %u spp (%s, independent frames), "
-           "measured runs: %s sampler, target %.3g relative RMSE\n", base_name(mesh),
+           "measured runs: %s sampler, target %.3g relative RMSE, %s pixel filter\n", base_name(mesh),
            clvr_render_method_name(base->method), w, h, (double)density, ref_spp,
            clvr_render_estimator_name(base->estimator), base->sampler == CLVR_SAMPLER_LD ? "ld" : "independent",
-           target);
+           target, base->pixel_filter == CLVR_PIXEL_POINT ? "point" : "box");
     printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
            cl->driver_version);
     fflush(stdout);
@@ -572,10 +576,10 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
         fprintf(f, ", \"elements\": %" PRIu64 ", \"method\": \"%s\", \"width\": %u, \"height\": %u, \"ref_spp\": %u, "
                    "\"target\": %g, \"criterion\": \"relative RMSE over inside pixels, unclamped\", \"density\": %g, "
                    "\"inside_pixels\": %zu, \"preprocess_s\": %.6g, \"sampler\": \"%s\", \"ref_sampler\": \"independent\", "
-                   "\"ref_estimator\": \"%s\",\n",
+                   "\"ref_estimator\": \"%s\", \"pixel_filter\": \"%s\",\n",
                 g.elements, clvr_render_method_name(base->method), w, h, ref_spp, target, (double)density,
                 refs[sh_lo].ninside, g.preprocess_s, base->sampler == CLVR_SAMPLER_LD ? "ld" : "independent",
-                clvr_render_estimator_name(base->estimator));
+                clvr_render_estimator_name(base->estimator), base->pixel_filter == CLVR_PIXEL_POINT ? "point" : "box");
         fprintf(f, " \"camera\": {\"eye\": [%.9g, %.9g, %.9g], \"target\": [%.9g, %.9g, %.9g], \"up\": [%.9g, %.9g, %.9g], "
                    "\"fovy\": %.9g},\n",
                 cam.origin[0], cam.origin[1], cam.origin[2], cam.target[0], cam.target[1], cam.target[2], cam.up[0],
@@ -629,7 +633,7 @@ static int usage(void)
     fprintf(stderr,
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
             "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
-            "                    [--sampler ld|independent] [--no-hull]\n"
+            "                    [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]\n"
             "                    [--estimator urm|delta] [--urm-steps N] [--urm-kappa K]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
@@ -641,7 +645,7 @@ int main(int argc, char **argv)
 {
     const char *device = NULL, *json = NULL, *meshes[MAX_MESHES];
     const char *methods = "march,track,bins,dda", *macro = "32,128";
-    uint32_t sampler = CLVR_SAMPLER_LD;
+    uint32_t sampler = CLVR_SAMPLER_LD, pixel_filter = CLVR_PIXEL_BOX;
     uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024;
     uint32_t conv_method = CLVR_RENDER_DDA;
     clvr_render_settings defaults;
@@ -679,6 +683,12 @@ int main(int argc, char **argv)
             const char *sv = argv[++i];
             if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
             else if (!strcmp(sv, "independent")) sampler = CLVR_SAMPLER_INDEPENDENT;
+            else return usage();
+        }
+        else if (!strcmp(a, "--pixel-filter") && v) {
+            const char *fv = argv[++i];
+            if (!strcmp(fv, "box")) pixel_filter = CLVR_PIXEL_BOX;
+            else if (!strcmp(fv, "point")) pixel_filter = CLVR_PIXEL_POINT;
             else return usage();
         }
         else if (!strcmp(a, "--quick")) quick = 1;
@@ -731,13 +741,15 @@ int main(int argc, char **argv)
                 snprintf(mb, sizeof mb, "%s", macro);
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull};
+                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
+                                pixel_filter};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
-                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull};
+                config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0,
+                            no_hull, pixel_filter};
                 snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
@@ -751,7 +763,8 @@ int main(int argc, char **argv)
         return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
     }
     if (converge) {
-        const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0, no_hull};
+        const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
+                             no_hull, pixel_filter};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, json);
         clvr_cl_destroy(&cl);

@@ -17,9 +17,12 @@
 # Usage: bench/render-vs-vtk.sh [--build DIR] [--data DIR] [--elements N] [--mesh FILE.bin]
 #                               [--size WxH] [--ref-spp R] [--max-spp M] [--vtk-frames N]
 #                               [--mappers LIST] [--sampler ld|independent] [--density D]
-#                               [--estimators LIST] [--tag NAME]
+#                               [--estimators LIST] [--pixel-filter box|point] [--tag NAME]
 #   defaults: build, /tmp/clvr-bench, 1M (tets of clvr-gen cellvar), 512x512, 128, 256, 3,
-#             raycast,pt,zsweep, ld, 1, delta,urm
+#             raycast,pt,zsweep, ld, 1, delta,urm, box
+#   --pixel-filter point: clvr's image (and its reference) is the ray through each
+#           pixel's centre, the image VTK's mappers draw, instead of the antialiased
+#           pixel mean (box, clvr's default: the stricter figure, jitter noise included).
 #   --mesh: any clvr .bin instead. VTK's mappers draw tets only: bench/vtk_render.py
 #           cuts a mesh with other cells into tets with vtkDataSetTriangleFilter first,
 #           as ParaView does (timed apart), while clvr renders the cells as they are.
@@ -41,6 +44,7 @@ TAG=
 VFRAMES=3
 MAPPERS=raycast,pt,zsweep
 SAMPLER=ld
+FILTER=box
 while [ $# -gt 0 ]; do
   case $1 in
     --build) BUILD=$(cd "$2" && pwd); shift 2 ;;
@@ -55,6 +59,7 @@ while [ $# -gt 0 ]; do
     --mesh) MESH=$2; shift 2 ;;
     --density) DENSITY=$2; shift 2 ;;
     --estimators) ESTIMATORS=$2; shift 2 ;;
+    --pixel-filter) FILTER=$2; shift 2 ;;
     --tag) TAG=-$2; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "render-vs-vtk.sh: unknown argument '$1' (try --help)" >&2; exit 2 ;;
@@ -81,7 +86,8 @@ trap 'rm -rf "$WORK"' EXIT
 
 echo "render-vs-vtk.sh: clvr converge on $MESH ($SIZE, reference $REF spp); $(uptime)" >&2
 "$BUILD/bench_render" --converge --mesh "$MESH" --size "$SIZE" --ref-spp "$REF" --max-spp "$MAXSPP" \
-  --sampler "$SAMPLER" --density "$DENSITY" --estimators "$ESTIMATORS" --json "$WORK/clvr.json" >"$WORK/clvr.md"
+  --sampler "$SAMPLER" --density "$DENSITY" --estimators "$ESTIMATORS" --pixel-filter "$FILTER" \
+  --json "$WORK/clvr.json" >"$WORK/clvr.md"
 echo "render-vs-vtk.sh: VTK mappers ($MAPPERS); $(uptime)" >&2
 # xvfb-run -a can lose a race for a display number with another xvfb-run on a
 # shared machine ("bad X server connection"): try a few times.
@@ -110,7 +116,8 @@ p("")
 cut = (f", cut into {vtkr['tets']} tets for VTK by vtkDataSetTriangleFilter in {vtkr['tetrahedralize_s']:.1f} s"
        if vtkr.get('tetrahedralize_s', 0) > 0 else f", {vtkr['tets']} tets drawn by VTK")
 p(f"mesh `{os.path.basename(clvr['mesh'])}` ({clvr['elements']} elements{cut}), "
-  f"{clvr['width']}x{clvr['height']}, density {clvr['density']}, clvr `{clvr['method']}` ({clvr['sampler']} frames) "
+  f"{clvr['width']}x{clvr['height']}, density {clvr['density']}, clvr `{clvr['method']}` ({clvr['sampler']} frames, "
+  f"{clvr.get('pixel_filter', 'box')} pixel filter) "
   f"on {clvr['device']} (driver {clvr['driver']}), VTK {vtkr['vtk']}, commit {commit}, "
   f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}, host {socket.gethostname()}, {os.cpu_count()} cores")
 p("")

@@ -508,6 +508,14 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
  * unbiased, the running mean converges faster, but frames are correlated. */
 #define CLVR_SAMPLER_INDEPENDENT 0u
 #define CLVR_SAMPLER_LD 1u
+/* Pixel filters, the values of clvr_frame.pixel_filter: which image the
+ * frames converge to. box (default): each pixel the mean over its square,
+ * camera rays jittered across it (antialiased edges; the jitter is part of
+ * a frame's noise). point: each pixel the value of the ray through its
+ * centre, as VTK's and ParaView's ray casters draw it (one ray per pixel
+ * centre, aliased edges that no frame count removes; no jitter noise). */
+#define CLVR_PIXEL_BOX 0u
+#define CLVR_PIXEL_POINT 1u
 /* Largest --bins (the paper's 32 ray payload registers). */
 #define CLVR_RENDER_MAX_BINS 32u
 
@@ -568,6 +576,7 @@ typedef struct clvr_frame {
     clvr_u32 mpi_rank_key;
     clvr_u32 hull_faces;      /* boundary faces in the volume's hull arrays (kernels/hull.h); 0: none,
                                  rays keep their clipped box interval */
+    clvr_u32 pixel_filter;    /* CLVR_PIXEL_* */
     /* Half-spaces that clip the medium, (nx, ny, nz, d) with a unit normal:
      * points with n.p <= d are kept (ParaView's Clip with its default
      * "Invert": the side the normal points away from). Every ray, camera
@@ -576,7 +585,7 @@ typedef struct clvr_frame {
      * (still bounds on a shorter interval). */
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 304, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 308, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

@@ -1037,17 +1037,19 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, cl
 }
 
 /* Primary ray through pixel (x, y) with a random sub-pixel position
- * (dimensions 0 and 1 of ld, or two draws of rng when ld is NULL). */
+ * (dimensions 0 and 1 of ld, or two draws of rng when ld is NULL), or
+ * through its centre for the point filter (the draws are made all the same,
+ * so that the other dimensions keep their streams). */
 inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
                                     clvr_rng *rng, const float *ld, float3 *org, float3 *dir)
 {
     float jx = ld ? ld[0] : clvr_rng_next(rng), jy = ld ? ld[1] : clvr_rng_next(rng);
+    if (f->pixel_filter == CLVR_PIXEL_POINT) jx = jy = 0.5f;
     clvr_camera c = *cam;
     float o[3], d[3];
     clvr_camera_ray(&c, (float)x + jx, (float)y + jy, o, d);
     *org = vload3(0, o);
     *dir = vload3(0, d);
-    (void)f;
 }
 
 #endif

@@ -77,6 +77,7 @@ static void test_names(void)
         {"sampler", {"independent", "ld", NULL}},
         {"tonemap", {"none", "aces", "filmic", NULL}},
         {"element_boxes", {"auto", "on", "off", NULL}},
+        {"pixel_filter", {"box", "point", NULL}},
     };
     for (size_t t = 0; t < sizeof tables / sizeof tables[0]; ++t) {
         uint32_t n = 0;
@@ -276,6 +277,23 @@ static void test_on_device(clvr_context *ctx)
         snprintf(ts.sampler, sizeof ts.sampler, "%s", clvr_setting_name("sampler", i));
         OK(clvr_tracer_set_settings(tr, &ts, &msg));
     }
+    /* The pixel filter (1.3): box by default, each name of the table taken and
+     * read back, kept across clvr_tracer_set_settings (not in its struct),
+     * anything else refused with the choices; a frame renders with each. */
+    CHECK(!strcmp(clvr_tracer_pixel_filter(tr), "box"));
+    CHECK(clvr_tracer_pixel_filter(NULL) == NULL);
+    for (uint32_t i = 0; clvr_setting_name("pixel_filter", i); ++i) {
+        OK(clvr_tracer_set_pixel_filter(tr, clvr_setting_name("pixel_filter", i), &msg));
+        CHECK(!strcmp(clvr_tracer_pixel_filter(tr), clvr_setting_name("pixel_filter", i)));
+        OK(clvr_tracer_set_settings(tr, &ts, &msg));
+        CHECK(!strcmp(clvr_tracer_pixel_filter(tr), clvr_setting_name("pixel_filter", i)));
+        OK(clvr_tracer_render(tr, 1, &msg));
+    }
+    CHECK_FAILS(clvr_tracer_set_pixel_filter(tr, "gauss", &msg), CLVR_RESULT_ERR_USAGE, "gauss");
+    CHECK(strstr(msg.text, "box") && strstr(msg.text, "point"));
+    CHECK(!strcmp(clvr_tracer_pixel_filter(tr), "point")); /* a refused name changes nothing */
+    CHECK_FAILS(clvr_tracer_set_pixel_filter(tr, NULL, &msg), CLVR_RESULT_ERR_USAGE, "filter");
+    CHECK_FAILS(clvr_tracer_set_pixel_filter(NULL, "box", &msg), CLVR_RESULT_ERR_USAGE, "tr");
     clvr_tracer_destroy(tr);
     clvr_dataset_destroy(ds);
 }

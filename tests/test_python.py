@@ -389,6 +389,14 @@ def test_scene_settings(ctx):
     raises(lambda: r1.set_settings(seed=2 ** 64), clvr.InputError, "seed", "seed 2^64")
     r1.set_settings(seed=2 ** 40 + 7)
     check(r1.settings["seed"] == 2 ** 40 + 7, "a 64-bit seed is kept whole: %r" % r1.settings["seed"])
+    # The pixel filter (API 1.3, its own call under the settings dict).
+    check(r1.settings["pixel_filter"] == "box", "box filter by default")
+    raises(lambda: r1.set_settings(pixel_filter="gauss", bins=8), clvr.InputError, "gauss", "pixel_filter gauss")
+    check(r1.settings["pixel_filter"] == "box" and r1.settings["bins"] != 8, "a refused filter changes nothing")
+    r3 = clvr.Renderer(sc, width=8, height=8, method="track", estimator="delta", seed=5, pixel_filter="point")
+    r1.set_settings(pixel_filter="point")
+    check(r3.settings["pixel_filter"] == "point" and r1.settings["pixel_filter"] == "point", "point filter set")
+    check(not np.array_equal(r2.render(spp=2), r3.render(spp=2)), "the point filter renders another image")
     raises(lambda: clvr.Renderer(sc, width=True, height=8), clvr.InputError, "width", "width True")
     raises(lambda: clvr.Renderer(sc, width=8, height=65537), clvr.InputError, "[1, 65536]", "height 65537")
 

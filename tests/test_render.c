@@ -8,6 +8,8 @@
  *    transmittance of the chord that is left;
  *    and the urm light grid (the shadow rays' control variate) matches the
  *    analytic transmittance toward the light at its cell centres;
+ *    with the point pixel filter every pixel, silhouettes included, matches
+ *    the ray through its centre (where the box filter's image does not);
  * 2. track, bins and dda converge to the same image (per-pixel difference of
  *    means within k standard errors) on a mixed mesh and on a real file, and
  *    so does dda with the low-discrepancy sampler (its per-frame variance
@@ -340,6 +342,73 @@ static void test_homogeneous(clvr_cl *cl)
         }
         free(mean);
         free(var);
+    }
+    fixture_close(&fx);
+}
+
+/* ---- 1a. the point pixel filter: each pixel converges to the ray through
+ * its centre (1 - exp(-sigma * chord of that ray)), silhouette pixels
+ * included, where the box filter's pixel mean differs from it; the box
+ * filter's image is checked there too, so that a filter that did nothing
+ * would fail. urm and delta, independent frames, dda. */
+static void test_point_filter(clvr_cl *cl)
+{
+    const uint32_t W = 24, H = 24, N = 400;
+    const float sigma = 12.0f; /* dense: a silhouette pixel's mean and its centre ray differ */
+    fixture fx;
+    clvr_camera cam;
+    if (open_unit_box(cl, CLVR_SCENE_FIELD_CONSTANT, W, H, &fx, &cam)) return;
+    float table[8] = {1, 1, 1, sigma, 1, 1, 1, sigma};
+    set_table(&fx, table, 2, 0.0f, 2.0f);
+    for (uint32_t est = 0; est < CLVR_ESTIMATOR_COUNT; ++est) {
+        fx.set.estimator = est;
+        float *mean[2] = {0}, *var[2] = {0};
+        int ok = 1;
+        for (int f = 0; f < 2 && ok; ++f) {
+            fx.set.pixel_filter = f ? CLVR_PIXEL_POINT : CLVR_PIXEL_BOX;
+            ok = !render_stats(&fx, N, &mean[f], &var[f]);
+        }
+        int bad = 0, tested = 0, edges = 0, apart = 0; /* apart: the box image beyond K_SIGMA of the centre value */
+        for (uint32_t y = 0; y < H && ok; ++y)
+            for (uint32_t x = 0; x < W; ++x) {
+                const double centre = 1 - exp(-sigma * unit_box_chord(&cam, x + 0.5f, y + 0.5f));
+                double acc = 0;
+                for (int sy = 0; sy < 16; ++sy)
+                    for (int sx = 0; sx < 16; ++sx)
+                        acc += 1 - exp(-sigma * unit_box_chord(&cam, x + (sx + 0.5f) / 16, y + (sy + 0.5f) / 16));
+                const double box = acc / 256;
+                /* The centre ray grazing an edge of the box (in float): skip. */
+                const float e = 1e-3f;
+                const int graze = (unit_box_chord(&cam, x + 0.5f - e, y + 0.5f) > 0) !=
+                                      (unit_box_chord(&cam, x + 0.5f + e, y + 0.5f) > 0) ||
+                                  (unit_box_chord(&cam, x + 0.5f, y + 0.5f - e) > 0) !=
+                                      (unit_box_chord(&cam, x + 0.5f, y + 0.5f + e) > 0);
+                if (graze) continue;
+                const size_t i = 4 * ((size_t)y * W + x) + 3;
+                const double se = sqrt(fmax(centre * (1 - centre), var[1][i]) / N) + 1e-6;
+                ++tested;
+                if (fabs(mean[1][i] - centre) > K_SIGMA * se) {
+                    if (bad < 5)
+                        fprintf(stderr, "point filter %s: pixel (%u,%u) opacity %.4g, centre ray %.4g +- %.4g\n",
+                                clvr_render_estimator_name(est), x, y, mean[1][i], centre, K_SIGMA * se);
+                    ++bad;
+                }
+                if (fabs(box - centre) > 0.1) { /* a silhouette pixel: the two filters differ there */
+                    ++edges;
+                    const double sb = sqrt(fmax(box * (1 - box), var[0][i]) / N) + 1e-6;
+                    apart += fabs(mean[0][i] - centre) > K_SIGMA * sb;
+                }
+            }
+        printf("point filter, %s: %d pixels against the centre ray, %d off; %d silhouette pixels, %d of them "
+               "beyond %.0f standard errors of the centre value with the box filter\n",
+               clvr_render_estimator_name(est), tested, bad, edges, apart, K_SIGMA);
+        TU_CHECK_EQ_U64(bad, 0);
+        TU_CHECK(tested > (int)(W * H) / 2 && edges >= 10);
+        TU_CHECK(2 * apart > edges); /* the filters differ there: the test can fail */
+        for (int f = 0; f < 2; ++f) {
+            free(mean[f]);
+            free(var[f]);
+        }
     }
     fixture_close(&fx);
 }
@@ -1039,6 +1108,7 @@ int main(void)
     test_ld_sequence();
     tu_open_device(&cl);
     test_homogeneous(&cl);
+    test_point_filter(&cl);
     test_step_medium(&cl, 0.3, 3.0);
     test_step_medium(&cl, 3.0, 0.0);
     test_light_grid(&cl);

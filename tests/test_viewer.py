@@ -7,7 +7,7 @@ C / shift+C restore the first image bit for bit; that resize re-allocates the
 image; that the title reports spp, rates, method and device; that X, P and K
 write files; and that K's command line, rendered offline at the same spp,
 reproduces the viewer's accumulated image. The estimator: --estimator and
---urm-steps start the viewer, E / shift+E cycle it, the title and the K line
+--urm-steps start the viewer, E / shift+E cycle it (and A the pixel filter), the title and the K line
 carry it. The window and the P key's PNG use the exposure and tone curve of
 `clvr -o x.png` (the PNG equals the offline one byte for byte). Also: without a display --view fails
 with one line naming the fix, a bad script command fails with its line number,
@@ -247,6 +247,7 @@ frames 1
 title
 key E shift
 key E
+key A
 frames 3
 save acc.pfm
 key P
@@ -280,7 +281,7 @@ def estimator_session(xvfb, tmp):
         return
     with open(view_txt) as f:
         line = f.read().strip()
-    for opt in ["--estimator urm", "--urm-steps 5", "--exposure 0.5", "--tonemap filmic"]:
+    for opt in ["--estimator urm", "--urm-steps 5", "--exposure 0.5", "--tonemap filmic", "--pixel-filter point"]:
         check(opt in line, f"the K line has {opt}", line)
     base = shlex.split(line)[1:]
 
@@ -290,14 +291,14 @@ def estimator_session(xvfb, tmp):
         return path if check(r.returncode == 0, f"the K line runs offline ({out_name})", (r.returncode, r.stderr)) \
             else None
 
-    # The first frames were delta with 5 urm steps: the K line with --estimator delta
-    # at 2 spp renders them exactly; the accumulated urm image at its spp likewise
+    # The first frames were delta with 5 urm steps and the box filter: the K line with
+    # --estimator delta --pixel-filter box at 2 spp renders them exactly; the accumulated urm image at its spp likewise
     # (urm with 16 steps would differ, so --urm-steps reached the renderer).
     m = re.search(r"saved acc\.pfm \((\d+)x(\d+), (\d+) spp\)", out)
     if not check(m is not None, "save acc.pfm reports its spp", out):
         return
     spp = m.group(3)
-    p = offline(["--spp", "2", "--estimator", "delta"], "off_d.pfm")
+    p = offline(["--spp", "2", "--estimator", "delta", "--pixel-filter", "box"], "off_d.pfm")
     if p:
         dd = max_diff(read_pfm(os.path.join(d, "d.pfm")), read_pfm(p))
         check(dd <= 1e-6, "the viewer's first frames are --estimator delta's, offline", dd, 0.0)
@@ -310,6 +311,10 @@ def estimator_session(xvfb, tmp):
         if p16:
             check(max_diff(a, read_pfm(p16)) > 1e-4, "--urm-steps 16 gives another image (the check can fail)",
                   max_diff(a, read_pfm(p16)))
+        pb = offline(["--spp", spp, "--pixel-filter", "box"], "off_box.pfm")
+        if pb:
+            check(max_diff(a, read_pfm(pb)) > 1e-4, "after A the viewer renders the point filter (box differs)",
+                  max_diff(a, read_pfm(pb)))
     # The P key's PNG is the offline PNG of the same view, byte for byte in its
     # pixels (same exposure, tone curve, sRGB), and the window shows it within one
     # code (the window's sRGB encoding is a table).
@@ -345,7 +350,7 @@ def main():
     # --help lists every control.
     r = run([CLVR, "--help"])
     for control in ["Viewer controls", "left drag", "middle drag", "wheel", "R ", "C / shift+C", "[ / ]", "{ / }",
-                    "+ / -", "S ", "M / shift+M", "E / shift+E", "L+left drag", "X / P", "K ", "H ", "Escape"]:
+                    "+ / -", "S ", "M / shift+M", "E / shift+E", "A ", "L+left drag", "X / P", "K ", "H ", "Escape"]:
         check(control in r.stdout, f"--help mentions the viewer control '{control}'")
 
     tmp = tempfile.mkdtemp(prefix="clvr-viewer-")

@@ -48,12 +48,12 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 2
+#define CLVR_API_VERSION_MINOR 3
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
  * function file's window: what the clvr program needs beyond 1.1, so that it
- * uses this header alone). */
+ * uses this header alone), 1003 is 1.3 (the pixel filter). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -609,8 +609,8 @@ CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);
 
 /* The names a setting takes, by index: setting "method" (march, track,
  * bins, dda), "estimator" (delta, urm), "sampler" (independent, ld),
- * "tonemap" (none, aces, filmic) or "element_boxes" (auto, on, off: index =
- * CLVR_ELEMENT_BOXES_*). Static string; NULL for an index past the end or an
+ * "tonemap" (none, aces, filmic), "element_boxes" (auto, on, off: index =
+ * CLVR_ELEMENT_BOXES_*) or, since 1.3, "pixel_filter" (box, point). Static string; NULL for an index past the end or an
  * unknown setting. Indices are stable within a major version (new names
  * are appended), so a program may keep a setting as its index. */
 CLVR_API const char *clvr_setting_name(const char *setting, uint32_t index);
@@ -671,6 +671,23 @@ CLVR_API clvr_result clvr_series_step(const clvr_series *se, uint32_t i, const c
  * ("(step I of FILE)"). */
 CLVR_API clvr_result clvr_series_bounds(const clvr_series *se, const char *field, float lo[3], float hi[3],
                                         float *min, float *max, clvr_message *msg);
+
+/* ======================================================================== *
+ * API 1.3. A call, not a member appended to clvr_tracer_settings: a program
+ * built against 1.1 or 1.2 passes the shorter struct to
+ * clvr_tracer_settings_init, which must not write past it.
+ * ======================================================================== */
+
+/* Which image the frames converge to: "box" (the default) gives each pixel
+ * the mean over its square, camera rays jittered across it (antialiased
+ * edges; the jitter is part of each frame's noise); "point" gives it the
+ * value of the ray through its centre, as VTK's and ParaView's ray casters
+ * draw (aliased edges that no number of frames removes, and no jitter
+ * noise: on smooth meshes a clean image in about half the frames). A
+ * change restarts the accumulation. ERR_USAGE for another name. */
+CLVR_API clvr_result clvr_tracer_set_pixel_filter(clvr_tracer *tr, const char *filter, clvr_message *msg);
+/* "box" or "point"; NULL for a NULL tracer. */
+CLVR_API const char *clvr_tracer_pixel_filter(const clvr_tracer *tr);
 
 #ifdef __cplusplus
 }

@@ -1835,6 +1835,29 @@ clvr_result clvr_tracer_set_settings(clvr_tracer *tr, const clvr_tracer_settings
     return finish(st, &e, msg);
 }
 
+clvr_result clvr_tracer_set_pixel_filter(clvr_tracer *tr, const char *filter, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_set_pixel_filter";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!filter) return finish(NULL_ARG(fn, "filter"), &e, msg);
+    uint32_t f;
+    if (!strcmp(filter, "box")) f = CLVR_PIXEL_BOX;
+    else if (!strcmp(filter, "point")) f = CLVR_PIXEL_POINT;
+    else return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: pixel filter '%s'; use box or point", fn, filter), &e,
+                       msg);
+    const uint32_t old = tr->rs.pixel_filter;
+    tr->rs.pixel_filter = f;
+    const clvr_status s = apply_settings(tr, &e);
+    if (s != CLVR_OK) tr->rs.pixel_filter = old;
+    return finish(s, &e, msg);
+}
+
+const char *clvr_tracer_pixel_filter(const clvr_tracer *tr)
+{
+    return tr ? clvr_setting_name("pixel_filter", tr->rs.pixel_filter) : NULL;
+}
+
 clvr_result clvr_tracer_set_size(clvr_tracer *tr, uint32_t width, uint32_t height, clvr_message *msg)
 {
     clvr_error e = {0};
@@ -2310,6 +2333,7 @@ clvr_renderer *clvr_internal_tracer_renderer(clvr_tracer *tr) { return tr ? tr->
  * setting as its index holds the pipeline's value; the asserts catch a
  * renumbering. */
 _Static_assert(CLVR_SAMPLER_INDEPENDENT == 0 && CLVR_SAMPLER_LD == 1, "sampler names out of order");
+_Static_assert(CLVR_PIXEL_BOX == 0 && CLVR_PIXEL_POINT == 1, "pixel filter names out of order");
 _Static_assert(CLVR_TONEMAP_NONE == 0 && CLVR_TONEMAP_ACES == 1 && CLVR_TONEMAP_FILMIC == 2, "tone curves out of order");
 _Static_assert(CLVR_ELEMENT_BOXES_AUTO == CLVR_EBOX_AUTO && CLVR_ELEMENT_BOXES_ON == CLVR_EBOX_ON &&
                    CLVR_ELEMENT_BOXES_OFF == CLVR_EBOX_OFF, "element box modes drifted");
@@ -2319,6 +2343,7 @@ const char *clvr_setting_name(const char *setting, uint32_t index)
 {
     static const char *samplers[] = {"independent", "ld"};
     static const char *boxes[] = {"auto", "on", "off"};
+    static const char *filters[] = {"box", "point"}; /* CLVR_PIXEL_* */
     if (!setting) return NULL;
     if (!strcmp(setting, "method")) return index < CLVR_RENDER_COUNT ? clvr_render_method_name(index) : NULL;
     if (!strcmp(setting, "estimator"))
@@ -2326,6 +2351,7 @@ const char *clvr_setting_name(const char *setting, uint32_t index)
     if (!strcmp(setting, "sampler")) return index < 2 ? samplers[index] : NULL;
     if (!strcmp(setting, "tonemap")) return index < CLVR_TONEMAP_COUNT ? clvr_tonemap_name((clvr_tonemap)index) : NULL;
     if (!strcmp(setting, "element_boxes")) return index < 3 ? boxes[index] : NULL;
+    if (!strcmp(setting, "pixel_filter")) return index < 2 ? filters[index] : NULL;
     return NULL;
 }
 
@@ -2338,7 +2364,7 @@ clvr_result clvr_setting_index(const char *setting, const char *name, uint32_t *
     if (!index) return finish(NULL_ARG(fn, "index"), &e, msg);
     if (!clvr_setting_name(setting, 0))
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown setting '%s'; use method, estimator, sampler, "
-                                     "tonemap or element_boxes", fn, setting),
+                                     "tonemap, element_boxes or pixel_filter", fn, setting),
                       &e, msg);
     char list[256] = "";
     size_t len = 0;

@@ -245,6 +245,7 @@ int main(int argc, char **argv)
     clvr_tracer_settings_init(&ts);
     if (clvr_cli_tracer_settings(&o, &ts, &err) != CLVR_RESULT_OK) { rc = fail_msg(&err); goto cleanup; }
     TRY(clvr_tracer_create_on(scene, &ts, o.width, o.height, &tracer, &msg));
+    TRY(clvr_tracer_set_pixel_filter(tracer, clvr_setting_name("pixel_filter", o.pixel_filter), &msg));
     clvr_scene_destroy(scene); /* the tracer holds it */
     scene = NULL;
 

@@ -70,6 +70,7 @@ typedef struct viewer {
 
     /* Pending edits, applied once per loop turn. */
     int dirty_settings, dirty_camera, dirty_tf;
+    int filter_point;          /* A: the point pixel filter (clvr_tracer_set_pixel_filter) instead of box */
 
     /* Image: the renderer's size is the framebuffer's. */
     uint32_t img_w, img_h;       /* size of rgba / rgba8 contents */
@@ -359,6 +360,8 @@ static void print_command_line(viewer *v)
             v->ts.estimator);
     if (v->ts.urm_steps != dts.urm_steps) appendf(line, cap, " --urm-steps %u", v->ts.urm_steps);
     if (strcmp(v->ts.sampler, dts.sampler)) appendf(line, cap, " --sampler %s", v->ts.sampler);
+    if (strcmp(clvr_tracer_pixel_filter(v->tr), "box"))
+        appendf(line, cap, " --pixel-filter %s", clvr_tracer_pixel_filter(v->tr));
     if (v->ts.step != dts.step) appendf(line, cap, " --step %.9g", (double)v->ts.step);
     if (v->ts.bins != dts.bins) appendf(line, cap, " --bins %u", v->ts.bins);
     if (v->ts.segments != dts.segments) appendf(line, cap, " --segments %u", v->ts.segments);
@@ -483,6 +486,10 @@ static void handle_key(viewer *v, int key, int mods)
         v->dirty_settings = 1;
         break;
     }
+    case GLFW_KEY_A: /* antialiasing: the box filter, or the point filter of VTK's ray casters */
+        v->filter_point = !v->filter_point;
+        v->dirty_settings = 1;
+        break;
     case GLFW_KEY_X: save_numbered(v, "exr"); break;
     case GLFW_KEY_P: save_numbered(v, "png"); break;
     case GLFW_KEY_K: print_command_line(v); break;
@@ -662,6 +669,8 @@ static clvr_result apply_edits(viewer *v)
     if (v->dirty_settings) {
         v->ts.shadows = v->shadows;
         if (clvr_tracer_set_settings(v->tr, &v->ts, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
+        if (clvr_tracer_set_pixel_filter(v->tr, v->filter_point ? "point" : "box", &msg) != CLVR_RESULT_OK)
+            return lib_fail(v, &msg);
         v->dirty_settings = 0;
     }
     if (v->dirty_camera) {
@@ -1014,6 +1023,7 @@ clvr_result clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
     if (!v) return clvr_app_fail(err, CLVR_RESULT_ERR_NO_MEMORY, "out of memory for the viewer");
     v->o = o;
     v->tr = tr;
+    v->filter_point = !strcmp(clvr_tracer_pixel_filter(tr), "point");
     v->device = device ? device : "";
     v->shadows = o->shadows;
     v->err = err;

@@ -434,6 +434,7 @@ static int run(mpi_run *m, const clvr_options *o)
         int shadows = 0;
         s = clvr_internal_status(clvr_cli_tracer_settings(o, &ts, &msg), &msg, &err);
         if (s == CLVR_OK) s = clvr_internal_render_settings(&ts, o->width, o->height, &rsv, &shadows, &err);
+        rsv.pixel_filter = o->pixel_filter; /* clvr_setting_name("pixel_filter") is in CLVR_PIXEL_* order */
         clvr_render_settings *rs = &rsv;
         /* The region is one more clip box (intersected with --clip-box):
          * camera rays, shadow rays and the light grid's rays are all cut to

@@ -149,13 +149,15 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
 {
     clvr_status s = CLVR_OK;
     if (set->method >= CLVR_RENDER_COUNT || set->estimator >= CLVR_ESTIMATOR_COUNT || set->sampler > CLVR_SAMPLER_LD ||
+        set->pixel_filter > CLVR_PIXEL_POINT ||
         set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
         set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
         set->light_res == 0 || set->light_res > CLVR_URM_LIGHT_RES)
         return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
-                              "%ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, light grid %u: "
-                              "1..%u)", set->method,
-                              set->estimator, set->sampler, set->width, set->height, set->bins, set->segments,
+                              "pixel filter %u, %ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, "
+                              "light grid %u: 1..%u)", set->method,
+                              set->estimator, set->sampler, set->pixel_filter, set->width, set->height, set->bins,
+                              set->segments,
                               set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
                               CLVR_URM_LIGHT_RES);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
@@ -205,6 +207,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->seed_hi = (clvr_u32)(set->seed >> 32);
     f->shadows = set->shadows ? 1u : 0u;
     f->sampler = set->sampler;
+    f->pixel_filter = set->pixel_filter;
     f->bins = set->bins;
     f->segments = set->segments;
     f->grid_res = set->macrocells;

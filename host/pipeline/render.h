@@ -33,6 +33,7 @@ typedef struct clvr_render_settings {
     uint32_t width, height;
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
+    uint32_t pixel_filter;     /* CLVR_PIXEL_*: box (default, antialiased) or point (pixel centres) */
     int shadows;
     /* Nonzero (default): every camera ray is cut to the part between its
      * first and last crossing of the mesh's boundary faces, where the

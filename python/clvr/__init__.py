@@ -180,6 +180,8 @@ _PROTOS = {
     # API 1.2
     "clvr_setting_name": (_S, [_S, _U32]),
     "clvr_setting_index": (ctypes.c_int, [_S, _S, ctypes.POINTER(_U32), _M]),
+    "clvr_tracer_set_pixel_filter": (ctypes.c_int, [_P, _S, _M]),  # API 1.3
+    "clvr_tracer_pixel_filter": (_S, [_P]),
     "clvr_default_size": (None, [ctypes.POINTER(_U32), ctypes.POINTER(_U32)]),
     "clvr_frame_box": (ctypes.c_int, [_c_float3, _c_float3, _P, _F, _F, _F, _F, _U32, _U32, _c_float3, _c_float3,
                                       _M]),
@@ -730,7 +732,8 @@ class Renderer(_Handle):
     any of Renderer.settings' keys (method, estimator, sampler, seed,
     urm_steps, step, bins, segments, macrocells, light_dir,
     light_intensity, ambient, shadows, background, clip_box, clip_lo,
-    clip_hi, clip_planes)."""
+    clip_hi, clip_planes, pixel_filter: "box", the default, antialiased,
+    or "point", the ray through each pixel's centre as VTK draws)."""
 
     def __init__(self, mesh, device="pocl", width=512, height=512, field=None, **settings):
         if not isinstance(mesh, (Mesh, Scene)):
@@ -738,6 +741,10 @@ class Renderer(_Handle):
                              "clvr.Scene")
         for what, v in (("width", width), ("height", height)):
             _count(what, v, 1, 65536)
+        settings = dict(settings)
+        pixel_filter = settings.pop("pixel_filter", None)
+        if pixel_filter is not None:
+            setting_index("pixel_filter", pixel_filter)  # a bad name fails before any device work
         ts = _TracerSettings()
         _lib.clvr_tracer_settings_init(ctypes.byref(ts))
         _settings_apply(ts, settings)
@@ -753,6 +760,8 @@ class Renderer(_Handle):
                   ctypes.byref(self._h))
             if settings:
                 _call(_lib.clvr_tracer_set_settings, self._h, ctypes.byref(ts))
+        if pixel_filter is not None:
+            _call(_lib.clvr_tracer_set_pixel_filter, self._h, _text("pixel_filter", pixel_filter))
         self.width, self.height = int(width), int(height)
         self._seed = int(ts.seed)  # the renderer's default, as the program's --seed
 
@@ -762,15 +771,23 @@ class Renderer(_Handle):
         ts = _TracerSettings()
         ts.size = ctypes.sizeof(_TracerSettings)
         _call(_lib.clvr_tracer_get_settings, self._h, ctypes.byref(ts))
-        return _settings_dict(ts)
+        d = _settings_dict(ts)
+        d["pixel_filter"] = _lib.clvr_tracer_pixel_filter(self._h).decode()
+        return d
 
     def set_settings(self, **kw):
         """Changes the given settings (all checked; all or none applied)."""
+        kw = dict(kw)
+        pixel_filter = kw.pop("pixel_filter", None)
+        if pixel_filter is not None:
+            setting_index("pixel_filter", pixel_filter)  # checked before anything changes
         ts = _TracerSettings()
         ts.size = ctypes.sizeof(_TracerSettings)
         _call(_lib.clvr_tracer_get_settings, self._h, ctypes.byref(ts))
         _settings_apply(ts, kw)
         _call(_lib.clvr_tracer_set_settings, self._h, ctypes.byref(ts))
+        if pixel_filter is not None:
+            _call(_lib.clvr_tracer_set_pixel_filter, self._h, _text("pixel_filter", pixel_filter))
         self._seed = int(ts.seed)
 
     _destroy = staticmethod(_lib.clvr_tracer_destroy)
@@ -935,7 +952,8 @@ def save_exr(path, image):
 def setting_name(setting, index):
     """The name at index in a setting's table ("method": march, track,
     bins, dda; "estimator": delta, urm; "sampler": independent, ld;
-    "tonemap": none, aces, filmic; "element_boxes": auto, on, off), or None
+    "tonemap": none, aces, filmic; "element_boxes": auto, on, off;
+    "pixel_filter": box, point), or None
     past the end or for an unknown setting. Indices are stable within a
     major version (new names are appended)."""
     n = _lib.clvr_setting_name(_text("setting", setting), _count("index", index))
