@@ -334,6 +334,21 @@ CLVR_INLINE void clvr_hull_ray_face(const clvr_hull_ray *r, CLVR_GLOBAL const cl
     }
 }
 
+/* The slab test of child c of node n (an empty slot fails) against the ray
+ * r with inverse direction (ix, iy, iz): its entry *a and exit *b along the
+ * line; 0 when the line misses the box. */
+CLVR_INLINE int clvr_hull_child_span(CLVR_GLOBAL const clvr_bvh_node *n, int c, const clvr_hull_ray *r, float ix,
+                                     float iy, float iz, float *a, float *b)
+{
+    if (!(n->lo_x[c] <= n->hi_x[c])) return 0;
+    const float ax = (n->lo_x[c] - r->o[0]) * ix, bx = (n->hi_x[c] - r->o[0]) * ix;
+    const float ay = (n->lo_y[c] - r->o[1]) * iy, by = (n->hi_y[c] - r->o[1]) * iy;
+    const float az = (n->lo_z[c] - r->o[2]) * iz, bz = (n->hi_z[c] - r->o[2]) * iz;
+    *a = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+    *b = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    return *a <= *b;
+}
+
 /* The first (far = 0) or last (far = 1) crossing of the ray with the faces
  * under the tree `nodes` (root 0, primitive i = face i): with far = 0,
  * lowers *t to the smallest hit below it; with far = 1, raises it to the
@@ -359,13 +374,8 @@ CLVR_INLINE void clvr_hull_crossing(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR
         float key[4];
         clvr_u32 cnt = 0;
         for (int c = 0; c < 4; ++c) {
-            if (!(n->lo_x[c] <= n->hi_x[c])) continue;
-            const float ax = (n->lo_x[c] - r->o[0]) * ix, bx = (n->hi_x[c] - r->o[0]) * ix;
-            const float ay = (n->lo_y[c] - r->o[1]) * iy, by = (n->hi_y[c] - r->o[1]) * iy;
-            const float az = (n->lo_z[c] - r->o[2]) * iz, bz = (n->hi_z[c] - r->o[2]) * iz;
-            const float a = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
-            const float b = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-            if (!(a <= b)) continue;
+            float a, b;
+            if (!clvr_hull_child_span(n, c, r, ix, iy, iz, &a, &b)) continue;
             if (far ? !(b > *t) : !(a < *t)) continue;
             /* Pushed so that the most promising child pops first. */
             const float k = far ? b : -a;
@@ -381,6 +391,42 @@ CLVR_INLINE void clvr_hull_crossing(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR
     }
 }
 
+/* Where a query of the ray (o, d) over the faces under `nodes` starts: the
+ * faces' (padded) box, the union of the root's children; whether the origin
+ * lies outside it; the box's entry ta (>= 0) and exit tb; and the ray made
+ * from s = ta when outside, else from the origin (coordinates relative to a
+ * nearby origin, for precision), its distances then relative to s. Returns 0
+ * when the ray misses the box. */
+typedef struct clvr_hull_query {
+    clvr_hull_ray r;
+    int outside;
+    float ta, tb, s;
+} clvr_hull_query;
+
+CLVR_INLINE int clvr_hull_query_begin(CLVR_GLOBAL const clvr_bvh_node *nodes, float ox, float oy, float oz, float dx,
+                                      float dy, float dz, clvr_hull_query *q)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int c = 0; c < 4; ++c) {
+        lo[0] = fmin(lo[0], nodes->lo_x[c]);
+        lo[1] = fmin(lo[1], nodes->lo_y[c]);
+        lo[2] = fmin(lo[2], nodes->lo_z[c]);
+        hi[0] = fmax(hi[0], nodes->hi_x[c]);
+        hi[1] = fmax(hi[1], nodes->hi_y[c]);
+        hi[2] = fmax(hi[2], nodes->hi_z[c]);
+    }
+    q->outside = ox < lo[0] || oy < lo[1] || oz < lo[2] || ox > hi[0] || oy > hi[1] || oz > hi[2];
+    const float ix = clvr_bvh_safe_inv(dx), iy = clvr_bvh_safe_inv(dy), iz = clvr_bvh_safe_inv(dz);
+    const float ax = (lo[0] - ox) * ix, bx = (hi[0] - ox) * ix, ay = (lo[1] - oy) * iy, by = (hi[1] - oy) * iy;
+    const float az = (lo[2] - oz) * iz, bz = (hi[2] - oz) * iz;
+    q->ta = fmax(fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz)), 0.0f);
+    q->tb = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    if (!(q->ta <= q->tb)) return 0;
+    q->s = q->outside ? q->ta : 0.0f;
+    q->r = clvr_hull_ray_make(ox + dx * q->s, oy + dy * q->s, oz + dz * q->s, dx, dy, dz);
+    return 1;
+}
+
 /* Cuts [*t0, *t1] of the ray org + t dir to its part between the first
  * and the last crossing of the hull (nodes, faces: a tree of clvr_hull_build,
  * at least one face); returns 0 when the ray crosses no face (it misses the
@@ -392,25 +438,11 @@ CLVR_INLINE void clvr_hull_crossing(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR
 CLVR_INLINE int clvr_hull_clip(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOBAL const clvr_hull_face *faces,
                                float ox, float oy, float oz, float dx, float dy, float dz, float *t0, float *t1)
 {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int c = 0; c < 4; ++c) { /* the root's children: the faces' (padded) box */
-        lo[0] = fmin(lo[0], nodes->lo_x[c]);
-        lo[1] = fmin(lo[1], nodes->lo_y[c]);
-        lo[2] = fmin(lo[2], nodes->lo_z[c]);
-        hi[0] = fmax(hi[0], nodes->hi_x[c]);
-        hi[1] = fmax(hi[1], nodes->hi_y[c]);
-        hi[2] = fmax(hi[2], nodes->hi_z[c]);
-    }
-    const int outside = ox < lo[0] || oy < lo[1] || oz < lo[2] || ox > hi[0] || oy > hi[1] || oz > hi[2];
-    /* The box entry (or the origin) as the query's origin. */
-    const float ix = clvr_bvh_safe_inv(dx), iy = clvr_bvh_safe_inv(dy), iz = clvr_bvh_safe_inv(dz);
-    const float ax = (lo[0] - ox) * ix, bx = (hi[0] - ox) * ix, ay = (lo[1] - oy) * iy, by = (hi[1] - oy) * iy;
-    const float az = (lo[2] - oz) * iz, bz = (hi[2] - oz) * iz;
-    const float ta = fmax(fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz)), 0.0f);
-    const float tb = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-    if (!(ta <= tb)) return 0;
-    const float s = outside ? ta : 0.0f;
-    const clvr_hull_ray r = clvr_hull_ray_make(ox + dx * s, oy + dy * s, oz + dz * s, dx, dy, dz);
+    clvr_hull_query q;
+    if (!clvr_hull_query_begin(nodes, ox, oy, oz, dx, dy, dz, &q)) return 0;
+    const clvr_hull_ray r = q.r;
+    const int outside = q.outside;
+    const float ta = q.ta, tb = q.tb, s = q.s;
     float first = -INFINITY, last = -INFINITY;
     if (outside) {
         first = INFINITY;
@@ -472,14 +504,9 @@ CLVR_INLINE int clvr_hull_hits(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
         }
         CLVR_GLOBAL const clvr_bvh_node *nd = nodes + ref;
         for (int c = 0; c < 4; ++c) {
-            if (!(nd->lo_x[c] <= nd->hi_x[c])) continue;
-            const float ax = (nd->lo_x[c] - r->o[0]) * ix, bx = (nd->hi_x[c] - r->o[0]) * ix;
-            const float ay = (nd->lo_y[c] - r->o[1]) * iy, by = (nd->hi_y[c] - r->o[1]) * iy;
-            const float az = (nd->lo_z[c] - r->o[2]) * iz, bz = (nd->hi_z[c] - r->o[2]) * iz;
-            const float a = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
-            const float b = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-            if (!(a <= b) || sp >= CLVR_BVH_STACK_SIZE) continue;
-            stack[sp++] = nd->child[c];
+            float a, b;
+            if (clvr_hull_child_span(nd, c, r, ix, iy, iz, &a, &b) && sp < CLVR_BVH_STACK_SIZE)
+                stack[sp++] = nd->child[c];
         }
     }
     return n;
@@ -499,24 +526,11 @@ CLVR_INLINE int clvr_hull_gaps(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
                                float ox, float oy, float oz, float dx, float dy, float dz, float *t0, float *t1,
                                float *glo, float *ghi)
 {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int c = 0; c < 4; ++c) {
-        lo[0] = fmin(lo[0], nodes->lo_x[c]);
-        lo[1] = fmin(lo[1], nodes->lo_y[c]);
-        lo[2] = fmin(lo[2], nodes->lo_z[c]);
-        hi[0] = fmax(hi[0], nodes->hi_x[c]);
-        hi[1] = fmax(hi[1], nodes->hi_y[c]);
-        hi[2] = fmax(hi[2], nodes->hi_z[c]);
-    }
-    const int outside = ox < lo[0] || oy < lo[1] || oz < lo[2] || ox > hi[0] || oy > hi[1] || oz > hi[2];
-    const float ix = clvr_bvh_safe_inv(dx), iy = clvr_bvh_safe_inv(dy), iz = clvr_bvh_safe_inv(dz);
-    const float ax = (lo[0] - ox) * ix, bx = (hi[0] - ox) * ix, ay = (lo[1] - oy) * iy, by = (hi[1] - oy) * iy;
-    const float az = (lo[2] - oz) * iz, bz = (hi[2] - oz) * iz;
-    const float ta = fmax(fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz)), 0.0f);
-    const float tb = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-    if (!(ta <= tb)) return -1;
-    const float s = outside ? ta : 0.0f;
-    const clvr_hull_ray r = clvr_hull_ray_make(ox + dx * s, oy + dy * s, oz + dz * s, dx, dy, dz);
+    clvr_hull_query q;
+    if (!clvr_hull_query_begin(nodes, ox, oy, oz, dx, dy, dz, &q)) return -1;
+    const clvr_hull_ray r = q.r;
+    const int outside = q.outside;
+    const float ta = q.ta, tb = q.tb, s = q.s;
     float hlo[CLVR_HULL_MAX_HITS], hhi[CLVR_HULL_MAX_HITS];
     const int n = clvr_hull_hits(nodes, faces, &r, dx, dy, dz, hlo, hhi, CLVR_HULL_MAX_HITS);
     if (n < 0) return -2;

@@ -261,6 +261,18 @@ static void test_collisions(clvr_cl *cl)
 
 /* ------------------------------------------------------------ 3. rays */
 
+/* A random point on the sphere of the given radius around (c, c, c). */
+static void sphere_point(uint64_t *rs, float c, float radius, float o[3])
+{
+    float u[3], l = 0;
+    for (int k = 0; k < 3; ++k) {
+        u[k] = tu_randf(rs) - 0.5f;
+        l += u[k] * u[k];
+    }
+    l = sqrtf(l) + 1e-6f;
+    for (int k = 0; k < 3; ++k) o[k] = c + radius * u[k] / l;
+}
+
 /* First and last crossing of the line org + t dir with every face. */
 static void brute(const clvr_hull_face *f, uint32_t n, const float o[3], const float d[3], float *lo, float *hi)
 {
@@ -305,13 +317,7 @@ static void test_rays(clvr_cl *cl)
             if (inside) {
                 for (int c = 0; c < 3; ++c) o[c] = 0.2f + 4.6f * tu_randf(&rs);
             } else {
-                float u[3], l = 0;
-                for (int c = 0; c < 3; ++c) {
-                    u[c] = tu_randf(&rs) - 0.5f;
-                    l += u[c] * u[c];
-                }
-                l = sqrtf(l) + 1e-6f;
-                for (int c = 0; c < 3; ++c) o[c] = 2.5f + 12.0f * u[c] / l;
+                sphere_point(&rs, 2.5f, 12.0f, o);
             }
             for (int c = 0; c < 3; ++c) {
                 org[4 * i + c] = o[c];
@@ -495,13 +501,7 @@ static void test_gaps(clvr_cl *cl)
             if (inside) {
                 for (int c = 0; c < 3; ++c) o[c] = L * (0.05f + 0.9f * tu_randf(&rs));
             } else {
-                float u[3], l = 0;
-                for (int c = 0; c < 3; ++c) {
-                    u[c] = tu_randf(&rs) - 0.5f;
-                    l += u[c] * u[c];
-                }
-                l = sqrtf(l) + 1e-6f;
-                for (int c = 0; c < 3; ++c) o[c] = 0.5f * L + 2.5f * L * u[c] / l;
+                sphere_point(&rs, 0.5f * L, 2.5f * L, o);
                 if (which == 1 && i % 3 == 0) {
                     o[0] = -2.0f * L;
                     o[1] = 0.5f * L + 0.3f * L * (tu_randf(&rs) - 0.5f);
