@@ -393,14 +393,15 @@ CLVR_INLINE void clvr_hull_crossing(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR
 
 /* Where a query of the ray (o, d) over the faces under `nodes` starts: the
  * faces' (padded) box, the union of the root's children; whether the origin
- * lies outside it; the box's entry ta (>= 0) and exit tb; and the ray made
- * from s = ta when outside, else from the origin (coordinates relative to a
- * nearby origin, for precision), its distances then relative to s. Returns 0
- * when the ray misses the box. */
+ * lies outside it; the ray made from s = the box entry when outside, else
+ * from the origin (coordinates relative to a nearby origin, for precision),
+ * its distances then relative to s; and the margin `pad` by which a cut is
+ * widened so that rounding of t never cuts medium off (1e-5 of the chord
+ * through the box, 1e-6 of s). Returns 0 when the ray misses the box. */
 typedef struct clvr_hull_query {
     clvr_hull_ray r;
     int outside;
-    float ta, tb, s;
+    float s, pad;
 } clvr_hull_query;
 
 CLVR_INLINE int clvr_hull_query_begin(CLVR_GLOBAL const clvr_bvh_node *nodes, float ox, float oy, float oz, float dx,
@@ -419,10 +420,11 @@ CLVR_INLINE int clvr_hull_query_begin(CLVR_GLOBAL const clvr_bvh_node *nodes, fl
     const float ix = clvr_bvh_safe_inv(dx), iy = clvr_bvh_safe_inv(dy), iz = clvr_bvh_safe_inv(dz);
     const float ax = (lo[0] - ox) * ix, bx = (hi[0] - ox) * ix, ay = (lo[1] - oy) * iy, by = (hi[1] - oy) * iy;
     const float az = (lo[2] - oz) * iz, bz = (hi[2] - oz) * iz;
-    q->ta = fmax(fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz)), 0.0f);
-    q->tb = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-    if (!(q->ta <= q->tb)) return 0;
-    q->s = q->outside ? q->ta : 0.0f;
+    const float ta = fmax(fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz)), 0.0f);
+    const float tb = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    if (!(ta <= tb)) return 0;
+    q->s = q->outside ? ta : 0.0f;
+    q->pad = 1e-5f * (tb - ta) + 1e-6f * fabs(q->s);
     q->r = clvr_hull_ray_make(ox + dx * q->s, oy + dy * q->s, oz + dz * q->s, dx, dy, dz);
     return 1;
 }
@@ -440,21 +442,17 @@ CLVR_INLINE int clvr_hull_clip(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
 {
     clvr_hull_query q;
     if (!clvr_hull_query_begin(nodes, ox, oy, oz, dx, dy, dz, &q)) return 0;
-    const clvr_hull_ray r = q.r;
-    const int outside = q.outside;
-    const float ta = q.ta, tb = q.tb, s = q.s;
     float first = -INFINITY, last = -INFINITY;
-    if (outside) {
+    if (q.outside) {
         first = INFINITY;
-        clvr_hull_crossing(nodes, faces, &r, dx, dy, dz, 0, &first);
+        clvr_hull_crossing(nodes, faces, &q.r, dx, dy, dz, 0, &first);
         if (!(first < INFINITY)) return 0;
         last = first;
     }
-    clvr_hull_crossing(nodes, faces, &r, dx, dy, dz, 1, &last);
-    if (!(last > -INFINITY)) return outside ? 0 : 1;
-    const float pad = 1e-5f * (tb - ta) + 1e-6f * fabs(s);
-    if (outside) *t0 = fmax(*t0, s + first - pad);
-    *t1 = fmin(*t1, s + last + pad);
+    clvr_hull_crossing(nodes, faces, &q.r, dx, dy, dz, 1, &last);
+    if (!(last > -INFINITY)) return q.outside ? 0 : 1;
+    if (q.outside) *t0 = fmax(*t0, q.s + first - q.pad);
+    *t1 = fmin(*t1, q.s + last + q.pad);
     return *t0 <= *t1;
 }
 
@@ -528,11 +526,10 @@ CLVR_INLINE int clvr_hull_gaps(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
 {
     clvr_hull_query q;
     if (!clvr_hull_query_begin(nodes, ox, oy, oz, dx, dy, dz, &q)) return -1;
-    const clvr_hull_ray r = q.r;
     const int outside = q.outside;
-    const float ta = q.ta, tb = q.tb, s = q.s;
+    const float s = q.s, pad = q.pad;
     float hlo[CLVR_HULL_MAX_HITS], hhi[CLVR_HULL_MAX_HITS];
-    const int n = clvr_hull_hits(nodes, faces, &r, dx, dy, dz, hlo, hhi, CLVR_HULL_MAX_HITS);
+    const int n = clvr_hull_hits(nodes, faces, &q.r, dx, dy, dz, hlo, hhi, CLVR_HULL_MAX_HITS);
     if (n < 0) return -2;
     if (n == 0) return outside ? -1 : 0;
     /* From inside, crossings behind the origin only bound the end (as in
@@ -540,7 +537,6 @@ CLVR_INLINE int clvr_hull_gaps(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
      * first crossing ahead. */
     int k = 0;
     while (!outside && k < n - 1 && hhi[k] < 0.0f) ++k;
-    const float pad = 1e-5f * (tb - ta) + 1e-6f * fabs(s);
     int ng = 0;
     if (outside) *t0 = fmax(*t0, s + hlo[k] - pad);
     else if (hlo[k] - pad > *t0 - s) { /* from inside: before the first crossing */

@@ -45,10 +45,11 @@ uint64_t clvr_hull_bytes(const clvr_hull *h)
         CLVR_ARG(pc.idx32[2]), CLVR_ARG(pc.vertices[3]), CLVR_ARG(pc.idx16[3]), CLVR_ARG(pc.idx32[3])
 
 /* n rays (org, dir: 4 floats each) through kernel k over the tree `nodes`:
- * clvr_hull_rays' layout when faces is a hull's faces, clvr_bvh_ray_span's
- * (no faces argument) when it is NULL; 4 floats per ray into out. */
-static clvr_status rays_through_n(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
-                                  const float *dir, uint32_t n, size_t out_floats, float *out, clvr_error *err)
+ * clvr_hull_rays' (or clvr_hull_gap_rays') arguments when faces is a hull's
+ * faces, clvr_bvh_ray_span's (no faces argument) when it is NULL;
+ * out_floats floats per ray into out. */
+static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
+                                const float *dir, uint32_t n, size_t out_floats, float *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_mem bo = NULL, bd = NULL, bt = NULL;
@@ -74,18 +75,12 @@ cleanup:
     return s;
 }
 
-static clvr_status rays_through(clvr_cl *cl, cl_kernel k, cl_mem nodes, cl_mem faces, const float *org,
-                                const float *dir, uint32_t n, float *out, clvr_error *err)
-{
-    return rays_through_n(cl, k, nodes, faces, org, dir, n, 4, out, err);
-}
-
 clvr_status clvr_hull_gap_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
                                const float *dir, uint32_t n, float *out, clvr_error *err)
 {
     if (n == 0) return CLVR_OK;
     if (h->num_faces == 0) return clvr_error_set(err, CLVR_ERR_USAGE, "clvr_hull_gap_rays: the hull has no faces");
-    return rays_through_n(cl, k->hull_gap_rays, h->nodes, h->faces, org, dir, n, CLVR_HULL_GAP_STRIDE, out, err);
+    return rays_through(cl, k->hull_gap_rays, h->nodes, h->faces, org, dir, n, CLVR_HULL_GAP_STRIDE, out, err);
 }
 
 clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull *h, const float *org,
@@ -101,7 +96,7 @@ clvr_status clvr_hull_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hu
         }
         return CLVR_OK;
     }
-    return rays_through(cl, k->hull_rays, h->nodes, h->faces, org, dir, n, out, err);
+    return rays_through(cl, k->hull_rays, h->nodes, h->faces, org, dir, n, 4, out, err);
 }
 
 /* The probes of clvr_hull.empty_fraction: 128 rays from each of the 6 axis
@@ -178,7 +173,7 @@ static clvr_status probe(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_hull
         goto cleanup;
     }
     probe_rays(lo, hi, org, dir);
-    if (tree) CLVR_TRY(rays_through(cl, k->ray_span, tree, NULL, org, dir, PROBE_N, res, err));
+    if (tree) CLVR_TRY(rays_through(cl, k->ray_span, tree, NULL, org, dir, PROBE_N, 4, res, err));
     else CLVR_TRY(clvr_hull_rays(cl, k, h, org, dir, PROBE_N, res, err));
     *fraction = probe_fraction(lo, hi, org, dir, res);
 cleanup:
