@@ -546,7 +546,8 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 
 typedef struct clvr_urm {
     float rho_min, rho_root; /* rho_0 = rho_min + rho_root sqrt(m) clvr_urm_front(...) */
-    float tau_maj;     /* majorant optical depth from the ray's entry to the current segment */
+    float front;       /* exp(-CLVR_URM_FRONT tau), tau the majorant optical depth from the ray's entry
+                        * to the current segment (clvr_urm_front) */
     float kappa, inv_kappa;
     float to_quad;     /* warped distance to the next quadrature point */
     float tau_pt;      /* residual-process depth to the next residual point, ~ Exp(1) */
@@ -588,7 +589,7 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float r
     const float steps = emit ? (float)f->urm_steps : fmax(0.5f * (float)f->urm_steps, 1.0f);
     e->rho_min = root > 0.0f ? 0.0f : steps / fmax(span, 1e-30f);
     e->rho_root = root > 0.0f ? steps / root : 0.0f;
-    e->tau_maj = 0.0f;
+    e->front = 1.0f;
     e->kappa = f->urm_kappa;
     e->inv_kappa = 1.0f / f->urm_kappa;
     e->to_quad = u;
@@ -681,10 +682,14 @@ inline float clvr_light_at(const clvr_volume *v, float3 p, float *spread)
  * with the plain spread, did no better
  * (bench/results/render-converge/2026-11-25-s26-front.md). */
 #define CLVR_URM_FRONT 0.5f
-inline float clvr_urm_front(float tau, float m, float len)
+/* *front: exp(-CLVR_URM_FRONT tau) at the segment's start, advanced past it
+ * by the same exponential that the mean needs (one exp per segment). */
+inline float clvr_urm_front(float *front, float m, float len)
 {
-    const float x = CLVR_URM_FRONT * m * len;
-    return exp(-CLVR_URM_FRONT * tau) * (x > 1e-4f ? (1.0f - exp(-x)) / x : 1.0f - 0.5f * x);
+    const float x = CLVR_URM_FRONT * m * len, ex = exp(-x);
+    const float mean = *front * (x > 1e-4f ? (1.0f - ex) / x : 1.0f - 0.5f * x);
+    *front *= ex;
+    return mean;
 }
 
 /* Consumes [a, b) of majorant m; 0 once the walk may stop (terminated).
@@ -694,9 +699,8 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
 {
     if (!(m > 0.0f)) return 1;
     /* Shadow and light-grid rays (rho_root 0) spread evenly: no front. */
-    const float rho_spread = e->rho_root > 0.0f ? e->rho_root * sqrt(m) * clvr_urm_front(e->tau_maj, m, b - a) : 0.0f;
+    const float rho_spread = e->rho_root > 0.0f ? e->rho_root * sqrt(m) * clvr_urm_front(&e->front, m, b - a) : 0.0f;
     const float rho = fmax(m * e->inv_kappa, e->rho_min + rho_spread), inv_rho = 1.0f / rho;
-    e->tau_maj += m * (b - a);
     /* Residual points per unit s: e->rate times the majorant's rate, but at
      * least kappa/2 before that factor, because the control (interpolated
      * from neighbouring quadrature points, perhaps in denser segments) can
@@ -857,19 +861,18 @@ inline float clvr_light_cell(const clvr_volume *v, int x, int y, int z, uint *sa
 
 /* ------------------------------------------------------------ camera rays */
 
-/* clvr_root_depth's term of [a, b) of majorant m (tau: the depth in front). */
-inline void clvr_root_piece(float a, float b, float m, float *root, float *tau)
+/* clvr_root_depth's term of [a, b) of majorant m (front: as clvr_urm.front). */
+inline void clvr_root_piece(float a, float b, float m, float *root, float *front)
 {
     if (!(m > 0.0f) || !(a < b)) return;
-    *root += sqrt(m) * (b - a) * clvr_urm_front(*tau, m, b - a);
-    *tau += m * (b - a);
+    *root += sqrt(m) * (b - a) * clvr_urm_front(front, m, b - a);
 }
 
 /* One segment [a, b) of majorant m minus the gaps (as clvr_urm_segment_gaps). */
-inline int clvr_root_segment(float a, float b, float m, const clvr_gaps *g, int *gi, float *root, float *tau)
+inline int clvr_root_segment(float a, float b, float m, const clvr_gaps *g, int *gi, float *root, float *front)
 {
     float c;
-    for (; clvr_gaps_next(g, gi, &a, b, &c); a = c) clvr_root_piece(a, c, m, root, tau);
+    for (; clvr_gaps_next(g, gi, &a, b, &c); a = c) clvr_root_piece(a, c, m, root, front);
     return 0;
 }
 
@@ -891,9 +894,9 @@ inline int clvr_root_segment(float a, float b, float m, const clvr_gaps *g, int 
  * gaps, which hold no depth. */
 inline float clvr_root_depth(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, const clvr_gaps *g)
 {
-    float root = 0.0f, tau = 0.0f;
+    float root = 0.0f, front = 1.0f;
     int gi = 0;
-    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, clvr_root_segment(a, b, m, g, &gi, &root, &tau));
+    CLVR_FOR_EACH_SEGMENT(v, org, dir, t0, t1, a, b, m, clvr_root_segment(a, b, m, g, &gi, &root, &front));
     return root;
 }
 
