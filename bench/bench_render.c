@@ -23,8 +23,12 @@
  *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
  *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
- *                [--max-spp M] [--sampler ld|independent] [--json FILE]
+ *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise]
  *
+ * --denoise (--converge): also the error of each checkpoint's image after the
+ * optional denoiser (kernels/denoise.h), and its bias (the denoised
+ * reference against the reference), in a second table: never in the first,
+ * which is the unbiased estimate's.
  * --pixel-filter: the image the frames converge to (render.h; the
  * reference of --converge uses it too), box (default) or point.
  * --no-hull: camera rays are not cut to the mesh's boundary crossings
@@ -47,6 +51,7 @@
 #include "cli.h"
 #include "camera.h"
 #include "cl_context.h"
+#include "denoiser.h"
 #include "mesh_io.h"
 #include "preprocess.h"
 #include "render.h"
@@ -73,6 +78,7 @@ typedef struct config {
     uint32_t light_res; /* 0: the renderer's default (urm with shadows: light grid cells per axis) */
     int no_hull;        /* --no-hull: camera rays keep their whole box interval (render.h settings.hull) */
     uint32_t pixel_filter; /* CLVR_PIXEL_*: --pixel-filter (the reference's too) */
+    int guides;         /* --denoise (converge): keep the denoiser's guides, report the denoised error apart */
 } config;
 
 typedef struct row {
@@ -169,6 +175,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     if (c->light_res) rs.light_res = c->light_res;
     rs.hull = !c->no_hull;
     rs.pixel_filter = c->pixel_filter;
+    rs.guides = c->guides;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
     clvr_camera cam;
@@ -293,6 +300,7 @@ static const char *base_name(const char *p)
 typedef struct conv_point {
     uint32_t spp;
     double dev_s, wall_s, rmse_raw, rmse, rmse_rel;
+    double rmse_rel_dn; /* --denoise: the denoised image's (biased; NaN otherwise) */
 } conv_point;
 
 #define MAX_POINTS 128
@@ -341,6 +349,7 @@ typedef struct conv_ref {
     uint8_t *inside;                /* per pixel: camera ray enters the bounding box */
     size_t ninside;
     double ref_s, ref_mean, ref_var; /* device time, mean inside rgb, its own noise (variance of the mean) */
+    double bias_rel;                /* --denoise: rel RMSE of the denoised reference against itself (NaN otherwise) */
 } conv_ref;
 
 typedef struct conv_result {
@@ -353,6 +362,9 @@ typedef struct conv_result {
     conv_point pts[MAX_POINTS];
     int reached;
     conv_point at;                  /* first checkpoint at or below the target */
+    int reached_dn;                 /* --denoise: the same for the denoised image */
+    conv_point at_dn;
+    double dn_s;                    /* --denoise: wall seconds of one denoiser run (the last) */
     double fit_spp, fit_s;          /* 1/n fit */
     double load_before, load_after;
 } conv_result;
@@ -370,8 +382,43 @@ static int ray_hits_box(const float *org, const float *dir, const float *lo, con
     return t0 <= t1;
 }
 
+/* Mean squared error over the inside pixels' rgb of img against the reference. */
+static double inside_mse(const float *img, const conv_ref *ref, size_t npix)
+{
+    double mse = 0.0;
+    for (size_t p = 0; p < npix; ++p) {
+        if (!ref->inside[p]) continue;
+        for (int k = 0; k < 3; ++k) {
+            const size_t i = 4 * p + (size_t)k;
+            double d = (double)img[i] - (double)ref->img[i];
+            mse += d * d;
+        }
+    }
+    return ref->ninside ? mse / (3.0 * (double)ref->ninside) : 0.0;
+}
+
+/* The renderer's image denoised (its guides, the default parameters) into out. */
+static clvr_status denoised_image(clvr_renderer *rd, clvr_denoiser *dn, uint32_t w, uint32_t h, const float *img,
+                                  float *out, double *wall_s, clvr_error *err)
+{
+    const size_t npix = (size_t)w * h;
+    float *guide = malloc(npix * 4 * sizeof(float));
+    if (!guide) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
+    clvr_dn_params prm = clvr_dn_params_default();
+    /* CLVR_DN=sigma_l,sigma_a,sigma_d,passes: other parameters, for tuning. */
+    const char *ev = getenv("CLVR_DN");
+    if (ev) sscanf(ev, "%f,%f,%f,%u", &prm.sigma_l, &prm.sigma_a, &prm.sigma_d, &prm.passes);
+    const double t0 = clvr_clock_monotonic_s();
+    clvr_status s = clvr_renderer_read_guides(rd, guide, err);
+    if (s == CLVR_OK) s = clvr_denoiser_run(dn, w, h, img, guide, prm, out, err);
+    if (wall_s) *wall_s = clvr_clock_monotonic_s() - t0;
+    free(guide);
+    return s;
+}
+
 static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *base, int shadows, uint32_t w,
-                                      uint32_t h, uint32_t ref_spp, conv_ref *out, clvr_camera *cam, clvr_error *err)
+                                      uint32_t h, uint32_t ref_spp, clvr_denoiser *dn, conv_ref *out,
+                                      clvr_camera *cam, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_renderer *rd = NULL;
@@ -419,6 +466,14 @@ static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *b
     }
     out->ref_var = var;
     out->ref_mean = mean;
+    out->bias_rel = NAN;
+    if (dn) {
+        /* The denoiser's bias: what it changes in an image that is already
+         * converged (the reference, whose own noise is far below it). */
+        s = denoised_image(rd, dn, w, h, out->img, sum, NULL, err);
+        if (s != CLVR_OK) goto done;
+        out->bias_rel = mean > 0 ? sqrt(inside_mse(sum, out, npix)) / mean : 0.0;
+    }
 done:
     clvr_renderer_destroy(rd);
     free(sum);
@@ -427,18 +482,23 @@ done:
 }
 
 static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, const conv_ref *ref, uint32_t w,
-                                uint32_t h, uint32_t max_spp, double target, conv_result *out, clvr_error *err)
+                                uint32_t h, uint32_t max_spp, double target, clvr_denoiser *dn, conv_result *out,
+                                clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_renderer *rd = NULL;
     const size_t npix = (size_t)w * h;
-    float *img = malloc(npix * 4 * sizeof(float));
+    float *img = malloc(npix * 4 * sizeof(float)), *dimg = dn ? malloc(npix * 4 * sizeof(float)) : NULL;
     clvr_render_counters rc;
     memset(out, 0, sizeof *out);
     out->shadows = c->shadows;
     out->estimator = c->estimator;
     out->load_before = bench_load1();
-    if (!img) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
+    if (!img || (dn && !dimg)) {
+        free(img);
+        free(dimg);
+        return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
+    }
     s = renderer_for(cl, g, c, w, h, 1, &rd, NULL, err);
     double wall = 0.0, fit_acc = 0.0;
     uint32_t fit_n = 0, next = 1;
@@ -452,18 +512,17 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
         if (next > max_spp && n < max_spp) next = max_spp;
         s = clvr_renderer_read(rd, img, &rc, err);
         if (s != CLVR_OK) break;
-        double mse = 0.0;
-        for (size_t p = 0; p < npix; ++p) {
-            if (!ref->inside[p]) continue;
-            for (int k = 0; k < 3; ++k) {
-                const size_t i = 4 * p + (size_t)k;
-                double d = (double)img[i] - (double)ref->img[i];
-                mse += d * d;
-            }
-        }
-        mse = ref->ninside ? mse / (3.0 * (double)ref->ninside) : 0.0;
-        conv_point pt = {n, rc.kernel_s, wall, sqrt(mse), sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0};
+        const double mse = inside_mse(img, ref, npix);
+        conv_point pt = {n, rc.kernel_s, wall, sqrt(mse), sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0,
+                         NAN};
         pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
+        if (dn) {
+            s = denoised_image(rd, dn, w, h, img, dimg, &out->dn_s, err);
+            if (s != CLVR_OK) break;
+            const double md = inside_mse(dimg, ref, npix);
+            pt.rmse_rel_dn = ref->ref_mean > 0 ? sqrt(md > ref->ref_var ? md - ref->ref_var : 0.0) / ref->ref_mean : 0.0;
+            if (!out->reached_dn && pt.rmse_rel_dn <= target) { out->reached_dn = 1; out->at_dn = pt; }
+        }
         if (out->npoints < MAX_POINTS) out->pts[out->npoints++] = pt;
         /* Fit mse * n over checkpoints with n >= 4. */
         if (n >= 4) {
@@ -486,6 +545,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
 done:
     clvr_renderer_destroy(rd);
     free(img);
+    free(dimg);
     return s;
 }
 
@@ -501,8 +561,10 @@ static void json_str(FILE *f, const char *s)
 
 static void json_point(FILE *f, const conv_point *p)
 {
-    fprintf(f, "{\"spp\": %u, \"device_s\": %.6g, \"wall_s\": %.6g, \"rmse_raw\": %.6g, \"rmse\": %.6g, \"rmse_rel\": %.6g}",
+    fprintf(f, "{\"spp\": %u, \"device_s\": %.6g, \"wall_s\": %.6g, \"rmse_raw\": %.6g, \"rmse\": %.6g, \"rmse_rel\": %.6g",
             p->spp, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
+    if (isfinite(p->rmse_rel_dn)) fprintf(f, ", \"rmse_rel_denoised\": %.6g", p->rmse_rel_dn);
+    fprintf(f, "}");
 }
 
 static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const est_variant *est, uint32_t nest,
@@ -514,6 +576,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     conv_ref refs[2] = {{0}, {0}};
     conv_result res[2][MAX_EST];
     clvr_camera cam;
+    clvr_denoiser *dn = NULL;
     int rc = 1;
     printf("# bench_render --converge: %s, %s, %ux%u, density %g, reference %u spp (%s, independent frames), "
            "measured runs: %s sampler, target %.3g relative RMSE, %s pixel filter\n", base_name(mesh),
@@ -527,8 +590,9 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
         fprintf(stderr, "bench_render: %s\n", err.msg);
         return 1;
     }
+    if (base->guides && clvr_denoiser_create(cl, &dn, &err) != CLVR_OK) goto fail;
     for (int sh = sh_lo; sh <= sh_hi; ++sh) {
-        if (converge_reference(cl, &g, base, sh, w, h, ref_spp, &refs[sh], &cam, &err) != CLVR_OK) goto fail;
+        if (converge_reference(cl, &g, base, sh, w, h, ref_spp, dn, &refs[sh], &cam, &err) != CLVR_OK) goto fail;
         fprintf(stderr, "bench_render: reference shadows=%d done (%.1f s device)\n", sh, refs[sh].ref_s);
         for (uint32_t e = 0; e < nest; ++e) {
             config c = *base;
@@ -537,7 +601,8 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
             if (est[e].urm_steps) c.urm_steps = est[e].urm_steps;
             if (est[e].urm_kappa > 0.0f) c.urm_kappa = est[e].urm_kappa;
             if (est[e].light_res) c.light_res = est[e].light_res;
-            if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, &res[sh][e], &err) != CLVR_OK) goto fail;
+            if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, dn, &res[sh][e], &err) != CLVR_OK)
+                goto fail;
             variant_label(&est[e], res[sh][e].label, sizeof res[sh][e].label);
             fprintf(stderr, "bench_render: %s shadows=%d done\n", res[sh][e].label, sh);
         }
@@ -561,6 +626,32 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     printf("\nrel RMSE: linear rgb, unclamped, over pixels whose camera ray enters the bounding box (%zu of %u), "
            "reference noise subtracted, divided by the reference's mean rgb over the same pixels.\n",
            refs[sh_lo].ninside, w * h);
+    if (dn) {
+        /* Apart from the table above, which is the unbiased estimate's. */
+        printf("\n--denoise (biased, not the convergence figure): the same frames after the edge-avoiding filter "
+               "(kernels/denoise.h). bias: rel RMSE of the denoised reference against the reference.\n\n");
+        printf("| estimator | shadows | bias (rel) | rel RMSE after 1 / 2 / 4 frames | denoised | spp to %.0f%% "
+               "denoised | s to %.0f%% denoised (frames + one filter) | filter s (wall) |\n",
+               target * 100, target * 100);
+        printf("|---|---|---:|---|---|---:|---:|---:|\n");
+        for (int sh = sh_lo; sh <= sh_hi; ++sh)
+            for (uint32_t e = 0; e < nest; ++e) {
+                const conv_result *r = &res[sh][e];
+                char raw[64] = "", den[64] = "";
+                for (uint32_t i = 0; i < r->npoints; ++i) {
+                    const conv_point *p = &r->pts[i];
+                    if (p->spp != 1 && p->spp != 2 && p->spp != 4) continue;
+                    const size_t lr = strlen(raw), ld = strlen(den);
+                    snprintf(raw + lr, sizeof raw - lr, "%s%.2f%%", lr ? " / " : "", p->rmse_rel * 100);
+                    snprintf(den + ld, sizeof den - ld, "%s%.2f%%", ld ? " / " : "", p->rmse_rel_dn * 100);
+                }
+                printf("| %s | %s | %.2f%% | %s | %s | %s%u | %s%.3f | %.3f |\n", r->label, sh ? "on" : "off",
+                       refs[sh].bias_rel * 100, raw, den, r->reached_dn ? "" : ">",
+                       r->reached_dn ? r->at_dn.spp : max_spp, r->reached_dn ? "" : ">",
+                       (r->reached_dn ? r->at_dn.dev_s : r->pts[r->npoints ? r->npoints - 1 : 0].dev_s) + r->dn_s,
+                       r->dn_s);
+            }
+    }
     if (json) {
         FILE *f = fopen(json, "w");
         if (!f) {
@@ -601,6 +692,10 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                         first ? "" : ",", clvr_render_estimator_name(r->estimator), r->label, sh, r->frame_s,
                         r->samples_per_ray, r->rays_per_pixel, refs[sh].ref_s, refs[sh].ref_mean,
                         sqrt(refs[sh].ref_var), r->reached, r->fit_spp, r->fit_s, r->load_before, r->load_after);
+                if (dn)
+                    fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, "
+                               "\"spp_denoised\": %u, ",
+                            refs[sh].bias_rel, r->dn_s, r->reached_dn, r->reached_dn ? r->at_dn.spp : 0u);
                 first = 0;
                 json_point(f, &r->at);
                 fprintf(f, ", \"points\": [");
@@ -622,6 +717,7 @@ done:
         free(refs[sh].img);
         free(refs[sh].inside);
     }
+    clvr_denoiser_destroy(dn);
     scene_release(cl, &g);
     return rc;
 }
@@ -637,7 +733,8 @@ static int usage(void)
             "                    [--estimator urm|delta] [--urm-steps N] [--urm-kappa K]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
-            "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n");
+            "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n"
+            "                    [--denoise]\n");
     return 2;
 }
 
@@ -655,7 +752,7 @@ int main(int argc, char **argv)
     uint32_t nconv_est = 2;
     int shadow_lo = 0, shadow_hi = 1;
     float urm_kappa = 0.0f;
-    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0, no_hull = 0;
+    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0, no_hull = 0, denoise = 0;
     double target = 0.02, budget = 30.0;
     float density = 1.0f;
     for (int i = 1; i < argc; ++i) {
@@ -679,6 +776,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--no-shadows")) { shadows = 0; shadow_hi = 0; }
         else if (!strcmp(a, "--only-shadows")) shadow_lo = 1;
         else if (!strcmp(a, "--no-hull")) no_hull = 1;
+        else if (!strcmp(a, "--denoise")) denoise = 1;
         else if (!strcmp(a, "--sampler") && v) {
             const char *sv = argv[++i];
             if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
@@ -742,14 +840,14 @@ int main(int argc, char **argv)
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
                     config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
-                                pixel_filter};
+                                pixel_filter, 0};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
                 config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0,
-                            no_hull, pixel_filter};
+                            no_hull, pixel_filter, 0};
                 snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
@@ -764,7 +862,7 @@ int main(int argc, char **argv)
     }
     if (converge) {
         const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
-                             no_hull, pixel_filter};
+                             no_hull, pixel_filter, denoise};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, json);
         clvr_cl_destroy(&cl);

@@ -540,7 +540,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 304 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 312 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -577,6 +577,9 @@ typedef struct clvr_frame {
     clvr_u32 hull_faces;      /* boundary faces in the volume's hull arrays (kernels/hull.h); 0: none,
                                  rays keep their clipped box interval */
     clvr_u32 pixel_filter;    /* CLVR_PIXEL_* */
+    /* Nonzero: clvr_render_frame also accumulates the denoiser's guides
+     * (albedo and depth, kernels/denoise.h) into its guide buffer. */
+    clvr_u32 guides;
     /* Half-spaces that clip the medium, (nx, ny, nz, d) with a unit normal:
      * points with n.p <= d are kept (ParaView's Clip with its default
      * "Invert": the side the normal points away from). Every ray, camera
@@ -585,7 +588,7 @@ typedef struct clvr_frame {
      * (still bounds on a shorter interval). */
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 308, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 312, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

@@ -39,7 +39,7 @@ __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr
 }
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,
                                 CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float4 *accum,
-                                __global float4 *accum_sq, __global uint *counters)
+                                __global float4 *accum_sq, __global uint *counters, __global float4 *guides)
 {
     const uint x = get_global_id(0), y = get_global_id(1);
     const clvr_frame f = *fp;
@@ -60,12 +60,22 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
     float3 org, dir;
     clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir);
 
-    float4 result;
+    float4 result, guide;
     uint samples = 0, nulls = 0, rays = 1;
-    if (f.method == CLVR_RENDER_MARCH)
+    if (f.method == CLVR_RENDER_MARCH) {
         result = clvr_render_march(&v, org, dir, &rng, ldp, &samples);
-    else
-        result = clvr_render_track(&v, org, dir, &rng, ldp, &samples, &nulls, &rays);
+        guide = (float4)(result.xyz, result.w > 0.0f ? 0.0f : -1.0f); /* no depth: one flat layer */
+    } else {
+        result = clvr_render_track(&v, org, dir, &rng, ldp, &samples, &nulls, &rays, &guide);
+    }
+    if (f.guides) {
+        /* Two float4 per pixel: albedo rgb and the frames with a depth, then
+         * the sum of those depths (kernels/denoise.h reads their means). */
+        const int hit = guide.w >= 0.0f;
+        const float4 g0 = (float4)(guide.xyz, hit ? 1.0f : 0.0f), g1 = (float4)(hit ? guide.w : 0.0f, 0.0f, 0.0f, 0.0f);
+        if (f.frame_index == 0) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = g1; }
+        else { guides[2u * pixel] += g0; guides[2u * pixel + 1u] += g1; }
+    }
 
     if (f.frame_index == 0) { accum[pixel] = result; accum_sq[pixel] = result * result; }
     else { accum[pixel] += result; accum_sq[pixel] += result * result; }

@@ -563,6 +563,7 @@ typedef struct clvr_urm {
     float rate;        /* residual points per unit s over the majorant's rate (CLVR_URM_*RESIDUAL_RATE) */
     float3 sum;        /* sum of T sigma / rho * colour */
     float wsum;        /* reservoir: total weight */
+    float tsum;        /* sum of weight times distance: wsum's mean depth (the denoiser's depth guide) */
     float3 lit;        /* sum of T sigma / rho * colour * G (light grid) */
     float3 pick;       /* reservoir: T sigma / rho * colour / weight of the pick */
     float pick_t;      /* reservoir: where */
@@ -605,6 +606,7 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float r
     e->rate = rate;
     e->sum = (float3)(0.0f);
     e->wsum = 0.0f;
+    e->tsum = 0.0f;
     e->pick = (float3)(0.0f);
     e->pick_t = 0.0f;
 }
@@ -760,6 +762,7 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
                 const float G = e->emit == 2 ? clvr_light_at(v, org + dir * t, &spread) : 1.0f;
                 e->lit += G * g;
                 e->wsum += ww;
+                e->tsum += ww * t;
                 if (clvr_urm_reservoir(&e->pick_u, ww / e->wsum)) {
                     e->pick = g / ww;
                     e->pick_t = t;
@@ -921,13 +924,14 @@ inline float clvr_urm_camera(const clvr_volume *v, clvr_urm *e, float3 org, floa
  * (urm), 3 the shadow ray's, 4 the pick of urm's shadow-ray origin. Without
  * ld the draws come from rng. */
 inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
-                                uint *samples, uint *nulls, uint *rays)
+                                uint *samples, uint *nulls, uint *rays, float4 *guide)
 {
     const clvr_frame *f = v->f;
     const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi), ldir = vload3(0, f->light_dir);
     const float4 bg = (float4)(vload3(0, f->background), 0.0f);
     float t0 = 0.0f, t1 = INFINITY;
     const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
+    *guide = (float4)(bg.xyz, -1.0f);
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
         clvr_gaps g;
@@ -952,6 +956,9 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
                 c += f->light_intensity * (lb - e.pick_g) * e.wsum * e.pick / q;
             }
         }
+        /* Guides: the colour unlit (light 1 everywhere) and the points'
+         * weighted mean depth. */
+        *guide = (float4)(e.sum + Tend * bg.xyz, e.wsum > 0.0f ? e.tsum / e.wsum : -1.0f);
         return (float4)(c + Tend * bg.xyz, 1.0f - Tend);
     }
 
@@ -972,6 +979,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, cl
         }
     }
     const float shade = f->ambient + f->light_intensity * light;
+    *guide = (float4)(med.xyz, t); /* the colour and depth of the collision */
     return (float4)(med.xyz * shade, 1.0f);
 }
 

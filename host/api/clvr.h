@@ -48,7 +48,7 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 3
+#define CLVR_API_VERSION_MINOR 4
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
@@ -688,6 +688,26 @@ CLVR_API clvr_result clvr_series_bounds(const clvr_series *se, const char *field
 CLVR_API clvr_result clvr_tracer_set_pixel_filter(clvr_tracer *tr, const char *filter, clvr_message *msg);
 /* "box" or "point"; NULL for a NULL tracer. */
 CLVR_API const char *clvr_tracer_pixel_filter(const clvr_tracer *tr);
+
+/* ======================================================================== *
+ * API 1.4: the optional denoiser.
+ * ======================================================================== */
+
+/* on nonzero: the frames from now on also keep the denoiser's guides (per
+ * pixel the colour unlit and the mean depth of the medium seen, 32 bytes
+ * per pixel on the device), so that clvr_tracer_read_denoised can filter
+ * the image; 0 (the default) drops them. A change restarts the
+ * accumulation. */
+CLVR_API clvr_result clvr_tracer_set_denoise(clvr_tracer *tr, int on, clvr_message *msg);
+/* 1 when the tracer keeps the guides; 0 otherwise or for a NULL tracer. */
+CLVR_API int clvr_tracer_denoise(const clvr_tracer *tr);
+/* The accumulated image (as clvr_tracer_read_image) after an edge-avoiding
+ * a-trous filter guided by the colour's local noise, the albedo and the
+ * depth (kernels/denoise.h). Smoother, and biased: it is not the estimate
+ * the frames converge to, and no convergence figure of clvr uses it. Pixels
+ * whose rays never met the medium stay as they are. ERR_USAGE before a
+ * frame, or unless clvr_tracer_set_denoise(tr, 1) came before the frames. */
+CLVR_API clvr_result clvr_tracer_read_denoised(clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg);
 
 #ifdef __cplusplus
 }

@@ -17,6 +17,7 @@
 #include "camera.h"
 #include "cl_context.h"
 #include "clock.h"
+#include "denoiser.h"
 #include "image.h"
 #include "limits_check.h"
 #include "outline.h"
@@ -758,6 +759,7 @@ struct clvr_tracer {
     float up[3];
     float density, range_lo, range_hi;
     uint64_t frames;
+    clvr_denoiser *denoiser; /* made at the first clvr_tracer_read_denoised */
 };
 
 static void scene_release(clvr_scene *sc)
@@ -1283,6 +1285,7 @@ clvr_result clvr_tracer_create(clvr_context *ctx, clvr_dataset *ds, const char *
 void clvr_tracer_destroy(clvr_tracer *tr)
 {
     if (!tr) return;
+    clvr_denoiser_destroy(tr->denoiser);
     clvr_renderer_destroy(tr->renderer);
     dataset_release(tr->ds);
     scene_release(tr->sc);
@@ -1856,6 +1859,52 @@ clvr_result clvr_tracer_set_pixel_filter(clvr_tracer *tr, const char *filter, cl
 const char *clvr_tracer_pixel_filter(const clvr_tracer *tr)
 {
     return tr ? clvr_setting_name("pixel_filter", tr->rs.pixel_filter) : NULL;
+}
+
+clvr_result clvr_tracer_set_denoise(clvr_tracer *tr, int on, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_set_denoise";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    const int old = tr->rs.guides;
+    if (!old == !on) return finish(CLVR_OK, &e, msg);
+    tr->rs.guides = on ? 1 : 0;
+    const clvr_status s = apply_settings(tr, &e);
+    if (s != CLVR_OK) tr->rs.guides = old;
+    return finish(s, &e, msg);
+}
+
+int clvr_tracer_denoise(const clvr_tracer *tr) { return tr && tr->rs.guides ? 1 : 0; }
+
+clvr_result clvr_tracer_read_denoised(clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_read_denoised";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!rgba) return finish(NULL_ARG(fn, "rgba"), &e, msg);
+    const size_t npix = (size_t)tr->rs.width * tr->rs.height;
+    if (count < npix * 4)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: rgba holds %zu floats; a %ux%u image needs %zu", fn,
+                                     count, tr->rs.width, tr->rs.height, npix * 4),
+                      &e, msg);
+    if (!tr->rs.guides)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: the tracer keeps no guides; call "
+                                     "clvr_tracer_set_denoise(tr, 1) before rendering", fn),
+                      &e, msg);
+    if (tr->frames == 0)
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: no frame rendered since the last change; call "
+                                     "clvr_tracer_render first", fn),
+                      &e, msg);
+    float *guide = malloc(npix * 4 * sizeof(float));
+    if (!guide) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
+    clvr_status s = clvr_renderer_read(tr->renderer, rgba, NULL, &e);
+    if (s == CLVR_OK) s = clvr_renderer_read_guides(tr->renderer, guide, &e);
+    if (s == CLVR_OK && !tr->denoiser) s = clvr_denoiser_create(&tr->ctx->cl, &tr->denoiser, &e);
+    if (s == CLVR_OK)
+        s = clvr_denoiser_run(tr->denoiser, tr->rs.width, tr->rs.height, rgba, guide, clvr_dn_params_default(), rgba,
+                              &e);
+    free(guide);
+    return finish(s, &e, msg);
 }
 
 clvr_result clvr_tracer_set_size(clvr_tracer *tr, uint32_t width, uint32_t height, clvr_message *msg)

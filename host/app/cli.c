@@ -54,6 +54,9 @@ void clvr_cli_print_help(FILE *out)
         "                         at the bottom-left corner\n"
         "  --outline              draw the mesh's bounding box (and the --clip-box) over the image\n"
         "                         (PNG, EXR and PFM), projected with the camera\n"
+        "  --denoise              write the image after an edge-avoiding filter guided by the colour\n"
+        "                         unlit and the depth of the medium (kept by the kernel): smoother,\n"
+        "                         and biased (a preview, not the estimate the frames converge to)\n"
         "  --size WxH             image size (default 512x512)\n"
         "  --spp N                samples per pixel = frames accumulated (default 16)\n"
         "  --seed N               random seed (default 1); same seed, same image\n"
@@ -430,6 +433,7 @@ clvr_result clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_message 
         }
         else if (!strcmp(a, "--legend")) o->legend = 1;
         else if (!strcmp(a, "--outline")) o->outline = 1;
+        else if (!strcmp(a, "--denoise")) o->denoise = 1;
         else if (!strcmp(a, "--clip")) {
             const char *v = NEXT();
             if (v) {

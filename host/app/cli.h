@@ -71,6 +71,7 @@ typedef struct clvr_options {
     float exposure;              /* --exposure EV */
     int tonemap;                 /* --tonemap: index in clvr_setting_name("tonemap", i), default aces */
     int legend;                  /* --legend: colour bar, range and field name drawn into the PNG */
+    int denoise;                 /* --denoise: the image written is clvr_tracer_read_denoised's */
     int outline;                 /* --outline: the mesh's bounding box (and the clip box) drawn over the image */
     /* clipping (the medium is kept where n.p <= d) */
     uint32_t num_clip_planes;    /* --clip nx,ny,nz,d, repeatable up to CLVR_MAX_CLIP */

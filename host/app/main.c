@@ -246,6 +246,7 @@ int main(int argc, char **argv)
     if (clvr_cli_tracer_settings(&o, &ts, &err) != CLVR_RESULT_OK) { rc = fail_msg(&err); goto cleanup; }
     TRY(clvr_tracer_create_on(scene, &ts, o.width, o.height, &tracer, &msg));
     TRY(clvr_tracer_set_pixel_filter(tracer, clvr_setting_name("pixel_filter", o.pixel_filter), &msg));
+    if (o.denoise) TRY(clvr_tracer_set_denoise(tracer, 1, &msg));
     clvr_scene_destroy(scene); /* the tracer holds it */
     scene = NULL;
 
@@ -376,7 +377,8 @@ int main(int argc, char **argv)
         }
         clvr_render_stats counters;
         counters.size = sizeof counters;
-        TRY(clvr_tracer_read_image(tracer, pixels, npix * 4, &msg));
+        if (o.denoise) TRY(clvr_tracer_read_denoised(tracer, pixels, npix * 4, &msg));
+        else TRY(clvr_tracer_read_image(tracer, pixels, npix * 4, &msg));
         TRY(clvr_tracer_get_render_stats(tracer, &counters, &msg));
         if (o.outline) {
             /* Context for the volume: the mesh's bounds in light grey, the
@@ -389,7 +391,9 @@ int main(int argc, char **argv)
         TRY(clvr_image_save_with(path, o.width, o.height, pixels, &display, &msg));
         stats.have_render = 1;
         clvr_stats_from_render(&stats, &counters);
-        if (!o.quiet) fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp)\n", path, o.width, o.height, frame);
+        if (!o.quiet)
+            fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp%s)\n", path, o.width, o.height, frame,
+                    o.denoise ? ", denoised" : "");
     }
     clvr_process_memory(NULL, &stats.bytes_peak_rss);
     if (o.stats) clvr_stats_print(stdout, &stats);

@@ -153,6 +153,9 @@ static clvr_status check_options(const clvr_options *o, clvr_error *err)
                               o->width, o->height, sizeof(clvr_mpi_record));
     if (o->legend || o->outline)
         return clvr_error_set(err, CLVR_ERR_USAGE, "--legend and --outline are not available under mpirun yet");
+    if (o->denoise)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--denoise is not available under mpirun yet; render the image "
+                              "without it, or with clvr on one process");
     return CLVR_OK;
 }
 

@@ -29,6 +29,7 @@ struct clvr_renderer {
     cl_mem mpi_rec, mpi_pick, mpi_tau, mpi_counters;
     size_t mpi_npix;           /* pixels the MPI buffers hold */
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
+    cl_mem guides;             /* settings.guides: 8 floats per pixel (kernels/render.cl) */
     cl_mem light_buf;          /* urm with shadows: the light grid (frame.light_res^3) */
     int light_valid;           /* light_buf matches the frame and transfer function */
     light_key light_key;       /* the frame fields light_buf was made for */
@@ -129,7 +130,10 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
     clvr_status s = CLVR_OK;
     clvr_cl *cl = r->cl;
     size_t npix = (size_t)r->set.width * r->set.height;
-    if (r->accum && r->accum_w == r->set.width && r->accum_h == r->set.height) return CLVR_OK;
+    if (!r->set.guides) clvr_cl_release(cl, &r->guides);
+    if (r->accum && r->accum_w == r->set.width && r->accum_h == r->set.height && (r->guides || !r->set.guides))
+        return CLVR_OK;
+    clvr_cl_release(cl, &r->guides);
     clvr_cl_release(cl, &r->accum);
     clvr_cl_release(cl, &r->accum_sq);
     clvr_cl_release(cl, &r->counters);
@@ -139,6 +143,9 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
                             &r->accum_sq, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 3 * sizeof(cl_uint), NULL, "ray counters", &r->counters,
                             err));
+    if (r->set.guides)
+        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 8 * sizeof(float), NULL, "denoiser guides", &r->guides,
+                                err));
     r->accum_w = r->set.width;
     r->accum_h = r->set.height;
 cleanup:
@@ -208,6 +215,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->shadows = set->shadows ? 1u : 0u;
     f->sampler = set->sampler;
     f->pixel_filter = set->pixel_filter;
+    f->guides = set->guides ? 1u : 0u;
     f->bins = set->bins;
     f->segments = set->segments;
     f->grid_res = set->macrocells;
@@ -298,7 +306,7 @@ void clvr_renderer_destroy(clvr_renderer *r)
     clvr_cl_release(r->cl, &r->light_buf);
     if (r->prog_render) clReleaseProgram(r->prog_render);
     clvr_majorants_destroy(r->maj);
-    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters};
+    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters, &r->guides};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -409,9 +417,11 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     cl_kernel k = r->k_render;
     volume_bufs vol = volume_of(r);
     CLVR_TRY(ensure_light(r, err));
+    cl_mem guides = r->guides ? r->guides : r->accum; /* not written without guides */
     /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
-                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters)));
+                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters),
+                          CLVR_ARG(guides)));
     size_t local[2] = {r->local[0], r->local[1]};
     size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
                         (r->set.height + local[1] - 1) / local[1] * local[1]};
@@ -440,6 +450,30 @@ clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *sum, float *sums
     if (sum) CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->accum, CL_TRUE, 0, bytes, sum, 0, NULL, NULL));
     if (sumsq) CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->accum_sq, CL_TRUE, 0, bytes, sumsq, 0, NULL, NULL));
 cleanup:
+    return s;
+}
+
+clvr_status clvr_renderer_read_guides(clvr_renderer *r, float *guide, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const size_t npix = (size_t)r->set.width * r->set.height;
+    float *g = NULL;
+    if (!r->guides) return clvr_error_set(err, CLVR_ERR_INTERNAL, "the renderer keeps no denoiser guides");
+    if (r->frames == 0) return clvr_error_set(err, CLVR_ERR_INTERNAL, "no frame rendered yet");
+    g = malloc(npix * 8 * sizeof(float));
+    if (!g) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading the denoiser guides");
+    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->guides, CL_TRUE, 0, npix * 8 * sizeof(float), g, 0, NULL,
+                                      NULL));
+    {
+        const float inv = 1.0f / (float)r->frames;
+        for (size_t i = 0; i < npix; ++i) {
+            const float *q = g + 8 * i;
+            for (int k = 0; k < 3; ++k) guide[4 * i + (size_t)k] = q[k] * inv;
+            guide[4 * i + 3] = q[3] > 0.0f ? q[4] / q[3] : -1.0f;
+        }
+    }
+cleanup:
+    free(g);
     return s;
 }
 

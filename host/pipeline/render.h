@@ -34,6 +34,7 @@ typedef struct clvr_render_settings {
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
     uint32_t pixel_filter;     /* CLVR_PIXEL_*: box (default, antialiased) or point (pixel centres) */
+    int guides;                /* nonzero: frames also accumulate the denoiser's guides (clvr_renderer_read_guides) */
     int shadows;
     /* Nonzero (default): every camera ray is cut to the part between its
      * first and last crossing of the mesh's boundary faces, where the
@@ -103,6 +104,12 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
 /* The sum of per-frame samples (not the mean), for tests that need per-pixel
  * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL). */
 clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float *rgba_sumsq, clvr_error *err);
+
+/* The denoiser's guides (kernels/denoise.h) of the frames so far: per pixel
+ * the mean albedo (colour unlit) rgb and the mean depth of the frames whose
+ * ray met the medium, or -1 where none did (width * height * 4 floats). An
+ * error unless the settings asked for guides. */
+clvr_status clvr_renderer_read_guides(clvr_renderer *r, float *guide, clvr_error *err);
 
 /* The urm light grid (transmittance toward the light at the centres of
  * frame light_res^3 cells over the grid domain, x fastest) as last built by

@@ -1,0 +1,129 @@
+#include "denoiser.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct clvr_denoiser {
+    clvr_cl *cl;
+    cl_program prog;
+    cl_kernel k_guides, k_noise, k_pass;
+};
+
+clvr_status clvr_denoiser_create(clvr_cl *cl, clvr_denoiser **out, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_denoiser *d = calloc(1, sizeof *d);
+    *out = NULL;
+    if (!d) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory creating the denoiser");
+    d->cl = cl;
+    CLVR_TRY(clvr_cl_build(cl, "denoise.cl", NULL, &d->prog, err));
+    CLVR_TRY(clvr_cl_kernel(d->prog, "clvr_dn_guides", &d->k_guides, err));
+    CLVR_TRY(clvr_cl_kernel(d->prog, "clvr_dn_noise_map", &d->k_noise, err));
+    CLVR_TRY(clvr_cl_kernel(d->prog, "clvr_dn_atrous", &d->k_pass, err));
+    *out = d;
+    d = NULL;
+cleanup:
+    clvr_denoiser_destroy(d);
+    return s;
+}
+
+void clvr_denoiser_destroy(clvr_denoiser *d)
+{
+    if (!d) return;
+    if (d->k_guides) clReleaseKernel(d->k_guides);
+    if (d->k_noise) clReleaseKernel(d->k_noise);
+    if (d->k_pass) clReleaseKernel(d->k_pass);
+    if (d->prog) clReleaseProgram(d->prog);
+    free(d);
+}
+
+/* A 2D launch over w x h in 8x8 groups (rounded up; the kernels check). */
+static clvr_status run2d(clvr_cl *cl, cl_kernel k, const char *name, uint32_t w, uint32_t h, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const size_t local[2] = {8, 8}, global[2] = {(w + 7u) / 8u * 8u, (h + 7u) / 8u * 8u};
+    cl_int rc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
+    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 2, NULL, global, local, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        char call[96];
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s, %ux%u)", name, w, h);
+        return clvr_cl_fail(err, call, rc, __FILE__, __LINE__);
+    }
+    return s;
+}
+
+clvr_status clvr_denoiser_run(clvr_denoiser *d, uint32_t w, uint32_t h, const float *rgba, const float *guide,
+                              clvr_dn_params prm, float *out, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_cl *cl = d->cl;
+    cl_mem img[2] = {NULL, NULL}, graw = NULL, gbuf = NULL, noise = NULL;
+    const size_t npix = (size_t)w * h, bytes = npix * 4 * sizeof(float);
+    if (npix == 0) return CLVR_OK;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, bytes, (void *)rgba, "denoiser image",
+                            &img[0], err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, bytes, NULL, "denoiser image", &img[1], err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, (void *)guide, "denoiser guides",
+                            &graw, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, bytes, NULL, "denoiser guides", &gbuf, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * sizeof(float), NULL, "denoiser noise map", &noise, err));
+    {
+        cl_uint cw = w, ch = h;
+        CLVR_TRY(CLVR_CL_ARGS(d->k_guides, err, CLVR_ARG(graw), CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(gbuf)));
+        CLVR_TRY(run2d(cl, d->k_guides, "clvr_dn_guides", w, h, err));
+        CLVR_TRY(CLVR_CL_ARGS(d->k_noise, err, CLVR_ARG(img[0]), CLVR_ARG(gbuf), CLVR_ARG(cw), CLVR_ARG(ch),
+                              CLVR_ARG(noise)));
+        CLVR_TRY(run2d(cl, d->k_noise, "clvr_dn_noise_map", w, h, err));
+        int cur = 0;
+        for (cl_uint pass = 0, step = 1; pass < prm.passes && pass < CLVR_DN_MAX_PASSES; ++pass, step *= 2u) {
+            CLVR_TRY(CLVR_CL_ARGS(d->k_pass, err, CLVR_ARG(img[cur]), CLVR_ARG(gbuf), CLVR_ARG(noise), CLVR_ARG(cw),
+                                  CLVR_ARG(ch), CLVR_ARG(step), CLVR_ARG(prm.sigma_l), CLVR_ARG(prm.sigma_a),
+                                  CLVR_ARG(prm.sigma_d), CLVR_ARG(img[1 - cur])));
+            CLVR_TRY(run2d(cl, d->k_pass, "clvr_dn_atrous", w, h, err));
+            cur = 1 - cur;
+        }
+        CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, img[cur], CL_TRUE, 0, bytes, out, 0, NULL, NULL));
+    }
+cleanup:
+    clvr_cl_release(cl, &img[0]);
+    clvr_cl_release(cl, &img[1]);
+    clvr_cl_release(cl, &graw);
+    clvr_cl_release(cl, &gbuf);
+    clvr_cl_release(cl, &noise);
+    return s;
+}
+
+clvr_status clvr_denoise_ref(uint32_t w, uint32_t h, const float *rgba, const float *guide, clvr_dn_params prm,
+                             float *out, clvr_error *err)
+{
+    const size_t npix = (size_t)w * h;
+    if (npix == 0) return CLVR_OK;
+    float *a = malloc(npix * 4 * sizeof(float)), *b = malloc(npix * 4 * sizeof(float));
+    float *noise = malloc(npix * sizeof(float)), *g = malloc(npix * 4 * sizeof(float));
+    if (!a || !b || !noise || !g) {
+        free(a);
+        free(b);
+        free(noise);
+        free(g);
+        return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory denoising a %ux%u image", w, h);
+    }
+    memcpy(a, rgba, npix * 4 * sizeof(float));
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) clvr_dn_guide_smooth(guide, w, h, x, y, g + 4 * ((size_t)y * w + x));
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) noise[(size_t)y * w + x] = clvr_dn_noise(a, g, w, h, x, y);
+    for (uint32_t pass = 0, step = 1; pass < prm.passes && pass < CLVR_DN_MAX_PASSES; ++pass, step *= 2u) {
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x) clvr_dn_pass(a, g, noise, w, h, x, y, step, prm, b + 4 * ((size_t)y * w + x));
+        float *t = a;
+        a = b;
+        b = t;
+    }
+    memcpy(out, a, npix * 4 * sizeof(float));
+    free(a);
+    free(b);
+    free(noise);
+    free(g);
+    return CLVR_OK;
+}
