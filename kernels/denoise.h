@@ -36,15 +36,16 @@
 
 /* Edge-stopping strengths (larger: smooths across larger differences).
  * The defaults: 256^2, urm, bench_render --converge --denoise, error after
- * 1 frame raw -> denoised (bias: the converged reference denoised against
- * itself): PLOT3D post with shadows 3.95 -> 3.29% (bias 0.52%), combustor
- * without 4.56 -> 4.48% (0.85%), kiefer_tet10 without 7.09 -> 7.22% (1.0%);
- * a colour weight of 1 or an albedo weight of 0.1-0.2, or passes 3-5, gave
- * less or a larger bias, and without the albedo or the depth weight the bias
+ * 1 frame raw -> denoised without / with shadows (bias: the converged
+ * reference denoised, against itself): PLOT3D post 3.07 -> 2.49% / 3.95 ->
+ * 3.06% (bias 0.3-0.5%), combustor 4.56 -> 3.80% / 4.88 -> 3.93% (0.9%),
+ * kiefer_tet10 7.09 -> 6.61% / 6.92 -> 6.41% (1.1%). A colour weight of 1,
+ * an albedo weight of 0.1-0.2, passes 3 or 5, or guides used unsmoothed gave
+ * less or a larger bias; without the albedo or the depth weight the bias
  * reached 5-30% (bench/results/render-converge/2026-11-28-s30-denoise.md).
- * Where the error of the first frames is sub-pixel coverage at edges and
- * structure at the pixel's scale (what the box filter's jitter leaves), no
- * edge-avoiding filter removes it. */
+ * What the first frames' error holds beyond the estimator's noise
+ * (sub-pixel coverage at edges, structure at the pixel's scale) no
+ * edge-avoiding filter removes. */
 typedef struct clvr_dn_params {
     float sigma_l; /* colour: luminance differences in noise standard deviations */
     float sigma_a; /* albedo: relative difference */
