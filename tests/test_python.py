@@ -396,6 +396,20 @@ def test_scene_settings(ctx):
     r3 = clvr.Renderer(sc, width=8, height=8, method="track", estimator="delta", seed=5, pixel_filter="point")
     r1.set_settings(pixel_filter="point")
     check(r3.settings["pixel_filter"] == "point" and r1.settings["pixel_filter"] == "point", "point filter set")
+    # The denoiser (API 1.4): off by default, the denoised image refused without its guides, then a smoother image
+    # of the same frames.
+    check(r1.settings["denoise"] is False, "no denoiser guides by default")
+    r1.render(spp=1)
+    raises(lambda: r1.image(denoised=True), clvr.InputError, "clvr_tracer_set_denoise", "denoised image without guides")
+    r1.set_settings(denoise=True)
+    check(r1.settings["denoise"] is True, "denoise set")
+    r4 = clvr.Renderer(sc, width=32, height=32, seed=5, denoise=True)  # dda, urm
+    check(r4.settings["denoise"] is True, "denoise set at construction")
+    r4.render(spp=2)
+    dn, raw = r4.image(denoised=True), r4.image()
+    check(dn.shape == raw.shape and float(np.abs(dn - raw).max()) > 1e-5,
+          "the denoised image differs from the raw one (%g)" % float(np.abs(dn - raw).max()))
+    r1.set_settings(denoise=False)
     check(not np.array_equal(r2.render(spp=2), r3.render(spp=2)), "the point filter renders another image")
     raises(lambda: clvr.Renderer(sc, width=True, height=8), clvr.InputError, "width", "width True")
     raises(lambda: clvr.Renderer(sc, width=8, height=65537), clvr.InputError, "[1, 65536]", "height 65537")

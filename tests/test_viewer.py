@@ -335,6 +335,45 @@ def estimator_session(xvfb, tmp):
         check(worst <= 1, "the window shows the PNG's codes (within 1)", worst, "<= 1")
 
 
+DENOISE_SESSION = """\
+frames 2
+save raw.pfm
+key D
+frames 2
+save dn.pfm
+key K
+quit
+"""
+
+
+def denoise_session(xvfb, tmp):
+    """D shows the denoised preview: the window's image is `clvr --denoise` of its K line, and differs from the raw one."""
+    d = os.path.join(tmp, "denoise")
+    os.makedirs(d)
+    script = os.path.join(d, "dn.txt")
+    with open(script, "w") as f:
+        f.write(DENOISE_SESSION)
+    r = run(xvfb + [CLVR, "--view", "--quiet", "--size", "64x48", MESH], env={"CLVR_VIEW_SCRIPT": script}, cwd=d)
+    if not check(r.returncode == 0, "the denoise session exits 0", (r.returncode, r.stderr.strip())):
+        return
+    view_txt = os.path.join(d, "clvr-view.txt")
+    if not check(os.path.exists(view_txt), "K wrote clvr-view.txt (denoise session)"):
+        return
+    with open(view_txt) as f:
+        line = f.read().strip()
+    check("--denoise" in line, "after D the K line has --denoise", line)
+    base = shlex.split(line)[1:]
+    off = os.path.join(d, "off_dn.pfm")
+    r = run([CLVR] + base + ["--spp", "2", "--quiet", "-o", off], cwd=d)
+    if check(r.returncode == 0, "the K line with --denoise runs offline", (r.returncode, r.stderr)):
+        dn = read_pfm(os.path.join(d, "dn.pfm"))
+        check(max_diff(dn, read_pfm(off)) <= 1e-6, "the window's denoised image is `clvr --denoise` of its K line",
+              max_diff(dn, read_pfm(off)))
+        raw = read_pfm(os.path.join(d, "raw.pfm"))
+        check(max_diff(dn, raw) > 1e-4, "the denoised image differs from the raw one (the check can fail)",
+              max_diff(dn, raw))
+
+
 def srgb_encode(c):
     return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1.0 / 2.4) - 0.055
 
@@ -470,6 +509,7 @@ def main():
                 check(d <= 1e-6, f"offline render of the K line at {spp} spp equals the viewer's image", d, 0.0)
 
         estimator_session(xvfb, tmp)
+        denoise_session(xvfb, tmp)
 
         # --up z: the viewer orbits about z, and its K line carries that up vector.
         up_dir = os.path.join(tmp, "up")

@@ -143,6 +143,7 @@ void clvr_cli_print_help(FILE *out)
         "  M / shift+M            next / previous method: march, track, bins, dda\n"
         "  E / shift+E            next / previous estimator: urm, delta (not with march)\n"
         "  A                      pixel filter: box (antialiased) / point (pixel centres, as VTK)\n"
+        "  D                      show the image denoised (--denoise: a biased preview) / as it is\n"
         "  L+left drag, ctrl+left drag, ctrl+arrows   rotate the light\n"
         "  X / P                  save the accumulated image as clvr-view-NNN.exr / .png (the PNG\n"
         "                         and the window use --exposure and --tonemap, as -o x.png does)\n"

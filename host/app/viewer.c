@@ -71,6 +71,7 @@ typedef struct viewer {
     /* Pending edits, applied once per loop turn. */
     int dirty_settings, dirty_camera, dirty_tf;
     int filter_point;          /* A: the point pixel filter (clvr_tracer_set_pixel_filter) instead of box */
+    int denoise;               /* D: the window shows clvr_tracer_read_denoised (a biased preview) */
 
     /* Image: the renderer's size is the framebuffer's. */
     uint32_t img_w, img_h;       /* size of rgba / rgba8 contents */
@@ -362,6 +363,7 @@ static void print_command_line(viewer *v)
     if (strcmp(v->ts.sampler, dts.sampler)) appendf(line, cap, " --sampler %s", v->ts.sampler);
     if (strcmp(clvr_tracer_pixel_filter(v->tr), "box"))
         appendf(line, cap, " --pixel-filter %s", clvr_tracer_pixel_filter(v->tr));
+    if (v->denoise) appendf(line, cap, " --denoise");
     if (v->ts.step != dts.step) appendf(line, cap, " --step %.9g", (double)v->ts.step);
     if (v->ts.bins != dts.bins) appendf(line, cap, " --bins %u", v->ts.bins);
     if (v->ts.segments != dts.segments) appendf(line, cap, " --segments %u", v->ts.segments);
@@ -488,6 +490,10 @@ static void handle_key(viewer *v, int key, int mods)
     }
     case GLFW_KEY_A: /* antialiasing: the box filter, or the point filter of VTK's ray casters */
         v->filter_point = !v->filter_point;
+        v->dirty_settings = 1;
+        break;
+    case GLFW_KEY_D: /* the denoised preview (guides kept by the kernel), or the estimate itself */
+        v->denoise = !v->denoise;
         v->dirty_settings = 1;
         break;
     case GLFW_KEY_X: save_numbered(v, "exr"); break;
@@ -671,6 +677,7 @@ static clvr_result apply_edits(viewer *v)
         if (clvr_tracer_set_settings(v->tr, &v->ts, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
         if (clvr_tracer_set_pixel_filter(v->tr, v->filter_point ? "point" : "box", &msg) != CLVR_RESULT_OK)
             return lib_fail(v, &msg);
+        if (clvr_tracer_set_denoise(v->tr, v->denoise, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
         v->dirty_settings = 0;
     }
     if (v->dirty_camera) {
@@ -700,7 +707,9 @@ static clvr_result render_frame(viewer *v)
     c.size = sizeof c;
     if (clvr_tracer_render(v->tr, 1, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
     if ((s = ensure_image(v, v->width, v->height)) != CLVR_RESULT_OK) return s;
-    if (clvr_tracer_read_image(v->tr, v->rgba, (size_t)v->width * v->height * 4, &msg) != CLVR_RESULT_OK ||
+    const size_t count = (size_t)v->width * v->height * 4;
+    if ((v->denoise ? clvr_tracer_read_denoised(v->tr, v->rgba, count, &msg)
+                    : clvr_tracer_read_image(v->tr, v->rgba, count, &msg)) != CLVR_RESULT_OK ||
         clvr_tracer_get_render_stats(v->tr, &c, &msg) != CLVR_RESULT_OK)
         return lib_fail(v, &msg);
     v->img_w = v->width;
@@ -1024,6 +1033,7 @@ clvr_result clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
     v->o = o;
     v->tr = tr;
     v->filter_point = !strcmp(clvr_tracer_pixel_filter(tr), "point");
+    v->denoise = clvr_tracer_denoise(tr);
     v->device = device ? device : "";
     v->shadows = o->shadows;
     v->err = err;

@@ -182,6 +182,9 @@ _PROTOS = {
     "clvr_setting_index": (ctypes.c_int, [_S, _S, ctypes.POINTER(_U32), _M]),
     "clvr_tracer_set_pixel_filter": (ctypes.c_int, [_P, _S, _M]),  # API 1.3
     "clvr_tracer_pixel_filter": (_S, [_P]),
+    "clvr_tracer_set_denoise": (ctypes.c_int, [_P, ctypes.c_int, _M]),  # API 1.4
+    "clvr_tracer_denoise": (ctypes.c_int, [_P]),
+    "clvr_tracer_read_denoised": (ctypes.c_int, [_P, _P, ctypes.c_size_t, _M]),
     "clvr_default_size": (None, [ctypes.POINTER(_U32), ctypes.POINTER(_U32)]),
     "clvr_frame_box": (ctypes.c_int, [_c_float3, _c_float3, _P, _F, _F, _F, _F, _U32, _U32, _c_float3, _c_float3,
                                       _M]),
@@ -733,7 +736,8 @@ class Renderer(_Handle):
     urm_steps, step, bins, segments, macrocells, light_dir,
     light_intensity, ambient, shadows, background, clip_box, clip_lo,
     clip_hi, clip_planes, pixel_filter: "box", the default, antialiased,
-    or "point", the ray through each pixel's centre as VTK draws)."""
+    or "point", the ray through each pixel's centre as VTK draws; denoise:
+    True keeps the guides that image(denoised=True) needs, off by default)."""
 
     def __init__(self, mesh, device="pocl", width=512, height=512, field=None, **settings):
         if not isinstance(mesh, (Mesh, Scene)):
@@ -742,6 +746,7 @@ class Renderer(_Handle):
         for what, v in (("width", width), ("height", height)):
             _count(what, v, 1, 65536)
         settings = dict(settings)
+        denoise = settings.pop("denoise", None)
         pixel_filter = settings.pop("pixel_filter", None)
         if pixel_filter is not None:
             setting_index("pixel_filter", pixel_filter)  # a bad name fails before any device work
@@ -762,6 +767,8 @@ class Renderer(_Handle):
                 _call(_lib.clvr_tracer_set_settings, self._h, ctypes.byref(ts))
         if pixel_filter is not None:
             _call(_lib.clvr_tracer_set_pixel_filter, self._h, _text("pixel_filter", pixel_filter))
+        if denoise is not None:
+            _call(_lib.clvr_tracer_set_denoise, self._h, 1 if denoise else 0)
         self.width, self.height = int(width), int(height)
         self._seed = int(ts.seed)  # the renderer's default, as the program's --seed
 
@@ -773,11 +780,13 @@ class Renderer(_Handle):
         _call(_lib.clvr_tracer_get_settings, self._h, ctypes.byref(ts))
         d = _settings_dict(ts)
         d["pixel_filter"] = _lib.clvr_tracer_pixel_filter(self._h).decode()
+        d["denoise"] = bool(_lib.clvr_tracer_denoise(self._h))
         return d
 
     def set_settings(self, **kw):
         """Changes the given settings (all checked; all or none applied)."""
         kw = dict(kw)
+        denoise = kw.pop("denoise", None)
         pixel_filter = kw.pop("pixel_filter", None)
         if pixel_filter is not None:
             setting_index("pixel_filter", pixel_filter)  # checked before anything changes
@@ -788,6 +797,8 @@ class Renderer(_Handle):
         _call(_lib.clvr_tracer_set_settings, self._h, ctypes.byref(ts))
         if pixel_filter is not None:
             _call(_lib.clvr_tracer_set_pixel_filter, self._h, _text("pixel_filter", pixel_filter))
+        if denoise is not None:
+            _call(_lib.clvr_tracer_set_denoise, self._h, 1 if denoise else 0)
         self._seed = int(ts.seed)
 
     _destroy = staticmethod(_lib.clvr_tracer_destroy)
@@ -903,10 +914,13 @@ class Renderer(_Handle):
         _call(_lib.clvr_tracer_render, self._h, int(spp))
         return self.image()
 
-    def image(self):
-        """The running mean image, float32 (height, width, 4)."""
+    def image(self, denoised=False):
+        """The running mean image, float32 (height, width, 4). denoised: after
+        the edge-avoiding filter of clvr --denoise (a biased preview; needs the
+        denoise setting before the frames)."""
         img = np.empty((self.height, self.width, 4), np.float32)
-        _call(_lib.clvr_tracer_read_image, self._h, _ptr(img), img.size)
+        _call(_lib.clvr_tracer_read_denoised if denoised else _lib.clvr_tracer_read_image, self._h, _ptr(img),
+              img.size)
         return img
 
     _STATS = ("frames", "rays", "samples", "null_collisions", "kernel_s", "last_frame_s", "preprocess_s",
