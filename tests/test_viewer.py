@@ -258,16 +258,21 @@ quit
 """
 
 
+def run_session(xvfb, tmp, name, session, args):
+    """Runs the viewer with args and the CLVR_VIEW_SCRIPT session text in a new directory tmp/name: (dir, result)."""
+    d = os.path.join(tmp, name)
+    os.makedirs(d)
+    script = os.path.join(d, name + ".txt")
+    with open(script, "w") as f:
+        f.write(session)
+    return d, run(xvfb + [CLVR] + args, env={"CLVR_VIEW_SCRIPT": script}, cwd=d)
+
+
 def estimator_session(xvfb, tmp):
     """--estimator, --urm-steps, E / shift+E, and the display curve of PNG output."""
-    d = os.path.join(tmp, "estimator")
-    os.makedirs(d)
-    script = os.path.join(d, "e.txt")
-    with open(script, "w") as f:
-        f.write(ESTIMATOR_SESSION)
     args = ["--view", "--quiet", "--size", "64x48", "--estimator", "delta", "--urm-steps", "5", "--exposure", "0.5",
             "--tonemap", "filmic", MESH]
-    r = run(xvfb + [CLVR] + args, env={"CLVR_VIEW_SCRIPT": script}, cwd=d)
+    d, r = run_session(xvfb, tmp, "estimator", ESTIMATOR_SESSION, args)
     if not check(r.returncode == 0, "the estimator session exits 0", (r.returncode, r.stderr.strip())):
         return
     out = r.stdout
@@ -348,12 +353,7 @@ quit
 
 def denoise_session(xvfb, tmp):
     """D shows the denoised preview: the window's image is `clvr --denoise` of its K line, and differs from the raw one."""
-    d = os.path.join(tmp, "denoise")
-    os.makedirs(d)
-    script = os.path.join(d, "dn.txt")
-    with open(script, "w") as f:
-        f.write(DENOISE_SESSION)
-    r = run(xvfb + [CLVR, "--view", "--quiet", "--size", "64x48", MESH], env={"CLVR_VIEW_SCRIPT": script}, cwd=d)
+    d, r = run_session(xvfb, tmp, "denoise", DENOISE_SESSION, ["--view", "--quiet", "--size", "64x48", MESH])
     if not check(r.returncode == 0, "the denoise session exits 0", (r.returncode, r.stderr.strip())):
         return
     view_txt = os.path.join(d, "clvr-view.txt")
