@@ -397,22 +397,17 @@ static double inside_mse(const float *img, const conv_ref *ref, size_t npix)
     return ref->ninside ? mse / (3.0 * (double)ref->ninside) : 0.0;
 }
 
-/* The renderer's image denoised (its guides, the default parameters) into out. */
-static clvr_status denoised_image(clvr_renderer *rd, clvr_denoiser *dn, uint32_t w, uint32_t h, const float *img,
-                                  float *out, double *wall_s, clvr_error *err)
+/* The renderer's image denoised into out (clvr_denoise_renderer; the
+ * default parameters, or CLVR_DN=sigma_l,sigma_a,sigma_d,passes for tuning). */
+static clvr_status denoised_image(clvr_renderer *rd, clvr_denoiser *dn, uint32_t w, uint32_t h, float *out,
+                                  double *wall_s, clvr_error *err)
 {
-    const size_t npix = (size_t)w * h;
-    float *guide = malloc(npix * 4 * sizeof(float));
-    if (!guide) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
     clvr_dn_params prm = clvr_dn_params_default();
-    /* CLVR_DN=sigma_l,sigma_a,sigma_d,passes: other parameters, for tuning. */
     const char *ev = getenv("CLVR_DN");
     if (ev) sscanf(ev, "%f,%f,%f,%u", &prm.sigma_l, &prm.sigma_a, &prm.sigma_d, &prm.passes);
     const double t0 = clvr_clock_monotonic_s();
-    clvr_status s = clvr_renderer_read_guides(rd, guide, err);
-    if (s == CLVR_OK) s = clvr_denoiser_run(dn, w, h, img, guide, prm, out, err);
+    clvr_status s = clvr_denoise_renderer(dn, rd, w, h, prm, out, err);
     if (wall_s) *wall_s = clvr_clock_monotonic_s() - t0;
-    free(guide);
     return s;
 }
 
@@ -470,7 +465,7 @@ static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *b
     if (dn) {
         /* The denoiser's bias: what it changes in an image that is already
          * converged (the reference, whose own noise is far below it). */
-        s = denoised_image(rd, dn, w, h, out->img, sum, NULL, err);
+        s = denoised_image(rd, dn, w, h, sum, NULL, err);
         if (s != CLVR_OK) goto done;
         out->bias_rel = mean > 0 ? sqrt(inside_mse(sum, out, npix)) / mean : 0.0;
     }
@@ -491,6 +486,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
     float *img = malloc(npix * 4 * sizeof(float)), *dimg = dn ? malloc(npix * 4 * sizeof(float)) : NULL;
     clvr_render_counters rc;
     memset(out, 0, sizeof *out);
+    out->at.rmse_rel_dn = out->at_dn.rmse_rel_dn = NAN; /* not measured until a checkpoint says */
     out->shadows = c->shadows;
     out->estimator = c->estimator;
     out->load_before = bench_load1();
@@ -517,7 +513,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
                          NAN};
         pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
         if (dn) {
-            s = denoised_image(rd, dn, w, h, img, dimg, &out->dn_s, err);
+            s = denoised_image(rd, dn, w, h, dimg, &out->dn_s, err);
             if (s != CLVR_OK) break;
             const double md = inside_mse(dimg, ref, npix);
             pt.rmse_rel_dn = ref->ref_mean > 0 ? sqrt(md > ref->ref_var ? md - ref->ref_var : 0.0) / ref->ref_mean : 0.0;
@@ -688,7 +684,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                 fprintf(f, "%s\n  {\"estimator\": \"%s\", \"label\": \"%s\", \"shadows\": %d, \"frame_s\": %.6g, \"samples_per_ray\": %.6g, "
                            "\"rays_per_pixel\": %.6g, \"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
                            "\"ref_own_rmse\": %.6g, \"reached\": %d, \"fit_spp\": %.6g, \"fit_s\": %.6g, "
-                           "\"load_before\": %.2f, \"load_after\": %.2f, \"at\": ",
+                           "\"load_before\": %.2f, \"load_after\": %.2f, ",
                         first ? "" : ",", clvr_render_estimator_name(r->estimator), r->label, sh, r->frame_s,
                         r->samples_per_ray, r->rays_per_pixel, refs[sh].ref_s, refs[sh].ref_mean,
                         sqrt(refs[sh].ref_var), r->reached, r->fit_spp, r->fit_s, r->load_before, r->load_after);
@@ -696,6 +692,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                     fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, "
                                "\"spp_denoised\": %u, ",
                             refs[sh].bias_rel, r->dn_s, r->reached_dn, r->reached_dn ? r->at_dn.spp : 0u);
+                fprintf(f, "\"at\": ");
                 first = 0;
                 json_point(f, &r->at);
                 fprintf(f, ", \"points\": [");

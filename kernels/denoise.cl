@@ -4,13 +4,15 @@
 #include "clvr_shared.h"
 #include "denoise.h"
 
-/* noise[p]: clvr_dn_noise of the input image. */
-__kernel void clvr_dn_noise_map(__global const float *rgba, __global const float *guide, uint w, uint h,
-                                __global float *noise)
+/* noise[p]: clvr_dn_noise_var of var when has_var, else clvr_dn_noise of
+ * the input image. */
+__kernel void clvr_dn_noise_map(__global const float *rgba, __global const float *guide, __global const float *var,
+                                uint has_var, uint w, uint h, __global float *noise)
 {
     const uint x = get_global_id(0), y = get_global_id(1);
     if (x >= w || y >= h) return;
-    noise[(ulong)y * w + x] = clvr_dn_noise(rgba, guide, w, h, x, y);
+    const float lap = clvr_dn_noise(rgba, guide, w, h, x, y);
+    noise[(ulong)y * w + x] = has_var ? fmin(lap, clvr_dn_noise_var(var, guide, w, h, x, y)) : lap;
 }
 
 /* smooth[p]: clvr_dn_guide_smooth of the guides. */

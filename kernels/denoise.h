@@ -38,14 +38,15 @@
  * The defaults: 256^2, urm, bench_render --converge --denoise, error after
  * 1 frame raw -> denoised without / with shadows (bias: the converged
  * reference denoised, against itself): PLOT3D post 3.07 -> 2.49% / 3.95 ->
- * 3.06% (bias 0.3-0.5%), combustor 4.56 -> 3.80% / 4.88 -> 3.93% (0.9%),
- * kiefer_tet10 7.09 -> 6.61% / 6.92 -> 6.41% (1.1%). A colour weight of 1,
+ * 3.06% (bias 0.2-0.3%), combustor 4.56 -> 3.80% / 4.88 -> 3.93% (0.6-0.7%),
+ * kiefer_tet10 7.09 -> 6.61% / 6.92 -> 6.41% (0.5%). A colour weight of 1,
  * an albedo weight of 0.1-0.2, passes 3 or 5, or guides used unsmoothed gave
  * less or a larger bias; without the albedo or the depth weight the bias
  * reached 5-30% (bench/results/render-converge/2026-11-28-s30-denoise.md).
  * What the first frames' error holds beyond the estimator's noise
  * (sub-pixel coverage at edges, structure at the pixel's scale) no
- * edge-avoiding filter removes. */
+ * edge-avoiding filter removes; from about 4 frames on the raw image is
+ * closer to the converged one. */
 typedef struct clvr_dn_params {
     float sigma_l; /* colour: luminance differences in noise standard deviations */
     float sigma_a; /* albedo: relative difference */
@@ -126,6 +127,28 @@ CLVR_INLINE void clvr_dn_guide_smooth(CLVR_GLOBAL const float *guide, clvr_u32 w
             n += 1.0f;
         }
     for (int k = 0; k < 4; ++k) out[k] = sum[k] / n;
+}
+
+/* The noise scale of pixel (x, y) from var, the variance of each pixel's
+ * mean luminance over its frames (clvr_dn_moments_variance): the square root
+ * of its mean over the 3x3 neighbours that see the medium (one pixel's
+ * variance from a few frames is itself noisy). It shrinks as frames
+ * accumulate, so a converged image is left nearly as it is, where the
+ * Laplacians' estimate would keep smoothing its structure. */
+CLVR_INLINE float clvr_dn_noise_var(CLVR_GLOBAL const float *var, CLVR_GLOBAL const float *guide, clvr_u32 w,
+                                    clvr_u32 h, clvr_u32 x, clvr_u32 y)
+{
+    float s = 0.0f, n = 0.0f;
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int qx = (int)x + dx, qy = (int)y + dy;
+            if (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
+            const clvr_u64 q = (clvr_u64)qy * w + (clvr_u64)qx;
+            if (!(guide[4 * q + 3] >= 0.0f)) continue;
+            s += var[q];
+            n += 1.0f;
+        }
+    return n > 0.0f ? CLVR_DN_SQRT(s / n) : 0.0f;
 }
 
 /* One pass at pixel (x, y): taps `step` pixels apart over in (w x h rgba),

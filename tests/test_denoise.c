@@ -2,7 +2,8 @@
  *  - the device passes equal the plain-C reference (clvr_denoise_ref) on
  *    random images and guides of sizes 0x0, 1x1, 1x7, 7x1, 37x53 (primes),
  *    131x67 and 256x3 (not multiples of the 8x8 work-group), with the
- *    default parameters and with one pass;
+ *    default parameters, with one pass, and with the noise taken from given
+ *    variances (from 2 frames on) instead of the Laplacians;
  *  - pixels whose guide depth is < 0 (background) come out bit for bit;
  *  - a constant image with constant guides stays constant;
  *  - a noisy two-region image whose albedo steps between the regions keeps
@@ -41,14 +42,21 @@ static void test_device_vs_reference(clvr_cl *cl, clvr_denoiser *dn)
         const size_t n = (size_t)w * h * 4 + 4;
         float *in = malloc(n * sizeof(float)), *g = malloc(n * sizeof(float));
         float *dev = malloc(n * sizeof(float)), *ref = malloc(n * sizeof(float));
+        float *var = malloc(((size_t)w * h + 1) * sizeof(float));
         random_inputs(w, h, 1000 + si, in, g);
-        for (int variant = 0; variant < 2; ++variant) {
+        {
+            uint64_t st = 77 + si;
+            for (size_t p = 0; p < (size_t)w * h; ++p) var[p] = 0.05f * frand(&st);
+        }
+        /* The defaults, one pass, and the noise from given variances. */
+        for (int variant = 0; variant < 3; ++variant) {
             clvr_dn_params prm = clvr_dn_params_default();
-            if (variant) prm.passes = 1;
+            if (variant == 1) prm.passes = 1;
+            const float *v = variant == 2 ? var : NULL;
             memset(dev, 0, n * sizeof(float));
             memset(ref, 0, n * sizeof(float));
-            TU_CHECK_STATUS(clvr_denoiser_run(dn, w, h, in, g, prm, dev, &err), CLVR_OK, &err);
-            TU_CHECK_STATUS(clvr_denoise_ref(w, h, in, g, prm, ref, &err), CLVR_OK, &err);
+            TU_CHECK_STATUS(clvr_denoiser_run(dn, w, h, in, g, v, prm, dev, &err), CLVR_OK, &err);
+            TU_CHECK_STATUS(clvr_denoise_ref(w, h, in, g, v, prm, ref, &err), CLVR_OK, &err);
             double worst = 0.0;
             uint64_t bg_changed = 0, changed = 0;
             for (size_t p = 0; p < (size_t)w * h; ++p)
@@ -70,6 +78,7 @@ static void test_device_vs_reference(clvr_cl *cl, clvr_denoiser *dn)
         free(g);
         free(dev);
         free(ref);
+        free(var);
     }
     (void)cl;
 }
@@ -87,7 +96,7 @@ static void test_constant_and_step(clvr_denoiser *dn)
         memcpy(in + 4 * i, c, sizeof c);
         memcpy(g + 4 * i, a, sizeof a);
     }
-    TU_CHECK_STATUS(clvr_denoiser_run(dn, w, h, in, g, clvr_dn_params_default(), out, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_denoiser_run(dn, w, h, in, g, NULL, clvr_dn_params_default(), out, &err), CLVR_OK, &err);
     double worst = 0.0;
     for (size_t i = 0; i < npix * 4; ++i) worst = fmax(worst, fabs((double)out[i] - (double)in[i]));
     TU_CHECK(worst < 1e-6);
@@ -105,7 +114,7 @@ static void test_constant_and_step(clvr_denoiser *dn)
             in[4 * p + 3] = 1.0f;
             g[4 * p + 3] = 2.0f;
         }
-    TU_CHECK_STATUS(clvr_denoiser_run(dn, w, h, in, g, clvr_dn_params_default(), out, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_denoiser_run(dn, w, h, in, g, NULL, clvr_dn_params_default(), out, &err), CLVR_OK, &err);
     double mean_in[2] = {0, 0}, mean_out[2] = {0, 0}, var_in[2] = {0, 0}, var_out[2] = {0, 0}, cnt[2] = {0, 0};
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w; ++x) {
@@ -287,7 +296,9 @@ static void test_render(void)
     printf("built-in scene %ux%u, 1 frame against 64: rel RMSE raw %.4f, denoised %.4f; bias (the 64 frames "
            "denoised) %.4f\n", w, h, e_raw, e_dn, bias);
     TU_CHECK(e_dn < e_raw);
-    TU_CHECK(bias < 0.2 * e_raw);
+    /* The 64 frames' own variance caps the noise scale (0.05 measured; the
+     * Laplacians alone gave 0.13). */
+    TU_CHECK(bias < 0.1 * e_raw);
     test_smooth(ctx);
     API_OK(clvr_tracer_set_denoise(tr, 0, &msg));
     TU_CHECK(clvr_tracer_denoise(tr) == 0);

@@ -1895,15 +1895,11 @@ clvr_result clvr_tracer_read_denoised(clvr_tracer *tr, float *rgba, size_t count
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: no frame rendered since the last change; call "
                                      "clvr_tracer_render first", fn),
                       &e, msg);
-    float *guide = malloc(npix * 4 * sizeof(float));
-    if (!guide) return finish(clvr_error_set(&e, CLVR_ERR_NO_MEMORY, "%s: out of memory", fn), &e, msg);
-    clvr_status s = clvr_renderer_read(tr->renderer, rgba, NULL, &e);
-    if (s == CLVR_OK) s = clvr_renderer_read_guides(tr->renderer, guide, &e);
-    if (s == CLVR_OK && !tr->denoiser) s = clvr_denoiser_create(&tr->ctx->cl, &tr->denoiser, &e);
+    clvr_status s = CLVR_OK;
+    if (!tr->denoiser) s = clvr_denoiser_create(&tr->ctx->cl, &tr->denoiser, &e);
     if (s == CLVR_OK)
-        s = clvr_denoiser_run(tr->denoiser, tr->rs.width, tr->rs.height, rgba, guide, clvr_dn_params_default(), rgba,
-                              &e);
-    free(guide);
+        s = clvr_denoise_renderer(tr->denoiser, tr->renderer, tr->rs.width, tr->rs.height, clvr_dn_params_default(),
+                                  rgba, &e);
     return finish(s, &e, msg);
 }
 
