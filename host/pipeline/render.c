@@ -29,7 +29,9 @@ struct clvr_renderer {
     cl_mem mpi_rec, mpi_pick, mpi_tau, mpi_counters;
     size_t mpi_npix;           /* pixels the MPI buffers hold */
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
-    cl_mem guides;             /* settings.guides: 8 floats per pixel (kernels/render.cl) */
+    cl_mem guides;             /* settings.guides: 8 floats per pixel (kernels/render.cl); else 8 floats in all,
+                                * never written, so that no buffer is bound to two of the kernel's parameters */
+    int guides_full;           /* guides holds a whole image's */
     cl_mem light_buf;          /* urm with shadows: the light grid (frame.light_res^3) */
     int light_valid;           /* light_buf matches the frame and transfer function */
     light_key light_key;       /* the frame fields light_buf was made for */
@@ -130,8 +132,8 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
     clvr_status s = CLVR_OK;
     clvr_cl *cl = r->cl;
     size_t npix = (size_t)r->set.width * r->set.height;
-    if (!r->set.guides) clvr_cl_release(cl, &r->guides);
-    if (r->accum && r->accum_w == r->set.width && r->accum_h == r->set.height && (r->guides || !r->set.guides))
+    if (r->accum && r->accum_w == r->set.width && r->accum_h == r->set.height && r->guides &&
+        r->guides_full == !!r->set.guides)
         return CLVR_OK;
     clvr_cl_release(cl, &r->guides);
     clvr_cl_release(cl, &r->accum);
@@ -143,9 +145,9 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
                             &r->accum_sq, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 3 * sizeof(cl_uint), NULL, "ray counters", &r->counters,
                             err));
-    if (r->set.guides)
-        CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 8 * sizeof(float), NULL, "denoiser guides", &r->guides,
-                                err));
+    r->guides_full = !!r->set.guides;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (r->guides_full ? npix : 1) * 8 * sizeof(float), NULL,
+                            "denoiser guides", &r->guides, err));
     r->accum_w = r->set.width;
     r->accum_h = r->set.height;
 cleanup:
@@ -417,11 +419,10 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     cl_kernel k = r->k_render;
     volume_bufs vol = volume_of(r);
     CLVR_TRY(ensure_light(r, err));
-    cl_mem guides = r->guides ? r->guides : r->accum; /* not written without guides */
     /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
                           CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters),
-                          CLVR_ARG(guides)));
+                          CLVR_ARG(r->guides)));
     size_t local[2] = {r->local[0], r->local[1]};
     size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
                         (r->set.height + local[1] - 1) / local[1] * local[1]};
@@ -458,7 +459,7 @@ clvr_status clvr_renderer_read_guides(clvr_renderer *r, float *guide, clvr_error
     clvr_status s = CLVR_OK;
     const size_t npix = (size_t)r->set.width * r->set.height;
     float *g = NULL;
-    if (!r->guides) return clvr_error_set(err, CLVR_ERR_INTERNAL, "the renderer keeps no denoiser guides");
+    if (!r->guides_full) return clvr_error_set(err, CLVR_ERR_INTERNAL, "the renderer keeps no denoiser guides");
     if (r->frames == 0) return clvr_error_set(err, CLVR_ERR_INTERNAL, "no frame rendered yet");
     g = malloc(npix * 8 * sizeof(float));
     if (!g) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading the denoiser guides");
