@@ -106,6 +106,29 @@ CLVR_INLINE float clvr_dn_noise(CLVR_GLOBAL const float *rgba, CLVR_GLOBAL const
     return n > 0.0f ? CLVR_DN_SQRT(s2 / (20.0f * n)) : 0.0f;
 }
 
+/* out[0 .. count-1]: the means of components 0 .. count-1 of a (stride
+ * floats per pixel) over pixel (x, y)'s 3x3 neighbours that see the medium
+ * (guide depth >= 0; cut at the image's edges). Returns how many there were
+ * (out is left alone when none). */
+CLVR_INLINE float clvr_dn_mean3x3(CLVR_GLOBAL const float *a, clvr_u32 stride, clvr_u32 count,
+                                  CLVR_GLOBAL const float *guide, clvr_u32 w, clvr_u32 h, clvr_u32 x, clvr_u32 y,
+                                  float *out)
+{
+    float sum[4] = {0.0f, 0.0f, 0.0f, 0.0f}, n = 0.0f;
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int qx = (int)x + dx, qy = (int)y + dy;
+            if (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
+            const clvr_u64 q = (clvr_u64)qy * w + (clvr_u64)qx;
+            if (!(guide[4 * q + 3] >= 0.0f)) continue;
+            for (clvr_u32 k = 0; k < count; ++k) sum[k] += a[stride * q + k];
+            n += 1.0f;
+        }
+    if (n > 0.0f)
+        for (clvr_u32 k = 0; k < count; ++k) out[k] = sum[k] / n;
+    return n;
+}
+
 /* The guides of pixel (x, y) averaged over its 3x3 neighbours that see the
  * medium (a background pixel stays as it is): the guides come from the same
  * samples as the colour and carry their noise, which would stop the filter
@@ -115,18 +138,7 @@ CLVR_INLINE void clvr_dn_guide_smooth(CLVR_GLOBAL const float *guide, clvr_u32 w
 {
     const clvr_u64 p = (clvr_u64)y * w + x;
     for (int k = 0; k < 4; ++k) out[k] = guide[4 * p + (clvr_u64)k];
-    if (!(guide[4 * p + 3] >= 0.0f)) return;
-    float sum[4] = {0.0f, 0.0f, 0.0f, 0.0f}, n = 0.0f;
-    for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-            const int qx = (int)x + dx, qy = (int)y + dy;
-            if (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
-            const clvr_u64 q = (clvr_u64)qy * w + (clvr_u64)qx;
-            if (!(guide[4 * q + 3] >= 0.0f)) continue;
-            for (int k = 0; k < 4; ++k) sum[k] += guide[4 * q + (clvr_u64)k];
-            n += 1.0f;
-        }
-    for (int k = 0; k < 4; ++k) out[k] = sum[k] / n;
+    if (guide[4 * p + 3] >= 0.0f) clvr_dn_mean3x3(guide, 4u, 4u, guide, w, h, x, y, out);
 }
 
 /* The noise scale of pixel (x, y) from var, the variance of each pixel's
@@ -138,17 +150,8 @@ CLVR_INLINE void clvr_dn_guide_smooth(CLVR_GLOBAL const float *guide, clvr_u32 w
 CLVR_INLINE float clvr_dn_noise_var(CLVR_GLOBAL const float *var, CLVR_GLOBAL const float *guide, clvr_u32 w,
                                     clvr_u32 h, clvr_u32 x, clvr_u32 y)
 {
-    float s = 0.0f, n = 0.0f;
-    for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-            const int qx = (int)x + dx, qy = (int)y + dy;
-            if (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
-            const clvr_u64 q = (clvr_u64)qy * w + (clvr_u64)qx;
-            if (!(guide[4 * q + 3] >= 0.0f)) continue;
-            s += var[q];
-            n += 1.0f;
-        }
-    return n > 0.0f ? CLVR_DN_SQRT(s / n) : 0.0f;
+    float m = 0.0f;
+    return clvr_dn_mean3x3(var, 1u, 1u, guide, w, h, x, y, &m) > 0.0f ? CLVR_DN_SQRT(m) : 0.0f;
 }
 
 /* One pass at pixel (x, y): taps `step` pixels apart over in (w x h rgba),
