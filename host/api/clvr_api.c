@@ -1481,22 +1481,30 @@ clvr_result clvr_tracer_size(const clvr_tracer *tr, uint32_t *width, uint32_t *h
     return finish(CLVR_OK, &e, msg);
 }
 
+/* What reading an image (fn) needs: rgba, room for the tracer's image in
+ * count floats, and a frame since the last change. */
+static clvr_status image_read_usage(const clvr_tracer *tr, const char *fn, const float *rgba, size_t count,
+                                    clvr_error *e)
+{
+    if (!rgba) return clvr_error_set(e, CLVR_ERR_USAGE, "%s: %s is NULL", fn, "rgba");
+    const size_t need = (size_t)tr->rs.width * tr->rs.height * 4;
+    if (count < need)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: rgba holds %zu floats; a %ux%u image needs %zu", fn, count,
+                              tr->rs.width, tr->rs.height, need);
+    if (tr->frames == 0)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: no frame rendered since the last change; call "
+                              "clvr_tracer_render first", fn);
+    return CLVR_OK;
+}
+
 clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg)
 {
     clvr_error e = {0};
     static const char fn[] = "clvr_tracer_read_image";
     if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
-    if (!rgba) return finish(NULL_ARG(fn, "rgba"), &e, msg);
-    const size_t need = (size_t)tr->rs.width * tr->rs.height * 4;
-    if (count < need)
-        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: rgba holds %zu floats; a %ux%u image needs %zu", fn,
-                                     count, tr->rs.width, tr->rs.height, need),
-                      &e, msg);
-    if (tr->frames == 0)
-        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: no frame rendered since the last change; call "
-                                     "clvr_tracer_render first", fn),
-                      &e, msg);
-    return finish(clvr_renderer_read(tr->renderer, rgba, NULL, &e), &e, msg);
+    clvr_status s = image_read_usage(tr, fn, rgba, count, &e);
+    if (s == CLVR_OK) s = clvr_renderer_read(tr->renderer, rgba, NULL, &e);
+    return finish(s, &e, msg);
 }
 
 static const char *const stat_names =
@@ -1881,22 +1889,12 @@ clvr_result clvr_tracer_read_denoised(clvr_tracer *tr, float *rgba, size_t count
     clvr_error e = {0};
     static const char fn[] = "clvr_tracer_read_denoised";
     if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
-    if (!rgba) return finish(NULL_ARG(fn, "rgba"), &e, msg);
-    const size_t npix = (size_t)tr->rs.width * tr->rs.height;
-    if (count < npix * 4)
-        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: rgba holds %zu floats; a %ux%u image needs %zu", fn,
-                                     count, tr->rs.width, tr->rs.height, npix * 4),
-                      &e, msg);
     if (!tr->rs.guides)
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: the tracer keeps no guides; call "
                                      "clvr_tracer_set_denoise(tr, 1) before rendering", fn),
                       &e, msg);
-    if (tr->frames == 0)
-        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: no frame rendered since the last change; call "
-                                     "clvr_tracer_render first", fn),
-                      &e, msg);
-    clvr_status s = CLVR_OK;
-    if (!tr->denoiser) s = clvr_denoiser_create(&tr->ctx->cl, &tr->denoiser, &e);
+    clvr_status s = image_read_usage(tr, fn, rgba, count, &e);
+    if (s == CLVR_OK && !tr->denoiser) s = clvr_denoiser_create(&tr->ctx->cl, &tr->denoiser, &e);
     if (s == CLVR_OK)
         s = clvr_denoise_renderer(tr->denoiser, tr->renderer, tr->rs.width, tr->rs.height, clvr_dn_params_default(),
                                   rgba, &e);

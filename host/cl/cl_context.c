@@ -696,6 +696,25 @@ clvr_status clvr_cl_run1d(clvr_cl *cl, cl_kernel k, size_t n, size_t local, cl_e
     return s;
 }
 
+clvr_status clvr_cl_run2d(clvr_cl *cl, cl_kernel k, size_t w, size_t h, const size_t local[2], cl_event *evt,
+                          clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    if (evt) *evt = NULL;
+    if (w == 0 || h == 0) return CLVR_OK;
+    size_t global[2] = {(w + local[0] - 1) / local[0] * local[0], (h + local[1] - 1) / local[1] * local[1]};
+    cl_int rc = CLVR_FAULT_CODE("clEnqueueNDRangeKernel", CL_OUT_OF_RESOURCES);
+    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 2, NULL, global, local, 0, NULL, evt);
+    if (rc != CL_SUCCESS) {
+        /* "clEnqueueNDRangeKernel(clvr_render_frame, 512x512)". */
+        char name[128] = "?", call[192];
+        clGetKernelInfo(k, CL_KERNEL_FUNCTION_NAME, sizeof name, name, NULL);
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s, %zux%zu)", name, w, h);
+        s = clvr_cl_fail(err, call, rc, __FILE__, __LINE__);
+    }
+    return s;
+}
+
 double clvr_cl_event_seconds(cl_event e)
 {
     cl_ulong t0 = 0, t1 = 0;

@@ -106,6 +106,11 @@ void clvr_cl_release(clvr_cl *cl, cl_mem *buf);
  * kernel must check its global id against n). n == 0 enqueues nothing.
  * evt may be NULL; when not, it receives the event (for profiling). */
 clvr_status clvr_cl_run1d(clvr_cl *cl, cl_kernel k, size_t n, size_t local, cl_event *evt, clvr_error *err);
+/* The same over a w x h grid of work items in local[0] x local[1] groups
+ * (each axis rounded up; the kernel must check its ids against w and h):
+ * images. */
+clvr_status clvr_cl_run2d(clvr_cl *cl, cl_kernel k, size_t w, size_t h, const size_t local[2], cl_event *evt,
+                          clvr_error *err);
 
 /* Seconds between start and end of a profiled event. */
 double clvr_cl_event_seconds(cl_event e);

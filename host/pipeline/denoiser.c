@@ -39,21 +39,6 @@ void clvr_denoiser_destroy(clvr_denoiser *d)
     free(d);
 }
 
-/* A 2D launch over w x h in 8x8 groups (rounded up; the kernels check). */
-static clvr_status run2d(clvr_cl *cl, cl_kernel k, const char *name, uint32_t w, uint32_t h, clvr_error *err)
-{
-    clvr_status s = CLVR_OK;
-    const size_t local[2] = {8, 8}, global[2] = {(w + 7u) / 8u * 8u, (h + 7u) / 8u * 8u};
-    cl_int rc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
-    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 2, NULL, global, local, 0, NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        char call[96];
-        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s, %ux%u)", name, w, h);
-        return clvr_cl_fail(err, call, rc, __FILE__, __LINE__);
-    }
-    return s;
-}
-
 clvr_status clvr_denoiser_run(clvr_denoiser *d, uint32_t w, uint32_t h, const float *rgba, const float *guide,
                               const float *var, clvr_dn_params prm, float *out, clvr_error *err)
 {
@@ -72,18 +57,19 @@ clvr_status clvr_denoiser_run(clvr_denoiser *d, uint32_t w, uint32_t h, const fl
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | (var ? CL_MEM_COPY_HOST_PTR : 0), var ? npix * sizeof(float) : 4,
                             (void *)var, "denoiser variances", &vbuf, err));
     {
+        const size_t local[2] = {8, 8};
         cl_uint cw = w, ch = h, has_var = var != NULL;
         CLVR_TRY(CLVR_CL_ARGS(d->k_guides, err, CLVR_ARG(graw), CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(gbuf)));
-        CLVR_TRY(run2d(cl, d->k_guides, "clvr_dn_guides", w, h, err));
+        CLVR_TRY(clvr_cl_run2d(cl, d->k_guides, w, h, local, NULL, err));
         CLVR_TRY(CLVR_CL_ARGS(d->k_noise, err, CLVR_ARG(img[0]), CLVR_ARG(gbuf), CLVR_ARG(vbuf), CLVR_ARG(has_var),
                               CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(noise)));
-        CLVR_TRY(run2d(cl, d->k_noise, "clvr_dn_noise_map", w, h, err));
+        CLVR_TRY(clvr_cl_run2d(cl, d->k_noise, w, h, local, NULL, err));
         int cur = 0;
         for (cl_uint pass = 0, step = 1; pass < prm.passes && pass < CLVR_DN_MAX_PASSES; ++pass, step *= 2u) {
             CLVR_TRY(CLVR_CL_ARGS(d->k_pass, err, CLVR_ARG(img[cur]), CLVR_ARG(gbuf), CLVR_ARG(noise), CLVR_ARG(cw),
                                   CLVR_ARG(ch), CLVR_ARG(step), CLVR_ARG(prm.sigma_l), CLVR_ARG(prm.sigma_a),
                                   CLVR_ARG(prm.sigma_d), CLVR_ARG(img[1 - cur])));
-            CLVR_TRY(run2d(cl, d->k_pass, "clvr_dn_atrous", w, h, err));
+            CLVR_TRY(clvr_cl_run2d(cl, d->k_pass, w, h, local, NULL, err));
             cur = 1 - cur;
         }
         CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, img[cur], CL_TRUE, 0, bytes, out, 0, NULL, NULL));
@@ -153,12 +139,12 @@ clvr_status clvr_denoise_renderer(clvr_denoiser *d, clvr_renderer *r, uint32_t w
 {
     clvr_status s = CLVR_OK;
     const size_t npix = (size_t)w * h;
-    clvr_render_counters c;
+    const uint64_t frames = clvr_renderer_frames(r);
     float *guide = malloc(npix * 4 * sizeof(float)), *sum = NULL, *sq = NULL, *var = NULL;
     if (!guide) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory denoising a %ux%u image", w, h);
-    CLVR_TRY(clvr_renderer_read(r, out, &c, err));
+    CLVR_TRY(clvr_renderer_read(r, out, NULL, err));
     CLVR_TRY(clvr_renderer_read_guides(r, guide, err));
-    if (c.frames >= 2) {
+    if (frames >= 2) {
         sum = malloc(npix * 4 * sizeof(float));
         sq = malloc(npix * 4 * sizeof(float));
         var = malloc(npix * sizeof(float));
@@ -167,7 +153,7 @@ clvr_status clvr_denoise_renderer(clvr_denoiser *d, clvr_renderer *r, uint32_t w
             goto cleanup;
         }
         CLVR_TRY(clvr_renderer_read_moments(r, sum, sq, err));
-        clvr_dn_moments_variance(npix, c.frames, sum, sq, var);
+        clvr_dn_moments_variance(npix, frames, sum, sq, var);
     }
     CLVR_TRY(clvr_denoiser_run(d, w, h, out, guide, var, prm, out, err));
 cleanup:

@@ -408,6 +408,8 @@ cleanup:
     return s;
 }
 
+uint64_t clvr_renderer_frames(const clvr_renderer *r) { return r->frames; }
+
 clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -423,17 +425,7 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
                           CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters),
                           CLVR_ARG(r->guides)));
-    size_t local[2] = {r->local[0], r->local[1]};
-    size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
-                        (r->set.height + local[1] - 1) / local[1] * local[1]};
-    cl_int rc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
-    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(cl->queue, k, 2, NULL, global, local, 0, NULL, &evt);
-    if (rc != CL_SUCCESS) {
-        char call[96];
-        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(clvr_render_frame, %ux%u)", r->set.width, r->set.height);
-        s = clvr_cl_fail(err, call, rc, __FILE__, __LINE__);
-        goto cleanup;
-    }
+    CLVR_TRY(clvr_cl_run2d(cl, k, r->set.width, r->set.height, r->local, &evt, err));
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
     r->last_frame_s = clvr_cl_event_seconds(evt);
     r->kernel_s += r->last_frame_s;
@@ -552,20 +544,12 @@ cleanup:
     return s;
 }
 
-static clvr_status mpi_run(clvr_renderer *r, cl_kernel k, const char *name, uint64_t *samples, clvr_error *err)
+static clvr_status mpi_run(clvr_renderer *r, cl_kernel k, uint64_t *samples, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_event evt = NULL;
     cl_uint *cnt = NULL;
-    size_t local[2] = {r->local[0], r->local[1]};
-    size_t global[2] = {(r->set.width + local[0] - 1) / local[0] * local[0],
-                        (r->set.height + local[1] - 1) / local[1] * local[1]};
-    cl_int rc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
-    if (rc == CL_SUCCESS) rc = clEnqueueNDRangeKernel(r->cl->queue, k, 2, NULL, global, local, 0, NULL, &evt);
-    if (rc != CL_SUCCESS) {
-        s = clvr_cl_fail(err, name, rc, __FILE__, __LINE__);
-        goto cleanup;
-    }
+    CLVR_TRY(clvr_cl_run2d(r->cl, k, r->set.width, r->set.height, r->local, &evt, err));
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
     r->last_frame_s = clvr_cl_event_seconds(evt);
     r->kernel_s += r->last_frame_s;
@@ -593,7 +577,7 @@ clvr_status clvr_renderer_mpi_record(clvr_renderer *r, uint32_t frame, uint32_t 
     volume_bufs vol = volume_of(r);
     CLVR_TRY(CLVR_CL_ARGS(r->k_mpi_record, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
                           CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->mpi_rec), CLVR_ARG(r->mpi_counters)));
-    CLVR_TRY(mpi_run(r, r->k_mpi_record, "clEnqueueNDRangeKernel(clvr_render_mpi_record)", samples, err));
+    CLVR_TRY(mpi_run(r, r->k_mpi_record, samples, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_rec, CL_TRUE, 0, r->mpi_npix * sizeof(clvr_mpi_record), rec,
                                       0, NULL, NULL));
 cleanup:
@@ -611,7 +595,7 @@ clvr_status clvr_renderer_mpi_shadow(clvr_renderer *r, uint32_t frame, uint32_t 
     CLVR_TRY(CLVR_CL_ARGS(r->k_mpi_shadow, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
                           CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->mpi_pick), CLVR_ARG(r->mpi_tau),
                           CLVR_ARG(r->mpi_counters)));
-    CLVR_TRY(mpi_run(r, r->k_mpi_shadow, "clEnqueueNDRangeKernel(clvr_render_mpi_shadow)", samples, err));
+    CLVR_TRY(mpi_run(r, r->k_mpi_shadow, samples, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_tau, CL_TRUE, 0, r->mpi_npix * sizeof(float), tau, 0, NULL,
                                       NULL));
 cleanup:

@@ -96,6 +96,9 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
 
 /* Renders one more sample per pixel. */
 clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err);
+/* Frames accumulated since the last change (clvr_render_counters.frames,
+ * without reading the per-pixel counters). */
+uint64_t clvr_renderer_frames(const clvr_renderer *r);
 
 /* Copies the running mean image (width * height * 4 floats, linear rgb and
  * alpha = opacity, rows top to bottom) and the counters; either may be NULL. */
