@@ -457,6 +457,25 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * (bench/results/render-converge/2026-11-25-s25-root.md). */
 #define CLVR_URM_LIGHT_RES 32u
 #define CLVR_URM_DEFAULT_LIGHT_RES 24u
+/* The light grid is made by a sweep toward the light (kernels/
+ * render_volume.h, clvr_light_sweep): slices of cells taken from the
+ * light's side, each cell's optical depth integrated over the segment that
+ * reaches CLVR_LIGHT_SWEEP_SLICES slices nearer the light, plus that
+ * slice's depth interpolated where the segment ends (the first slices
+ * integrate to the box's exit). CLVR_LIGHT_SWEEP_POINTS points per slice
+ * crossed and one per CLVR_LIGHT_SWEEP_DEPTH of majorant optical depth.
+ * Fewer slices per step interpolate more often and blur the shadows (1:
+ * post's error after 1 / 2 shadowed frames 3.96 / 1.69% -> 4.56 / 2.32%);
+ * 8 keeps it (4.00 / 1.73%) at half the rays' cost. */
+#define CLVR_LIGHT_SWEEP_SLICES 8u
+#define CLVR_LIGHT_SWEEP_POINTS 1.0f
+#define CLVR_LIGHT_SWEEP_DEPTH 0.5f
+/* Launches of the sweep for a grid of r cells per axis: one per
+ * CLVR_LIGHT_SWEEP_SLICES slices, then one from depth to transmittance. */
+CLVR_INLINE clvr_u32 clvr_light_sweep_steps(clvr_u32 r)
+{
+    return (r + CLVR_LIGHT_SWEEP_SLICES - 1u) / CLVR_LIGHT_SWEEP_SLICES + 1u;
+}
 
 /* Index of macrocell (x, y, z) in a grid of r cells per axis (x fastest):
  * the one definition shared by the majorant kernels and the DDA. */

@@ -21,20 +21,20 @@
 #define CLVR_VOLUME_PARAM(T, name) __global const T *name,
 #define CLVR_VOLUME_BIND(T, name) v.name = name;
 
-/* The light grid (urm with shadows): one work item per cell, same parameters
- * as clvr_render_frame then the output (the host passes the grid's buffer as
- * both; this kernel never reads the input). */
+/* The light grid (urm with shadows): step `step` of its sweep
+ * (clvr_light_sweep), one work item per lateral cell, same parameters as
+ * clvr_render_frame then the grid (the host passes the grid's buffer as
+ * both; this kernel reads and writes it through `out` only). */
 __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr_camera *cam,
-                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out)
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out, uint step)
 {
     const clvr_frame f = *fp;
-    const int r = (int)f.light_res, x = (int)get_global_id(0), y = (int)get_global_id(1), z = (int)get_global_id(2);
-    if (x >= r || y >= r || z >= r) return;
+    const int r = (int)f.light_res, a = (int)get_global_id(0), b = (int)get_global_id(1);
+    if (a >= r || b >= r) return;
     clvr_volume v;
     v.f = &f;
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
-    uint samples = 0, nulls = 0;
-    out[clvr_grid_index(x, y, z, r)] = clvr_light_cell(&v, x, y, z, &samples, &nulls);
+    clvr_light_sweep(&v, a, b, (int)step, out);
     (void)cam;
 }
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,

@@ -38,7 +38,7 @@ struct clvr_renderer {
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
     uint32_t accum_w, accum_h; /* size of accum buffers */
     uint64_t frames;
-    double kernel_s, last_frame_s;
+    double kernel_s, last_frame_s, light_s;
     size_t local[2];           /* work-group shape of the render kernel */
 };
 
@@ -390,17 +390,27 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
     volume_bufs vol = volume_of(r);
     if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
         r->frame.method != CLVR_RENDER_MARCH) {
-        const size_t n = r->frame.light_res, gl[3] = {n, n, n};
+        /* The sweep (kernels/render_volume.h, clvr_light_sweep): one launch
+         * per slice, in order from the light, then one that turns optical
+         * depth into transmittance. */
+        const cl_uint n = r->frame.light_res;
+        const size_t local[2] = {8, 8};
+        cl_uint step = 0;
+        r->light_s = 0.0;
         CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
-                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf)));
-        cl_int lrc = clvr_cl_fault("clEnqueueNDRangeKernel") ? CL_OUT_OF_RESOURCES : CL_SUCCESS;
-        if (lrc == CL_SUCCESS) lrc = clEnqueueNDRangeKernel(r->cl->queue, r->k_light, 3, NULL, gl, NULL, 0, NULL, &evt);
-        if (lrc != CL_SUCCESS) {
-            s = clvr_cl_fail(err, "clEnqueueNDRangeKernel(clvr_light_grid)", lrc, __FILE__, __LINE__);
-            goto cleanup;
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf), CLVR_ARG(step)));
+        cl_uint nargs = 0;
+        CLVR_CL_CHECK(clGetKernelInfo(r->k_light, CL_KERNEL_NUM_ARGS, sizeof nargs, &nargs, NULL));
+        for (step = 0; step < clvr_light_sweep_steps(n); ++step) {
+            CLVR_CL_CHECK(clSetKernelArg(r->k_light, nargs - 1, sizeof step, &step));
+            CLVR_TRY(clvr_cl_run2d(r->cl, r->k_light, n, n, local, &evt, err));
+            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+            const double dt = clvr_cl_event_seconds(evt);
+            r->kernel_s += dt;
+            r->light_s += dt;
+            clReleaseEvent(evt);
+            evt = NULL;
         }
-        CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-        r->kernel_s += clvr_cl_event_seconds(evt);
         r->light_valid = 1;
     }
 cleanup:
@@ -484,6 +494,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         memset(counters, 0, sizeof *counters);
         counters->frames = r->frames;
         counters->kernel_s = r->kernel_s;
+        counters->light_s = r->light_s;
         counters->last_frame_s = r->last_frame_s;
         if (r->frames) {
             cnt = malloc(npix * 3 * sizeof(cl_uint));

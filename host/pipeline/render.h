@@ -74,8 +74,9 @@ typedef struct clvr_render_counters {
     uint64_t rays;            /* primary + shadow rays */
     uint64_t samples;         /* extinction lookups (point locations) */
     uint64_t null_collisions; /* rejected samples of delta tracking */
-    double kernel_s;          /* device time of the render kernel, all frames */
+    double kernel_s;          /* device time of the render kernel, all frames (the light grid's included) */
     double last_frame_s;      /* device time of the last frame */
+    double light_s;           /* device time of the light grid's last build (urm with shadows; part of kernel_s) */
 } clvr_render_counters;
 
 typedef struct clvr_renderer clvr_renderer;
