@@ -131,6 +131,7 @@ for r in clvr["rows"]:
     sh = "yes" if r["shadows"] else "no"
     name = f"clvr {clvr['method']} {r['label']}"
     cost = f"{r['samples_per_ray']:.1f} samples/ray, {r['frame_s'] * 1e3:.0f} ms/frame"
+    if r.get("light_s"): cost += f" + light grid {r['light_s'] * 1e3:.0f} ms"
     if r["reached"]:
         a = r["at"]
         p(f"| {name} | {sh} | {a['device_s']:.2f} | to {t:.0%} relative RMSE: {a['spp']} spp ({cost}; 1/n fit "
