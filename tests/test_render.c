@@ -225,20 +225,60 @@ static int edge_hits(const clvr_camera *cam, uint32_t x, uint32_t y)
     return hits;
 }
 
+/* Opacity per pixel against expect (< 0: not tested) after N frames of
+ * estimator est: each pixel within K_SIGMA standard errors (delta's
+ * opacity is a 0/1 outcome, so its variance is known; urm's from the
+ * frames), the first few misses printed after `what`. Returns the misses;
+ * *tested, and the summed difference and variance of the tested pixels
+ * (for an aggregate check), through the out-parameters. */
+static int opacity_misses(const char *what, uint32_t est, const float *mean, const float *var, uint32_t N,
+                          const double *expect, size_t n, int *tested, double *dsum, double *vsum)
+{
+    int bad = 0;
+    *tested = 0;
+    *dsum = *vsum = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (expect[i] < 0) continue;
+        const double got = mean[4 * i + 3],
+                     v = est == CLVR_ESTIMATOR_DELTA ? expect[i] * (1.0 - expect[i]) / N : var[4 * i + 3] / N;
+        ++*tested;
+        *dsum += got - expect[i];
+        *vsum += v;
+        if (fabs(got - expect[i]) > K_SIGMA * sqrt(v) + 1e-4) {
+            if (bad < 3)
+                fprintf(stderr, "%s: pixel %zu opacity %.4f, expected %.4f +- %.4f\n", what, i, got, expect[i],
+                        K_SIGMA * sqrt(v));
+            ++bad;
+        }
+    }
+    return bad;
+}
+
+/* The unit box [0, 1]^3 of n^3 cubes of cell mix `mix` with scalar field
+ * `field` (CLVR_SCENE_FIELD_CONSTANT: 1 everywhere); 0 when it is made. */
+static int make_box(uint32_t n, uint32_t mix, uint32_t field, clvr_mesh *m)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = n;
+    p.mix = mix;
+    p.field = field;
+    p.value = 1.0f;
+    if (clvr_scene_box(&p, m, &err) == CLVR_OK) return 0;
+    fprintf(stderr, "%s\n", err.msg);
+    ++tu_fail_;
+    return 1;
+}
+
 /* The unit box of 4^3 cells, hexes, tets, wedges and pyramids side by
  * side, with the given scalar field, opened as a w x h fixture seen by *cam
  * from (2.2, 1.8, 2.6), shadows off. Returns 0 when it is ready. */
 static int open_unit_box(clvr_cl *cl, uint32_t field, uint32_t w, uint32_t h, fixture *fx, clvr_camera *cam)
 {
     clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 4;
-    p.mix = CLVR_SCENE_MIX_CYCLE;
-    p.field = field;
-    p.value = 1.0f; /* of CLVR_SCENE_FIELD_CONSTANT */
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return 1; }
+    if (make_box(4, CLVR_SCENE_MIX_CYCLE, field, &m)) return 1;
     if (fixture_open(fx, cl, &m, w, h)) return 1;
     const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
     TU_CHECK_STATUS(clvr_camera_look_at(cam, eye, at, up, 35.0f, w, h, &err), CLVR_OK, &err);
@@ -496,24 +536,12 @@ static void test_step_medium(clvr_cl *cl, double below, double above)
             fx.set.macrocells = 7;
             float *mean, *var;
             if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
-            int bad = 0, tested = 0;
-            double dsum = 0, vsum = 0;
-            for (size_t i = 0; i < (size_t)W * H; ++i) {
-                if (expect[i] < 0) continue;
-                /* delta's opacity is a 0/1 outcome: its variance is known */
-                const double got = mean[4 * i + 3],
-                             v = est == CLVR_ESTIMATOR_DELTA ? expect[i] * (1.0 - expect[i]) / N : var[4 * i + 3] / N;
-                ++tested;
-                dsum += got - expect[i];
-                vsum += v;
-                if (fabs(got - expect[i]) > K_SIGMA * sqrt(v) + 1e-4) {
-                    if (bad < 3)
-                        fprintf(stderr, "step medium (%g | %g) %s %s: pixel %zu opacity %.4f, expected %.4f +- %.4f\n",
-                                below, above, clvr_render_estimator_name(est), clvr_render_method_name(methods[mi]), i, got,
-                                expect[i], K_SIGMA * sqrt(v));
-                    ++bad;
-                }
-            }
+            char what[96];
+            snprintf(what, sizeof what, "step medium (%g | %g) %s %s", below, above, clvr_render_estimator_name(est),
+                     clvr_render_method_name(methods[mi]));
+            int tested;
+            double dsum, vsum;
+            const int bad = opacity_misses(what, est, mean, var, N, expect, (size_t)W * H, &tested, &dsum, &vsum);
             TU_CHECK_EQ_U64(bad, 0);
             if (tested < 150) fprintf(stderr, "step medium: %d pixels tested\n", tested);
             TU_CHECK(tested >= 150);
@@ -596,13 +624,8 @@ static void test_tet_spans(clvr_cl *cl)
     const uint32_t W = 24, H = 24, N = 400;
     const double sigma_max = 3.0;
     clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 3;
-    p.mix = CLVR_SCENE_MIX_TET;
-    p.field = CLVR_SCENE_FIELD_CONSTANT;
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    if (make_box(3, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;
     uint64_t rng = 77;
     for (uint64_t i = 0; i < m.num_vertices; ++i) m.scalars[i] = tu_randf(&rng);
     clvr_mesh_update_ranges(&m);
@@ -634,23 +657,12 @@ static void test_tet_spans(clvr_cl *cl)
         fx.set.method = CLVR_RENDER_DDA;
         float *mean, *var;
         if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
-        int bad = 0, tested = 0, inside = 0;
-        double dsum = 0, vsum = 0;
-        for (size_t i = 0; i < (size_t)W * H; ++i) {
-            if (expect[i] < 0) continue;
-            const double got = mean[4 * i + 3],
-                         v = est == CLVR_ESTIMATOR_DELTA ? expect[i] * (1.0 - expect[i]) / N : var[4 * i + 3] / N;
-            ++tested;
-            inside += expect[i] > 0.05;
-            dsum += got - expect[i];
-            vsum += v;
-            if (fabs(got - expect[i]) > K_SIGMA * sqrt(v) + 1e-4) {
-                if (bad < 3)
-                    fprintf(stderr, "tet spans %s: pixel %zu opacity %.4f, expected %.4f +- %.4f\n",
-                            clvr_render_estimator_name(est), i, got, expect[i], K_SIGMA * sqrt(v));
-                ++bad;
-            }
-        }
+        char what[64];
+        snprintf(what, sizeof what, "tet spans %s", clvr_render_estimator_name(est));
+        int tested, inside = 0;
+        double dsum, vsum;
+        const int bad = opacity_misses(what, est, mean, var, N, expect, (size_t)W * H, &tested, &dsum, &vsum);
+        for (size_t i = 0; i < (size_t)W * H; ++i) inside += expect[i] > 0.05;
         printf("tet spans, %s: %d pixels against the exact chord sums, %d off, mean difference %.5f (%.1f SE)\n",
                clvr_render_estimator_name(est), tested, bad, dsum / tested, fabs(dsum) / sqrt(vsum));
         TU_CHECK_EQ_U64(bad, 0);
@@ -679,14 +691,8 @@ static void test_tet_spans(clvr_cl *cl)
 static void test_light_grid(clvr_cl *cl)
 {
     clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 6;
-    p.mix = CLVR_SCENE_MIX_TET;
-    p.field = CLVR_SCENE_FIELD_CONSTANT;
-    p.value = 1.0f;
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    if (make_box(6, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;
     fixture fx;
     if (fixture_open(&fx, cl, &m, 8, 8)) return;
     const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
@@ -775,14 +781,8 @@ static double clipped_chord(const clvr_camera *cam, float px, float py, const fl
 static void test_clip(clvr_cl *cl)
 {
     clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 4;
-    p.mix = CLVR_SCENE_MIX_CYCLE;
-    p.field = CLVR_SCENE_FIELD_CONSTANT;
-    p.value = 1.0f;
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    if (make_box(4, CLVR_SCENE_MIX_CYCLE, CLVR_SCENE_FIELD_CONSTANT, &m)) return;
     const uint32_t W = 24, H = 24, N = 300;
     fixture fx;
     if (fixture_open(&fx, cl, &m, W, H)) return;
@@ -1010,13 +1010,8 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
 static void test_majorants(clvr_cl *cl)
 {
     clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 9;
-    p.mix = CLVR_SCENE_MIX_MIXED;
-    p.field = CLVR_SCENE_FIELD_BLOBS;
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { fprintf(stderr, "%s\n", err.msg); ++tu_fail_; return; }
+    if (make_box(9, CLVR_SCENE_MIX_MIXED, CLVR_SCENE_FIELD_BLOBS, &m)) return;
     fixture fx;
     if (fixture_open(&fx, cl, &m, 8, 8)) return;
     clvr_clustered_host h = {0};
@@ -1118,13 +1113,8 @@ static void test_majorants(clvr_cl *cl)
 static void test_seeds(clvr_cl *cl)
 {
     clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 6;
-    p.mix = CLVR_SCENE_MIX_MIXED;
-    p.field = CLVR_SCENE_FIELD_BLOBS;
     clvr_mesh m;
-    if (clvr_scene_box(&p, &m, &err) != CLVR_OK) { ++tu_fail_; return; }
+    if (make_box(6, CLVR_SCENE_MIX_MIXED, CLVR_SCENE_FIELD_BLOBS, &m)) return;
     fixture fx;
     if (fixture_open(&fx, cl, &m, 16, 16)) return;
     float table[8] = {1, 0, 0, 0, 0, 0, 1, 20};
