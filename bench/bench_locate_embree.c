@@ -12,7 +12,8 @@
  *
  *   bench_locate_embree [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
  *                       [--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L]
- *   defaults: 56^3 cubes cut into 6 Kuhn tets (1,053,696 tets), 1M random points, leaf clusters of 8,
+ *   defaults: 56^3 cubes cut into 6 Kuhn tets (1,053,696 tets), 1M random points, leaf clusters of 16
+ *   (the library's default),
  *   2 threads, work-group 64
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
  *                       [--hint coherent|incoherent]  (clvr's query hint, CLVR_LOCATE_*; default
@@ -432,7 +433,13 @@ int main(int argc, char **argv)
 {
     const char *device = NULL, *json = NULL, *mesh_path = NULL, *dump = NULL, *kind_name = "tets", *order = "random",
                *hint = NULL;
-    uint32_t cubes = 56, nq = 1000000, leaf = 8;
+    /* The leaf-cluster size users get (clvr_preprocess_options_default: 16);
+     * issue #19's figures before session 31 used 8, which is 4-15% slower
+     * on the graded and PLOT3D meshes
+     * (bench/results/graded/2026-11-28-s31-leaf.md). */
+    clvr_preprocess_options po;
+    clvr_preprocess_options_default(&po);
+    uint32_t cubes = 56, nq = 1000000, leaf = po.leaf_size;
     int threads = 2;
     size_t local = 64;
     for (int i = 1; i < argc; ++i) {

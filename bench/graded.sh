@@ -97,7 +97,7 @@ fi
 
 export POCL_MEMORY_LIMIT=${POCL_MEMORY_LIMIT:-20}
 if ! skip locate; then
-  echo "## Point location vs Embree 3 (bench/locate-vs-embree.sh --mesh, $QUERIES queries, leaf 8, 2 threads)" >>"$MD"
+  echo "## Point location vs Embree 3 (bench/locate-vs-embree.sh --mesh, $QUERIES queries, leaf 16, 2 threads)" >>"$MD"
   echo >>"$MD"
   for m in "${LOCATE[@]}"; do
     for order in random sorted rays; do
