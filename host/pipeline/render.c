@@ -391,8 +391,9 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
     if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
         r->frame.method != CLVR_RENDER_MARCH) {
         /* The sweep (kernels/render_volume.h, clvr_light_sweep): one launch
-         * per slice, in order from the light, then one that turns optical
-         * depth into transmittance. */
+         * per CLVR_LIGHT_SWEEP_SLICES slices, in order from the light, then
+         * one that turns optical depth into transmittance; the step number
+         * is the kernel's last argument. */
         const cl_uint n = r->frame.light_res;
         const size_t local[2] = {8, 8};
         cl_uint step = 0;
