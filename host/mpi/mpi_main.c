@@ -455,6 +455,9 @@ static int run(mpi_run *m, const clvr_options *o)
         }
         if (empty)
             for (int a = 0; a < 3; ++a) rs->clip_lo[a] = rs->clip_hi[a] = share.region_lo[a];
+        /* Every rank's light grid has the same cells (they are combined
+         * cell by cell): sized for the whole mesh, not the rank's part. */
+        if (rs->light_res == 0) rs->light_res = clvr_light_res_for(share.global_elements);
         /* The broadcast table is set on the renderer below; the tracer's own
          * automatic transfer function (at a first clvr_tracer_render, which
          * this driver never calls) is not computed from the share. */

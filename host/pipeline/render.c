@@ -71,7 +71,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
     s->estimator = CLVR_ESTIMATOR_URM;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
     s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
-    s->light_res = CLVR_URM_DEFAULT_LIGHT_RES;
+    s->light_res = 0; /* clvr_light_res_for the mesh */
     s->width = s->height = 512;
     s->seed = 1;
     /* Low-discrepancy frames: the progressive image reaches a given error
@@ -154,6 +154,13 @@ cleanup:
     return s;
 }
 
+uint32_t clvr_light_res_for(uint64_t elements)
+{
+    uint32_t r = CLVR_URM_DEFAULT_LIGHT_RES;
+    while (r > 8u && (uint64_t)r * r * r * 4u > elements) --r;
+    return r;
+}
+
 clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_settings *set, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -161,10 +168,10 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         set->pixel_filter > CLVR_PIXEL_POINT ||
         set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
         set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
-        set->light_res == 0 || set->light_res > CLVR_URM_LIGHT_RES)
+        set->light_res > CLVR_URM_LIGHT_RES)
         return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
                               "pixel filter %u, %ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, "
-                              "light grid %u: 1..%u)", set->method,
+                              "light grid %u: 0..%u)", set->method,
                               set->estimator, set->sampler, set->pixel_filter, set->width, set->height, set->bins,
                               set->segments,
                               set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
@@ -227,7 +234,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         const clvr_hull *hl = &r->bvh->hull;
         f->hull_faces = set->hull && hl->kept ? hl->num_faces : 0u;
     }
-    f->light_res = set->light_res;
+    f->light_res = set->light_res ? set->light_res : clvr_light_res_for(m->num_elements);
     {
         /* The light grid depends on these fields only (and on the transfer
          * function): a new image size, exposure, sampler or a shadows toggle
