@@ -690,6 +690,13 @@ static void test_tet_spans(clvr_cl *cl)
  * far more. */
 static void test_light_grid(clvr_cl *cl)
 {
+    /* Cells per axis for the mesh's element count: at most one per 4
+     * elements, between 8 and the default 24. */
+    TU_CHECK_EQ_U64(clvr_light_res_for(0), 8);
+    TU_CHECK_EQ_U64(clvr_light_res_for(13127), 14);
+    TU_CHECK_EQ_U64(clvr_light_res_for(4u * 24 * 24 * 24 - 1), 23);
+    TU_CHECK_EQ_U64(clvr_light_res_for(4u * 24 * 24 * 24), 24);
+    TU_CHECK_EQ_U64(clvr_light_res_for(UINT64_MAX), CLVR_URM_DEFAULT_LIGHT_RES);
     clvr_error err = {0};
     clvr_mesh m;
     if (make_box(6, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;
@@ -714,6 +721,9 @@ static void test_light_grid(clvr_cl *cl)
         free(mean);
         free(var);
         TU_CHECK_STATUS(clvr_renderer_read_light(fx.r, NULL, &res, &err), CLVR_OK, &err);
+        /* the default (light_res 0) sizes the grid to the mesh: 1296 tets -> 8 */
+        TU_CHECK_EQ_U64(res, clvr_light_res_for(fx.c.num_elements));
+        TU_CHECK_EQ_U64(res, 8);
         float *g = malloc((size_t)res * res * res * sizeof(float));
         if (!g || clvr_renderer_read_light(fx.r, g, &res, &err) != CLVR_OK) { free(g); ++tu_fail_; break; }
         const double n = sqrt((double)dirs[di][0] * dirs[di][0] + (double)dirs[di][1] * dirs[di][1] +
