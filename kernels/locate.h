@@ -557,12 +557,4 @@ CLVR_INLINE int clvr_locate_point(clvr_mesh_view m, float px, float py, float pz
     return clvr_locate(&m, px, py, pz, CLVR_LOCATE_COHERENT, scalar, &e);
 }
 
-/* clvr_locate_point with a ray's hint (clvr_locate_hinted). */
-CLVR_INLINE int clvr_locate_point_hinted(clvr_mesh_view m, float px, float py, float pz, clvr_locate_hint *h,
-                                         float *scalar)
-{
-    clvr_u32 e;
-    return clvr_locate_hinted(&m, px, py, pz, h, scalar, &e);
-}
-
 #endif /* CLVR_LOCATE_H */

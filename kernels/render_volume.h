@@ -51,15 +51,6 @@ inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
     return clvr_volume_tf(v, s);
 }
 
-/* clvr_volume_at with the ray's point-location hint (locate.h). */
-inline float4 clvr_volume_at_hinted(const clvr_volume *v, float3 p, clvr_locate_hint *h)
-{
-    float s;
-    if (!clvr_locate_point_hinted(clvr_volume_view(v), p.x, p.y, p.z, h, &s))
-        return (float4)(0.0f);
-    return clvr_volume_tf(v, s);
-}
-
 /* The stretch of a ray inside the tet its last lookup found: [t0, t_end]
  * with the scalar linear in t (s0 at t0, ds/dt dsdt). A ray's lookups go
  * forward in t and, where elements are large against the spacing of its
@@ -108,8 +99,9 @@ inline clvr_span clvr_tet_span(const clvr_vec4 *vtx, float3 org, float3 dir, flo
     return sp;
 }
 
-/* clvr_volume_at_hinted at org + t dir, answered from the ray's span when t
- * lies in it; a tet found by a lookup becomes the new span. */
+/* clvr_volume_at at org + t dir with the ray's point-location hint
+ * (clvr_locate_hinted), answered from the ray's span when t lies in it; a
+ * tet found by a lookup becomes the new span. */
 inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, float t, clvr_locate_hint *h,
                                  clvr_span *sp)
 {
