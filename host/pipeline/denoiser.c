@@ -140,25 +140,28 @@ clvr_status clvr_denoise_renderer(clvr_denoiser *d, clvr_renderer *r, uint32_t w
     clvr_status s = CLVR_OK;
     const size_t npix = (size_t)w * h;
     const uint64_t frames = clvr_renderer_frames(r);
-    float *guide = malloc(npix * 4 * sizeof(float)), *sum = NULL, *sq = NULL, *var = NULL;
+    float *guide = malloc(npix * 4 * sizeof(float)), *sq = NULL, *var = NULL;
     if (!guide) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory denoising a %ux%u image", w, h);
-    CLVR_TRY(clvr_renderer_read(r, out, NULL, err));
     CLVR_TRY(clvr_renderer_read_guides(r, guide, err));
     if (frames >= 2) {
-        sum = malloc(npix * 4 * sizeof(float));
+        /* The moments give the variance and, scaled as clvr_renderer_read
+         * scales them, the mean: one read of the sums instead of two. */
         sq = malloc(npix * 4 * sizeof(float));
         var = malloc(npix * sizeof(float));
-        if (!sum || !sq || !var) {
+        if (!sq || !var) {
             s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory denoising a %ux%u image", w, h);
             goto cleanup;
         }
-        CLVR_TRY(clvr_renderer_read_moments(r, sum, sq, err));
-        clvr_dn_moments_variance(npix, frames, sum, sq, var);
+        CLVR_TRY(clvr_renderer_read_moments(r, out, sq, err));
+        clvr_dn_moments_variance(npix, frames, out, sq, var);
+        const float inv = 1.0f / (float)frames;
+        for (size_t i = 0; i < npix * 4; ++i) out[i] *= inv;
+    } else {
+        CLVR_TRY(clvr_renderer_read(r, out, NULL, err));
     }
     CLVR_TRY(clvr_denoiser_run(d, w, h, out, guide, var, prm, out, err));
 cleanup:
     free(guide);
-    free(sum);
     free(sq);
     free(var);
     return s;
