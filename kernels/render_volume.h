@@ -935,10 +935,17 @@ inline int clvr_tau_segment(const clvr_volume *v, float3 org, float3 dir, float 
     return 0;
 }
 
-/* Cell (lateral a, b; slice c along axis k) to grid index. */
+/* Cell (lateral a, b; slice c along axis k) as (x, y, z), and its grid
+ * index. */
+inline int3 clvr_light_cell(int k, int c, int a, int b)
+{
+    return k == 0 ? (int3)(c, a, b) : k == 1 ? (int3)(a, c, b) : (int3)(a, b, c);
+}
+
 inline int clvr_light_index(int k, int c, int a, int b, int r)
 {
-    return k == 0 ? clvr_grid_index(c, a, b, r) : k == 1 ? clvr_grid_index(a, c, b, r) : clvr_grid_index(a, b, c, r);
+    const int3 q = clvr_light_cell(k, c, a, b);
+    return clvr_grid_index(q.x, q.y, q.z, r);
 }
 
 inline float clvr_f3(float3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
@@ -980,11 +987,7 @@ inline void clvr_light_slice(const clvr_volume *v, int a, int b, int s, int k, i
     const float3 vlo = vload3(0, f->vol_lo), vhi = vload3(0, f->vol_hi);
     const float3 h = (hi - lo) / (float)r;
     const int i = clvr_light_index(k, c, a, b, r);
-    int3 cell;
-    cell.x = k == 0 ? c : a;
-    cell.y = k == 0 ? a : k == 1 ? c : b;
-    cell.z = k == 2 ? c : b;
-    const float3 p = lo + (convert_float3(cell) + 0.5f) * h;
+    const float3 p = lo + (convert_float3(clvr_light_cell(k, c, a, b)) + 0.5f) * h;
     float s1 = s < M || !(cells > 0.0f) ? INFINITY : (float)M / cells, tau_up = 0.0f;
     if (s1 < INFINITY) {
         const float3 q = (p + ldir * s1 - lo) / fmax(h, (float3)(1e-30f)) - 0.5f; /* in cell centres */
