@@ -79,6 +79,7 @@ typedef struct config {
     int no_hull;        /* --no-hull: camera rays keep their whole box interval (render.h settings.hull) */
     uint32_t pixel_filter; /* CLVR_PIXEL_*: --pixel-filter (the reference's too) */
     int guides;         /* --denoise (converge): keep the denoiser's guides, report the denoised error apart */
+    int no_pixel_cv;    /* --no-pixel-cv: box-filter frames without the jitter's control variate (render.h) */
 } config;
 
 typedef struct row {
@@ -175,6 +176,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     if (c->light_res) rs.light_res = c->light_res;
     rs.hull = !c->no_hull;
     rs.pixel_filter = c->pixel_filter;
+    rs.pixel_cv = !c->no_pixel_cv;
     rs.guides = c->guides;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
@@ -429,6 +431,9 @@ static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *b
     /* Independent frames: the reference's own noise, subtracted below, is
      * estimated from its per-pixel moments, which needs them. */
     c.sampler = CLVR_SAMPLER_INDEPENDENT;
+    /* Plain box samples: the measured runs' control variate is checked
+     * against an image made without it. */
+    c.no_pixel_cv = 1;
     if (!sum || !sq || !out->img || !out->inside) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
         goto done;
@@ -510,7 +515,8 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
         s = clvr_renderer_read(rd, img, &rc, err);
         if (s != CLVR_OK) break;
         const double mse = inside_mse(img, ref, npix);
-        conv_point pt = {n, rc.kernel_s, wall, sqrt(mse), sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0,
+        /* The image pass (the control variates) is part of what a reader waits for. */
+        conv_point pt = {n, rc.kernel_s + rc.image_s, wall + rc.image_s, sqrt(mse), sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0,
                          NAN};
         pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
         if (dn) {
@@ -753,7 +759,7 @@ int main(int argc, char **argv)
     uint32_t nconv_est = 2;
     int shadow_lo = 0, shadow_hi = 1;
     float urm_kappa = 0.0f;
-    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0, no_hull = 0, denoise = 0;
+    int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0, no_hull = 0, denoise = 0, no_cv = 0;
     double target = 0.02, budget = 30.0;
     float density = 1.0f;
     for (int i = 1; i < argc; ++i) {
@@ -778,6 +784,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--only-shadows")) shadow_lo = 1;
         else if (!strcmp(a, "--no-hull")) no_hull = 1;
         else if (!strcmp(a, "--denoise")) denoise = 1;
+        else if (!strcmp(a, "--no-pixel-cv")) no_cv = 1;
         else if (!strcmp(a, "--sampler") && v) {
             const char *sv = argv[++i];
             if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
@@ -841,14 +848,14 @@ int main(int argc, char **argv)
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
                     config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
-                                pixel_filter, 0};
+                                pixel_filter, 0, no_cv};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
                 config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0,
-                            no_hull, pixel_filter, 0};
+                            no_hull, pixel_filter, 0, no_cv};
                 snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
@@ -863,7 +870,7 @@ int main(int argc, char **argv)
     }
     if (converge) {
         const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
-                             no_hull, pixel_filter, denoise};
+                             no_hull, pixel_filter, denoise, no_cv};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, json);
         clvr_cl_destroy(&cl);

@@ -15,6 +15,7 @@
 #include "rng.h"
 #include "locate.h"
 #include "render_volume.h"
+#include "pixel_cv.h"
 
 /* Parameters: the frame, the camera, the arrays of CLVR_VOLUME_ARRAYS in
  * their order, then the outputs (host/pipeline/render.c binds them in this order). */
@@ -37,9 +38,14 @@ __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr
     clvr_light_sweep(&v, a, b, (int)step, out);
     (void)cam;
 }
+/* One frame: adds each pixel's sample to accum (and its square to
+ * accum_sq), its controls to ctl (the camera ray's offset from the pixel
+ * centre and its first uniform minus 1/2, kernels/pixel_cv.h), its counters
+ * and, when asked, its denoiser guides. */
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,
                                 CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float4 *accum,
-                                __global float4 *accum_sq, __global uint *counters, __global float4 *guides)
+                                __global float4 *accum_sq, __global float4 *ctl, __global uint *counters,
+                                __global float4 *guides)
 {
     const uint x = get_global_id(0), y = get_global_id(1);
     const clvr_frame f = *fp;
@@ -58,15 +64,17 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
         ldp = ld;
     }
     float3 org, dir;
-    clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir);
+    float2 d;
+    clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir, &d);
+    const float u = ldp ? ldp[2] : clvr_rng_next(&rng);
 
     float4 result, guide;
     uint samples = 0, nulls = 0, rays = 1;
     if (f.method == CLVR_RENDER_MARCH) {
-        result = clvr_render_march(&v, org, dir, &rng, ldp, &samples);
+        result = clvr_render_march(&v, org, dir, u, &samples);
         guide = (float4)(result.xyz, result.w > 0.0f ? 0.0f : -1.0f); /* no depth: one flat layer */
     } else {
-        result = clvr_render_track(&v, org, dir, &rng, ldp, &samples, &nulls, &rays, &guide);
+        result = clvr_render_track(&v, org, dir, u, &rng, ldp, &samples, &nulls, &rays, &guide);
     }
     if (f.guides) {
         /* Two float4 per pixel: albedo rgb and the frames with a depth, then
@@ -76,14 +84,27 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
         if (f.frame_index == 0) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = g1; }
         else { guides[2u * pixel] += g0; guides[2u * pixel + 1u] += g1; }
     }
-
-    if (f.frame_index == 0) { accum[pixel] = result; accum_sq[pixel] = result * result; }
-    else { accum[pixel] += result; accum_sq[pixel] += result * result; }
+    const float4 c4 = (float4)(d, u - 0.5f, 0.0f);
+    if (f.frame_index == 0) { accum[pixel] = result; accum_sq[pixel] = result * result; ctl[pixel] = c4; }
+    else { accum[pixel] += result; accum_sq[pixel] += result * result; ctl[pixel] += c4; }
     /* Counters: rays, samples (extinction lookups), null collisions, per
      * pixel, summed over frames. */
     __global uint *c = counters + 3u * pixel;
     if (f.frame_index == 0) { c[0] = rays; c[1] = samples; c[2] = nulls; }
     else { c[0] += rays; c[1] += samples; c[2] += nulls; }
+}
+
+/* The image so far, its means minus their control variates
+ * (kernels/pixel_cv.h): sum and ctl as clvr_render_frame accumulates them,
+ * inv_n = 1 / frames. */
+__kernel void clvr_pixel_cv_image(__global const float *sum, __global const float *ctl, float inv_n, uint w, uint h,
+                                  __global float4 *out)
+{
+    const uint x = get_global_id(0), y = get_global_id(1);
+    if (x >= w || y >= h) return;
+    float o[4];
+    clvr_pixel_cv(sum, ctl, inv_n, w, h, x, y, o);
+    out[(ulong)y * w + x] = (float4)(o[0], o[1], o[2], o[3]);
 }
 
 /* MPI mode (docs/mpi-compositing.md). The sub-pixel position comes from the
@@ -113,7 +134,8 @@ inline void clvr_mpi_camera_ray(__global const clvr_camera *cam, const clvr_fram
         clvr_ld_sample(pixel, f->frame_index, f->seed_lo, f->seed_hi, ld);
         ldp = ld;
     }
-    clvr_render_primary_ray(cam, f, x, y, &rng, ldp, org, dir);
+    float2 jit; /* MPI frames are composited on the host without the jitter's control variate */
+    clvr_render_primary_ray(cam, f, x, y, &rng, ldp, org, dir, &jit);
 }
 
 /* Phase 1: one clvr_mpi_record per pixel. */

@@ -1099,19 +1099,19 @@ inline float clvr_urm_camera(const clvr_volume *v, clvr_urm *e, float3 org, floa
     return clvr_urm_end(e);
 }
 
-/* One camera ray with the frame's estimator. ld: the frame's low-discrepancy
- * uniforms (CLVR_LD_DIMS), or NULL for the independent sampler; dimension 2
- * drives the camera ray's first free flight (delta) or quadrature offset
- * (urm), 3 the shadow ray's, 4 the pick of urm's shadow-ray origin. Without
- * ld the draws come from rng. */
-inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
-                                uint *samples, uint *nulls, uint *rays, float4 *guide)
+/* One camera ray with the frame's estimator. u_primary (dimension 2 of the
+ * low-discrepancy sampler, the caller's draw) drives the camera ray's first
+ * free flight (delta) or quadrature offset (urm). ld: the frame's
+ * low-discrepancy uniforms (CLVR_LD_DIMS), or NULL for the independent
+ * sampler; dimension 3 drives the shadow ray's, 4 the pick of urm's
+ * shadow-ray origin. Without ld the draws come from rng. */
+inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, float u_primary, clvr_rng *rng,
+                                const float *ld, uint *samples, uint *nulls, uint *rays, float4 *guide)
 {
     const clvr_frame *f = v->f;
     const float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi), ldir = vload3(0, f->light_dir);
     const float4 bg = (float4)(vload3(0, f->background), 0.0f);
     float t0 = 0.0f, t1 = INFINITY;
-    const float u_primary = ld ? ld[2] : clvr_rng_next(rng);
     *guide = (float4)(bg.xyz, -1.0f);
 
     if (f->estimator == CLVR_ESTIMATOR_URM) {
@@ -1203,10 +1203,9 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
 }
 
 /* Front-to-back alpha compositing at a fixed step with a random offset per
- * frame (so frames average to the continuous integral); no shadows. ld as in
- * clvr_render_track: dimension 2 gives the offset. */
-inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, clvr_rng *rng, const float *ld,
-                                uint *samples)
+ * frame, u in [0, 1) steps (so frames average to the continuous integral);
+ * no shadows. */
+inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, float u, uint *samples)
 {
     const clvr_frame *f = v->f;
     float3 lo = vload3(0, f->vol_lo), hi = vload3(0, f->vol_hi);
@@ -1216,7 +1215,6 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, cl
     float3 c = (float3)(0.0f);
     float T = 1.0f;
     const float shade = f->ambient + f->light_intensity;
-    const float u = ld ? ld[2] : clvr_rng_next(rng);
     for (float t = t0 + u * f->step; t < t1 && T > 1e-6f; t += f->step) {
         float4 med = clvr_volume_at(v, org + dir * t);
         ++*samples;
@@ -1231,12 +1229,14 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, cl
 /* Primary ray through pixel (x, y) with a random sub-pixel position
  * (dimensions 0 and 1 of ld, or two draws of rng when ld is NULL), or
  * through its centre for the point filter (the draws are made all the same,
- * so that the other dimensions keep their streams). */
+ * so that the other dimensions keep their streams). *jit: the position's
+ * offset from the centre, in pixels (a control of kernels/pixel_cv.h). */
 inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
-                                    clvr_rng *rng, const float *ld, float3 *org, float3 *dir)
+                                    clvr_rng *rng, const float *ld, float3 *org, float3 *dir, float2 *jit)
 {
     float jx = ld ? ld[0] : clvr_rng_next(rng), jy = ld ? ld[1] : clvr_rng_next(rng);
     if (f->pixel_filter == CLVR_PIXEL_POINT) jx = jy = 0.5f;
+    *jit = (float2)(jx - 0.5f, jy - 0.5f);
     clvr_camera c = *cam;
     float o[3], d[3];
     clvr_camera_ray(&c, (float)x + jx, (float)y + jy, o, d);

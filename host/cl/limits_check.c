@@ -17,8 +17,9 @@
 #define LIMITS_DEFAULT_SAMPLING 16u
 #define LIMITS_DEFAULT_BITS 16u
 /* Bytes per pixel of the renderer's image buffers: float4 accumulator,
- * float4 second moments, 3 uint ray counters (host/pipeline/render.c). */
-#define LIMITS_PIXEL_BYTES (16u + 16u + 12u)
+ * float4 second moments, float4 controls, the float4 image read, 3 uint ray
+ * counters (host/pipeline/render.c). */
+#define LIMITS_PIXEL_BYTES (16u + 16u + 16u + 16u + 12u)
 /* A BVH over L leaves has about L / 3 nodes (4-wide). */
 #define LIMITS_BVH_NODE_BYTES sizeof(clvr_bvh_node)
 

@@ -30,7 +30,7 @@
  * vertex), 16-bit local indices (2 per slot), leaf boxes (32 bytes per
  * leaf), instances and sampling clusters, the BVH (about one 112-byte node
  * per 3 leaves), and the image buffers (accumulator, second moments,
- * counters: 44 bytes per pixel). Every figure is a lower bound on what the
+ * controls, the image read, counters: 76 bytes per pixel). Every figure is a lower bound on what the
  * pipeline allocates, so a refusal is never a false alarm. */
 typedef struct clvr_limits_estimate {
     uint64_t num_elements, num_slots, num_vertices;

@@ -144,8 +144,7 @@ clvr_status clvr_denoise_renderer(clvr_denoiser *d, clvr_renderer *r, uint32_t w
     if (!guide) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory denoising a %ux%u image", w, h);
     CLVR_TRY(clvr_renderer_read_guides(r, guide, err));
     if (frames >= 2) {
-        /* The moments give the variance and, scaled as clvr_renderer_read
-         * scales them, the mean: one read of the sums instead of two. */
+        /* The moments give the variance. */
         sq = malloc(npix * 4 * sizeof(float));
         var = malloc(npix * sizeof(float));
         if (!sq || !var) {
@@ -154,11 +153,9 @@ clvr_status clvr_denoise_renderer(clvr_denoiser *d, clvr_renderer *r, uint32_t w
         }
         CLVR_TRY(clvr_renderer_read_moments(r, out, sq, err));
         clvr_dn_moments_variance(npix, frames, out, sq, var);
-        const float inv = 1.0f / (float)frames;
-        for (size_t i = 0; i < npix * 4; ++i) out[i] *= inv;
-    } else {
-        CLVR_TRY(clvr_renderer_read(r, out, NULL, err));
     }
+    /* The image as clvr_renderer_read shows it (with its control variates). */
+    CLVR_TRY(clvr_renderer_read(r, out, NULL, err));
     CLVR_TRY(clvr_denoiser_run(d, w, h, out, guide, var, prm, out, err));
 cleanup:
     free(guide);

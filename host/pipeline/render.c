@@ -29,6 +29,9 @@ struct clvr_renderer {
     cl_mem mpi_rec, mpi_pick, mpi_tau, mpi_counters;
     size_t mpi_npix;           /* pixels the MPI buffers hold */
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
+    cl_mem ctl;                /* per pixel, the sums of its controls (float4, kernels/pixel_cv.h) */
+    cl_mem image;              /* the image clvr_renderer_read reads: means minus their control variates */
+    cl_kernel k_cv;            /* kernels/render.cl: clvr_pixel_cv_image */
     cl_mem guides;             /* settings.guides: 8 floats per pixel (kernels/render.cl); else 8 floats in all,
                                 * never written, so that no buffer is bound to two of the kernel's parameters */
     int guides_full;           /* guides holds a whole image's */
@@ -39,6 +42,7 @@ struct clvr_renderer {
     uint32_t accum_w, accum_h; /* size of accum buffers */
     uint64_t frames;
     double kernel_s, last_frame_s, light_s;
+    double image_s;            /* device time of the last clvr_renderer_read's image pass (clvr_pixel_cv_image) */
     size_t local[2];           /* work-group shape of the render kernel */
 };
 
@@ -78,6 +82,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
      * in fewer frames (bench_render --converge); tests that need
      * independent frames ask for CLVR_SAMPLER_INDEPENDENT. */
     s->sampler = CLVR_SAMPLER_LD;
+    s->pixel_cv = 1;
     s->shadows = 1;
     s->hull = 1;
     s->bins = 32;
@@ -139,12 +144,16 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
     clvr_cl_release(cl, &r->accum);
     clvr_cl_release(cl, &r->accum_sq);
     clvr_cl_release(cl, &r->counters);
+    clvr_cl_release(cl, &r->ctl);
+    clvr_cl_release(cl, &r->image);
     r->accum_w = r->accum_h = 0;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 4 * sizeof(float), NULL, "image accumulator", &r->accum, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 4 * sizeof(float), NULL, "image second moments",
                             &r->accum_sq, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 3 * sizeof(cl_uint), NULL, "ray counters", &r->counters,
                             err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 4 * sizeof(float), NULL, "pixel controls", &r->ctl, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 4 * sizeof(float), NULL, "image", &r->image, err));
     r->guides_full = !!r->set.guides;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (r->guides_full ? npix : 1) * 8 * sizeof(float), NULL,
                             "denoiser guides", &r->guides, err));
@@ -258,6 +267,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     CLVR_TRY(update_majorants(r, 0, err));
     r->frames = 0;
     r->kernel_s = 0.0;
+    r->image_s = 0.0;
 cleanup:
     return s;
 }
@@ -288,6 +298,7 @@ clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const 
     CLVR_TRY(clvr_majorants_create(cl, mesh, &r->maj, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_frame", &r->k_render, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_light_grid", &r->k_light, err));
+    CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_pixel_cv_image", &r->k_cv, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE,
                             (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * sizeof(float), NULL,
                             "light grid", &r->light_buf, err));
@@ -306,6 +317,7 @@ void clvr_renderer_destroy(clvr_renderer *r)
     if (!r) return;
     if (r->k_render) clReleaseKernel(r->k_render);
     if (r->k_light) clReleaseKernel(r->k_light);
+    if (r->k_cv) clReleaseKernel(r->k_cv);
     if (r->k_mpi_record) clReleaseKernel(r->k_mpi_record);
     if (r->k_mpi_shadow) clReleaseKernel(r->k_mpi_shadow);
     clvr_cl_release(r->cl, &r->mpi_rec);
@@ -315,7 +327,8 @@ void clvr_renderer_destroy(clvr_renderer *r)
     clvr_cl_release(r->cl, &r->light_buf);
     if (r->prog_render) clReleaseProgram(r->prog_render);
     clvr_majorants_destroy(r->maj);
-    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum, &r->accum_sq, &r->counters, &r->guides};
+    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum,  &r->accum_sq,
+                      &r->counters,  &r->guides,  &r->ctl, &r->image};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -327,6 +340,7 @@ clvr_status clvr_renderer_set_camera(clvr_renderer *r, const clvr_camera *cam, c
     CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->cam_buf, CL_TRUE, 0, sizeof r->cam, &r->cam, 0, NULL, NULL));
     r->frames = 0;
     r->kernel_s = 0.0;
+    r->image_s = 0.0;
 cleanup:
     return s;
 }
@@ -355,6 +369,7 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
     r->light_valid = 0;
     r->frames = 0;
     r->kernel_s = 0.0;
+    r->image_s = 0.0;
 cleanup:
     return s;
 }
@@ -436,7 +451,7 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     CLVR_TRY(ensure_light(r, err));
     /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
-                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->counters),
+                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->ctl), CLVR_ARG(r->counters),
                           CLVR_ARG(r->guides)));
     CLVR_TRY(clvr_cl_run2d(cl, k, r->set.width, r->set.height, r->local, &evt, err));
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
@@ -487,8 +502,21 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
 {
     clvr_status s = CLVR_OK;
     cl_uint *cnt = NULL;
+    cl_event evt = NULL;
     size_t npix = (size_t)r->set.width * r->set.height;
-    if (rgba) {
+    if (rgba && r->set.pixel_cv) {
+        /* The means minus their control variates (kernels/pixel_cv.h), on
+         * the device: a least-squares fit per pixel. */
+        if (r->frames == 0) return clvr_error_set(err, CLVR_ERR_INTERNAL, "no frame rendered yet");
+        const cl_float inv_n = 1.0f / (float)r->frames;
+        const cl_uint w = r->set.width, h = r->set.height;
+        CLVR_TRY(CLVR_CL_ARGS(r->k_cv, err, CLVR_ARG(r->accum), CLVR_ARG(r->ctl), CLVR_ARG(inv_n), CLVR_ARG(w),
+                              CLVR_ARG(h), CLVR_ARG(r->image)));
+        CLVR_TRY(clvr_cl_run2d(r->cl, r->k_cv, w, h, r->local, &evt, err));
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->image, CL_TRUE, 0, npix * 4 * sizeof(float), rgba, 0,
+                                          NULL, NULL));
+        r->image_s = clvr_cl_event_seconds(evt);
+    } else if (rgba) {
         CLVR_TRY(clvr_renderer_read_moments(r, rgba, NULL, err));
         float inv = 1.0f / (float)r->frames;
         for (size_t i = 0; i < npix * 4; ++i) rgba[i] *= inv;
@@ -498,6 +526,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         counters->frames = r->frames;
         counters->kernel_s = r->kernel_s;
         counters->light_s = r->light_s;
+        counters->image_s = r->image_s;
         counters->last_frame_s = r->last_frame_s;
         if (r->frames) {
             cnt = malloc(npix * 3 * sizeof(cl_uint));
@@ -512,6 +541,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         }
     }
 cleanup:
+    if (evt) clReleaseEvent(evt);
     free(cnt);
     return s;
 }

@@ -34,6 +34,9 @@ typedef struct clvr_render_settings {
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
     uint32_t pixel_filter;     /* CLVR_PIXEL_*: box (default, antialiased) or point (pixel centres) */
+    int pixel_cv;              /* nonzero (default): the image read is each pixel's mean minus the control
+                                * variates of its jitter and first uniform (kernels/pixel_cv.h; the same
+                                * expected image, less noise); 0: the plain means */
     int guides;                /* nonzero: frames also accumulate the denoiser's guides (clvr_renderer_read_guides) */
     int shadows;
     /* Nonzero (default): every camera ray is cut to the part between its
@@ -88,6 +91,8 @@ typedef struct clvr_render_counters {
     double kernel_s;          /* device time of the render kernel, all frames (the light grid's included) */
     double last_frame_s;      /* device time of the last frame */
     double light_s;           /* device time of the light grid's last build (urm with shadows; part of kernel_s) */
+    double image_s;           /* device time of the image pass of the last clvr_renderer_read that read the image
+                               * (kernels/pixel_cv.h; not part of kernel_s; 0 without the control variates) */
 } clvr_render_counters;
 
 typedef struct clvr_renderer clvr_renderer;
