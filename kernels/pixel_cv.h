@@ -1,7 +1,7 @@
 /* pixel_cv.h: control variates for the draws every frame makes per pixel,
- * applied to the running image (clvr_renderer_read; kernels/render.cl's
- * clvr_pixel_cv_image runs it on the device, the host reference is the
- * same code).
+ * applied to the running image (clvr_renderer_read). clvr_pixel_cv is the
+ * plain-C reference; kernels/render.cl's clvr_pixel_cv_image runs the same
+ * arithmetic in the same order with the four channels as one float4.
  *
  * A pixel's running mean M is the mean of its frames' samples. Two of each
  * frame's draws move a sample in a way its neighbours can predict:

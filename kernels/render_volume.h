@@ -66,9 +66,18 @@ inline float4 clvr_volume_at(const clvr_volume *v, float3 p)
  * (the instance's type read after each lookup). */
 typedef struct clvr_span {
     float t0, t_end, s0, dsdt;
+    /* The cell of another type the last lookup found (in instance
+     * clvr_locate_hint.inst), or CLVR_BVH_NOT_FOUND: the next lookup tests
+     * it first (its box, then its map's inverse: the same containment test
+     * as a walk's) before any tree walk. 256^2 urm frames (interleaved
+     * runs): notch_stress's 2,192 hexes and wedges 34.8 -> 28.9 ms without
+     * shadows, 51.5 -> 39.1 ms with; the AMR-like 1M hexes 41.8 -> 37.6 ms;
+     * the built-in mixed scene 147 -> 138 ms with shadows; tet meshes
+     * within 1%. */
+    uint elem;
 } clvr_span;
 
-inline clvr_span clvr_span_none(void) { return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f}; }
+inline clvr_span clvr_span_none(void) { return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f, CLVR_BVH_NOT_FOUND}; }
 
 /* The span of tet vtx along the ray org + t dir from t (inside it, scalar
  * s there): barycentric gradients from the same cofactors as
@@ -109,14 +118,29 @@ inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, f
     const clvr_mesh_view m = clvr_volume_view(v);
     const float3 p = org + dir * t;
     float s;
+    if (sp->elem != CLVR_BVH_NOT_FOUND) {
+        const clvr_instance inst = m.instances[h->inst];
+        const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
+        clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
+        clvr_load_element_in(&pa, &inst, sp->elem, vtx);
+        if (clvr_element_box_test(inst.type, vtx, p.x, p.y, p.z) &&
+            clvr_element_sample(inst.type, vtx, p.x, p.y, p.z, &s))
+            return clvr_volume_tf(v, s);
+    }
     clvr_u32 e;
-    if (!clvr_locate_hinted(&m, p.x, p.y, p.z, h, &s, &e)) return (float4)(0.0f);
+    if (!clvr_locate_hinted(&m, p.x, p.y, p.z, h, &s, &e)) {
+        sp->elem = CLVR_BVH_NOT_FOUND;
+        return (float4)(0.0f);
+    }
     const clvr_instance inst = m.instances[h->inst];
     if (inst.type == CLVR_CELL_TET) {
         const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
         clvr_vec4 vtx[4];
         clvr_load_tet(&pa, &inst, e, vtx);
         *sp = clvr_tet_span(vtx, org, dir, t, s);
+    } else {
+        *sp = clvr_span_none();
+        sp->elem = e;
     }
     return clvr_volume_tf(v, s);
 }

@@ -246,8 +246,11 @@ CLVR_API clvr_result clvr_tracer_set_seed(clvr_tracer *tr, uint64_t seed, clvr_m
 CLVR_API clvr_result clvr_tracer_render(clvr_tracer *tr, uint32_t frames, clvr_message *msg);
 /* Image size in pixels. */
 CLVR_API clvr_result clvr_tracer_size(const clvr_tracer *tr, uint32_t *width, uint32_t *height, clvr_message *msg);
-/* Copies the running mean image into rgba, which holds `count` floats
- * (>= width * height * 4; else ERR_USAGE with the size needed). Before any
+/* Copies the running image into rgba, which holds `count` floats
+ * (>= width * height * 4; else ERR_USAGE with the size needed): each
+ * pixel's mean over the frames less its control variates (a fit
+ * over its neighbours of what its sub-pixel offset and first uniform added,
+ * kernels/pixel_cv.h; the same expected image, less noise). Before any
  * frame: ERR_USAGE. */
 CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg);
 /* One figure by name: "frames", "rays", "samples", "null_collisions",
