@@ -352,6 +352,27 @@ CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float p
     return 1;
 }
 
+/* clvr_element_sample for a type other than tets with Newton started from
+ * *u, *v, *w (a point nearby found inside the element) when start is set,
+ * from the type's own start otherwise; writes the coordinates found there. */
+CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, int start,
+                                         float *u, float *v, float *w, float *scalar)
+{
+    float a, b, c;
+    if (!(start ? clvr_newton_invert(type, vtx, px, py, pz, *u, *v, *w, &a, &b, &c)
+                : clvr_element_invert(type, vtx, px, py, pz, &a, &b, &c)))
+        return 0;
+    if (!clvr_element_param_inside(type, a, b, c, CLVR_ELEMENT_EPS)) return 0;
+    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
+    clvr_element_shape(type, a, b, c, N, Nu, Nv, Nw);
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
+    float s = 0.0f;
+    for (clvr_u32 i = 0; i < nv; ++i) s += N[i] * vtx[i].w;
+    *scalar = s;
+    *u = a; *v = b; *w = c;
+    return 1;
+}
+
 /* The element's vertex box (lo, hi) and the padding clvr_element_box_test
  * grows it by: CLVR_BVH_BOX_PAD_REL of its largest extent plus a few ulps of
  * its coordinates. */

@@ -73,11 +73,18 @@ typedef struct clvr_span {
      * runs): notch_stress's 2,192 hexes and wedges 34.8 -> 28.9 ms without
      * shadows, 51.5 -> 39.1 ms with; the AMR-like 1M hexes 41.8 -> 37.6 ms;
      * the built-in mixed scene 147 -> 138 ms with shadows; tet meshes
-     * within 1%. */
+     * within 1%. Newton then starts from the coordinates of the span's
+     * last point (pu, pv, pw), not the cell's centre: the notch 31.2 ->
+     * 26.6 ms without shadows, 39.8 -> 36.9 ms with; AMR-like and built-in
+     * scene -1%. */
     uint elem;
+    float pu, pv, pw; /* elem's parametric coordinates at the last point the span answered; pu NaN: none */
 } clvr_span;
 
-inline clvr_span clvr_span_none(void) { return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f, CLVR_BVH_NOT_FOUND}; }
+inline clvr_span clvr_span_none(void)
+{
+    return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f, CLVR_BVH_NOT_FOUND, NAN, 0.0f, 0.0f};
+}
 
 /* The span of tet vtx along the ray org + t dir from t (inside it, scalar
  * s there): barycentric gradients from the same cofactors as
@@ -123,9 +130,12 @@ inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, f
         const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
         clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
         clvr_load_element_in(&pa, &inst, sp->elem, vtx);
+        float u = sp->pu, vv = sp->pv, w = sp->pw;
         if (clvr_element_box_test(inst.type, vtx, p.x, p.y, p.z) &&
-            clvr_element_sample(inst.type, vtx, p.x, p.y, p.z, &s))
+            clvr_element_sample_near(inst.type, vtx, p.x, p.y, p.z, !isnan(u), &u, &vv, &w, &s)) {
+            sp->pu = u; sp->pv = vv; sp->pw = w;
             return clvr_volume_tf(v, s);
+        }
     }
     clvr_u32 e;
     if (!clvr_locate_hinted(&m, p.x, p.y, p.z, h, &s, &e)) {
