@@ -331,30 +331,10 @@ CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float
     *x = sx; *y = sy; *z = sz;
 }
 
-/* Point containment and interpolation: returns 1 when (px, py, pz) lies in
- * the element (within CLVR_ELEMENT_EPS in parametric coordinates) and writes
- * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
- * for degenerate elements and NaN input). vtx holds the element's
- * clvr_cell_vertex_count(type) vertices in VTK order. Tets take their
- * early-out test (clvr_tet_sample); every other type inverts its map. */
-CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
-{
-    if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
-    float u, v, w;
-    if (!clvr_element_invert(type, vtx, px, py, pz, &u, &v, &w)) return 0;
-    if (!clvr_element_param_inside(type, u, v, w, CLVR_ELEMENT_EPS)) return 0;
-    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
-    clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
-    const clvr_u32 nv = clvr_cell_vertex_count(type);
-    float s = 0.0f;
-    for (clvr_u32 i = 0; i < nv; ++i) s += N[i] * vtx[i].w;
-    *scalar = s;
-    return 1;
-}
-
-/* clvr_element_sample for a type other than tets with Newton started from
- * *u, *v, *w (a point nearby found inside the element) when start is set,
- * from the type's own start otherwise; writes the coordinates found there. */
+/* Containment and interpolation for a type other than tets: Newton started
+ * from *u, *v, *w (a point nearby found inside the element) when start is
+ * set, from the type's own start otherwise (clvr_element_invert); as
+ * clvr_element_sample, and writes the coordinates found. */
 CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, int start,
                                          float *u, float *v, float *w, float *scalar)
 {
@@ -371,6 +351,19 @@ CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, fl
     *scalar = s;
     *u = a; *v = b; *w = c;
     return 1;
+}
+
+/* Point containment and interpolation: returns 1 when (px, py, pz) lies in
+ * the element (within CLVR_ELEMENT_EPS in parametric coordinates) and writes
+ * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
+ * for degenerate elements and NaN input). vtx holds the element's
+ * clvr_cell_vertex_count(type) vertices in VTK order. Tets take their
+ * early-out test (clvr_tet_sample); every other type inverts its map. */
+CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
+{
+    if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
+    float u, v, w;
+    return clvr_element_sample_near(type, vtx, px, py, pz, 0, &u, &v, &w, scalar);
 }
 
 /* The element's vertex box (lo, hi) and the padding clvr_element_box_test

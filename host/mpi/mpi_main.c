@@ -37,7 +37,9 @@
 #include "mpi_share.h"
 #include "mpi_share_mesh.h"
 #include "partition.h"
+#include "pixel_cv.h"
 #include "render.h"
+#include "rng.h"
 #include "scene.h"
 #include "series_file.h"
 #include "tf.h"
@@ -318,6 +320,34 @@ static clvr_status write_stats_json(const char *path, const rank_stats *rs, int 
     return CLVR_OK;
 }
 
+/* Adds frame `frame`'s camera-ray offsets from the pixel centres (what
+ * kernels/render.cl's clvr_mpi_camera_ray draws from the frame's seed, the
+ * same on every rank) to ctl, 4 per pixel as clvr_render_frame's controls.
+ * The first uniform of a frame differs between ranks (their own streams),
+ * so it is left at 0: the composited image gets the jitter's control
+ * variate only (kernels/pixel_cv.h). */
+static void add_jitters(double *ctl, uint32_t w, uint32_t h, uint32_t frame, uint64_t seed, uint32_t sampler,
+                        uint32_t pixel_filter)
+{
+    if (pixel_filter == CLVR_PIXEL_POINT) return;
+    const clvr_u32 lo = (clvr_u32)seed, hi = (clvr_u32)(seed >> 32);
+    for (uint32_t p = 0; p < w * h; ++p) {
+        float jx, jy;
+        if (sampler == CLVR_SAMPLER_LD) {
+            float ld[CLVR_LD_DIMS];
+            clvr_ld_sample(p, frame, lo, hi, ld);
+            jx = ld[0];
+            jy = ld[1];
+        } else {
+            clvr_rng rng = clvr_rng_make(p, frame, lo, hi);
+            jx = clvr_rng_next(&rng);
+            jy = clvr_rng_next(&rng);
+        }
+        ctl[4 * (size_t)p] += jx - 0.5f;
+        ctl[4 * (size_t)p + 1] += jy - 0.5f;
+    }
+}
+
 static int run(mpi_run *m, const clvr_options *o)
 {
     clvr_error err = {0};
@@ -329,7 +359,10 @@ static int run(mpi_run *m, const clvr_options *o)
     clvr_dataset *ds = NULL;
     clvr_tracer *tracer = NULL;
     float *table = NULL, *pick_t = NULL, *tau = NULL, *tau_all = NULL, *img = NULL, *grid = NULL, *grid_all = NULL;
-    double *sum = NULL;
+    double *sum = NULL, *ctl = NULL;
+    float *sumf = NULL, *ctlf = NULL;
+    uint64_t seed = 0;
+    uint32_t sampler = 0, pixel_filter = 0;
     clvr_mpi_record *rec = NULL, *rec_all = NULL;
     clvr_mpi_shadow_pick *picks = NULL;
     rank_stats st;
@@ -438,6 +471,9 @@ static int run(mpi_run *m, const clvr_options *o)
         s = clvr_internal_status(clvr_cli_tracer_settings(o, &ts, &msg), &msg, &err);
         if (s == CLVR_OK) s = clvr_internal_render_settings(&ts, o->width, o->height, &rsv, &shadows, &err);
         rsv.pixel_filter = o->pixel_filter; /* clvr_setting_name("pixel_filter") is in CLVR_PIXEL_* order */
+        seed = rsv.seed;
+        sampler = rsv.sampler;
+        pixel_filter = rsv.pixel_filter;
         clvr_render_settings *rs = &rsv;
         /* The region is one more clip box (intersected with --clip-box):
          * camera rays, shadow rays and the light grid's rays are all cut to
@@ -507,8 +543,11 @@ static int run(mpi_run *m, const clvr_options *o)
         picks = malloc(npix * sizeof *picks);
         img = malloc(npix * 4 * sizeof(float));
         sum = calloc(npix * 4, sizeof(double));
+        ctl = calloc(npix * 4, sizeof(double));
+        sumf = malloc(npix * 4 * sizeof(float));
+        ctlf = malloc(npix * 4 * sizeof(float));
     }
-    s = rec && pick_t && tau && (!root || (rec_all && tau_all && picks && img && sum))
+    s = rec && pick_t && tau && (!root || (rec_all && tau_all && picks && img && sum && ctl && sumf && ctlf))
             ? CLVR_OK
             : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for %ux%u MPI records", o->width, o->height);
     s = agree(m, s, &err);
@@ -602,6 +641,7 @@ static int run(mpi_run *m, const clvr_options *o)
         st.samples += (double)(n1 + n2);
         if (root) {
             for (size_t i = 0; i < npix * 4; ++i) sum[i] += img[i];
+            add_jitters(ctl, o->width, o->height, frames, seed, sampler, pixel_filter);
             const double tn = now();
             if (!o->quiet && (tn - last_report > 1.0 || frames + 1 == o->spp)) {
                 const double per = (tn - render0) / (frames + 1);
@@ -622,7 +662,16 @@ static int run(mpi_run *m, const clvr_options *o)
         goto done;
     }
     if (root) {
-        for (size_t i = 0; i < npix * 4; ++i) img[i] = (float)(sum[i] / (frames ? frames : 1));
+        /* The means less the jitter's control variate, as one process's
+         * image read (clvr_pixel_cv, the device pass's host reference). */
+        for (size_t i = 0; i < npix * 4; ++i) {
+            sumf[i] = (float)sum[i];
+            ctlf[i] = (float)ctl[i];
+        }
+        const float inv_n = 1.0f / (float)(frames ? frames : 1);
+        for (uint32_t y = 0; y < o->height; ++y)
+            for (uint32_t x = 0; x < o->width; ++x)
+                clvr_pixel_cv(sumf, ctlf, inv_n, o->width, o->height, x, y, img + 4 * ((size_t)y * o->width + x));
         clvr_image_display display = {o->exposure, (clvr_tonemap)o->tonemap, o->transparent, NULL};
         s = clvr_image_write_display(o->output, o->width, o->height, img, &display, &err);
     }
@@ -662,6 +711,9 @@ done:
     free(tau_all);
     free(img);
     free(sum);
+    free(ctl);
+    free(sumf);
+    free(ctlf);
     free(rec);
     free(rec_all);
     free(picks);
