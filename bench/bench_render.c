@@ -23,7 +23,7 @@
  *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
  *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
- *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise]
+ *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise] [--no-pixel-cv]
  *
  * --denoise (--converge): also the error of each checkpoint's image after the
  * optional denoiser (kernels/denoise.h), and its bias (the denoised
@@ -31,6 +31,10 @@
  * which is the unbiased estimate's.
  * --pixel-filter: the image the frames converge to (render.h; the
  * reference of --converge uses it too), box (default) or point.
+ * --no-pixel-cv: the images read are the plain means, without the
+ * per-pixel control variates (kernels/pixel_cv.h; render.h settings.pixel_cv;
+ * for A/B runs). The --converge reference is always made without them; the
+ * image pass's device time counts in the measured runs' times.
  * --no-hull: camera rays are not cut to the mesh's boundary crossings
  * (settings.hull off; the same image in expectation, for A/B runs).
  * --sampler: the renderer's frame sampler (default ld, the renderer's
@@ -79,7 +83,7 @@ typedef struct config {
     int no_hull;        /* --no-hull: camera rays keep their whole box interval (render.h settings.hull) */
     uint32_t pixel_filter; /* CLVR_PIXEL_*: --pixel-filter (the reference's too) */
     int guides;         /* --denoise (converge): keep the denoiser's guides, report the denoised error apart */
-    int no_pixel_cv;    /* --no-pixel-cv: box-filter frames without the jitter's control variate (render.h) */
+    int no_pixel_cv;    /* --no-pixel-cv: images read without the per-pixel control variates (render.h) */
 } config;
 
 typedef struct row {
@@ -741,7 +745,7 @@ static int usage(void)
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
             "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n"
-            "                    [--denoise]\n");
+            "                    [--denoise] [--no-pixel-cv]\n");
     return 2;
 }
 
