@@ -177,7 +177,7 @@ inline void clvr_mpi_camera_ray(__global const clvr_camera *cam, const clvr_fram
         clvr_ld_sample(pixel, f->frame_index, f->seed_lo, f->seed_hi, ld);
         ldp = ld;
     }
-    float2 jit; /* MPI frames are composited on the host without the jitter's control variate */
+    float2 jit; /* rank 0 draws it again on the host (host/mpi/mpi_main.c, add_jitters) */
     clvr_render_primary_ray(cam, f, x, y, &rng, ldp, org, dir, &jit);
 }
 

@@ -1260,16 +1260,14 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, fl
     return (float4)(c + T * bg.xyz, 1.0f - T);
 }
 
-/* Primary ray through pixel (x, y) with a random sub-pixel position
- * (dimensions 0 and 1 of ld, or two draws of rng when ld is NULL), or
- * through its centre for the point filter (the draws are made all the same,
- * so that the other dimensions keep their streams). *jit: the position's
- * offset from the centre, in pixels (a control of kernels/pixel_cv.h). */
+/* Primary ray through pixel (x, y) at its sub-pixel position
+ * (clvr_pixel_jitter). *jit: the position's offset from the centre, in
+ * pixels (a control of kernels/pixel_cv.h). */
 inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
                                     clvr_rng *rng, const float *ld, float3 *org, float3 *dir, float2 *jit)
 {
-    float jx = ld ? ld[0] : clvr_rng_next(rng), jy = ld ? ld[1] : clvr_rng_next(rng);
-    if (f->pixel_filter == CLVR_PIXEL_POINT) jx = jy = 0.5f;
+    float jx, jy;
+    clvr_pixel_jitter(ld, rng, f->pixel_filter, &jx, &jy);
     *jit = (float2)(jx - 0.5f, jy - 0.5f);
     clvr_camera c = *cam;
     float o[3], d[3];

@@ -150,4 +150,17 @@ CLVR_INLINE void clvr_ld_sample(clvr_u32 pixel, clvr_u32 frame, clvr_u32 seed_lo
         u[k] = (float)(clvr_owen_scramble(clvr_sobol_bits(frame, k), seed[k]) >> 8) * (1.0f / 16777216.0f);
 }
 
+/* The camera ray's position in its pixel, [0, 1)^2: dimensions 0 and 1 of
+ * ld, or the next two draws of rng when ld is NULL; the centre for the point
+ * filter (the draws are made all the same, so that the other dimensions
+ * keep their streams). The render kernel traces through it; in MPI mode
+ * rank 0 draws it again on the host for the image's control variate
+ * (kernels/pixel_cv.h), so both must come from here. */
+CLVR_INLINE void clvr_pixel_jitter(const float *ld, clvr_rng *rng, clvr_u32 pixel_filter, float *jx, float *jy)
+{
+    *jx = ld ? ld[0] : clvr_rng_next(rng);
+    *jy = ld ? ld[1] : clvr_rng_next(rng);
+    if (pixel_filter == CLVR_PIXEL_POINT) *jx = *jy = 0.5f;
+}
+
 #endif

@@ -329,20 +329,14 @@ static clvr_status write_stats_json(const char *path, const rank_stats *rs, int 
 static void add_jitters(double *ctl, uint32_t w, uint32_t h, uint32_t frame, uint64_t seed, uint32_t sampler,
                         uint32_t pixel_filter)
 {
-    if (pixel_filter == CLVR_PIXEL_POINT) return;
+    if (pixel_filter == CLVR_PIXEL_POINT) return; /* every offset 0 */
     const clvr_u32 lo = (clvr_u32)seed, hi = (clvr_u32)(seed >> 32);
     for (uint32_t p = 0; p < w * h; ++p) {
-        float jx, jy;
-        if (sampler == CLVR_SAMPLER_LD) {
-            float ld[CLVR_LD_DIMS];
-            clvr_ld_sample(p, frame, lo, hi, ld);
-            jx = ld[0];
-            jy = ld[1];
-        } else {
-            clvr_rng rng = clvr_rng_make(p, frame, lo, hi);
-            jx = clvr_rng_next(&rng);
-            jy = clvr_rng_next(&rng);
-        }
+        /* The streams of clvr_mpi_camera_ray. */
+        clvr_rng rng = clvr_rng_make(p, frame, lo, hi);
+        float ld[CLVR_LD_DIMS], jx, jy;
+        if (sampler == CLVR_SAMPLER_LD) clvr_ld_sample(p, frame, lo, hi, ld);
+        clvr_pixel_jitter(sampler == CLVR_SAMPLER_LD ? ld : NULL, &rng, pixel_filter, &jx, &jy);
         ctl[4 * (size_t)p] += jx - 0.5f;
         ctl[4 * (size_t)p + 1] += jy - 0.5f;
     }
