@@ -48,8 +48,12 @@ typedef int64_t clvr_i64;
 /* A hint to start loading the cache line at p (no fault, no effect on
  * results). Point location on a CPU device is bound by dependent cache
  * misses; asking for the next lines before they are needed overlaps them.
- * A no-op where the compiler lacks the builtin (other OpenCL compilers). */
-#if defined(__has_builtin)
+ * In kernels only where the host defines CLVR_DEVICE_PREFETCH (PoCL's CPU
+ * devices, whose address spaces are one): NVIDIA's OpenCL compiler rejects
+ * the __global pointer the builtin would get ("changes address space of
+ * pointer"), and a GPU gains nothing from it. The host's own compile of
+ * these helpers always has it. A no-op where the compiler lacks the builtin. */
+#if defined(__has_builtin) && (!defined(__OPENCL_VERSION__) || defined(CLVR_DEVICE_PREFETCH))
 #if __has_builtin(__builtin_prefetch)
 #define CLVR_PREFETCH(p) __builtin_prefetch((CLVR_GLOBAL const void *)(p))
 #endif

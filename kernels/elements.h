@@ -371,6 +371,11 @@ CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float p
  * its coordinates. */
 CLVR_INLINE float clvr_element_vertex_box(clvr_u32 type, const clvr_vec4 *vtx, float *lo, float *hi)
 {
+#ifdef __OPENCL_VERSION__
+    /* No fused multiply-add in the padding: the device's boxes (and the
+     * quantized element boxes built from them) keep the host's bits. */
+#pragma OPENCL FP_CONTRACT OFF
+#endif
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     lo[0] = hi[0] = vtx[0].x;
     lo[1] = hi[1] = vtx[0].y;

@@ -14,9 +14,14 @@ int main(void)
     clvr_error err = {0};
     tu_open_device(&cl);
 
-    /* Every spec form finds the PoCL device that the test machine has. */
-    const char *specs[] = {"pocl", "cpu", "0:0", "portable"};
-    for (unsigned i = 0; i < sizeof specs / sizeof specs[0]; ++i) {
+    /* Every spec form finds the PoCL device that the test machine has; on
+     * another test device (CLVR_TEST_DEVICE=gpu), the forms that name it. */
+    const char *pocl_specs[] = {"pocl", "cpu", "0:0", "portable"};
+    const char *other_specs[] = {tu_device_spec(), "0:0"};
+    const int on_pocl = strcmp(tu_device_spec(), "pocl") == 0;
+    const char **specs = on_pocl ? pocl_specs : other_specs;
+    const unsigned nspecs = on_pocl ? 4u : 2u;
+    for (unsigned i = 0; i < nspecs; ++i) {
         clvr_cl other;
         TU_CHECK_STATUS(clvr_cl_create(specs[i], &other, &err), CLVR_OK, &err);
         clvr_cl_destroy(&other);
@@ -26,6 +31,21 @@ int main(void)
         TU_CHECK_STATUS(clvr_cl_create("no-such-device-xyz", &none, &err), CLVR_ERR_NO_DEVICE, &err);
         TU_CHECK(strstr(err.msg, "no-such-device-xyz") != NULL && strstr(err.msg, "available") != NULL);
         TU_CHECK_STATUS(clvr_cl_create("9:9", &none, &err), CLVR_ERR_NO_DEVICE, &err);
+    }
+
+    /* Build logs of compilers that ignore #line (NVIDIA's: "<kernel>:N:")
+     * name the kernel file and line, as PoCL's do. */
+    {
+        const char *src = "#line 1 \"a.cl\"\nx\n#line 1 \"b.h\"\ny\nz\n#line 3 \"a.cl\"\nw\n";
+        const char *log = "<kernel>:4:7: error: e1\n<source>:7:1: note\n<kernel>:1:2: marker\n<kernel>:99: past\n<kernel>:x";
+        char *m = clvr_cl_map_build_log(src, log);
+        TU_CHECK(m != NULL);
+        if (m) {
+            TU_CHECK(strcmp(m, "b.h:1:7: error: e1\na.cl:3:1: note\n<kernel>:1:2: marker\n<kernel>:99: past\n<kernel>:x") == 0);
+            if (strcmp(m, "b.h:1:7: error: e1\na.cl:3:1: note\n<kernel>:1:2: marker\n<kernel>:99: past\n<kernel>:x") != 0)
+                fprintf(stderr, "mapped log:\n%s\n", m);
+        }
+        free(m);
     }
 
     /* The embedded program builds and runs; shared struct sizes agree. */

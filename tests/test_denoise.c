@@ -254,7 +254,7 @@ static void test_render(void)
     float *ref = malloc(npix * 4 * sizeof(float)), *ref_dn = malloc(npix * 4 * sizeof(float));
     float *raw = malloc(npix * 4 * sizeof(float)), *dn = malloc(npix * 4 * sizeof(float));
     uint8_t *medium = calloc(npix, 1);
-    API_OK(clvr_context_create("pocl", &ctx, &msg));
+    API_OK(clvr_context_create(tu_device_spec(), &ctx, &msg));
     API_OK(clvr_dataset_create_demo(&ds, &msg));
     if (ctx && ds) API_OK(clvr_tracer_create(ctx, ds, NULL, w, h, &tr, &msg));
     if (!tr) goto done;

@@ -229,7 +229,7 @@ def make_bin_grid_bad_tf(d, n):
 
 def make_bin_sparse_huge(d, n):
     """9M hexes on a single vertex: element indices of 288 MB, above the
-    256 MiB per-buffer limit of a POCL_MEMORY_LIMIT=1 device. Written as a
+    256 MiB per-buffer limit the case sets (CLVR_MAX_ALLOC_BYTES; POCL_MEMORY_LIMIT=1 on PoCL). Written as a
     sparse file (all zeros: every index is 0, valid), so it costs no disk."""
     hexes, verts = 9000000, 1
     m = mg.mesh([(0.0, 0.0, 0.0)], [0.0], {})

@@ -55,6 +55,8 @@ import clvr
 
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(os.path.dirname(__file__), "data"))
 BUILD = os.environ.get("CLVR_BUILD_DIR", "build")
+# The device the renders run on (tests/test_util.h: CLVR_TEST_DEVICE, default pocl).
+DEVICE = os.environ.get("CLVR_TEST_DEVICE") or "pocl"
 # 6 SE, not 5: the variances come from 8 batches (Student-t tails) and 1024
 # blocks are compared; the broken cases differ by tens to hundreds of SE.
 W, H, BATCHES, FRAMES, K_SIGMA = 32, 32, 8, 4, 6.0
@@ -183,7 +185,7 @@ def test_program_matches_module(ctx):
     vtk = os.path.join(DATA, "vtk", "notch_stress.vtk")
     with tempfile.TemporaryDirectory() as tmp:
         pfm = os.path.join(tmp, "cli.pfm")
-        subprocess.run([os.path.join(BUILD, "clvr"), vtk, "--device", "pocl", "--size", "40x32", "--spp", "4",
+        subprocess.run([os.path.join(BUILD, "clvr"), vtk, "--device", DEVICE, "--size", "40x32", "--spp", "4",
                         "--seed", "7", "--quiet", "-o", pfm], check=True)
         raw = open(pfm, "rb").read()
     magic, size, scale, data = raw.split(b"\n", 3)
@@ -569,7 +571,7 @@ def test_api12(ctx):
 
 def main():
     try:
-        ctx = clvr.Context("pocl")
+        ctx = clvr.Context(DEVICE)
     except clvr.Error as e:
         print("test_python: no OpenCL device (%s): skipped" % e, file=sys.stderr)
         return 77

@@ -30,6 +30,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
 BUILD = os.environ.get("CLVR_BUILD_DIR", os.path.join(HERE, "..", "build"))
 CLVR = os.path.abspath(os.path.join(BUILD, "clvr"))
+# The device the renders run on (tests/test_util.h: CLVR_TEST_DEVICE, default pocl).
+DEVICE = os.environ.get("CLVR_TEST_DEVICE") or "pocl"
 CONVERT = os.path.join(HERE, "..", "tools", "clvr-convert")
 LOW, HIGH = 0.2, 1.5
 
@@ -57,7 +59,7 @@ def median_depth(png):
 
 def render(tmp, mesh, extra, name):
     out = os.path.join(tmp, name + ".png")
-    args = [CLVR] + ([mesh] if mesh else []) + ["--device", "pocl", "--quiet", "--size", "64x64", "--spp", "16",
+    args = [CLVR] + ([mesh] if mesh else []) + ["--device", DEVICE, "--quiet", "--size", "64x64", "--spp", "16",
                                                 "--background", "none", "-o", out] + extra
     r = run(args)
     if not check(r.returncode == 0, f"clvr renders {name}", (r.returncode, r.stderr.strip())):

@@ -54,13 +54,20 @@ static inline int tu_finish(const char *name)
     return tu_fail_ ? 1 : 0;
 }
 
-/* Opens the test device (CLVR_TEST_DEVICE, default "pocl"); exits 77 when
- * there is none, so ctest reports the test as skipped. */
+/* The device the tests run on: CLVR_TEST_DEVICE (any --device SPEC, e.g.
+ * "gpu" on a machine with a GPU driver), default "pocl". */
+static inline const char *tu_device_spec(void)
+{
+    const char *spec = getenv("CLVR_TEST_DEVICE");
+    return spec && *spec ? spec : "pocl";
+}
+
+/* Opens the test device (tu_device_spec); exits 77 when there is none, so
+ * ctest reports the test as skipped. */
 static inline void tu_open_device(clvr_cl *cl)
 {
     clvr_error err = {0};
-    const char *spec = getenv("CLVR_TEST_DEVICE");
-    if (clvr_cl_create(spec ? spec : "pocl", cl, &err) != CLVR_OK) {
+    if (clvr_cl_create(tu_device_spec(), cl, &err) != CLVR_OK) {
         fprintf(stderr, "SKIP: no OpenCL device: %s\n", err.msg);
         exit(77);
     }

@@ -183,7 +183,7 @@ int main(int argc, char **argv)
      * every count), .bin files again with what is left now. */
     int boxes = o.element_boxes; /* AUTO resolves here: off only when the run fits only without them */
     TRY(clvr_dataset_check_memory(ds, mesh_name, o.width, o.height, o.partitions, o.element_boxes, &boxes, &msg));
-    if (boxes != o.element_boxes && !o.quiet)
+    if (boxes == CLVR_ELEMENT_BOXES_OFF && o.element_boxes == CLVR_ELEMENT_BOXES_AUTO && !o.quiet)
         fprintf(stderr,
                 "clvr: %s: point location without its element boxes (6 bytes per element): the run fits in memory "
                 "only without them (--element-boxes on insists)\n",

@@ -194,10 +194,12 @@ static int contains_nocase(const char *hay, const char *needle)
     return nl == 0;
 }
 
-static int is_pocl(const device_entry *e)
+static int is_pocl_platform(const char *platform_name)
 {
-    return contains_nocase(e->platform_name, "portable computing language") || contains_nocase(e->platform_name, "pocl");
+    return contains_nocase(platform_name, "portable computing language") || contains_nocase(platform_name, "pocl");
 }
+
+static int is_pocl(const device_entry *e) { return is_pocl_platform(e->platform_name); }
 
 /* Returns the index of the device matching spec, or -1. */
 static int pick(const device_entry *list, unsigned n, const char *spec)
@@ -286,6 +288,9 @@ clvr_status clvr_cl_create(const char *spec, clvr_cl *out, clvr_error *err)
                                   &out->max_work_group_size, NULL));
     CLVR_CL_CHECK(clGetDeviceInfo(out->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof out->compute_units,
                                   &out->compute_units, NULL));
+    cl_device_fp_config fp = 0;
+    if (clGetDeviceInfo(out->device, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL) == CL_SUCCESS)
+        out->fp32_correct_div_sqrt = (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
     rc = CLVR_FAULT_CODE("clCreateContext", CL_OUT_OF_HOST_MEMORY);
     if (rc == CL_SUCCESS) out->context = clCreateContext(NULL, 1, &out->device, NULL, NULL, &rc);
     CLVR_CL_CHECK(rc);
@@ -364,6 +369,65 @@ static char *read_source(const clvr_cl *cl, const char *name)
             return t;
         }
     return NULL;
+}
+
+/* Where line n (1-based) of the expanded source came from, read off its
+ * #line markers: the file into f and its line into *line. 0 when line n is
+ * a marker or past the end. */
+static int source_origin(const char *src, unsigned long n, char *f, size_t fsz, unsigned long *line)
+{
+    unsigned long at = 1;
+    f[0] = 0;
+    const char *p = src;
+    for (unsigned long i = 1; *p; ++i) {
+        const char *eol = strchr(p, '\n');
+        unsigned long l;
+        char name[256];
+        if (strncmp(p, "#line ", 6) == 0 && sscanf(p, "#line %lu \"%255[^\"\n]\"", &l, name) == 2) {
+            if (i == n) return 0;
+            snprintf(f, fsz, "%s", name);
+            at = l;
+        } else {
+            if (i == n) {
+                *line = at;
+                return f[0] != 0;
+            }
+            ++at;
+        }
+        if (!eol) break;
+        p = eol + 1;
+    }
+    return 0;
+}
+
+/* cl_context.h. Written as PoCL writes its log, which honours #line. */
+char *clvr_cl_map_build_log(const char *src, const char *log)
+{
+    static const char *const tags[] = {"<kernel>:", "<source>:"};
+    strbuf out = {0};
+    const char *p = log;
+    int oom = sb_append(&out, "", 0);
+    while (*p && !oom) {
+        size_t tl = 0;
+        for (size_t t = 0; t < sizeof tags / sizeof tags[0]; ++t)
+            if (strncmp(p, tags[t], strlen(tags[t])) == 0) tl = strlen(tags[t]);
+        char *end = NULL;
+        unsigned long n = tl && isdigit((unsigned char)p[tl]) ? strtoul(p + tl, &end, 10) : 0;
+        char f[256];
+        unsigned long line = 0;
+        if (n && *end == ':' && source_origin(src, n, f, sizeof f, &line)) {
+            oom = sb_printf(&out, "%s:%lu", f, line);
+            p = end;
+        } else {
+            oom = sb_append(&out, p, 1);
+            ++p;
+        }
+    }
+    if (oom) {
+        free(out.p);
+        return NULL;
+    }
+    return out.p;
 }
 
 /* Expands local `#include "x"` lines recursively (each file once, like
@@ -484,8 +548,12 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
     const char *text = src.p;
     prog = clCreateProgramWithSource(cl->context, 1, &text, NULL, &rc);
     CLVR_CL_CHECK(rc);
-    sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
-              options ? options : "");
+    /* CLVR_DEVICE_PREFETCH: the kernels' CLVR_PREFETCH is a real prefetch
+     * (kernels/clvr_shared.h) on PoCL's CPU devices alone. */
+    const int prefetch = (cl->device_type & CL_DEVICE_TYPE_CPU) && is_pocl_platform(cl->platform_name);
+    sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u%s%s %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
+              prefetch ? " -DCLVR_DEVICE_PREFETCH" : "",
+              cl->fp32_correct_div_sqrt ? " -cl-fp32-correctly-rounded-divide-sqrt" : "", options ? options : "");
     rc = CLVR_FAULT_CODE("clBuildProgram", CL_BUILD_PROGRAM_FAILURE);
     char *compiler_said = NULL;
     if (rc == CL_SUCCESS) {
@@ -536,6 +604,11 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
             log[logsize] = 0;
         }
         if (clvr_cl_fault("clBuildProgram") && log) snprintf(log, logsize + 64, "%s", "(injected by CLVR_FAIL)");
+        char *mapped = log ? clvr_cl_map_build_log(src.p, log) : NULL;
+        if (mapped) {
+            free(log);
+            log = mapped;
+        }
         s = clvr_error_set(err, CLVR_ERR_KERNEL_BUILD, "building kernels/%s for %s failed (%s):\n%s%s", entry,
                            cl->device_name, clvr_cl_error_name(rc), log && *log ? log : "(empty build log)",
                            compiler_said && !(log && *log) ? compiler_said : "");

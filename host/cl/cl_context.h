@@ -27,6 +27,12 @@ typedef struct clvr_cl {
     cl_ulong device_max_alloc_bytes; /* CL_DEVICE_MAX_MEM_ALLOC_SIZE as the device reports it */
     size_t max_work_group_size;
     cl_uint compute_units;
+    /* CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT in CL_DEVICE_SINGLE_FP_CONFIG: the
+     * kernels are built with -cl-fp32-correctly-rounded-divide-sqrt, so a
+     * division or square root gives the host reference's bits (NVIDIA's
+     * default division is within 2.5 ulp, enough to move a quantized
+     * element box by a step). */
+    int fp32_correct_div_sqrt;
     const char *kernel_dir;      /* NULL: embedded sources; else read kernels from this directory */
     cl_ulong allocated_bytes;    /* sum of live buffers made by clvr_cl_buffer (bookkeeping for --stats) */
     double build_s;              /* seconds spent in clBuildProgram so far (kernel compilation) */
@@ -67,6 +73,12 @@ void clvr_cl_destroy(clvr_cl *cl);
  * environment prints it and the build log of every program (developers).
  * Adds the build's wall time to cl->build_s. */
 clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, cl_program *out, clvr_error *err);
+
+/* A build log with each "<kernel>:LINE:" / "<source>:LINE:" (compilers that
+ * ignore #line, NVIDIA's among them) rewritten as "FILE:LINE:" of the kernel
+ * file that line of the expanded source `src` came from. Malloc'ed; NULL
+ * when out of memory. Used by clvr_cl_build; public for its test. */
+char *clvr_cl_map_build_log(const char *src, const char *log);
 
 /* clCreateKernel with error reporting. */
 clvr_status clvr_cl_kernel(cl_program prog, const char *name, cl_kernel *out, clvr_error *err);
