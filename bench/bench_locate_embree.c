@@ -14,7 +14,7 @@
  *                       [--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L]
  *   defaults: 56^3 cubes cut into 6 Kuhn tets (1,053,696 tets), 1M random points, leaf clusters of 16
  *   (the library's default),
- *   2 threads, work-group 64
+ *   as many threads as online cores (bench_cpu_threads), work-group 64
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
  *                       [--hint coherent|incoherent]  (clvr's query hint, CLVR_LOCATE_*; default
  *                       incoherent for random points, coherent for sorted ones)
@@ -440,7 +440,7 @@ int main(int argc, char **argv)
     clvr_preprocess_options po;
     clvr_preprocess_options_default(&po);
     uint32_t cubes = 56, nq = 1000000, leaf = po.leaf_size;
-    int threads = 2;
+    int threads = bench_cpu_threads();
     size_t local = 64;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--device") && i + 1 < argc) device = argv[++i];

@@ -27,6 +27,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_util.h"
 #include "clock.h"
 #include "bounds.h"
 #include "mesh_io.h"
@@ -77,8 +78,9 @@ static int make_hexes(clvr_mesh *m, uint32_t n, clvr_error *err)
     return 0;
 }
 
-/* ---- plain-C 2-thread LSD radix sort: each thread histograms and scatters
- * its half; offsets are combined so the sort stays stable. */
+/* ---- plain-C multi-threaded LSD radix sort (bench_cpu_threads threads):
+ * each thread histograms and scatters its share; offsets are combined in
+ * thread order so the sort stays stable. */
 typedef struct radix_job {
     const uint64_t *ks;
     const uint32_t *vs;
@@ -110,30 +112,35 @@ static void *radix_worker(void *arg)
     return NULL;
 }
 
+/* One phase of every job: jobs 1.. on threads, job 0 on the caller's. */
+static void radix_phase(radix_job *job, int nt)
+{
+    pthread_t th[64];
+    for (int t = 1; t < nt; ++t) pthread_create(&th[t], NULL, radix_worker, &job[t]);
+    radix_worker(&job[0]);
+    for (int t = 1; t < nt; ++t) pthread_join(th[t], NULL);
+}
+
 static void c_radix2(uint64_t *keys, uint32_t *vals, uint64_t *kt, uint32_t *vt, uint64_t n)
 {
     uint64_t a = ~0ull, o = 0;
     for (uint64_t i = 0; i < n; ++i) { a &= keys[i]; o |= keys[i]; }
     uint64_t *ks = keys, *kd = kt;
     uint32_t *vs = vals, *vd = vt;
-    radix_job job[2];
+    const int nt = bench_cpu_threads();
+    radix_job job[64];
     for (uint32_t shift = 0; shift < 64; shift += 8) {
         if ((((a ^ o) >> shift) & 255) == 0) continue;
-        pthread_t th;
-        for (int t = 0; t < 2; ++t) {
+        for (int t = 0; t < nt; ++t) {
             job[t].ks = ks; job[t].vs = vs; job[t].kd = kd; job[t].vd = vd; job[t].shift = shift;
-            job[t].b = n * t / 2; job[t].e = n * (t + 1) / 2; job[t].phase = 0;
+            job[t].b = n * (uint64_t)t / (uint64_t)nt; job[t].e = n * (uint64_t)(t + 1) / (uint64_t)nt; job[t].phase = 0;
         }
-        pthread_create(&th, NULL, radix_worker, &job[1]);
-        radix_worker(&job[0]);
-        pthread_join(th, NULL);
+        radix_phase(job, nt);
         uint64_t acc = 0;
         for (int d = 0; d < 256; ++d)
-            for (int t = 0; t < 2; ++t) { job[t].off[d] = acc; acc += job[t].hist[d]; }
-        for (int t = 0; t < 2; ++t) job[t].phase = 1;
-        pthread_create(&th, NULL, radix_worker, &job[1]);
-        radix_worker(&job[0]);
-        pthread_join(th, NULL);
+            for (int t = 0; t < nt; ++t) { job[t].off[d] = acc; acc += job[t].hist[d]; }
+        for (int t = 0; t < nt; ++t) job[t].phase = 1;
+        radix_phase(job, nt);
         uint64_t *tk = ks; ks = kd; kd = tk;
         uint32_t *tv = vs; vs = vd; vd = tv;
     }
@@ -323,6 +330,15 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
         c_radix2(k2, v2, kt, vt, N);
         double t1 = clvr_clock_monotonic_s();
         if (t1 - t0 < t_radix) t_radix = t1 - t0;
+        /* A baseline is a figure only when it sorts: keys in order, and
+         * stable (ties keep their element order, which vals hold). */
+        for (uint64_t i = 1; i < N; ++i)
+            if (k2[i - 1] > k2[i] || (k2[i - 1] == k2[i] && v2[i - 1] > v2[i])) {
+                fprintf(stderr, "bench_preprocess: the C radix sort's output is out of order at %" PRIu64 "\n", i);
+                free(idx); free(keys); free(k2); free(kt); free(vals); free(v2); free(vt);
+                clvr_clustered_release(cl, &keep);
+                return 1;
+            }
         t0 = clvr_clock_monotonic_s();
         memcpy(kt, keys, N * 8);
         t1 = clvr_clock_monotonic_s();
@@ -354,7 +370,7 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
     printf("| **wall (no build)** | %.4f | %.1f |\n", best_wall, N / best_wall / 1e6);
     printf("| kernel build (not in wall) | %.4f | |\n", keep.build_s);
     printf("| Hilbert clustering (keys+sort+gather+leaves) | %.4f | %.1f |\n", hilbert, N / hilbert / 1e6);
-    printf("| C radix sort, 2 threads | %.4f | %.1f |\n", t_radix, N / t_radix / 1e6);
+    printf("| C radix sort, %d threads | %.4f | %.1f |\n", bench_cpu_threads(), t_radix, N / t_radix / 1e6);
     printf("| memcpy of the keys | %.4f | %.1f |\n", t_memcpy, N / t_memcpy / 1e6);
     printf("| fresh scratch (a single clvr run): Hilbert clustering | %.4f | %.1f |\n", hilbert_cold,
            N / hilbert_cold / 1e6);
@@ -425,9 +441,9 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
     for (int q = 0; q < 2; ++q) {
 #ifdef CLVR_HAVE_EMBREE
         if (bc->embree && emb[0][q] >= 0)
-            printf("| Embree 3 rtcBuildBVH %s, 2 threads (element boxes given; filling them took %.4f s) | %.4f (%.1f) "
+            printf("| Embree 3 rtcBuildBVH %s, %d threads (element boxes given; filling them took %.4f s) | %.4f (%.1f) "
                    "| n/a: leaves hold at most %d primitives |\n",
-                   qn[q], t_boxes, emb[0][q], N / emb[0][q] / 1e6, (int)RTC_BUILD_MAX_PRIMITIVES_PER_LEAF);
+                   qn[q], bench_cpu_threads(), t_boxes, emb[0][q], N / emb[0][q] / 1e6, (int)RTC_BUILD_MAX_PRIMITIVES_PER_LEAF);
         else
             printf("| Embree 3 rtcBuildBVH %s | embree: build failed | embree: build failed |\n", qn[q]);
 #else
@@ -475,9 +491,13 @@ int main(int argc, char **argv)
     if (clvr_cl_create(device, &cl, &err) != CLVR_OK) { fprintf(stderr, "bench_preprocess: %s\n", err.msg); return 4; }
     printf("device: %s (%s), %s, driver %s, %u compute units, %.2f GB device memory\n", cl.device_name,
            cl.platform_name, cl.device_version, cl.driver_version, cl.compute_units, (double)cl.global_mem_bytes / 1e9);
+#ifdef CLVR_HAVE_EMBREE
+    char emb_cfg[32]; /* as many threads as the C radix sort */
+    snprintf(emb_cfg, sizeof emb_cfg, "threads=%d", bench_cpu_threads());
+#endif
     bench_ctx bc = {&cl, repeat, NULL, 1
 #ifdef CLVR_HAVE_EMBREE
-                    , rtcNewDevice(NULL)
+                    , rtcNewDevice(emb_cfg)
 #endif
     };
 #ifdef CLVR_HAVE_EMBREE

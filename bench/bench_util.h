@@ -7,6 +7,17 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <unistd.h>
+
+/* Threads for the CPU baselines (the C radix sort, Embree): the machine's
+ * online cores, 1..64, so that a ceiling uses the whole CPU as PoCL does;
+ * CLVR_BENCH_THREADS=N sets another count. */
+static inline int bench_cpu_threads(void)
+{
+    const char *e = getenv("CLVR_BENCH_THREADS");
+    const long n = e && atoi(e) > 0 ? atol(e) : sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : n > 64 ? 64 : (int)n;
+}
 
 /* 1-minute load average from /proc/loadavg, -1 when unknown. */
 static inline double bench_load1(void)

@@ -23,19 +23,20 @@
 #define CLVR_VOLUME_BIND(T, name) v.name = name;
 
 /* The light grid (urm with shadows): step `step` of its sweep
- * (clvr_light_sweep), one work item per lateral cell, same parameters as
- * clvr_render_frame then the grid (the host passes the grid's buffer as
- * both; this kernel reads and writes it through `out` only). */
+ * (clvr_light_sweep) over r x (r * CLVR_LIGHT_SWEEP_SLICES) work items, one
+ * per lateral cell (a, b) and slice j of the step (b + r j), same
+ * parameters as clvr_render_frame then the grid (the host passes the grid's
+ * buffer as both; this kernel reads and writes it through `out` only). */
 __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr_camera *cam,
                               CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out, uint step)
 {
     const clvr_frame f = *fp;
-    const int r = (int)f.light_res, a = (int)get_global_id(0), b = (int)get_global_id(1);
-    if (a >= r || b >= r) return;
+    const int r = (int)f.light_res, a = (int)get_global_id(0), bj = (int)get_global_id(1);
+    if (a >= r || bj >= r * (int)CLVR_LIGHT_SWEEP_SLICES) return;
     clvr_volume v;
     v.f = &f;
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
-    clvr_light_sweep(&v, a, b, (int)step, out);
+    clvr_light_sweep(&v, a, bj % r, bj / r, (int)step, out);
     (void)cam;
 }
 /* One frame: adds each pixel's sample to accum (and its square to

@@ -1056,11 +1056,13 @@ inline void clvr_light_slice(const clvr_volume *v, int a, int b, int s, int k, i
     grid[i] = tau + tau_up;
 }
 
-/* Step `step` of the sweep for lateral cell (a, b): slices step * M ..
- * step * M + M - 1 (M = CLVR_LIGHT_SWEEP_SLICES, each depending on the one
- * M slices nearer the light only); at step clvr_light_sweep_steps - 1,
- * optical depth to transmittance along the column. */
-inline void clvr_light_sweep(const clvr_volume *v, int a, int b, int step, __global float *grid)
+/* Step `step` of the sweep for lateral cell (a, b), its part j of M
+ * (M = CLVR_LIGHT_SWEEP_SLICES): slice step * M + j, which depends on the
+ * slice M nearer the light only, so the M slices of a step are made side by
+ * side (r^2 M work items: a GPU has many more lanes than the r^2 = 576
+ * columns of a 24^3 grid). At step clvr_light_sweep_steps - 1, optical
+ * depth to transmittance for cells j, j + M, ... of the column. */
+inline void clvr_light_sweep(const clvr_volume *v, int a, int b, int j, int step, __global float *grid)
 {
     const clvr_frame *f = v->f;
     const int r = (int)f->light_res, M = (int)CLVR_LIGHT_SWEEP_SLICES;
@@ -1068,13 +1070,14 @@ inline void clvr_light_sweep(const clvr_volume *v, int a, int b, int step, __glo
     float cells = 0.0f;
     const int k = clvr_light_axis(f, &sgn, &cells);
     if (step + 1 >= (int)clvr_light_sweep_steps((uint)r)) {
-        for (int c = 0; c < r; ++c) {
+        for (int c = j; c < r; c += M) {
             const int i = clvr_light_index(k, c, a, b, r);
             grid[i] = exp(-grid[i]);
         }
         return;
     }
-    for (int s = step * M; s < step * M + M && s < r; ++s) clvr_light_slice(v, a, b, s, k, sgn, cells, grid);
+    const int s = step * M + j;
+    if (s < r) clvr_light_slice(v, a, b, s, k, sgn, cells, grid);
 }
 
 /* ------------------------------------------------------------ camera rays */

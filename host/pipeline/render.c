@@ -413,15 +413,16 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
     if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
         r->frame.method != CLVR_RENDER_MARCH) {
         /* The sweep (kernels/render_volume.h, clvr_light_sweep): one launch
-         * per CLVR_LIGHT_SWEEP_SLICES slices, in order from the light, then
-         * one that turns optical depth into transmittance. */
+         * per CLVR_LIGHT_SWEEP_SLICES slices, in order from the light, each
+         * slice of a launch its own work items, then one that turns optical
+         * depth into transmittance. */
         const cl_uint n = r->frame.light_res;
         const size_t local[2] = {8, 8};
         r->light_s = 0.0;
         for (cl_uint step = 0; step < clvr_light_sweep_steps(n); ++step) {
             CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
                                   CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf), CLVR_ARG(step)));
-            CLVR_TRY(clvr_cl_run2d(r->cl, r->k_light, n, n, local, &evt, err));
+            CLVR_TRY(clvr_cl_run2d(r->cl, r->k_light, n, (size_t)n * CLVR_LIGHT_SWEEP_SLICES, local, &evt, err));
             CLVR_CL_CHECK(clWaitForEvents(1, &evt));
             const double dt = clvr_cl_event_seconds(evt);
             r->kernel_s += dt;
