@@ -511,12 +511,17 @@ static char *capture_end(stderr_capture *c)
 }
 
 /* Prints the compiling notice from a helper thread when the build outlasts
- * CLVR_BUILD_NOTICE_S: only then is it a compilation the user waits for.
- * It writes to the real stderr (fd 2 is captured meanwhile). */
+ * CLVR_BUILD_NOTICE_S: only then is it a compilation the user waits for;
+ * once per context (`quiet` after that), and then every
+ * CLVR_BUILD_PROGRESS_S while this build lasts, naming it: NVIDIA's driver
+ * takes minutes on a cold cache. It writes to the real stderr (fd 2 is
+ * captured meanwhile). */
+#define CLVR_BUILD_PROGRESS_S 20
 typedef struct build_notice {
     pthread_mutex_t lock;
     pthread_cond_t done_cv;
-    int done, shown, fd;
+    int done, shown, fd, quiet;
+    const char *entry;
 } build_notice;
 
 static void *notice_main(void *arg)
@@ -528,10 +533,14 @@ static void *notice_main(void *arg)
     until.tv_sec += ns / 1000000000L;
     until.tv_nsec = ns % 1000000000L;
     pthread_mutex_lock(&n->lock);
-    while (!n->done && pthread_cond_timedwait(&n->done_cv, &n->lock, &until) != ETIMEDOUT) {}
-    if (!n->done) {
-        static const char msg[] = "clvr: compiling kernels (cached for next time)\n";
-        n->shown = write(n->fd, msg, sizeof msg - 1) > 0;
+    for (long waited = 0;; waited += CLVR_BUILD_PROGRESS_S, until.tv_sec += CLVR_BUILD_PROGRESS_S) {
+        while (!n->done && pthread_cond_timedwait(&n->done_cv, &n->lock, &until) != ETIMEDOUT) {}
+        if (n->done) break;
+        char msg[160];
+        const int len = !waited ? snprintf(msg, sizeof msg, "clvr: compiling kernels (cached for next time)\n")
+                                : snprintf(msg, sizeof msg, "clvr: still compiling kernels/%s (%ld s)\n", n->entry,
+                                           waited);
+        if ((waited || !n->quiet) && write(n->fd, msg, (size_t)len) > 0 && !waited) n->shown = 1;
     }
     pthread_mutex_unlock(&n->lock);
     return NULL;
@@ -559,13 +568,14 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
     if (rc == CL_SUCCESS) {
         const int debug = getenv("CLVR_BUILD_LOG") && strcmp(getenv("CLVR_BUILD_LOG"), "0") != 0;
         stderr_capture cap;
-        build_notice notice = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, 0, 0, 2};
+        build_notice notice = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, 0, 0, 2, 0, entry};
         pthread_t notice_thread;
         int notice_running = 0;
         double t0 = clvr_clock_monotonic_s();
         capture_begin(&cap);
-        if (cl->build_notice && !cl->build_notice_shown) {
+        if (cl->build_notice) {
             notice.fd = cap.saved >= 0 ? cap.saved : 2;
+            notice.quiet = cl->build_notice_shown;
             notice_running = pthread_create(&notice_thread, NULL, notice_main, &notice) == 0;
         }
         rc = clBuildProgram(prog, 1, &cl->device, opts.p, NULL, NULL);
