@@ -560,9 +560,14 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
     /* CLVR_DEVICE_PREFETCH: the kernels' CLVR_PREFETCH is a real prefetch
      * (kernels/clvr_shared.h) on PoCL's CPU devices alone. */
     const int prefetch = (cl->device_type & CL_DEVICE_TYPE_CPU) && is_pocl_platform(cl->platform_name);
-    sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u%s%s %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
+    /* CLVR_BUILD_OPTIONS (developers): more options for every program, e.g.
+     * NVIDIA's -cl-nv-verbose, whose registers and spills CLVR_BUILD_LOG=1
+     * then prints. */
+    const char *extra = getenv("CLVR_BUILD_OPTIONS");
+    sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u%s%s %s %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
               prefetch ? " -DCLVR_DEVICE_PREFETCH" : "",
-              cl->fp32_correct_div_sqrt ? " -cl-fp32-correctly-rounded-divide-sqrt" : "", options ? options : "");
+              cl->fp32_correct_div_sqrt ? " -cl-fp32-correctly-rounded-divide-sqrt" : "", options ? options : "",
+              extra ? extra : "");
     rc = CLVR_FAULT_CODE("clBuildProgram", CL_BUILD_PROGRAM_FAILURE);
     char *compiler_said = NULL;
     if (rc == CL_SUCCESS) {
