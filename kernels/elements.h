@@ -77,9 +77,13 @@ CLVR_INLINE int clvr_solve3(float ax, float ay, float az, float bx, float by, fl
 
 /* Newton's method on the isoparametric map of an element of `type` (any
  * type whose clvr_<name>_shape is set up), from (u, v, w), in coordinates
- * relative to vertex 0; see clvr_element_invert for the result. */
-CLVR_INLINE int clvr_newton_invert(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float u,
-                                   float v, float w, float *pu, float *pv, float *pw)
+ * relative to vertex 0; see clvr_element_invert for the result. N
+ * (CLVR_CELL_MAX_VERTS floats) is left holding the shape functions of the
+ * last iteration: at the coordinates returned, or within
+ * CLVR_NEWTON_STEP_TOL of them, so that interpolation needs no other
+ * evaluation (clvr_element_sample_near). */
+CLVR_INLINE int clvr_newton_solve(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float u, float v,
+                                  float w, float *pu, float *pv, float *pw, float *N)
 {
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     /* Relative to vertex 0, for precision far from the origin. */
@@ -89,7 +93,7 @@ CLVR_INLINE int clvr_newton_invert(clvr_u32 type, const clvr_vec4 *vtx, float px
     for (clvr_u32 i = 1; i < nv; ++i)
         size = fmax(size, fabs(vtx[i].x - ox) + fabs(vtx[i].y - oy) + fabs(vtx[i].z - oz));
     const float res_tol = CLVR_NEWTON_RESIDUAL_REL * size;
-    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
+    float Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
     for (int it = 0; it < CLVR_NEWTON_MAX_ITER; ++it) {
         clvr_element_shape(type, u, v, w, N, Nu, Nv, Nw);
         float fx = -px, fy = -py, fz = -pz;
@@ -119,6 +123,14 @@ CLVR_INLINE int clvr_newton_invert(clvr_u32 type, const clvr_vec4 *vtx, float px
         }
     }
     return 0;
+}
+
+/* clvr_newton_solve without the shape functions. */
+CLVR_INLINE int clvr_newton_invert(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float u,
+                                   float v, float w, float *pu, float *pv, float *pw)
+{
+    float N[CLVR_CELL_MAX_VERTS];
+    return clvr_newton_solve(type, vtx, px, py, pz, u, v, w, pu, pv, pw, N);
 }
 
 /* ------------------------------------------------ tetrahedron (VTK_TETRA) */
@@ -205,10 +217,12 @@ CLVR_INLINE int clvr_pyramid_inside(float u, float v, float w, float eps)
 }
 
 /* Newton from below the singular apex. */
+/* Newton's start: the centroid (clvr_element_newton_start). */
+#define CLVR_PYRAMID_START 0.5f, 0.5f, 0.25f
 CLVR_INLINE int clvr_pyramid_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv,
                                     float *pw)
 {
-    return clvr_newton_invert(CLVR_CELL_PYRAMID, vtx, px, py, pz, 0.5f, 0.5f, 0.25f, pu, pv, pw);
+    return clvr_newton_invert(CLVR_CELL_PYRAMID, vtx, px, py, pz, CLVR_PYRAMID_START, pu, pv, pw);
 }
 
 /* ------------------------------------------------ wedge (VTK_WEDGE) */
@@ -230,9 +244,10 @@ CLVR_INLINE int clvr_wedge_inside(float u, float v, float w, float eps)
 }
 
 /* Newton from the parametric centre. */
+#define CLVR_WEDGE_START 1.0f / 3.0f, 1.0f / 3.0f, 0.5f
 CLVR_INLINE int clvr_wedge_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv, float *pw)
 {
-    return clvr_newton_invert(CLVR_CELL_WEDGE, vtx, px, py, pz, 1.0f / 3.0f, 1.0f / 3.0f, 0.5f, pu, pv, pw);
+    return clvr_newton_invert(CLVR_CELL_WEDGE, vtx, px, py, pz, CLVR_WEDGE_START, pu, pv, pw);
 }
 
 /* ------------------------------------------------ hexahedron (VTK_HEXAHEDRON) */
@@ -258,9 +273,10 @@ CLVR_INLINE int clvr_hex_inside(float u, float v, float w, float eps)
 }
 
 /* Newton from the parametric centre. */
+#define CLVR_HEX_START 0.5f, 0.5f, 0.5f
 CLVR_INLINE int clvr_hex_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv, float *pw)
 {
-    return clvr_newton_invert(CLVR_CELL_HEX, vtx, px, py, pz, 0.5f, 0.5f, 0.5f, pu, pv, pw);
+    return clvr_newton_invert(CLVR_CELL_HEX, vtx, px, py, pz, CLVR_HEX_START, pu, pv, pw);
 }
 
 /* ---------------------------------------------------------------- dispatch
@@ -338,13 +354,15 @@ CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float
 CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, int start,
                                          float *u, float *v, float *w, float *scalar)
 {
-    float a, b, c;
-    if (!(start ? clvr_newton_invert(type, vtx, px, py, pz, *u, *v, *w, &a, &b, &c)
-                : clvr_element_invert(type, vtx, px, py, pz, &a, &b, &c)))
-        return 0;
+    float a, b, c, N[CLVR_CELL_MAX_VERTS];
+    if (!start) { /* the type's own start, as its clvr_<name>_invert's (a tet's map is linear: any) */
+        const float sp[3] = {CLVR_PYRAMID_START}, sw[3] = {CLVR_WEDGE_START}, sh[3] = {CLVR_HEX_START};
+        const float *s0 = type == CLVR_CELL_PYRAMID ? sp : type == CLVR_CELL_WEDGE ? sw : sh;
+        *u = s0[0]; *v = s0[1]; *w = s0[2];
+    }
+    /* Newton's last shape functions interpolate: one evaluation fewer. */
+    if (!clvr_newton_solve(type, vtx, px, py, pz, *u, *v, *w, &a, &b, &c, N)) return 0;
     if (!clvr_element_param_inside(type, a, b, c, CLVR_ELEMENT_EPS)) return 0;
-    float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
-    clvr_element_shape(type, a, b, c, N, Nu, Nv, Nw);
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     float s = 0.0f;
     for (clvr_u32 i = 0; i < nv; ++i) s += N[i] * vtx[i].w;

@@ -79,11 +79,20 @@ typedef struct clvr_span {
      * scene -1%. */
     uint elem;
     float pu, pv, pw; /* elem's parametric coordinates at the last point the span answered; pu NaN: none */
+    /* ... at ray parameter t_pt, moving by (du, dv, dw) per unit t there
+     * (from the two points before; 0 until then): Newton starts where that
+     * line predicts, exact for an affine cell. With Newton's last shape
+     * functions interpolating (clvr_element_sample_near), 256^2 urm frames
+     * (interleaved runs): notch_stress's hexes 27.8 -> 25.7 ms without
+     * shadows, 39.8 -> 35.7 ms with; the combustor as 258k curvilinear
+     * hexes 132 -> 127 ms; AMR-like 41.4 -> 40.0 ms; built-in scene 154 ->
+     * 152 ms with shadows; post as tets unchanged (148.5 -> 149.7). */
+    float t_pt, du, dv, dw;
 } clvr_span;
 
 inline clvr_span clvr_span_none(void)
 {
-    return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f, CLVR_BVH_NOT_FOUND, NAN, 0.0f, 0.0f};
+    return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f, CLVR_BVH_NOT_FOUND, NAN, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
 }
 
 /* The span of tet vtx along the ray org + t dir from t (inside it, scalar
@@ -130,10 +139,16 @@ inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, f
         const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
         clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
         clvr_load_element_in(&pa, &inst, sp->elem, vtx);
-        float u = sp->pu, vv = sp->pv, w = sp->pw;
+        const float dt = t - sp->t_pt;
+        float u = sp->pu + sp->du * dt, vv = sp->pv + sp->dv * dt, w = sp->pw + sp->dw * dt;
         if (clvr_element_box_test(inst.type, vtx, p.x, p.y, p.z) &&
             clvr_element_sample_near(inst.type, vtx, p.x, p.y, p.z, !isnan(u), &u, &vv, &w, &s)) {
+            if (!isnan(sp->pu) && dt != 0.0f) {
+                const float inv = 1.0f / dt;
+                sp->du = (u - sp->pu) * inv; sp->dv = (vv - sp->pv) * inv; sp->dw = (w - sp->pw) * inv;
+            }
             sp->pu = u; sp->pv = vv; sp->pw = w;
+            sp->t_pt = t;
             return clvr_volume_tf(v, s);
         }
     }
