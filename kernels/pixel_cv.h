@@ -56,6 +56,30 @@
  * on that axis: a 1-pixel-wide image) is held near 0 by this ridge. */
 #define CLVR_PIXEL_CV_PIN 1.0e4f
 
+/* 1 when the 8 neighbours' sums (those inside the image) are all the same,
+ * bit for bit: then the fit's gradient and u slope are 0 and the pixel's
+ * mean is its value, without the fit (the background, most of many
+ * images, where the fit was half the image pass's time). It reads the
+ * neighbours only, as the fit does, so the pixel keeps its expected value.
+ * A NaN neighbour never compares equal: the fit then decides. */
+CLVR_INLINE int clvr_pixel_cv_flat(CLVR_GLOBAL const float *sum, clvr_u32 w, clvr_u32 h, clvr_u32 x, clvr_u32 y)
+{
+    int n = 0, same = 1;
+    clvr_u64 q0 = 0;
+    for (int oy = -1; oy <= 1 && same; ++oy)
+        for (int ox = -1; ox <= 1; ++ox) {
+            const int xx = (int)x + ox, yy = (int)y + oy;
+            if ((ox == 0 && oy == 0) || xx < 0 || yy < 0 || xx >= (int)w || yy >= (int)h) continue;
+            const clvr_u64 q = (clvr_u64)yy * w + (clvr_u64)xx;
+            if (n++ == 0) {
+                q0 = q;
+                continue;
+            }
+            for (int k = 0; k < 4; ++k) same &= sum[4u * q + (clvr_u64)k] == sum[4u * q0 + (clvr_u64)k];
+        }
+    return same && n > 0;
+}
+
 /* sum: the frames' summed rgba samples per pixel; ctl: per pixel the summed
  * controls (dx, dy, u - 1/2, unused); inv_n: 1 / frames; w x h row by row.
  * out: pixel (x, y)'s mean rgba minus its control variate. */
@@ -66,6 +90,9 @@ CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const f
      * used), B one column per channel. */
     float A[4][4] = {{0.0f}}, B[4][4] = {{0.0f}};
     int beside_x = 0, beside_y = 0;
+    const clvr_u64 p = (clvr_u64)y * w + (clvr_u64)x;
+    for (int k = 0; k < 4; ++k) out[k] = sum[4u * p + (clvr_u64)k] * inv_n;
+    if (clvr_pixel_cv_flat(sum, w, h, x, y)) return;
     for (int oy = -1; oy <= 1; ++oy)
         for (int ox = -1; ox <= 1; ++ox) {
             const int xx = (int)x + ox, yy = (int)y + oy;
@@ -90,8 +117,6 @@ CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const f
     A[1][1] += beside_x ? 0.0f : CLVR_PIXEL_CV_PIN;
     A[2][2] += beside_y ? 0.0f : CLVR_PIXEL_CV_PIN;
     A[3][3] += CLVR_PIXEL_CV_RIDGE;
-    const clvr_u64 p = (clvr_u64)y * w + (clvr_u64)x;
-    for (int k = 0; k < 4; ++k) out[k] = sum[4u * p + (clvr_u64)k] * inv_n;
     /* Cholesky A = L L^T in place; a pivot that is not clearly positive
      * (fewer neighbours than unknowns) leaves the mean as it is. */
     for (int j = 0; j < 4; ++j) {

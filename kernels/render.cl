@@ -108,6 +108,24 @@ __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const flo
 #pragma OPENCL FP_CONTRACT OFF
     const uint x = get_global_id(0), y = get_global_id(1);
     if (x >= w || y >= h) return;
+    const ulong p = (ulong)y * w + x;
+    const float4 mean = sum[p] * inv_n;
+    { /* clvr_pixel_cv_flat: the neighbours all the same, no fit */
+        int n = 0, same = 1;
+        float4 m0 = (float4)(0.0f);
+        for (int oy = -1; oy <= 1 && same; ++oy)
+            for (int ox = -1; ox <= 1; ++ox) {
+                const int xx = (int)x + ox, yy = (int)y + oy;
+                if ((ox == 0 && oy == 0) || xx < 0 || yy < 0 || xx >= (int)w || yy >= (int)h) continue;
+                const float4 s = sum[(ulong)yy * w + (ulong)xx];
+                if (n++ == 0) m0 = s;
+                else same &= all(s == m0);
+            }
+        if (same && n > 0) {
+            out[p] = mean;
+            return;
+        }
+    }
     float a00 = 0.0f, a10 = 0.0f, a11 = 0.0f, a20 = 0.0f, a21 = 0.0f, a22 = 0.0f, a30 = 0.0f, a31 = 0.0f, a32 = 0.0f,
           a33 = 0.0f;
     float4 b0 = (float4)(0.0f), b1 = b0, b2 = b0, b3 = b0;
@@ -132,8 +150,6 @@ __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const flo
     a11 += beside_x ? 0.0f : CLVR_PIXEL_CV_PIN;
     a22 += beside_y ? 0.0f : CLVR_PIXEL_CV_PIN;
     a33 += CLVR_PIXEL_CV_RIDGE;
-    const ulong p = (ulong)y * w + x;
-    const float4 mean = sum[p] * inv_n;
     /* Cholesky, as clvr_pixel_cv: l_ij below the diagonal, d_j on it. */
     float d = a00;
     if (!(d > 1e-4f * a00 && d > 1e-12f)) { out[p] = mean; return; }
