@@ -23,20 +23,25 @@
 #define CLVR_VOLUME_BIND(T, name) v.name = name;
 
 /* The light grid (urm with shadows): step `step` of its sweep
- * (clvr_light_sweep) over r x (r * CLVR_LIGHT_SWEEP_SLICES) work items, one
- * per lateral cell (a, b) and slice j of the step (b + r j), same
- * parameters as clvr_render_frame then the grid (the host passes the grid's
- * buffer as both; this kernel reads and writes it through `out` only). */
+ * (clvr_light_sweep) over r x (r * M / per_item) work items (M =
+ * CLVR_LIGHT_SWEEP_SLICES), each making `per_item` of the step's M slices
+ * (a divisor of M) for lateral cell (a, b): work item (a, b + r g) slices
+ * g per_item ... The host asks for 1 on a GPU (8 times the lanes) and M on
+ * a CPU, where a work item's setup costs more than the lanes gain. Same
+ * parameters as clvr_render_frame then the grid (the host passes the
+ * grid's buffer as both; this kernel reads and writes it through `out`
+ * only). */
 __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr_camera *cam,
-                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out, uint step)
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out, uint step, uint per_item)
 {
     const clvr_frame f = *fp;
-    const int r = (int)f.light_res, a = (int)get_global_id(0), bj = (int)get_global_id(1);
-    if (a >= r || bj >= r * (int)CLVR_LIGHT_SWEEP_SLICES) return;
+    const int r = (int)f.light_res, a = (int)get_global_id(0), bg = (int)get_global_id(1);
+    const int k = (int)per_item, groups = (int)CLVR_LIGHT_SWEEP_SLICES / k;
+    if (a >= r || bg >= r * groups) return;
     clvr_volume v;
     v.f = &f;
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
-    clvr_light_sweep(&v, a, bj % r, bj / r, (int)step, out);
+    for (int j = (bg / r) * k; j < (bg / r + 1) * k; ++j) clvr_light_sweep(&v, a, bg % r, j, (int)step, out);
     (void)cam;
 }
 /* One frame: adds each pixel's sample to accum (and its square to
