@@ -11,7 +11,7 @@
  * function), compared byte for byte. */
 typedef struct light_key {
     float vol[6], grid[6], light_dir[3], urm_kappa;
-    uint32_t u[8];
+    uint32_t u[9];
     float planes[CLVR_MAX_CLIP_PLANES * 4]; /* the shadow rays are clipped too */
 } light_key;
 
@@ -177,14 +177,15 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         set->pixel_filter > CLVR_PIXEL_POINT ||
         set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
         set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
-        set->light_res > CLVR_URM_LIGHT_RES)
+        set->light_res > CLVR_URM_LIGHT_RES ||
+        (set->light_per_item && CLVR_LIGHT_SWEEP_SLICES % set->light_per_item != 0))
         return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
                               "pixel filter %u, %ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, "
-                              "light grid %u: 0..%u)", set->method,
+                              "light grid %u: 0..%u, %u slices per work item)", set->method,
                               set->estimator, set->sampler, set->pixel_filter, set->width, set->height, set->bins,
                               set->segments,
                               set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
-                              CLVR_URM_LIGHT_RES);
+                              CLVR_URM_LIGHT_RES, set->light_per_item);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
@@ -258,6 +259,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         k.urm_kappa = f->urm_kappa;
         k.u[0] = f->urm_steps; k.u[1] = f->seed_lo; k.u[2] = f->seed_hi; k.u[3] = f->method;
         k.u[4] = f->grid_res; k.u[5] = f->bins; k.u[6] = f->segments; k.u[7] = f->light_res;
+        k.u[8] = set->light_per_item;
         memcpy(k.planes, f->clip_planes, sizeof k.planes);
         if (memcmp(&k, &r->light_key, sizeof k) != 0) r->light_valid = 0;
         r->light_key = k;
@@ -422,7 +424,9 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
          * with one work item per column: post 25 ms), one on a GPU, whose
          * lanes 24 x 24 columns leave idle (the H200: 79 ms, more than 2
          * CPU cores' 38.5). */
-        const cl_uint per_item = (r->cl->device_type & CL_DEVICE_TYPE_CPU) ? CLVR_LIGHT_SWEEP_SLICES : 1u;
+        const cl_uint per_item = r->set.light_per_item                          ? r->set.light_per_item
+                                 : (r->cl->device_type & CL_DEVICE_TYPE_CPU) ? CLVR_LIGHT_SWEEP_SLICES
+                                                                             : 1u;
         r->light_s = 0.0;
         for (cl_uint step = 0; step < clvr_light_sweep_steps(n); ++step) {
             CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),

@@ -30,6 +30,9 @@ typedef struct clvr_render_settings {
     uint32_t light_res;        /* urm with shadows: light grid cells per axis, 1..CLVR_URM_LIGHT_RES, or 0
                                 * (the default): clvr_light_res_for the mesh's elements; any keeps the
                                 * image unbiased, a coarser one is noisier */
+    uint32_t light_per_item;   /* light grid sweep: slices per work item, a divisor of CLVR_LIGHT_SWEEP_SLICES,
+                                * or 0 (the default): all of a step's on a CPU device, 1 elsewhere (the grid
+                                * is the same bit for bit; tests set 1 to run a GPU's launch on PoCL) */
     uint32_t width, height;
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
