@@ -10,16 +10,9 @@
 #include <string.h>
 
 #include "clvr.h"
+#include "test_device.h"
 
 static int failures;
-
-/* The device the tests run on: CLVR_TEST_DEVICE (any --device SPEC, e.g.
- * "gpu" on a machine with a GPU driver), default "pocl". */
-static inline const char *api_test_device(void)
-{
-    const char *spec = getenv("CLVR_TEST_DEVICE");
-    return spec && *spec ? spec : "pocl";
-}
 
 #define CHECK(cond)                                                                                                   \
     do {                                                                                                              \

@@ -221,7 +221,7 @@ int main(void)
 
     clvr_message msg = {0};
     clvr_context *ctx = NULL;
-    if (clvr_context_create(api_test_device(), &ctx, &msg) != CLVR_RESULT_OK) {
+    if (clvr_context_create(tu_device_spec(), &ctx, &msg) != CLVR_RESULT_OK) {
         fprintf(stderr, "test_api: no OpenCL device (%s): skipped\n", msg.text);
         return failures ? 1 : 77;
     }

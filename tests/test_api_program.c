@@ -310,7 +310,7 @@ int main(void)
     test_series();
     clvr_context *ctx = NULL;
     int skipped = 0;
-    if (clvr_context_create(api_test_device(), &ctx, &msg) != CLVR_RESULT_OK &&
+    if (clvr_context_create(tu_device_spec(), &ctx, &msg) != CLVR_RESULT_OK &&
         clvr_context_create(NULL, &ctx, &msg) != CLVR_RESULT_OK) {
         printf("no OpenCL device (%s): the device checks are skipped\n", msg.text);
         skipped = 1;

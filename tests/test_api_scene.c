@@ -329,7 +329,7 @@ int main(void)
         return 1;
     }
     clvr_context *ctx = NULL;
-    if (clvr_context_create(api_test_device(), &ctx, &msg) != CLVR_RESULT_OK &&
+    if (clvr_context_create(tu_device_spec(), &ctx, &msg) != CLVR_RESULT_OK &&
         clvr_context_create(NULL, &ctx, &msg) != CLVR_RESULT_OK) {
         printf("skipped: no OpenCL device (%s)\n", msg.text);
         remove(path);

@@ -9,7 +9,7 @@ BUILD=$1
 DATA=$2
 CLVR=$BUILD/clvr
 PY=/usr/bin/python3
-# The device the renders run on (tests/test_util.h: CLVR_TEST_DEVICE, default pocl).
+# The device the renders run on (tests/test_device.h: CLVR_TEST_DEVICE, default pocl).
 DEV=${CLVR_TEST_DEVICE:-pocl}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

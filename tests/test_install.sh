@@ -8,6 +8,8 @@
 # help2man) is checked the same way.
 # Usage: test_install.sh BUILD_DIR SOURCE_DIR
 set -u
+# The device the renders run on (tests/test_device.h: CLVR_TEST_DEVICE, default pocl).
+DEV=${CLVR_TEST_DEVICE:-pocl}
 BUILD=$1
 SRC=$2
 tmp=$(mktemp -d)
@@ -49,7 +51,7 @@ cmake -DCLVR="$P/bin/clvr" -DOUT="$tmp/fallback.1" -DVERSION=0 -P "$SRC/tools/ma
 "$P/bin/clvr" --version | grep -q "^clvr [0-9]" && ok || bad "installed clvr --version"
 "$P/bin/clvr-convert" --help >/dev/null 2>&1 && ok || bad "installed clvr-convert --help"
 if "$P/bin/clvr" --list-devices >/dev/null 2>&1; then
-  "$P/bin/clvr" --device "${CLVR_TEST_DEVICE:-pocl}" --size 8x8 --spp 1 --quiet -o "$tmp/i.png" && [ -s "$tmp/i.png" ] && ok ||
+  "$P/bin/clvr" --device "$DEV" --size 8x8 --spp 1 --quiet -o "$tmp/i.png" && [ -s "$tmp/i.png" ] && ok ||
     bad "installed clvr does not render"
 else
   echo "note: no OpenCL device; the installed clvr's render is not tried"
@@ -163,7 +165,7 @@ if cc -std=c11 -Wall -Werror -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE "${san[
   ok
   "$tmp/clvr_app" --version | grep -q "^clvr [0-9]" && ok || bad "the program built on the installed library: --version"
   if "$P/bin/clvr" --list-devices >/dev/null 2>&1; then
-    "$tmp/clvr_app" --device "${CLVR_TEST_DEVICE:-pocl}" --size 8x8 --spp 1 --quiet -o "$tmp/j.png" && [ -s "$tmp/j.png" ] && ok ||
+    "$tmp/clvr_app" --device "$DEV" --size 8x8 --spp 1 --quiet -o "$tmp/j.png" && [ -s "$tmp/j.png" ] && ok ||
       bad "the program built on the installed library does not render"
   fi
 else

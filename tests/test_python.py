@@ -55,7 +55,7 @@ import clvr
 
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(os.path.dirname(__file__), "data"))
 BUILD = os.environ.get("CLVR_BUILD_DIR", "build")
-# The device the renders run on (tests/test_util.h: CLVR_TEST_DEVICE, default pocl).
+# The device the renders run on (tests/test_device.h: CLVR_TEST_DEVICE, default pocl).
 DEVICE = os.environ.get("CLVR_TEST_DEVICE") or "pocl"
 # 6 SE, not 5: the variances come from 8 batches (Student-t tails) and 1024
 # blocks are compared; the broken cases differ by tens to hundreds of SE.

@@ -30,7 +30,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
 BUILD = os.environ.get("CLVR_BUILD_DIR", os.path.join(HERE, "..", "build"))
 CLVR = os.path.abspath(os.path.join(BUILD, "clvr"))
-# The device the renders run on (tests/test_util.h: CLVR_TEST_DEVICE, default pocl).
+# The device the renders run on (tests/test_device.h: CLVR_TEST_DEVICE, default pocl).
 DEVICE = os.environ.get("CLVR_TEST_DEVICE") or "pocl"
 CONVERT = os.path.join(HERE, "..", "tools", "clvr-convert")
 LOW, HIGH = 0.2, 1.5

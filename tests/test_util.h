@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "cl_context.h"
+#include "test_device.h"
 
 static int tu_pass_, tu_fail_;
 
@@ -52,14 +53,6 @@ static inline int tu_finish(const char *name)
 {
     printf("%s: %d passed, %d failed\n", name, tu_pass_, tu_fail_);
     return tu_fail_ ? 1 : 0;
-}
-
-/* The device the tests run on: CLVR_TEST_DEVICE (any --device SPEC, e.g.
- * "gpu" on a machine with a GPU driver), default "pocl". */
-static inline const char *tu_device_spec(void)
-{
-    const char *spec = getenv("CLVR_TEST_DEVICE");
-    return spec && *spec ? spec : "pocl";
 }
 
 /* Opens the test device (tu_device_spec); exits 77 when there is none, so
