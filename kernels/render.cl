@@ -41,7 +41,7 @@ __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr
     clvr_volume v;
     v.f = &f;
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
-    for (int j = (bg / r) * k; j < (bg / r + 1) * k; ++j) clvr_light_sweep(&v, a, bg % r, j, (int)step, out);
+    clvr_light_sweep(&v, a, bg % r, (bg / r) * k, (bg / r + 1) * k, (int)step, out);
     (void)cam;
 }
 /* One frame: adds each pixel's sample to accum (and its square to

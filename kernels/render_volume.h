@@ -1071,28 +1071,30 @@ inline void clvr_light_slice(const clvr_volume *v, int a, int b, int s, int k, i
     grid[i] = tau + tau_up;
 }
 
-/* Step `step` of the sweep for lateral cell (a, b), its part j of M
- * (M = CLVR_LIGHT_SWEEP_SLICES): slice step * M + j, which depends on the
- * slice M nearer the light only, so the M slices of a step are made side by
- * side (r^2 M work items: a GPU has many more lanes than the r^2 = 576
- * columns of a 24^3 grid). At step clvr_light_sweep_steps - 1, optical
- * depth to transmittance for cells j, j + M, ... of the column. */
-inline void clvr_light_sweep(const clvr_volume *v, int a, int b, int j, int step, __global float *grid)
+/* Step `step` of the sweep for lateral cell (a, b), its parts j0 .. j1 - 1
+ * of M (M = CLVR_LIGHT_SWEEP_SLICES): slices step * M + j, each depending
+ * on the slice M nearer the light only, so the M slices of a step can be
+ * made side by side (r^2 M work items: a GPU has many more lanes than the
+ * r^2 = 576 columns of a 24^3 grid). At step clvr_light_sweep_steps - 1,
+ * optical depth to transmittance for cells j, j + M, ... of the column. */
+inline void clvr_light_sweep(const clvr_volume *v, int a, int b, int j0, int j1, int step, __global float *grid)
 {
     const clvr_frame *f = v->f;
     const int r = (int)f->light_res, M = (int)CLVR_LIGHT_SWEEP_SLICES;
     int sgn = 1;
     float cells = 0.0f;
     const int k = clvr_light_axis(f, &sgn, &cells);
-    if (step + 1 >= (int)clvr_light_sweep_steps((uint)r)) {
-        for (int c = j; c < r; c += M) {
-            const int i = clvr_light_index(k, c, a, b, r);
-            grid[i] = exp(-grid[i]);
+    const int last = step + 1 >= (int)clvr_light_sweep_steps((uint)r);
+    for (int j = j0; j < j1; ++j) {
+        if (last) {
+            for (int c = j; c < r; c += M) {
+                const int i = clvr_light_index(k, c, a, b, r);
+                grid[i] = exp(-grid[i]);
+            }
+        } else if (step * M + j < r) {
+            clvr_light_slice(v, a, b, step * M + j, k, sgn, cells, grid);
         }
-        return;
     }
-    const int s = step * M + j;
-    if (s < r) clvr_light_slice(v, a, b, s, k, sgn, cells, grid);
 }
 
 /* ------------------------------------------------------------ camera rays */
