@@ -216,8 +216,8 @@ CLVR_INLINE int clvr_pyramid_inside(float u, float v, float w, float eps)
     return w >= lo && w <= hi && a >= lo && a <= iw + eps && b >= lo && b <= iw + eps;
 }
 
-/* Newton from below the singular apex. */
-/* Newton's start: the centroid (clvr_element_newton_start). */
+/* Newton from below the singular apex. Each type's start is a macro that
+ * clvr_element_sample_near uses too. */
 #define CLVR_PYRAMID_START 0.5f, 0.5f, 0.25f
 CLVR_INLINE int clvr_pyramid_invert(const clvr_vec4 *vtx, float px, float py, float pz, float *pu, float *pv,
                                     float *pw)
