@@ -400,7 +400,7 @@ static int source_origin(const char *src, unsigned long n, char *f, size_t fsz, 
     return 0;
 }
 
-/* cl_context.h. Written as PoCL writes its log, which honours #line. */
+/* See cl_context.h: FILE:LINE as PoCL, which honours #line, writes it. */
 char *clvr_cl_map_build_log(const char *src, const char *log)
 {
     static const char *const tags[] = {"<kernel>:", "<source>:"};
