@@ -310,6 +310,12 @@ int main(void)
     OK(clvr_tracer_stat(ta, "frames", &frames, &msg));
     OK(clvr_tracer_stat(ta, "rays", &rays, &msg));
     CHECK(frames == FRAMES && rays >= (double)W * H * FRAMES);
+    /* The image pass that made the last image read (render_batches reads
+     * it), and the light grid (shadows are on by default). */
+    double image_s = -1, light_s = -1;
+    OK(clvr_tracer_stat(ta, "image_s", &image_s, &msg));
+    OK(clvr_tracer_stat(ta, "light_s", &light_s, &msg));
+    CHECK(image_s > 0 && light_s > 0);
     int lit = 0;
     for (size_t i = 3; i < n; i += 4) lit += ma[i] > 0.05f;
     CHECK(lit > W * H / 8); /* not an empty image */

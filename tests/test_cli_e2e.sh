@@ -63,6 +63,9 @@ for k in keys:
 assert d["elements"] > 100000
 assert d["bytes"]["indices_after"] < d["bytes"]["indices_before"]
 assert d["render"]["rays_per_s"] > 0
+# The image pass (the control variates' fit, on by default) ran once for the
+# image written; the built-in scene has shadows, so the light grid was built.
+assert d["render"]["image_s"] > 0 and d["render"]["light_s"] > 0, d["render"]
 PYEOF
 
 # --info on every natively read test file.

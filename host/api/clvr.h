@@ -264,8 +264,12 @@ CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t
  * "hull_empty_fraction" (the share of a ray's path through the box that
  * lies outside the mesh, measured on a fixed set of rays: the saving the
  * cut is for), "hull_skipped" (1 when there was too little memory to build
- * them: the image is the same, it converges as without the cut). Unknown
- * name: ERR_USAGE listing the names. */
+ * them: the image is the same, it converges as without the cut),
+ * "light_s" (device seconds of the light grid's last build: urm with
+ * shadows, already part of kernel_s), "image_s" (device seconds of the
+ * image pass of the last clvr_tracer_read_image, the control variates'
+ * fit: not part of kernel_s; 0 before one). Unknown name: ERR_USAGE
+ * listing the names. */
 CLVR_API clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg);
 
 /* --- images ------------------------------------------------------------- */

@@ -1510,7 +1510,7 @@ clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, c
 static const char *const stat_names =
     "frames, rays, samples, null_collisions, kernel_s, last_frame_s, preprocess_s, kernel_build_s, elements, points, "
     "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi, hull_faces, hull_bytes, "
-    "hull_empty_fraction, hull_skipped";
+    "hull_empty_fraction, hull_skipped, light_s, image_s";
 
 clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg)
 {
@@ -1545,6 +1545,8 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "hull_bytes")) v = (double)clvr_hull_bytes(&tr->sc->accel.hull);
     else if (!strcmp(name, "hull_empty_fraction")) v = tr->sc->accel.hull.empty_fraction;
     else if (!strcmp(name, "hull_skipped")) v = tr->sc->accel.hull_skipped[0] ? 1.0 : 0.0;
+    else if (!strcmp(name, "light_s")) v = c.light_s;
+    else if (!strcmp(name, "image_s")) v = c.image_s;
     else
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown figure '%.64s'; use one of %s", fn, name,
                                      stat_names),

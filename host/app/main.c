@@ -391,6 +391,10 @@ int main(int argc, char **argv)
         TRY(clvr_image_save_with(path, o.width, o.height, pixels, &display, &msg));
         stats.have_render = 1;
         clvr_stats_from_render(&stats, &counters);
+        /* Read after the image: image_s is the pass that made it (0 with
+         * --denoise's read or without the control variates). */
+        TRY(clvr_tracer_stat(tracer, "light_s", &stats.light_s, &msg));
+        TRY(clvr_tracer_stat(tracer, "image_s", &stats.image_s, &msg));
         if (!o.quiet)
             fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp%s)\n", path, o.width, o.height, frame,
                     o.denoise ? ", denoised" : "");

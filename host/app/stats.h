@@ -45,6 +45,8 @@ typedef struct clvr_stats {
     uint32_t width, height;
     uint64_t frames, rays, samples, null_collisions;
     double frame_s, rays_per_s, samples_per_ray, null_collisions_per_ray, render_wall_s;
+    double light_s; /* device seconds of the light grid's last build (part of frame_s's sum) */
+    double image_s; /* device seconds of the image pass that made the image written (not in frame_s) */
 } clvr_stats;
 
 /* The figures of the input, of the preprocessing and of the frames, from
