@@ -9,6 +9,7 @@
 #include "rng.h"
 #include "locate.h"
 #include "hull.h"
+#include "exp_neg.h"
 
 /* The frame and the device arrays of CLVR_VOLUME_ARRAYS (clvr_shared.h). */
 #define CLVR_VOLUME_FIELD(T, name) __global const T *name;
@@ -731,7 +732,7 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float r
 inline float clvr_urm_interval(clvr_urm *e, float sr0, float sr1)
 {
     const float len = e->len, slope = len > 0.0f ? (sr1 - sr0) / len : 0.0f;
-    float F = exp(-0.5f * (sr0 + sr1) * len);
+    float F = clvr_exp_neg(0.5f * (sr0 + sr1) * len);
     for (int i = 0; i < e->npts; ++i) F *= 1.0f - (e->pt_sr[i] - (sr0 + slope * e->pt_s[i])) / e->pt_mu[i];
     e->npts = 0;
     return F;
@@ -803,7 +804,7 @@ inline float clvr_light_at(const clvr_volume *v, float3 p, float *spread)
  * by the same exponential that the mean needs (one exp per segment). */
 inline float clvr_urm_front(float *front, float m, float len)
 {
-    const float x = CLVR_URM_FRONT * m * len, ex = exp(-x);
+    const float x = CLVR_URM_FRONT * m * len, ex = clvr_exp_neg(x);
     const float mean = *front * (x > 1e-4f ? (1.0f - ex) / x : 1.0f - 0.5f * x);
     *front *= ex;
     return mean;

@@ -3,11 +3,19 @@
  * kernels has the same size and field offsets on the device (a compiler that
  * pads differently would silently corrupt every buffer). */
 #include "clvr_shared.h"
+#include "exp_neg.h"
 
 __kernel void clvr_selftest_add(__global const float *a, __global const float *b, __global float *c, uint n)
 {
     uint i = get_global_id(0);
     if (i < n) c[i] = a[i] + b[i];
+}
+
+/* clvr_exp_neg (exp_neg.h) of n values, for test_cl_context. */
+__kernel void clvr_selftest_exp_neg(__global const float *x, __global float *y, uint n)
+{
+    uint i = get_global_id(0);
+    if (i < n) y[i] = clvr_exp_neg(x[i]);
 }
 
 /* The order of entries is CLVR_SELFTEST_LAYOUT in tests/test_cl_context.c. */

@@ -6,6 +6,7 @@
 
 #include "cl_context.h"
 #include "clvr_shared.h"
+#include "exp_neg.h"
 #include "test_util.h"
 
 int main(void)
@@ -106,6 +107,58 @@ int main(void)
             }
         }
         TU_CHECK_EQ_U64(sizes[2 * nl], 8);
+
+        /* clvr_exp_neg (the renderer's exp(-x)) on the device and on the
+         * host, against double precision: within 2 ulp where the result is
+         * a normal float; 0 for +inf, NaN for NaN. Sizes 1 and a prime. */
+        for (int pass = 0; pass < 2; ++pass) {
+            const cl_uint ne = pass ? 100003u : 1u;
+            float *ex = malloc(ne * sizeof(float)), *ey = malloc(ne * sizeof(float));
+            const float special[] = {0.0f, 1e-30f, 1e-40f, 0.25f, 0.5f, 0x1.000002p-1f, 0.75f, 1.0f, 10.0f, 87.0f,
+                                     104.0f, INFINITY, NAN};
+            const cl_uint nsp = (cl_uint)(sizeof special / sizeof special[0]);
+            for (cl_uint i = 0; i < ne; ++i)
+                ex[i] = pass == 0 ? 0.3f : i < nsp ? special[i] : (float)(i - nsp) * (0.6f / (float)(ne - nsp));
+            cl_mem bx, by;
+            cl_kernel ke;
+            TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ne * sizeof(float), ex, "x", &bx,
+                                           &err), CLVR_OK, &err);
+            TU_CHECK_STATUS(clvr_cl_buffer(&cl, CL_MEM_WRITE_ONLY, ne * sizeof(float), NULL, "y", &by, &err), CLVR_OK,
+                            &err);
+            TU_CHECK_STATUS(clvr_cl_kernel(prog, "clvr_selftest_exp_neg", &ke, &err), CLVR_OK, &err);
+            clSetKernelArg(ke, 0, sizeof bx, &bx);
+            clSetKernelArg(ke, 1, sizeof by, &by);
+            clSetKernelArg(ke, 2, sizeof ne, &ne);
+            TU_CHECK_STATUS(clvr_cl_run1d(&cl, ke, ne, 64, NULL, &err), CLVR_OK, &err);
+            clEnqueueReadBuffer(cl.queue, by, CL_TRUE, 0, ne * sizeof(float), ey, 0, NULL, NULL);
+            int ebad = 0;
+            double worst = 0.0;
+            for (cl_uint i = 0; i < ne; ++i) {
+                const double want = exp(-(double)ex[i]);
+                const float got[2] = {ey[i], clvr_exp_neg(ex[i])}; /* device, host */
+                for (int side = 0; side < 2; ++side) {
+                    const float g = got[side];
+                    int ok;
+                    if (isnan(ex[i])) ok = isnan(g);
+                    else if (want < 1.17549435e-38) ok = g >= 0.0f && g < 1.2e-38f;
+                    else {
+                        const double rel = fabs((double)g - want) / want;
+                        worst = rel > worst ? rel : worst;
+                        ok = rel <= 2.4e-7;
+                    }
+                    if (!ok && ebad++ < 5)
+                        fprintf(stderr, "clvr_exp_neg(%.9g) on the %s: %.9g, exp: %.9g\n", (double)ex[i],
+                                side ? "host" : "device", (double)g, want);
+                }
+            }
+            TU_CHECK_EQ_U64(ebad, 0);
+            if (pass) fprintf(stderr, "clvr_exp_neg: %u values, worst relative error %.3g\n", ne, worst);
+            clReleaseKernel(ke);
+            clvr_cl_release(&cl, &bx);
+            clvr_cl_release(&cl, &by);
+            free(ex);
+            free(ey);
+        }
 
         /* The argument helper sets a whole list, and a failure names the
          * kernel, the argument and the error. */
