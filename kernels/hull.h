@@ -334,19 +334,40 @@ CLVR_INLINE void clvr_hull_ray_face(const clvr_hull_ray *r, CLVR_GLOBAL const cl
     }
 }
 
-/* The slab test of child c of node n (an empty slot fails) against the ray
- * r with inverse direction (ix, iy, iz): its entry *a and exit *b along the
- * line; 0 when the line misses the box. */
-CLVR_INLINE int clvr_hull_child_span(CLVR_GLOBAL const clvr_bvh_node *n, int c, const clvr_hull_ray *r, float ix,
-                                     float iy, float iz, float *a, float *b)
+/* The slab test of the four children of node n against the ray r with
+ * inverse direction (ix, iy, iz): bit c of the result is set when the line
+ * crosses child c's box (an empty slot never), and a[c], b[c] are its entry
+ * and exit along the line (set for every child, meaningful where its bit
+ * is). The same operations per child on the host and on float4 lanes in
+ * kernels (a node stores its four children's bounds side by side): one
+ * child at a time, these tests were 6.5% of the PLOT3D combustor's urm
+ * frame (perf), the walks that find where camera rays cross the hull. */
+CLVR_INLINE clvr_u32 clvr_hull_node_spans(CLVR_GLOBAL const clvr_bvh_node *n, const clvr_hull_ray *r, float ix,
+                                          float iy, float iz, float *a, float *b)
 {
-    if (!(n->lo_x[c] <= n->hi_x[c])) return 0;
-    const float ax = (n->lo_x[c] - r->o[0]) * ix, bx = (n->hi_x[c] - r->o[0]) * ix;
-    const float ay = (n->lo_y[c] - r->o[1]) * iy, by = (n->hi_y[c] - r->o[1]) * iy;
-    const float az = (n->lo_z[c] - r->o[2]) * iz, bz = (n->hi_z[c] - r->o[2]) * iz;
-    *a = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
-    *b = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-    return *a <= *b;
+#ifdef __OPENCL_VERSION__
+    CLVR_GLOBAL const float4 *q = (CLVR_GLOBAL const float4 *)n; /* lo x y z, hi x y z, child */
+    const float4 ax = (q[0] - r->o[0]) * ix, bx = (q[3] - r->o[0]) * ix;
+    const float4 ay = (q[1] - r->o[1]) * iy, by = (q[4] - r->o[1]) * iy;
+    const float4 az = (q[2] - r->o[2]) * iz, bz = (q[5] - r->o[2]) * iz;
+    const float4 a4 = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+    const float4 b4 = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    vstore4(a4, 0, a);
+    vstore4(b4, 0, b);
+    const int4 hit = (q[0] <= q[3]) & (a4 <= b4);
+    return (clvr_u32)((hit.x & 1) | (hit.y & 2) | (hit.z & 4) | (hit.w & 8));
+#else
+    clvr_u32 mask = 0;
+    for (int c = 0; c < 4; ++c) {
+        const float ax = (n->lo_x[c] - r->o[0]) * ix, bx = (n->hi_x[c] - r->o[0]) * ix;
+        const float ay = (n->lo_y[c] - r->o[1]) * iy, by = (n->hi_y[c] - r->o[1]) * iy;
+        const float az = (n->lo_z[c] - r->o[2]) * iz, bz = (n->hi_z[c] - r->o[2]) * iz;
+        a[c] = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+        b[c] = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+        mask |= (clvr_u32)(n->lo_x[c] <= n->hi_x[c] && a[c] <= b[c]) << c;
+    }
+    return mask;
+#endif
 }
 
 /* The first (far = 0) or last (far = 1) crossing of the ray with the faces
@@ -371,11 +392,12 @@ CLVR_INLINE void clvr_hull_crossing(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR
         }
         CLVR_GLOBAL const clvr_bvh_node *n = nodes + ref;
         clvr_u32 ch[4];
-        float key[4];
+        float key[4], a4[4], b4[4];
         clvr_u32 cnt = 0;
+        const clvr_u32 mask = clvr_hull_node_spans(n, r, ix, iy, iz, a4, b4);
         for (int c = 0; c < 4; ++c) {
-            float a, b;
-            if (!clvr_hull_child_span(n, c, r, ix, iy, iz, &a, &b)) continue;
+            const float a = a4[c], b = b4[c];
+            if (!((mask >> c) & 1u)) continue;
             if (far ? !(b > *t) : !(a < *t)) continue;
             /* Pushed so that the most promising child pops first. */
             const float k = far ? b : -a;
@@ -501,11 +523,10 @@ CLVR_INLINE int clvr_hull_hits(CLVR_GLOBAL const clvr_bvh_node *nodes, CLVR_GLOB
             continue;
         }
         CLVR_GLOBAL const clvr_bvh_node *nd = nodes + ref;
-        for (int c = 0; c < 4; ++c) {
-            float a, b;
-            if (clvr_hull_child_span(nd, c, r, ix, iy, iz, &a, &b) && sp < CLVR_BVH_STACK_SIZE)
-                stack[sp++] = nd->child[c];
-        }
+        float a4[4], b4[4];
+        const clvr_u32 mask = clvr_hull_node_spans(nd, r, ix, iy, iz, a4, b4);
+        for (int c = 0; c < 4; ++c)
+            if (((mask >> c) & 1u) && sp < CLVR_BVH_STACK_SIZE) stack[sp++] = nd->child[c];
     }
     return n;
 }
