@@ -254,6 +254,14 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_ar
     clvr_u32 end;
     const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
     CLVR_GLOBAL const clvr_u8 *eb = a->ebox;
+    if (eb && inst->type == CLVR_CELL_TET && inst->index_bits == 16u) {
+        /* The index block's lines (the first candidate's load waits on
+         * them) are asked for before the pass over the boxes. */
+        CLVR_GLOBAL const clvr_u8 *ib =
+            (CLVR_GLOBAL const clvr_u8 *)(a->idx16 + inst->first_index + (clvr_u64)(first - inst->first_element) * 4u);
+        CLVR_PREFETCH(ib);
+        CLVR_PREFETCH(ib + CLVR_CACHE_LINE);
+    }
     /* p's step on each axis of the leaf box (floor: a step test that is
      * at least as permissive as the float one). */
     clvr_u32 ix = 0, iy = 0, iz = 0;
