@@ -110,12 +110,13 @@ int main(void)
 
         /* clvr_exp_neg (the renderer's exp(-x)) on the device and on the
          * host, against double precision: within 2 ulp where the result is
-         * a normal float; 0 for +inf, NaN for NaN. Sizes 1 and a prime. */
+         * a normal float (negative x too); 0 for +inf, NaN for NaN. Sizes
+         * 1 and a prime. */
         for (int pass = 0; pass < 2; ++pass) {
             const cl_uint ne = pass ? 100003u : 1u;
             float *ex = malloc(ne * sizeof(float)), *ey = malloc(ne * sizeof(float));
             const float special[] = {0.0f, 1e-30f, 1e-40f, 0.25f, 0.5f, 0x1.000002p-1f, 0.75f, 1.0f, 10.0f, 87.0f,
-                                     104.0f, INFINITY, NAN};
+                                     104.0f, INFINITY, NAN, -1e-30f, -0.25f, -5.0f, -80.0f};
             const cl_uint nsp = (cl_uint)(sizeof special / sizeof special[0]);
             for (cl_uint i = 0; i < ne; ++i)
                 ex[i] = pass == 0 ? 0.3f : i < nsp ? special[i] : (float)(i - nsp) * (0.6f / (float)(ne - nsp));
