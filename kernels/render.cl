@@ -115,21 +115,9 @@ __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const flo
     if (x >= w || y >= h) return;
     const ulong p = (ulong)y * w + x;
     const float4 mean = sum[p] * inv_n;
-    { /* clvr_pixel_cv_flat: the neighbours all the same, no fit */
-        int n = 0, same = 1;
-        float4 m0 = (float4)(0.0f);
-        for (int oy = -1; oy <= 1 && same; ++oy)
-            for (int ox = -1; ox <= 1; ++ox) {
-                const int xx = (int)x + ox, yy = (int)y + oy;
-                if ((ox == 0 && oy == 0) || xx < 0 || yy < 0 || xx >= (int)w || yy >= (int)h) continue;
-                const float4 s = sum[(ulong)yy * w + (ulong)xx];
-                if (n++ == 0) m0 = s;
-                else same &= all(s == m0);
-            }
-        if (same && n > 0) {
-            out[p] = mean;
-            return;
-        }
+    if (clvr_pixel_cv_flat((__global const float *)sum, w, h, x, y)) { /* the neighbours all the same: no fit */
+        out[p] = mean;
+        return;
     }
     float a00 = 0.0f, a10 = 0.0f, a11 = 0.0f, a20 = 0.0f, a21 = 0.0f, a22 = 0.0f, a30 = 0.0f, a31 = 0.0f, a32 = 0.0f,
           a33 = 0.0f;
