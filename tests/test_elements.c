@@ -278,6 +278,52 @@ static void test_degenerate(void)
     TU_CHECK(n_in < 1000);
 }
 
+/* Newton's accuracy where it stops (elements.h, CLVR_NEWTON_STEP_TOL): on
+ * cells distorted by a quarter of their edge, the coordinates returned lie
+ * within 1e-5 of the true ones (those the point was made from) and the
+ * interpolated scalar matches them, from the type's own start (far) and
+ * from a start 0.03 away (a ray's next point in the same cell,
+ * clvr_element_sample_near). test_inside_linear's 1e-3 would not see a
+ * solve stopped after a step of 1e-2; this fails then (one step from the
+ * near start leaves about 1e-4). */
+static void test_newton_accuracy(uint32_t type)
+{
+    uint64_t rs = 4242 + type;
+    int bad = 0, tried = 0;
+    double worst = 0.0;
+    for (int trial = 0; trial < 200; ++trial) {
+        clvr_vec4 v[CLVR_CELL_MAX_VERTS];
+        make_element(type, 0.25f, 1.0f, 0.0f, &rs, v);
+        for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) v[i].w = tu_randf(&rs);
+        for (int k = 0; k < 20; ++k) {
+            float u, vv, w, x, y, z;
+            random_param(type, 0.05f, &rs, &u, &vv, &w);
+            if (type == CLVR_CELL_PYRAMID && w > 0.8f) continue; /* u, v ill-conditioned near the apex */
+            clvr_element_forward(type, v, u, vv, w, &x, &y, &z);
+            float N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
+            clvr_element_shape(type, u, vv, w, N, Nu, Nv, Nw);
+            double want = 0.0;
+            for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) want += (double)N[i] * v[i].w;
+            for (int near = 0; near < 2; ++near) {
+                float pu = u + 0.03f * (2.0f * tu_randf(&rs) - 1.0f), pv = vv + 0.03f * (2.0f * tu_randf(&rs) - 1.0f),
+                      pw = w + 0.03f * (2.0f * tu_randf(&rs) - 1.0f), s = -1.0f;
+                ++tried;
+                if (!clvr_element_sample_near(type, v, x, y, z, near, &pu, &pv, &pw, &s)) {
+                    ++bad;
+                    continue;
+                }
+                const double e = fmax(fmax(fabs(pu - u), fabs(pv - vv)), fabs(pw - w));
+                if (e > worst) worst = e;
+                if (e > 1e-5 || fabs(s - want) > 1e-5) ++bad;
+            }
+        }
+    }
+    if (bad) fprintf(stderr, "%s: %d of %d Newton solves off by more than 1e-5 (worst %g)\n", type_name(type), bad,
+                     tried, worst);
+    TU_CHECK(tried > 1000);
+    TU_CHECK_EQ_U64(bad, 0);
+}
+
 /* Pyramid apex (singular Jacobian) and wedge/pyramid interpolation at a
  * few hand-computed points. */
 static void test_known_values(void)
@@ -305,6 +351,7 @@ int main(void)
         test_inside_linear(t, 0.12f, 0.5f, 1000.0f); /* far from the origin */
         test_boundary_and_outside(t);
     }
+    for (uint32_t t = CLVR_CELL_PYRAMID; t <= CLVR_CELL_HEX; ++t) test_newton_accuracy(t);
     test_hex_vs_tets();
     test_nonplanar_shared_face();
     test_degenerate();
