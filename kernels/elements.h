@@ -36,8 +36,8 @@
  * re-evaluation, which spent one more full iteration (shape functions,
  * Jacobian, residual) to confirm nearly every solve that starts near its
  * answer, as a ray's next point in the same cell does
- * (clvr_element_sample_near): 256^2 urm frames, notch_stress's hexes 23.8
- * -> 20.3 ms. test_elements checks the coordinates against the exact ones
+ * (clvr_element_sample_near): 256^2 urm frames, notch_stress's hexes 24.6
+ * -> 21.5 ms. test_elements checks the coordinates against the exact ones
  * within 1e-5 from near and far starts, on cells distorted by a quarter of
  * their edge. */
 #define CLVR_NEWTON_MAX_ITER 16
