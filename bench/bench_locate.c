@@ -18,7 +18,7 @@
  * --ebox: quantized element boxes (kernels/locate.h), on by default as in
  * the renderer; off measures the leaf scan without them.
  * --hint: the query hint passed to the kernel (CLVR_LOCATE_*, clvr_shared.h);
- * default incoherent for random points, coherent for sorted ones.
+ * default coherent (the faster on every order, clvr_shared.h).
  */
 #include <stdio.h>
 #include <stdlib.h>

@@ -17,7 +17,7 @@
  *   as many threads as online cores (bench_cpu_threads), work-group 64
  *                       [--dump FILE]   (the mesh and points, raw, for bench_vtk_locate)
  *                       [--hint coherent|incoherent]  (clvr's query hint, CLVR_LOCATE_*; default
- *                       incoherent for random points, coherent for sorted ones)
+ *                       coherent, the faster on every order: clvr_shared.h)
  *                       [--ebox on|off]  (quantized element boxes, kernels/locate.h; default on as
  *                       in bench_locate; their bytes count in clvr's tree bytes)
  *

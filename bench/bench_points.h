@@ -134,12 +134,14 @@ static inline float (*bench_make_points(const clvr_mesh *m, uint32_t nq, int ord
     return tmp;
 }
 
-/* The query hint of --hint NAME (NULL: coherent for sorted points and
- * rays, incoherent for random ones) into *hints (CLVR_LOCATE_*); the name
- * it took into *name. Returns 0, or -1 when NAME is neither. */
+/* The query hint of --hint NAME (NULL: coherent, for every order: the
+ * incoherent walk's prefetches lost on random points too, see
+ * CLVR_LOCATE_INCOHERENT) into *hints (CLVR_LOCATE_*); the name it took
+ * into *name. Returns 0, or -1 when NAME is neither. */
 static inline int bench_query_hint(const char *hint, int order, const char **name, unsigned *hints)
 {
-    if (!hint) hint = order != BENCH_ORDER_RANDOM ? "coherent" : "incoherent";
+    (void)order;
+    if (!hint) hint = "coherent";
     if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) return -1;
     *name = hint;
     *hints = !strcmp(hint, "coherent") ? CLVR_LOCATE_COHERENT : CLVR_LOCATE_INCOHERENT;

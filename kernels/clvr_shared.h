@@ -258,9 +258,17 @@ CLVR_STATIC_ASSERT(sizeof(clvr_bvh_node) == 112, "clvr_bvh_node layout");
  * INCOHERENT: queries are scattered (random points): the walk prefetches
  * every hit child's lines, a lowest-level node's leaf index blocks and a
  * hit leaf's tet vertices before searching, so that the cache misses that
- * bound it overlap. Measured on PoCL, 1M tets, leaves of 8, interleaved
- * runs: random points +23% to +40% queries/s; sorted points lose 12% to
- * 20% with INCOHERENT, hence the hint. */
+ * bound it overlap. Measured on PoCL, 1M tets, leaves of 8, before the
+ * element boxes: random points +23% to +40% queries/s; sorted points lost
+ * 12% to 20%, hence the hint. Remeasured with the element boxes and leaves
+ * of 16 (2-core Intel Xeon, PoCL 3.1, bench_locate --order random,
+ * interleaved runs), INCOHERENT loses on random points too: queries/s
+ * 6.63 -> 6.11M on the combustor as tets, 1.84 -> 1.64M on 1M tets, 4.31 ->
+ * 3.92M post, 6.77 -> 6.08M blunt fin, 3.78 -> 3.38M gmsh point-graded,
+ * 4.59 -> 4.48M the AMR-like 6M tets; prefetching only the hit children or
+ * only the leaves' boxes did no better, and without element boxes it was
+ * even or lost. So every caller here passes COHERENT; INCOHERENT stays for
+ * machines where the misses overlap better (the figures above). */
 #define CLVR_LOCATE_COHERENT 0u
 #define CLVR_LOCATE_INCOHERENT 1u
 /* Traversal stack entries. A packed tree over n < 2^32 primitives has at
