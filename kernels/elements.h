@@ -363,9 +363,14 @@ CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float
 /* Containment and interpolation for a type other than tets: Newton started
  * from *u, *v, *w (a point nearby found inside the element) when start is
  * set, from the type's own start otherwise (clvr_element_invert); as
- * clvr_element_sample, and writes the coordinates found. */
-CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, int start,
-                                         float *u, float *v, float *w, float *scalar)
+ * clvr_element_sample, and writes the coordinates found. *settled: 1 when
+ * the answer does not hang on the start (found inside, or Newton converged
+ * to coordinates outside), 0 when Newton gave up (no convergence, a
+ * singular Jacobian), where another start might still find the point
+ * inside; a caller that tests the element again elsewhere may skip it only
+ * when settled. */
+CLVR_INLINE int clvr_element_sample_near_settled(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz,
+                                                 int start, float *u, float *v, float *w, float *scalar, int *settled)
 {
     float a, b, c, N[CLVR_CELL_MAX_VERTS];
     if (!start) { /* the type's own start, as its clvr_<name>_invert's (a tet's map is linear: any) */
@@ -373,8 +378,10 @@ CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, fl
         const float *s0 = type == CLVR_CELL_PYRAMID ? sp : type == CLVR_CELL_WEDGE ? sw : sh;
         *u = s0[0]; *v = s0[1]; *w = s0[2];
     }
+    *settled = 0;
     /* Newton's last shape functions interpolate: one evaluation fewer. */
     if (!clvr_newton_solve(type, vtx, px, py, pz, *u, *v, *w, &a, &b, &c, N)) return 0;
+    *settled = 1;
     if (!clvr_element_param_inside(type, a, b, c, CLVR_ELEMENT_EPS)) return 0;
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     float s = 0.0f;
@@ -382,6 +389,13 @@ CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, fl
     *scalar = s;
     *u = a; *v = b; *w = c;
     return 1;
+}
+
+CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, int start,
+                                         float *u, float *v, float *w, float *scalar)
+{
+    int settled;
+    return clvr_element_sample_near_settled(type, vtx, px, py, pz, start, u, v, w, scalar, &settled);
 }
 
 /* Point containment and interpolation: returns 1 when (px, py, pz) lies in

@@ -246,10 +246,12 @@ CLVR_INLINE void clvr_ebox_build_leaf(const clvr_mesh_view *m, const clvr_instan
  * scalar and element id of the first one that contains p. Candidates are
  * first rejected by their quantized box (when m->ebox is set), then by
  * their vertex box (cheaper than a solve; tets skip it behind a quantized
- * box); tets then take the early-out barycentric test, other types Newton. */
+ * box); tets then take the early-out barycentric test, other types Newton.
+ * skip_elem: an element not tested (its caller has just found it outside
+ * p), or CLVR_BVH_NOT_FOUND. */
 CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_arrays *a, const clvr_instance *inst,
                                     clvr_u32 leaf, CLVR_GLOBAL const clvr_bvh_node *n, clvr_u32 c, float px,
-                                    float py, float pz, float *scalar, clvr_u32 *element_id)
+                                    float py, float pz, clvr_u32 skip_elem, float *scalar, clvr_u32 *element_id)
 {
     clvr_u32 end;
     const clvr_u32 first = clvr_leaf_elements(m, inst, leaf, &end);
@@ -286,6 +288,7 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_ar
             }
             mask = pass;
         }
+        if (skip_elem - base < cnt) mask &= ~(1u << (skip_elem - base));
         while (mask) {
             const clvr_u32 k = clvr_ctz32(mask);
             mask &= mask - 1u;
@@ -386,10 +389,11 @@ CLVR_INLINE void clvr_locate_prefetch_children(const clvr_mesh_view *m, const cl
  * random ones, so leaves are searched in traversal order. hints: see
  * CLVR_LOCATE_INCOHERENT; results do not depend on them. skip: an inner
  * node whose subtree is not entered (one already searched), or
- * CLVR_BVH_NOT_FOUND. */
+ * CLVR_BVH_NOT_FOUND; skip_elem: as clvr_locate_in_leaf's. */
 CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 root,
-                                        clvr_u32 skip, float px, float py, float pz, clvr_u32 hints, float *scalar,
-                                        clvr_u32 *element_id, clvr_u32 *leaf_found)
+                                        clvr_u32 skip, float px, float py, float pz, clvr_u32 hints,
+                                        clvr_u32 skip_elem, float *scalar, clvr_u32 *element_id,
+                                        clvr_u32 *leaf_found)
 {
     CLVR_GLOBAL const clvr_bvh_node *blas = m->blas;
     const clvr_piece_arrays a = clvr_view_piece(m, inst); /* once per instance entered */
@@ -409,7 +413,8 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
             const clvr_u32 ch = n->child[c];
             if (ch & CLVR_BVH_LEAF_BIT) {
                 CLVR_WALK_STAT(leaves);
-                if (clvr_locate_in_leaf(m, &a, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, scalar, element_id)) {
+                if (clvr_locate_in_leaf(m, &a, inst, ch & CLVR_BVH_MAX_PRIMS, n, c, px, py, pz, skip_elem, scalar,
+                                        element_id)) {
                     *leaf_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
                 }
@@ -427,11 +432,12 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  * id; 0 (and element id CLVR_BVH_NOT_FOUND) otherwise. hints:
  * CLVR_LOCATE_COHERENT or CLVR_LOCATE_INCOHERENT (a speed hint only: the
  * result is the same bit for bit). skip_inst: an instance not entered
- * (one already searched), or CLVR_BVH_NOT_FOUND. inst_found, leaf_found:
- * the instance index and leaf cluster of the element found. */
+ * (one already searched), or CLVR_BVH_NOT_FOUND; skip_elem: an element not
+ * tested (clvr_locate_in_leaf). inst_found, leaf_found: the instance index
+ * and leaf cluster of the element found. */
 CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints,
-                               clvr_u32 skip_inst, float *scalar, clvr_u32 *element_id, clvr_u32 *inst_found,
-                               clvr_u32 *leaf_found)
+                               clvr_u32 skip_inst, clvr_u32 skip_elem, float *scalar, clvr_u32 *element_id,
+                               clvr_u32 *inst_found, clvr_u32 *leaf_found)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
@@ -446,8 +452,8 @@ CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, floa
             if (ch & CLVR_BVH_LEAF_BIT) {
                 if ((ch & CLVR_BVH_MAX_PRIMS) == skip_inst) continue;
                 const clvr_instance inst = m->instances[ch & CLVR_BVH_MAX_PRIMS];
-                if (clvr_locate_in_instance(m, &inst, inst.bvh_root, CLVR_BVH_NOT_FOUND, px, py, pz, hints, scalar,
-                                            element_id, leaf_found)) {
+                if (clvr_locate_in_instance(m, &inst, inst.bvh_root, CLVR_BVH_NOT_FOUND, px, py, pz, hints, skip_elem,
+                                            scalar, element_id, leaf_found)) {
                     *inst_found = ch & CLVR_BVH_MAX_PRIMS;
                     return 1;
                 }
@@ -464,7 +470,8 @@ CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float p
                             clvr_u32 *element_id)
 {
     clvr_u32 inst, leaf;
-    return clvr_locate_ex(m, px, py, pz, hints, CLVR_BVH_NOT_FOUND, scalar, element_id, &inst, &leaf);
+    return clvr_locate_ex(m, px, py, pz, hints, CLVR_BVH_NOT_FOUND, CLVR_BVH_NOT_FOUND, scalar, element_id, &inst,
+                          &leaf);
 }
 
 /* A ray's next sample is usually near its last one (urm's quadrature
@@ -500,15 +507,17 @@ CLVR_INLINE clvr_u32 clvr_locate_hint_node(const clvr_instance *inst, clvr_u32 l
     return s1 == 0u ? level0 : level0 - s1 + (leaf - inst->first_leaf) / 16u;
 }
 
-CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, float pz, clvr_locate_hint *h,
-                                   float *scalar, clvr_u32 *element_id)
+/* clvr_locate_hinted without testing element skip_elem (one the caller has
+ * just found outside the point, or CLVR_BVH_NOT_FOUND). */
+CLVR_INLINE int clvr_locate_hinted_skip(const clvr_mesh_view *m, float px, float py, float pz, clvr_locate_hint *h,
+                                        clvr_u32 skip_elem, float *scalar, clvr_u32 *element_id)
 {
     clvr_u32 leaf, inst_id, skip_inst = CLVR_BVH_NOT_FOUND;
     if (h->inst != CLVR_BVH_NOT_FOUND) {
         const clvr_instance inst = m->instances[h->inst];
         CLVR_WALK_STAT(hint_try);
-        if (clvr_locate_in_instance(m, &inst, h->node, CLVR_BVH_NOT_FOUND, px, py, pz, CLVR_LOCATE_COHERENT, scalar,
-                                    element_id, &leaf)) {
+        if (clvr_locate_in_instance(m, &inst, h->node, CLVR_BVH_NOT_FOUND, px, py, pz, CLVR_LOCATE_COHERENT,
+                                    skip_elem, scalar, element_id, &leaf)) {
             CLVR_WALK_STAT(hint_hit);
             h->node = clvr_locate_hint_node(&inst, leaf);
             return 1;
@@ -536,8 +545,8 @@ CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, 
         while (size > 1u) {
             const clvr_u32 up = (size + 3u) / 4u, up_first = first - up;
             const clvr_u32 parent = up_first + (node - first) / 4u;
-            if (clvr_locate_in_instance(m, &inst, parent, node, px, py, pz, CLVR_LOCATE_COHERENT, scalar,
-                                        element_id, &leaf)) {
+            if (clvr_locate_in_instance(m, &inst, parent, node, px, py, pz, CLVR_LOCATE_COHERENT, skip_elem,
+                                        scalar, element_id, &leaf)) {
                 h->node = clvr_locate_hint_node(&inst, leaf);
                 return 1;
             }
@@ -547,11 +556,19 @@ CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, 
         }
         skip_inst = h->inst;
     }
-    if (!clvr_locate_ex(m, px, py, pz, CLVR_LOCATE_COHERENT, skip_inst, scalar, element_id, &inst_id, &leaf)) return 0;
+    if (!clvr_locate_ex(m, px, py, pz, CLVR_LOCATE_COHERENT, skip_inst, skip_elem, scalar, element_id, &inst_id,
+                        &leaf))
+        return 0;
     const clvr_instance inst = m->instances[inst_id];
     h->inst = inst_id;
     h->node = clvr_locate_hint_node(&inst, leaf);
     return 1;
+}
+
+CLVR_INLINE int clvr_locate_hinted(const clvr_mesh_view *m, float px, float py, float pz, clvr_locate_hint *h,
+                                   float *scalar, clvr_u32 *element_id)
+{
+    return clvr_locate_hinted_skip(m, px, py, pz, h, CLVR_BVH_NOT_FOUND, scalar, element_id);
 }
 
 /* The renderer's entry point: clvr_locate without the element id. The

@@ -404,9 +404,14 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
          * with its value (judge(): where elements overlap, as curved faces
          * of mixed meshes do, either one). */
         mve.ebox = ebox;
-        int hint_bad = 0, walked = 0;
+        /* The same walks skipping an element (clvr_locate_hinted_skip, the
+         * renderer's kept cell once it is settled outside): skipping one
+         * that does not hold the point changes nothing; skipping the one
+         * the full walk found leaves no element, or another that holds the
+         * point (a shared face). */
+        int hint_bad = 0, walked = 0, skip_bad = 0, skip_gone = 0;
         for (uint32_t i = 0; i + 1 < nq; i += 2) {
-            clvr_locate_hint h = clvr_locate_hint_none();
+            clvr_locate_hint h = clvr_locate_hint_none(), ha = h, hb2 = h;
             for (int step = 0; step <= 24; ++step) {
                 const float w = (float)step / 24.0f;
                 float p[3];
@@ -422,10 +427,26 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
                                 p[0], p[1], p[2], ok2, s2, ok1, s1);
                     ++hint_bad;
                 }
+                /* a), an element away from the point (step by step through the mesh) */
+                float sa = 0.0f, sb = 0.0f, dummy;
+                uint32_t ea = 0, eb = 0, other = (uint32_t)(((uint64_t)i * 7919u + (uint64_t)step) % c.num_elements);
+                if (!fx_element_sample(&c, other, p[0], p[1], p[2], &dummy)) {
+                    const int oka = clvr_locate_hinted_skip(&mve, p[0], p[1], p[2], &ha, other, &sa, &ea);
+                    if (oka != ok1 || (ok1 && !judge(&c, p, ea, sa, e1, s1))) ++skip_bad;
+                }
+                /* b), the element found */
+                if (ok1) {
+                    const int okb = clvr_locate_hinted_skip(&mve, p[0], p[1], p[2], &hb2, e1, &sb, &eb);
+                    if (okb && (eb == e1 || !judge(&c, p, eb, sb, e1, s1))) ++skip_bad;
+                    skip_gone += !okb;
+                }
             }
         }
         TU_CHECK_EQ_U64(hint_bad, 0);
         TU_CHECK(walked > 0 || nq < 2);
+        if (skip_bad) fprintf(stderr, "%s N=%u: %d lookups that skip an element went wrong\n", name, leaf_size, skip_bad);
+        TU_CHECK_EQ_U64(skip_bad, 0);
+        TU_CHECK(skip_gone > 0 || walked == 0);
     }
 
     /* device build and device point location */

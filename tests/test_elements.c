@@ -324,6 +324,30 @@ static void test_newton_accuracy(uint32_t type)
     TU_CHECK_EQ_U64(bad, 0);
 }
 
+/* clvr_element_sample_near_settled's flag (the renderer skips a kept cell
+ * in its next walk only when it is set): set for a point found inside and
+ * for one Newton places outside, clear where Newton gives up (a cell
+ * collapsed to a plane: singular Jacobian everywhere). */
+static void test_settled(void)
+{
+    clvr_vec4 v[8];
+    uint64_t rs = 5;
+    make_element(CLVR_CELL_HEX, 0.1f, 1.0f, 0.0f, &rs, v);
+    float u = 0.5f, vv = 0.5f, w = 0.5f, s = 0.0f;
+    int settled = -1;
+    TU_CHECK(clvr_element_sample_near_settled(CLVR_CELL_HEX, v, 0.5f, 0.5f, 0.5f, 1, &u, &vv, &w, &s, &settled));
+    TU_CHECK_EQ_U64(settled, 1);
+    u = vv = w = 0.5f;
+    settled = -1;
+    TU_CHECK(!clvr_element_sample_near_settled(CLVR_CELL_HEX, v, 1.6f, 0.5f, 0.5f, 1, &u, &vv, &w, &s, &settled));
+    TU_CHECK_EQ_U64(settled, 1);
+    for (int i = 0; i < 8; ++i) v[i].z = 0.0f; /* flat */
+    u = vv = w = 0.5f;
+    settled = -1;
+    TU_CHECK(!clvr_element_sample_near_settled(CLVR_CELL_HEX, v, 0.5f, 0.5f, 0.0f, 1, &u, &vv, &w, &s, &settled));
+    TU_CHECK_EQ_U64(settled, 0);
+}
+
 /* Pyramid apex (singular Jacobian) and wedge/pyramid interpolation at a
  * few hand-computed points. */
 static void test_known_values(void)
@@ -352,6 +376,7 @@ int main(void)
         test_boundary_and_outside(t);
     }
     for (uint32_t t = CLVR_CELL_PYRAMID; t <= CLVR_CELL_HEX; ++t) test_newton_accuracy(t);
+    test_settled();
     test_hex_vs_tets();
     test_nonplanar_shared_face();
     test_degenerate();
