@@ -583,12 +583,16 @@ static int run(mpi_run *m, const clvr_options *o)
     cp.light_intensity = o->light_intensity;
     cp.shadows = shadows;
     cp.seed = o->seed ^ 0xC0A1E5CEull;
+    uint32_t jitter_shift = 0; /* 1: the image's controls from the wrong frames (test hook) */
     {
         /* Test hook (docs/mpi-compositing.md): a compositing that is wrong
-         * on purpose, for the tests that must notice it. */
+         * on purpose, for the tests that must notice it; "jitter" keeps the
+         * image unbiased but takes each frame's jitter control from the
+         * next frame's draws, so that the control variate only adds noise. */
         const char *b = getenv("CLVR_MPI_TEST_BREAK");
         if (b && !strcmp(b, "rank0")) cp.broken = CLVR_MPI_BREAK_RANK0;
         else if (b && !strcmp(b, "order")) cp.broken = CLVR_MPI_BREAK_ORDER;
+        else if (b && !strcmp(b, "jitter")) jitter_shift = 1;
     }
     const uint32_t rank_key = (uint32_t)m->rank + 1u;
     const int rec_bytes = (int)(npix * sizeof *rec);
@@ -635,7 +639,7 @@ static int run(mpi_run *m, const clvr_options *o)
         st.samples += (double)(n1 + n2);
         if (root) {
             for (size_t i = 0; i < npix * 4; ++i) sum[i] += img[i];
-            add_jitters(ctl, o->width, o->height, frames, seed, sampler, pixel_filter);
+            add_jitters(ctl, o->width, o->height, frames + jitter_shift, seed, sampler, pixel_filter);
             const double tn = now();
             if (!o->quiet && (tn - last_report > 1.0 || frames + 1 == o->spp)) {
                 const double per = (tn - render0) / (frames + 1);
