@@ -64,13 +64,13 @@
  * [0, 1]^3. */
 
 /* The shape dispatcher (below, with the others): Newton calls it. */
-CLVR_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
-                                    float *Nw);
+CLVR_FORCE_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
+                                          float *Nw);
 
 /* Solves [a b c] x = r by Cramer's rule; returns 0 when the determinant is
  * zero, tiny relative to the columns, or not finite. */
-CLVR_INLINE int clvr_solve3(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy, float cz,
-                            float rx, float ry, float rz, float *x0, float *x1, float *x2)
+CLVR_FORCE_INLINE int clvr_solve3(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                                  float cz, float rx, float ry, float rz, float *x0, float *x1, float *x2)
 {
     /* cofactors of the columns: b x c, c x a, a x b */
     const float bcx = by * cz - bz * cy, bcy = bz * cx - bx * cz, bcz = bx * cy - by * cx;
@@ -94,8 +94,8 @@ CLVR_INLINE int clvr_solve3(float ax, float ay, float az, float bx, float by, fl
  * (CLVR_CELL_MAX_VERTS floats) is left holding the shape functions at the
  * coordinates returned, so that interpolation needs no other evaluation
  * (clvr_element_sample_near). */
-CLVR_INLINE int clvr_newton_solve(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float u, float v,
-                                  float w, float *pu, float *pv, float *pw, float *N)
+CLVR_FORCE_INLINE int clvr_newton_solve(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float u,
+                                        float v, float w, float *pu, float *pv, float *pw, float *N)
 {
     const clvr_u32 nv = clvr_cell_vertex_count(type);
     /* Relative to vertex 0, for precision far from the origin. */
@@ -301,8 +301,8 @@ CLVR_INLINE int clvr_hex_invert(const clvr_vec4 *vtx, float px, float py, float 
 /* Shape functions N[i] of the element type at parametric (u, v, w) and
  * their derivatives (domains above). Slots past the vertex count are
  * zero. */
-CLVR_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
-                                    float *Nw)
+CLVR_FORCE_INLINE void clvr_element_shape(clvr_u32 type, float u, float v, float w, float *N, float *Nu, float *Nv,
+                                          float *Nw)
 {
     for (clvr_u32 i = 0; i < CLVR_CELL_MAX_VERTS; ++i) { N[i] = 0.0f; Nu[i] = 0.0f; Nv[i] = 0.0f; Nw[i] = 0.0f; }
     switch (type) {
@@ -369,8 +369,9 @@ CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float
  * singular Jacobian), where another start might still find the point
  * inside; a caller that tests the element again elsewhere may skip it only
  * when settled. */
-CLVR_INLINE int clvr_element_sample_near_settled(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz,
-                                                 int start, float *u, float *v, float *w, float *scalar, int *settled)
+CLVR_FORCE_INLINE int clvr_element_sample_near_settled(clvr_u32 type, const clvr_vec4 *vtx, float px, float py,
+                                                       float pz, int start, float *u, float *v, float *w,
+                                                       float *scalar, int *settled)
 {
     float a, b, c, N[CLVR_CELL_MAX_VERTS];
     if (!start) { /* the type's own start, as its clvr_<name>_invert's (a tet's map is linear: any) */
