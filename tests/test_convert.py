@@ -12,6 +12,7 @@ Exit: 0 all passed, 1 a check failed, 77 when /usr/bin/python3 has no VTK (skipp
 import glob
 import importlib.machinery
 import importlib.util
+import json
 import math
 import os
 import shutil
@@ -262,6 +263,32 @@ def test_files(tmp, info_ok):
                   int((v <= 0).sum()), 0)
         if info_ok:
             clvr_info_check(out, max(want), label)
+
+
+def test_cell_stats(tmp):
+    """tools/cell-stats.py (bench/graded.sh's first section) on what the converter
+    writes (a version 2 .bin, whose fields follow the elements): its counts and
+    volume extremes match this test's own reading. It read version 2 files as
+    version 1 (a scalar array after the positions) and failed on every mesh."""
+    src = os.path.join(DATA, "vtk", "kiefer_tet10.vtu")
+    out = os.path.join(tmp, "cellstats.bin")
+    r = convert([src, out, "--quiet"], tmp)
+    if not check(r.returncode == 0, "cell-stats: the input converts", r.stderr[-500:], "exit 0"):
+        return
+    m, _ = read_bin(out)
+    js = os.path.join(tmp, "cellstats.json")
+    tool = os.path.join(HERE, "..", "tools", "cell-stats.py")
+    r = subprocess.run([sys.executable, tool, out, "--json", js], capture_output=True, text=True, timeout=300)
+    if not check(r.returncode == 0 and os.path.exists(js), "cell-stats.py reads a version 2 .bin", r.stderr[-500:],
+                 "exit 0"):
+        return
+    with open(js) as f:
+        row = json.load(f)[0]
+    vol = tet_volumes(m.pos, m.cells[0])
+    check(row["elements"] == m.T and row["tets"] == m.T, "cell-stats.py: element counts", row["elements"], m.T)
+    check(math.isclose(row["vol_min"], float(vol.min()), rel_tol=1e-6) and
+          math.isclose(row["vol_max"], float(vol.max()), rel_tol=1e-6), "cell-stats.py: volume extremes",
+          (row["vol_min"], row["vol_max"]), (float(vol.min()), float(vol.max())))
 
 
 def test_values_match_vtk(tmp):
@@ -1071,6 +1098,7 @@ def main():
     tmp = tempfile.mkdtemp(prefix="clvr-test-convert-")
     try:
         test_files(tmp, info_ok)
+        test_cell_stats(tmp)
         test_values_match_vtk(tmp)
         test_reorientation_and_tets(tmp)
         test_plot3d_layouts_and_blanking(tmp)

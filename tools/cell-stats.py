@@ -33,9 +33,13 @@ def read_bin(path):
         head = f.read(256)
         if len(head) != 256 or head[:8] != b"CLVRMESH":
             sys.exit("cell-stats.py: %s: not a clvr .bin mesh" % path)
+        version = int(np.frombuffer(head, dtype="<u4", count=1, offset=8)[0])
+        if version not in (1, 2):
+            sys.exit("cell-stats.py: %s: .bin version %d, this reads 1 and 2" % (path, version))
         v, t, p, w, h = np.frombuffer(head, dtype="<u8", count=5, offset=16)
         pos = np.fromfile(f, dtype="<f4", count=3 * int(v)).reshape(-1, 3)
-        np.fromfile(f, dtype="<f4", count=int(v))  # scalars
+        if version == 1:  # version 2 keeps its fields after the elements
+            np.fromfile(f, dtype="<f4", count=int(v))  # scalars
         elems = {}
         for (name, k), n in zip(COUNTS, (t, p, w, h)):
             elems[name] = np.fromfile(f, dtype="<u4", count=k * int(n)).reshape(-1, k)
