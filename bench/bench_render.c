@@ -24,6 +24,14 @@
  *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise] [--no-pixel-cv]
+ *                [--repeats K]
+ *
+ * --repeats (--converge): K measured runs per configuration with seeds 1 ..
+ * K (default 3); the row is the run whose time to the target is the median
+ * (runs that miss it rank last), and the table's note and the JSON
+ * ("repeats_s") give every run's time. One 20-40 ms frame moved by up to 40%
+ * on a 2-core VM between runs (bench/results/render-converge/
+ * 2026-11-28-s35-newton-locate.md, section 8); a seed's error moves too.
  *
  * --denoise (--converge): also the error of each checkpoint's image after the
  * optional denoiser (kernels/denoise.h), and its bias (the denoised
@@ -310,6 +318,7 @@ typedef struct conv_point {
 } conv_point;
 
 #define MAX_POINTS 128
+#define MAX_REPEATS 9
 #define MAX_EST 8
 
 /* An estimator of a converge run: name[:urm-steps[:urm-kappa[:light-res]]]
@@ -374,6 +383,8 @@ typedef struct conv_result {
     double dn_s;                    /* --denoise: wall seconds of one denoiser run (the last) */
     double fit_spp, fit_s;          /* 1/n fit */
     double load_before, load_after;
+    uint32_t nrep;                  /* --repeats: runs behind the row (the median's) */
+    double rep_s[MAX_REPEATS];      /* each run's device seconds to the target, NaN where missed */
 } conv_result;
 
 /* 1 when the ray from org along dir meets the box [lo, hi]. */
@@ -487,7 +498,8 @@ done:
 }
 
 static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, const conv_ref *ref, uint32_t w,
-                                uint32_t h, uint32_t max_spp, double target, clvr_denoiser *dn, conv_result *out,
+                                uint32_t h, uint32_t max_spp, double target, clvr_denoiser *dn, uint64_t seed,
+                                conv_result *out,
                                 clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -505,7 +517,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
         free(dimg);
         return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
     }
-    s = renderer_for(cl, g, c, w, h, 1, &rd, NULL, err);
+    s = renderer_for(cl, g, c, w, h, seed, &rd, NULL, err);
     double wall = 0.0, fit_acc = 0.0;
     uint32_t fit_n = 0, next = 1;
     for (uint32_t n = 1; s == CLVR_OK && n <= max_spp; ++n) {
@@ -575,10 +587,15 @@ static void json_point(FILE *f, const conv_point *p)
     fprintf(f, "}");
 }
 
+/* Sort key of a measured run: its time to the target; a run that missed it
+ * after every run that reached it, by its 1/n fit. */
+static double conv_rank(const conv_result *r) { return r->reached ? r->at.dev_s : 1e30 + r->fit_s; }
+
 static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const est_variant *est, uint32_t nest,
                         int sh_lo, int sh_hi, uint32_t w, uint32_t h, uint32_t ref_spp, uint32_t max_spp,
-                        double target, float density, const char *json)
+                        double target, float density, uint32_t repeats, const char *json)
 {
+    static conv_result runs[MAX_REPEATS]; /* large (their checkpoints); one converge per process */
     clvr_error err = {0};
     scene_gpu g;
     conv_ref refs[2] = {{0}, {0}};
@@ -609,8 +626,18 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
             if (est[e].urm_steps) c.urm_steps = est[e].urm_steps;
             if (est[e].urm_kappa > 0.0f) c.urm_kappa = est[e].urm_kappa;
             if (est[e].light_res) c.light_res = est[e].light_res;
-            if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, dn, &res[sh][e], &err) != CLVR_OK)
-                goto fail;
+            uint32_t order[MAX_REPEATS];
+            for (uint32_t k = 0; k < repeats; ++k) {
+                if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, dn, 1 + k, &runs[k], &err) != CLVR_OK)
+                    goto fail;
+                /* insertion by rank: the median run is order[(repeats - 1) / 2] */
+                uint32_t j = k;
+                for (; j > 0 && conv_rank(&runs[order[j - 1]]) > conv_rank(&runs[k]); --j) order[j] = order[j - 1];
+                order[j] = k;
+            }
+            res[sh][e] = runs[order[(repeats - 1) / 2]];
+            res[sh][e].nrep = repeats;
+            for (uint32_t k = 0; k < repeats; ++k) res[sh][e].rep_s[k] = runs[k].reached ? runs[k].at.dev_s : NAN;
             variant_label(&est[e], res[sh][e].label, sizeof res[sh][e].label);
             fprintf(stderr, "bench_render: %s shadows=%d done\n", res[sh][e].label, sh);
         }
@@ -636,6 +663,15 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     printf("\nrel RMSE: linear rgb, unclamped, over pixels whose camera ray enters the bounding box (%zu of %u), "
            "reference noise subtracted, divided by the reference's mean rgb over the same pixels.\n",
            refs[sh_lo].ninside, w * h);
+    printf("Each row is the median of %u measured runs (seeds 1 .. %u) by time to %.0f%%; every run's seconds:", repeats,
+           repeats, target * 100);
+    for (int sh = sh_lo; sh <= sh_hi; ++sh)
+        for (uint32_t e = 0; e < nest; ++e) {
+            const conv_result *r = &res[sh][e];
+            printf("%s %s shadows %s:", sh == sh_lo && e == 0 ? "" : ";", r->label, sh ? "on" : "off");
+            for (uint32_t k = 0; k < r->nrep; ++k) printf(" %.3f", r->rep_s[k]);
+        }
+    printf(".\n");
     if (dn) {
         /* Apart from the table above, which is the unbiased estimate's. */
         printf("\n--denoise (biased, not the convergence figure): the same frames after the edge-avoiding filter "
@@ -706,7 +742,12 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                     fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, "
                                "\"spp_denoised\": %u, ",
                             refs[sh].bias_rel, r->dn_s, r->reached_dn, r->reached_dn ? r->at_dn.spp : 0u);
-                fprintf(f, "\"at\": ");
+                fprintf(f, "\"repeats_s\": [");
+                for (uint32_t k = 0; k < r->nrep; ++k) {
+                    if (isnan(r->rep_s[k])) fprintf(f, "%snull", k ? ", " : "");
+                    else fprintf(f, "%s%.6g", k ? ", " : "", r->rep_s[k]);
+                }
+                fprintf(f, "], \"at\": ");
                 first = 0;
                 json_point(f, &r->at);
                 fprintf(f, ", \"points\": [");
@@ -745,7 +786,7 @@ static int usage(void)
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
             "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n"
-            "                    [--denoise] [--no-pixel-cv]\n");
+            "                    [--denoise] [--no-pixel-cv] [--repeats K]\n");
     return 2;
 }
 
@@ -754,7 +795,7 @@ int main(int argc, char **argv)
     const char *device = NULL, *json = NULL, *meshes[MAX_MESHES];
     const char *methods = "march,track,bins,dda", *macro = "32,128";
     uint32_t sampler = CLVR_SAMPLER_LD, pixel_filter = CLVR_PIXEL_BOX;
-    uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024;
+    uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024, repeats = 3;
     uint32_t conv_method = CLVR_RENDER_DDA;
     clvr_render_settings defaults;
     clvr_render_settings_default(&defaults);
@@ -807,6 +848,10 @@ int main(int argc, char **argv)
             if (!parse_method(argv[++i], &conv_method)) return usage();
         } else if (!strcmp(a, "--ref-spp") && v) ref_spp = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(a, "--max-spp") && v) max_spp = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--repeats") && v) {
+            repeats = (uint32_t)atoi(argv[++i]);
+            if (repeats < 1 || repeats > MAX_REPEATS) return usage();
+        }
         else if (!strcmp(a, "--target") && v) target = atof(argv[++i]);
         else if (!strcmp(a, "--estimator") && v) {
             if ((estimator = clvr_render_estimator_from_name(argv[++i])) == CLVR_ESTIMATOR_COUNT) return usage();
@@ -876,7 +921,7 @@ int main(int argc, char **argv)
         const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
                              no_hull, pixel_filter, denoise, no_cv};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
-                              ref_spp, max_spp, target, density, json);
+                              ref_spp, max_spp, target, density, repeats, json);
         clvr_cl_destroy(&cl);
         return rc;
     }

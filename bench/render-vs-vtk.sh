@@ -7,7 +7,8 @@
 # VTK's images are deterministic; clvr's converge. So clvr is measured by time to
 # equal quality (issue 14's figure): `bench_render --converge` renders a reference
 # (REF spp, independent frames, the urm estimator, seed A), then for each clvr
-# estimator a fresh run (seed B, --sampler) until its relative RMSE against the
+# estimator fresh runs (seeds 1, 2, 3, --sampler; the median run's time is the
+# figure, like VTK's median frame) until its relative RMSE against the
 # reference is <= 2%: RMSE of linear rgb, unclamped, over the pixels whose camera
 # ray enters the mesh's bounding box, with the reference's own noise (from its
 # per-pixel moments) subtracted, divided by the reference's mean rgb over the same
@@ -132,6 +133,9 @@ for r in clvr["rows"]:
     name = f"clvr {clvr['method']} {r['label']}"
     cost = f"{r['samples_per_ray']:.1f} samples/ray, {r['frame_s'] * 1e3:.0f} ms/frame"
     if r.get("light_s"): cost += f" + light grid {r['light_s'] * 1e3:.0f} ms"
+    reps = r.get("repeats_s") or []
+    if len(reps) > 1:  # bench_render --repeats: the row is the median run
+        cost += "; median of " + ", ".join("missed" if x is None else f"{x:.3f}" for x in reps) + " s"
     if r["reached"]:
         a = r["at"]
         p(f"| {name} | {sh} | {a['device_s']:.2f} | to {t:.0%} relative RMSE: {a['spp']} spp ({cost}; 1/n fit "
