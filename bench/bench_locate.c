@@ -160,7 +160,7 @@ int main(int argc, char **argv)
         return 2;
     }
     g_chain = bench_order_chain(order_id);
-    if (bench_query_hint(hint, order_id, &hint, &g_hints)) {
+    if (bench_query_hint(hint, &hint, &g_hints)) {
         fprintf(stderr, "bench_locate: --hint must be coherent or incoherent\n");
         return 2;
     }

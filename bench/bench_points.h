@@ -138,9 +138,8 @@ static inline float (*bench_make_points(const clvr_mesh *m, uint32_t nq, int ord
  * incoherent walk's prefetches lost on random points too, see
  * CLVR_LOCATE_INCOHERENT) into *hints (CLVR_LOCATE_*); the name it took
  * into *name. Returns 0, or -1 when NAME is neither. */
-static inline int bench_query_hint(const char *hint, int order, const char **name, unsigned *hints)
+static inline int bench_query_hint(const char *hint, const char **name, unsigned *hints)
 {
-    (void)order;
     if (!hint) hint = "coherent";
     if (strcmp(hint, "coherent") != 0 && strcmp(hint, "incoherent") != 0) return -1;
     *name = hint;

@@ -590,6 +590,9 @@ static void json_point(FILE *f, const conv_point *p)
     fprintf(f, "}");
 }
 
+/* Device seconds of a measured run at its last checkpoint. */
+static double conv_last_s(const conv_result *r) { return r->pts[r->npoints ? r->npoints - 1 : 0].dev_s; }
+
 /* Sort key of a measured run: its time to the target; a run that missed it
  * after every run that reached it, by its 1/n fit. */
 static double conv_rank(const conv_result *r) { return r->reached ? r->at.dev_s : 1e30 + r->fit_s; }
@@ -636,11 +639,9 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                 /* A run of more than CONV_REPEAT_MAX_S device seconds averages
                  * its frames' noise already: one is enough (delta runs to
                  * hundreds of spp would triple the bench's time). */
-                const conv_result *r0 = &runs[0];
-                if (k == 0 && (r0->reached ? r0->at.dev_s : r0->pts[r0->npoints ? r0->npoints - 1 : 0].dev_s) >
-                                  CONV_REPEAT_MAX_S)
+                if (k == 0 && (runs[0].reached ? runs[0].at.dev_s : conv_last_s(&runs[0])) > CONV_REPEAT_MAX_S)
                     nrun = 1;
-                /* insertion by rank: the median run is order[(repeats - 1) / 2] */
+                /* insertion by rank: the median run is order[(nrun - 1) / 2] */
                 uint32_t j = k;
                 for (; j > 0 && conv_rank(&runs[order[j - 1]]) > conv_rank(&runs[k]); --j) order[j] = order[j - 1];
                 order[j] = k;
@@ -667,7 +668,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                    refs[sh].ref_mean,
                    refs[sh].ref_mean > 0 ? sqrt(refs[sh].ref_var) / refs[sh].ref_mean : 0.0, r->reached ? "" : ">",
                    r->reached ? r->at.spp : max_spp, r->reached ? "" : ">",
-                   r->reached ? r->at.dev_s : r->pts[r->npoints ? r->npoints - 1 : 0].dev_s,
+                   r->reached ? r->at.dev_s : conv_last_s(r),
                    r->reached ? r->at.wall_s : NAN, r->fit_spp, r->fit_s, r->load_after);
         }
     printf("\nrel RMSE: linear rgb, unclamped, over pixels whose camera ray enters the bounding box (%zu of %u), "
@@ -704,7 +705,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                 printf("| %s | %s | %.2f%% | %s | %s | %s%u | %s%.3f | %.3f |\n", r->label, sh ? "on" : "off",
                        refs[sh].bias_rel * 100, raw, den, r->reached_dn ? "" : ">",
                        r->reached_dn ? r->at_dn.spp : max_spp, r->reached_dn ? "" : ">",
-                       (r->reached_dn ? r->at_dn.dev_s : r->pts[r->npoints ? r->npoints - 1 : 0].dev_s) + r->dn_s,
+                       (r->reached_dn ? r->at_dn.dev_s : conv_last_s(r)) + r->dn_s,
                        r->dn_s);
             }
     }
