@@ -160,6 +160,7 @@ clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_err
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_element_boxes", &out->element_boxes, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_keys", &out->hull_keys, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_flags", &out->hull_flags, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_adjacency", &out->hull_adjacency, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_faces", &out->hull_faces, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_rays", &out->hull_rays, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_gap_rays", &out->hull_gap_rays, err));
@@ -178,8 +179,8 @@ void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
     if (k->ray_hits) clReleaseKernel(k->ray_hits);
     if (k->ray_span) clReleaseKernel(k->ray_span);
     if (k->element_boxes) clReleaseKernel(k->element_boxes);
-    cl_kernel hk[5] = {k->hull_keys, k->hull_flags, k->hull_faces, k->hull_rays, k->hull_gap_rays};
-    for (int i = 0; i < 5; ++i)
+    cl_kernel hk[6] = {k->hull_keys, k->hull_flags, k->hull_faces, k->hull_rays, k->hull_gap_rays, k->hull_adjacency};
+    for (int i = 0; i < 6; ++i)
         if (hk[i]) clReleaseKernel(hk[i]);
     if (k->program) clReleaseProgram(k->program);
     memset(k, 0, sizeof *k);

@@ -52,7 +52,7 @@ typedef struct clvr_bvh_kernels {
     cl_kernel ray_hits;
     cl_kernel ray_span; /* first entry and last exit of a tree's boxes per ray (the hull's first probe) */
     cl_kernel element_boxes;
-    cl_kernel hull_keys, hull_flags, hull_faces, hull_rays, hull_gap_rays; /* host/pipeline/hull.h */
+    cl_kernel hull_keys, hull_flags, hull_faces, hull_rays, hull_gap_rays, hull_adjacency; /* host/pipeline/hull.h */
 } clvr_bvh_kernels;
 clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_error *err);
 void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k); /* accepts NULL and half-built */

@@ -278,6 +278,24 @@ __kernel void clvr_hull_flags(__global const clvr_instance *instances, uint num_
     flags[slots[i]] = clvr_hull_boundary(&m, instances, face_first, num_instances, num_slots, keys, slots, i);
 }
 
+/* keys, slots: sorted pairs. adj[slot] = the sorted element id across the
+ * face in that slot (clvr_hull_twin), CLVR_BVH_NOT_FOUND on the boundary. */
+__kernel void clvr_hull_adjacency(__global const clvr_instance *instances, uint num_instances,
+                                  __global const uint *face_first, uint num_slots, __global const ulong *keys,
+                                  __global const uint *slots, __global uint *adj, CLVR_HULL_PIECE_PARAMS)
+{
+    const uint i = get_global_id(0);
+    if (i >= num_slots) return;
+    const ulong key = keys[i];
+    const int prev = i > 0u && keys[i - 1u] == key, next = i + 1u < num_slots && keys[i + 1u] == key;
+    if (!prev && !next) {
+        adj[slots[i]] = CLVR_BVH_NOT_FOUND;
+        return;
+    }
+    const clvr_mesh_view m = CLVR_HULL_VIEW(instances);
+    adj[slots[i]] = clvr_hull_twin(&m, instances, face_first, num_instances, num_slots, keys, slots, i);
+}
+
 /* Face k of the hull from boundary slot slots[k]: out[k] and its box. */
 __kernel void clvr_hull_faces(__global const clvr_instance *instances, uint num_instances,
                               __global const uint *face_first, __global const uint *slots, uint num_faces,

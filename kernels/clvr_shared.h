@@ -453,7 +453,8 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * names in clvr_render_estimator_name (host/pipeline/render.c), in this order. */
 #define CLVR_ESTIMATOR_DELTA 0u
 #define CLVR_ESTIMATOR_URM 1u
-#define CLVR_ESTIMATOR_COUNT 2u
+#define CLVR_ESTIMATOR_WALK 2u
+#define CLVR_ESTIMATOR_COUNT 3u
 /* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
  * at least this many quadrature points per ray, and at most this much
  * majorant optical depth between two of them. */
@@ -508,6 +509,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
  * (host/pipeline/render.c), so the three cannot drift apart. */
 #define CLVR_VOLUME_ARRAYS(X)                                                                                          \
     X(float4, tf)                           /* transfer function table: rgb + extinction */                             \
+    X(float, tf_prefix)                     /* walk: prefix sums of the table's extinction */                            \
     X(float4, vertices)                     /* clustered vertices: xyz + scalar */                                       \
     X(ushort, idx16)                        /* 16-bit local indices */                                                   \
     X(uint, idx32)                          /* 32-bit indices of large instances */                                      \
@@ -523,6 +525,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
     X(uchar, ebox)                          /* quantized element boxes (locate.h) */                    \
     X(clvr_bvh_node, hull_bvh)              /* tree over the boundary faces (kernels/hull.h) */        \
     X(clvr_hull_face, hull)                 /* the boundary faces, in the tree's primitive order */    \
+    X(uint, face_first)                     /* walk: first face slot per instance (kernels/hull.h) */  \
+    X(uint, adj)                            /* walk: element across each face slot */                 \
     /* pieces 1 .. CLVR_MAX_SPLITS - 1 of the split arrays (piece 0 above; a */                                      \
     /* small dummy buffer where the mesh has fewer pieces) */                                                        \
     X(float4, vertices1) X(float4, vertices2) X(float4, vertices3)                                                     \
@@ -611,6 +615,7 @@ typedef struct clvr_frame {
     /* Nonzero: clvr_render_frame also accumulates the denoiser's guides
      * (albedo and depth, kernels/denoise.h) into its guide buffer. */
     clvr_u32 guides;
+    clvr_u32 num_instances;   /* instance clusters of the mesh (the walk's element -> instance search) */
     /* Half-spaces that clip the medium, (nx, ny, nz, d) with a unit normal:
      * points with n.p <= d are kept (ParaView's Clip with its default
      * "Invert": the side the normal points away from). Every ray, camera
@@ -619,7 +624,7 @@ typedef struct clvr_frame {
      * (still bounds on a shorter interval). */
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 312, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 316, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

@@ -235,6 +235,36 @@ CLVR_INLINE clvr_u32 clvr_hull_boundary(const clvr_mesh_view *m, CLVR_GLOBAL con
     return 1u;
 }
 
+/* The sorted element id of the element on the other side of the face at
+ * sorted position i (clvr_hull_opposite), or CLVR_BVH_NOT_FOUND: a boundary
+ * face, or a run of equal keys too long to search (always safe: the walk
+ * that reads this falls back to a lookup). */
+CLVR_INLINE clvr_u32 clvr_hull_twin(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
+                                    CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances, clvr_u32 num_slots,
+                                    CLVR_GLOBAL const clvr_u64 *keys, CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i)
+{
+    const clvr_u64 key = keys[i];
+    clvr_hull_face h, o;
+    clvr_u32 ii, e, f;
+    clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
+    clvr_u32 j = i;
+    for (; j > 0u && i - j < CLVR_HULL_RUN && keys[j - 1u] == key; --j) {
+        clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j - 1u], &o);
+        if (clvr_hull_opposite(&h, &o)) {
+            clvr_hull_slot_face(instances, face_first, num_instances, slots[j - 1u], &ii, &e, &f);
+            return e;
+        }
+    }
+    for (j = i + 1u; j < num_slots && j - i <= CLVR_HULL_RUN && keys[j] == key; ++j) {
+        clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j], &o);
+        if (clvr_hull_opposite(&h, &o)) {
+            clvr_hull_slot_face(instances, face_first, num_instances, slots[j], &ii, &e, &f);
+            return e;
+        }
+    }
+    return CLVR_BVH_NOT_FOUND;
+}
+
 /* The face in slot `slot` and its box (8 floats: lo xyz 0, hi xyz 0). */
 CLVR_INLINE void clvr_hull_face_at(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
                                    CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances, clvr_u32 slot,

@@ -1176,6 +1176,320 @@ inline float clvr_urm_camera(const clvr_volume *v, clvr_urm *e, float3 org, floa
     return clvr_urm_end(e);
 }
 
+/* ------------------------------------------------------------ walk
+ * Tet meshes with face adjacency (hull.h, clvr_hull_twin): the camera ray
+ * walks from tet to tet across shared faces. In a tet the scalar is affine,
+ * so along the ray it is linear, and the extinction (the transfer
+ * function's, piecewise linear in the scalar) is piecewise linear in t:
+ * each tet's optical depth is integrated exactly (clvr_walk_depth), the
+ * transmittance is exact, and the tet's emission int T sigma c dt is
+ * estimated by one point t* drawn in proportion to T sigma (the colour at
+ * t* times T_in (1 - exp(-tau))), unbiased, with variance from the
+ * colour's change inside the tet only. Where the walk cannot go on (a face
+ * without a twin in the same instance: a lookup past it; no element
+ * there, another cell type), urm finishes the ray from that point. */
+
+/* The table's extinction weight (w, before the density) at position p in
+ * [0, n - 1], as clvr_tf_lookup interpolates it. */
+inline float clvr_walk_w(const clvr_volume *v, float p)
+{
+    const uint i = clvr_tf_entry(p, v->f->tf_size);
+    const float a = v->tf[i].w, b = v->tf[i + 1u].w;
+    return a + (p - (float)i) * (b - a);
+}
+
+/* G(p): the integral of w from position 0 to p (positions: table entries),
+ * w held at its end values beyond the table, as the lookup clamps. */
+inline float clvr_walk_g(const clvr_volume *v, float p)
+{
+    const uint n = v->f->tf_size;
+    const float last = (float)(n - 1u);
+    if (p <= 0.0f) return v->tf[0].w * p;
+    if (p >= last) return v->tf_prefix[n - 1u] + v->tf[n - 1u].w * (p - last);
+    const uint i = clvr_tf_entry(p, n);
+    const float f = p - (float)i, a = v->tf[i].w, b = v->tf[i + 1u].w;
+    return v->tf_prefix[i] + f * (a + 0.5f * f * (b - a));
+}
+
+/* A position p with G(p) = g (G is nondecreasing). */
+inline float clvr_walk_g_inverse(const clvr_volume *v, float g)
+{
+    const uint n = v->f->tf_size;
+    if (g <= 0.0f) {
+        const float w0 = v->tf[0].w;
+        return w0 > 0.0f ? g / w0 : 0.0f;
+    }
+    const float pn = v->tf_prefix[n - 1u];
+    if (g >= pn) {
+        const float wl = v->tf[n - 1u].w;
+        return (float)(n - 1u) + (wl > 0.0f ? (g - pn) / wl : 0.0f);
+    }
+    uint lo = 0u, hi = n - 1u; /* P[lo] <= g < P[hi] */
+    while (hi - lo > 1u) {
+        const uint mid = (lo + hi) / 2u;
+        if (v->tf_prefix[mid] <= g) lo = mid;
+        else hi = mid;
+    }
+    const float a = v->tf[lo].w, b = v->tf[lo + 1u].w, r = g - v->tf_prefix[lo];
+    const float den = a + sqrt(fmax(a * a + 2.0f * (b - a) * r, 0.0f));
+    return (float)lo + (den > 0.0f ? clamp(2.0f * r / den, 0.0f, 1.0f) : 0.0f);
+}
+
+/* Tet e's barycentric coordinates l[k] at org + t dir and their rates g[k]
+ * along dir; 0 for a flat tet. */
+inline int clvr_walk_bary(const clvr_vec4 *vtx, float3 org, float3 dir, float t, float *l, float *g)
+{
+    const float3 o = (float3)(vtx[0].x, vtx[0].y, vtx[0].z);
+    const float3 a = (float3)(vtx[1].x, vtx[1].y, vtx[1].z) - o, b = (float3)(vtx[2].x, vtx[2].y, vtx[2].z) - o;
+    const float3 c = (float3)(vtx[3].x, vtx[3].y, vtx[3].z) - o;
+    const float3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
+    const float det = dot(a, bc);
+    if (!(fabs(det) > 0.0f)) return 0;
+    const float inv = 1.0f / det;
+    const float3 r = org + dir * t - o;
+    l[1] = dot(r, bc) * inv; l[2] = dot(r, ca) * inv; l[3] = dot(r, ab) * inv;
+    l[0] = 1.0f - l[1] - l[2] - l[3];
+    g[1] = dot(dir, bc) * inv; g[2] = dot(dir, ca) * inv; g[3] = dot(dir, ab) * inv;
+    g[0] = -(g[1] + g[2] + g[3]);
+    return 1;
+}
+
+/* The face slot (kernels/hull.h order) of tet e's face opposite vertex k. */
+inline uint clvr_walk_slot(const clvr_volume *v, uint inst_id, const clvr_instance *inst, uint e, int k)
+{
+    return v->face_first[inst_id] + (e - inst->first_element) * 4u + (k == 0 ? 1u : k == 1 ? 2u : k == 2 ? 0u : 3u);
+}
+
+/* Where the walk stands: the tet, its instance and the ray parameter. */
+typedef struct clvr_walk {
+    clvr_locate_hint h; /* h.inst: the instance of e */
+    clvr_instance inst;
+    clvr_piece_arrays pa;
+    uint e;
+    float t;
+} clvr_walk;
+
+/* Points the walk at element nb (global sorted id), finding its instance
+ * (instances are sorted by first element); 0 when it is not a tet. */
+inline int clvr_walk_goto(const clvr_volume *v, const clvr_mesh_view *m, clvr_walk *w, uint nb)
+{
+    if (nb - w->inst.first_element >= w->inst.num_elements) {
+        uint lo = 0u, hi = v->f->num_instances;
+        while (hi - lo > 1u) {
+            const uint mid = (lo + hi) / 2u;
+            if (m->instances[mid].first_element <= nb) lo = mid;
+            else hi = mid;
+        }
+        w->inst = m->instances[lo];
+        if (w->inst.type != CLVR_CELL_TET) return 0;
+        w->pa = clvr_view_piece(m, &w->inst);
+        /* The lookup hint moves with it (its node is a node of this
+         * instance's tree). */
+        w->h.inst = lo;
+        w->h.node = clvr_locate_hint_node(&w->inst, w->inst.first_leaf + (nb - w->inst.first_element) / m->leaf_size);
+    }
+    w->e = nb;
+    return 1;
+}
+
+/* Enters the mesh after t_from: a lookup at t_probe (a little past the
+ * crossing, which the hull places conservatively), then back across entry
+ * faces to the tet the ray enters first after t_from; w->t = that entry
+ * (at least t_from). 0 when the lookup finds no tet. */
+inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3 org, float3 dir, float t_from,
+                           float t_probe, clvr_walk *w)
+{
+    const float3 q = org + dir * t_probe;
+    float s;
+    if (!clvr_locate_hinted(m, q.x, q.y, q.z, &w->h, &s, &w->e)) return 0;
+    w->inst = m->instances[w->h.inst];
+    if (w->inst.type != CLVR_CELL_TET) return 0;
+    w->pa = clvr_view_piece(m, &w->inst);
+    float t = t_probe;
+    for (int back = 0; back < 64; ++back) {
+        clvr_vec4 vtx[4];
+        float l[4], g[4];
+        clvr_load_tet(&w->pa, &w->inst, w->e, vtx);
+        if (!clvr_walk_bary(vtx, org, dir, t, l, g)) return 0;
+        float dt = -INFINITY;
+        int kx = -1;
+        for (int k = 0; k < 4; ++k)
+            if (g[k] > 0.0f && -l[k] / g[k] > dt) {
+                dt = -l[k] / g[k];
+                kx = k;
+            }
+        if (kx < 0) return 0;
+        t = fmax(t + fmin(dt, 0.0f), t_from);
+        if (t <= t_from) break;
+        const uint nb = v->adj[clvr_walk_slot(v, w->h.inst, &w->inst, w->e, kx)];
+        if (nb == CLVR_BVH_NOT_FOUND || !clvr_walk_goto(v, m, w, nb)) break;
+    }
+    w->t = t;
+    return 1;
+}
+
+/* What a camera ray's emission points add up to (the walk's; urm keeps the
+ * same sums in clvr_urm): sum of the weighted colours, with shadows their
+ * light-grid terms and a reservoir pick for the correction shadow ray
+ * (see urm's comment). */
+typedef struct clvr_emit {
+    float3 sum, lit, pick;
+    float wsum, tsum, pick_t, pick_g, pick_s, pick_u;
+    int shadows;
+} clvr_emit;
+
+inline void clvr_emit_begin(clvr_emit *a, int shadows, float u_pick)
+{
+    a->sum = a->lit = a->pick = (float3)(0.0f);
+    a->wsum = a->tsum = a->pick_t = a->pick_g = a->pick_s = 0.0f;
+    a->pick_u = u_pick;
+    a->shadows = shadows;
+}
+
+/* Adds colour weight g (rgb, transmittance applied) emitted at org + t dir. */
+inline void clvr_emit_add(const clvr_volume *v, clvr_emit *a, float3 org, float3 dir, float t, float3 g)
+{
+    a->sum += g;
+    const float ww = clvr_urm_lum(g);
+    if (!(ww > 0.0f)) return;
+    float spread = 0.0f;
+    const float G = a->shadows ? clvr_light_at(v, org + dir * t, &spread) : 1.0f;
+    a->lit += G * g;
+    a->wsum += ww;
+    a->tsum += ww * t;
+    if (clvr_urm_reservoir(&a->pick_u, ww / a->wsum)) {
+        a->pick = g / ww;
+        a->pick_t = t;
+        a->pick_g = G;
+        a->pick_s = spread;
+    }
+}
+
+/* Walks [t0, t1] (raw hull gaps glo/ghi, ng of them, tell where the ray is
+ * outside between two crossings): *sum the emission with the
+ * transmittance applied, *T the transmittance at the end. Returns 1 when
+ * it covered the interval, 0 with *t_stop where it stopped (the caller
+ * finishes [*t_stop, t1] another way). */
+inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0, float t1, const float *glo,
+                         const float *ghi, int ng, float u, clvr_rng *rng, clvr_emit *acc, float *T, float *t_stop,
+                         uint *samples, uint *nulls)
+{
+    const clvr_frame *f = v->f;
+    const clvr_mesh_view m = clvr_volume_view(v);
+    const float eps = 1e-6f * (fabs(t0) + fabs(t1)) + 1e-30f, probe = fmin(1e-3f * (t1 - t0), 1e3f * eps);
+    const float tf_scale = (float)(f->tf_size - 1u) / (f->tf_hi - f->tf_lo), last = (float)(f->tf_size - 1u);
+    clvr_walk w;
+    w.h = clvr_locate_hint_none();
+    *T = 1.0f;
+    *t_stop = t0;
+    if (!clvr_walk_enter(v, &m, org, dir, t0, fmin(t0 + probe, t1), &w)) return 0;
+    float sa = NAN, sig_a = 0.0f;
+    int zsteps = 0;
+    for (int iter = 0; iter < 65536; ++iter) {
+        clvr_vec4 vtx[4];
+        float l[4], g[4];
+        clvr_load_tet(&w.pa, &w.inst, w.e, vtx);
+        if (!clvr_walk_bary(vtx, org, dir, w.t, l, g)) return 0;
+        float dt = INFINITY;
+        int kx = -1;
+        for (int k = 0; k < 4; ++k)
+            if (g[k] < 0.0f && l[k] / -g[k] < dt) {
+                dt = l[k] / -g[k];
+                kx = k;
+            }
+        if (kx < 0) return 0;
+        const float tb = fmin(w.t + fmax(dt, 0.0f), t1), len = tb - w.t;
+        const float k = g[0] * vtx[0].w + g[1] * vtx[1].w + g[2] * vtx[2].w + g[3] * vtx[3].w;
+        if (isnan(sa)) {
+            sa = l[0] * vtx[0].w + l[1] * vtx[1].w + l[2] * vtx[2].w + l[3] * vtx[3].w;
+            sig_a = f->density * clvr_walk_w(v, clamp((sa - f->tf_lo) * tf_scale, 0.0f, last));
+        }
+        const float sb = sa + k * fmax(len, 0.0f);
+        float sig_b = sig_a;
+        if (len > 0.0f) {
+            zsteps = 0;
+            ++*samples;
+            const float pa = (sa - f->tf_lo) * tf_scale, pb = (sb - f->tf_lo) * tf_scale;
+            const float qa = clamp(pa, 0.0f, last), qb = clamp(pb, 0.0f, last);
+            sig_b = f->density * clvr_walk_w(v, qb);
+            /* One bin of the table (or both ends beyond the same end): the
+             * extinction is linear over the tet, its integral the trapezoid,
+             * its inverse a quadratic; else the prefix sums. */
+            const int one_bin = (pa <= 0.0f && pb <= 0.0f) || (pa >= last && pb >= last) ||
+                                clvr_tf_entry(qa, f->tf_size) == clvr_tf_entry(qb, f->tf_size);
+            const float ga = one_bin ? 0.0f : clvr_walk_g(v, pa), gb = one_bin ? 0.0f : clvr_walk_g(v, pb);
+            const float tau = one_bin ? 0.5f * len * (sig_a + sig_b) : f->density * (gb - ga) / (k * tf_scale);
+            if (tau > 0.0f) {
+                /* The emission point: drawn in proportion to the
+                 * extinction and weighted by the transmittance there (thin
+                 * tets), or drawn in proportion to both (tau > 1/4). */
+                float want, wt;
+                if (tau <= 0.25f) {
+                    want = u * tau;
+                    wt = tau * clvr_exp_neg(want);
+                } else {
+                    wt = -expm1(-tau);
+                    want = -log1p(-u * wt);
+                }
+                float xs;
+                if (one_bin) {
+                    const float den = sig_a + sqrt(fmax(sig_a * sig_a + 2.0f * (sig_b - sig_a) / len * want, 0.0f));
+                    xs = den > 0.0f ? 2.0f * want / den : 0.0f;
+                } else {
+                    xs = len * (ps - pa) / (pb - pa);
+                }
+                const float xc = clamp(xs, 0.0f, len);
+                clvr_emit_add(v, acc, org, dir, w.t + xc, (*T * wt) * clvr_volume_tf(v, sa + k * xc).xyz);
+                *T *= clvr_exp_neg(tau);
+            }
+            if (*T < CLVR_URM_RR) {
+                if (clvr_rng_next(rng) * CLVR_URM_RR >= *T) {
+                    *T = 0.0f;
+                    *t_stop = t1;
+                    return 1;
+                }
+                *T = CLVR_URM_RR;
+            }
+        } else if (++zsteps > 4) {
+            /* A ray along an edge or through a vertex: the tets around it
+             * may hand it back and forth without moving on. A lookup a
+             * little further on picks one of them. */
+            const float tn = fmin(w.t + 8.0f * eps, t1);
+            *t_stop = w.t;
+            if (tn >= t1) return 1;
+            ++*nulls;
+            if (!clvr_walk_enter(v, &m, org, dir, tn, tn, &w)) return 0;
+            sa = NAN;
+            zsteps = 0;
+            continue;
+        }
+        w.t = tb;
+        sa = sb;
+        sig_a = sig_b;
+        *t_stop = w.t;
+        if (w.t >= t1) return 1;
+        const uint nb = v->adj[clvr_walk_slot(v, w.h.inst, &w.inst, w.e, kx)];
+        if (nb != CLVR_BVH_NOT_FOUND) {
+            if (!clvr_walk_goto(v, &m, &w, nb)) return 0;
+            continue;
+        }
+        /* A boundary face: the ray leaves the mesh here, or meets a face
+         * whose other side does not match (a non-conforming mesh). A
+         * lookup just past it; else, where the hull's crossings put a
+         * stretch outside the mesh after it, past that stretch. */
+        ++*nulls;
+        sa = NAN;
+        const float tx = w.t;
+        if (clvr_walk_enter(v, &m, org, dir, tx, fmin(tx + eps, t1), &w)) continue;
+        int i = 0;
+        while (i < ng && !(glo[i] <= tx + probe && ghi[i] > tx + probe)) ++i;
+        if (i == ng || ghi[i] >= t1) return i < ng; /* the rest is outside: done */
+        w.h = clvr_locate_hint_none();
+        if (!clvr_walk_enter(v, &m, org, dir, ghi[i], fmin(ghi[i] + probe, t1), &w)) return 0;
+    }
+    return 0;
+}
+
 /* One camera ray with the frame's estimator. u_primary (dimension 2 of the
  * low-discrepancy sampler, the caller's draw) drives the camera ray's first
  * free flight (delta) or quadrature offset (urm). ld: the frame's
@@ -1191,7 +1505,57 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
     float t0 = 0.0f, t1 = INFINITY;
     *guide = (float4)(bg.xyz, -1.0f);
 
-    if (f->estimator == CLVR_ESTIMATOR_URM) {
+    if (f->estimator == CLVR_ESTIMATOR_WALK) {
+        if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return bg;
+        float glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
+        int ng = 0;
+        if (f->hull_faces) {
+            ng = clvr_hull_gaps(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, &t0, &t1, glo, ghi);
+            if (ng == -1) return bg;
+            if (ng == -2) {
+                ng = 0;
+                if (!clvr_volume_hull_clip(v, org, dir, &t0, &t1)) return bg;
+            }
+        }
+        clvr_emit acc;
+        clvr_emit_begin(&acc, f->shadows != 0u, ld ? ld[4] : clvr_rng_next(rng));
+        float T, ts;
+        if (!clvr_walk_ray(v, org, dir, t0, t1, glo, ghi, ng, u_primary, rng, &acc, &T, &ts, samples, nulls) &&
+            T > 0.0f) {
+            /* urm finishes the ray; its sums join the walk's (its pick
+             * replaces the walk's in proportion to its weight). */
+            clvr_urm e;
+            clvr_gaps g;
+            g.n = 0;
+            const float Tend = clvr_urm_camera(v, &e, org, dir, ts, t1, u_primary, clvr_rng_next(rng), &g, rng,
+                                               samples, nulls);
+            acc.sum += T * e.sum;
+            acc.lit += T * e.lit;
+            const float wu = T * e.wsum;
+            if (wu > 0.0f && clvr_rng_next(rng) * (acc.wsum + wu) < wu) {
+                acc.pick = e.pick;
+                acc.pick_t = e.pick_t;
+                acc.pick_g = e.pick_g;
+                acc.pick_s = e.pick_s;
+            }
+            acc.wsum += wu;
+            acc.tsum += T * e.tsum;
+            T *= Tend;
+        }
+        float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * acc.sum;
+        if (f->shadows && acc.wsum > 0.0f) {
+            const float q = acc.pick_s > CLVR_URM_SHADOW_RR_SPREAD ? 1.0f : CLVR_URM_SHADOW_RR_Q;
+            c += f->light_intensity * acc.lit;
+            if (q >= 1.0f || clvr_rng_next(rng) < q) {
+                const float u_s = ld ? ld[3] : clvr_rng_next(rng);
+                const float lb = clvr_urm_light(v, org + dir * acc.pick_t, ldir, lo, hi, u_s, rng, samples, nulls, rays);
+                c += f->light_intensity * (lb - acc.pick_g) * acc.wsum * acc.pick / q;
+            }
+        }
+        *guide = (float4)(acc.sum + T * bg.xyz, acc.wsum > 0.0f ? acc.tsum / acc.wsum : -1.0f);
+        return (float4)(c + T * bg.xyz, 1.0f - T);
+    }
+    if (f->estimator != CLVR_ESTIMATOR_DELTA) {
         clvr_gaps g;
         if (!clvr_volume_clip_gaps(v, org, dir, lo, hi, &t0, &t1, &g)) return bg;
         clvr_urm e;

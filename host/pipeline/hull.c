@@ -2,6 +2,7 @@
 #include "hull.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -295,6 +296,63 @@ cleanup:
     free(ff);
     if (s != CLVR_OK) clvr_hull_release(cl, out);
     return s;
+}
+
+clvr_status clvr_adjacency_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_clustered *c, clvr_adjacency *out,
+                                 clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    memset(out, 0, sizeof *out);
+    uint32_t *ff = NULL;
+    cl_mem keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL;
+    clvr_pp pp;
+    int pp_made = 0;
+    if (c->num_instances == 0) return CLVR_OK;
+    ff = malloc((size_t)(c->num_instances + 1) * sizeof *ff);
+    if (!ff) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "face adjacency: out of host memory for the face layout");
+    CLVR_TRY(clvr_hull_face_first(c->host_instances, c->num_instances, ff, err));
+    const cl_uint ninst = (cl_uint)c->num_instances, nslots = ff[c->num_instances];
+    if (nslots == 0) goto cleanup;
+    /* The same keys and sort as the hull's build (24 bytes per face slot
+     * while it runs); kept: 4 bytes per face slot. */
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(ninst + 1) * 4, ff,
+                            "face adjacency layout", &out->face_first, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "face keys", &keys, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "face keys", &keys_tmp, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face slots", &vals, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face slots", &vals_tmp, err));
+    clvr_clustered_pieces pc;
+    clvr_clustered_get_pieces(c, &pc);
+    CLVR_TRY(clvr_pp_create(cl, &pp, err));
+    pp_made = 1;
+    CLVR_TRY(CLVR_CL_ARGS(k->hull_keys, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(out->face_first),
+                          CLVR_ARG(nslots), CLVR_ARG(keys), PIECE_ARGS(pc)));
+    CLVR_TRY(clvr_pp_launch(&pp, k->hull_keys, nslots, 64, &out->build_s, err));
+    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, nslots, 1, 0xffffffffull, &out->build_s, err));
+    clvr_cl_release(cl, &keys_tmp);
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face adjacency", &out->adj, err));
+    CLVR_TRY(CLVR_CL_ARGS(k->hull_adjacency, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(out->face_first),
+                          CLVR_ARG(nslots), CLVR_ARG(keys), CLVR_ARG(vals), CLVR_ARG(out->adj), PIECE_ARGS(pc)));
+    CLVR_TRY(clvr_pp_launch(&pp, k->hull_adjacency, nslots, 64, &out->build_s, err));
+    out->num_slots = nslots;
+    out->bytes = (uint64_t)nslots * 4u + (uint64_t)(ninst + 1) * 4u;
+cleanup:
+    if (pp_made) clvr_pp_destroy(&pp);
+    clvr_cl_release(cl, &keys);
+    clvr_cl_release(cl, &keys_tmp);
+    clvr_cl_release(cl, &vals);
+    clvr_cl_release(cl, &vals_tmp);
+    free(ff);
+    if (s != CLVR_OK) clvr_adjacency_release(cl, out);
+    return s;
+}
+
+void clvr_adjacency_release(clvr_cl *cl, clvr_adjacency *a)
+{
+    if (!a) return;
+    clvr_cl_release(cl, &a->adj);
+    clvr_cl_release(cl, &a->face_first);
+    memset(a, 0, sizeof *a);
 }
 
 typedef struct key_slot {

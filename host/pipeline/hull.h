@@ -43,6 +43,19 @@ typedef struct clvr_hull {
     int kept;            /* faces and nodes are there for the renderer */
 } clvr_hull;
 
+/* Face adjacency, for the walk estimator (kernels/render_volume.h): the
+ * same face keys and sort as the hull's build, then per face slot the
+ * sorted element id across the face (kernels/hull.h, clvr_hull_twin), or
+ * CLVR_BVH_NOT_FOUND on the boundary. 4 bytes per face slot (16 per tet)
+ * kept; 24 per face slot while it builds. */
+typedef struct clvr_adjacency {
+    cl_mem adj;          /* uint [num_slots] */
+    cl_mem face_first;   /* uint [num_instances + 1]: first slot of each instance (clvr_hull_face_first) */
+    uint32_t num_slots;
+    uint64_t bytes;      /* device bytes kept */
+    double build_s;      /* device seconds of its kernels */
+} clvr_adjacency;
+
 /* How clvr_hull_build treats a mesh: CLVR_HULL_AUTO (the default) first
  * runs the probe's rays through the sampling clusters' boxes and builds
  * nothing when their empty fraction is under CLVR_HULL_MIN_BOX_EMPTY (the boxes
@@ -103,6 +116,13 @@ clvr_status clvr_hull_gap_rays(clvr_cl *cl, const clvr_bvh_kernels *k, const clv
                                const float *dir, uint32_t n, float *out, clvr_error *err);
 
 void clvr_hull_release(clvr_cl *cl, clvr_hull *h); /* accepts NULL and half-built */
+
+/* Builds c's face adjacency on the device. A mesh without elements gets
+ * none (NULL buffers). Errors: CLVR_ERR_OVERFLOW past 2^31 - 1 faces,
+ * device memory and OpenCL errors. */
+clvr_status clvr_adjacency_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_clustered *c, clvr_adjacency *out,
+                                 clvr_error *err);
+void clvr_adjacency_release(clvr_cl *cl, clvr_adjacency *a); /* accepts NULL and half-built */
 /* Device bytes the renderer keeps for the hull: faces and tree, 0 when
  * none are kept. */
 uint64_t clvr_hull_bytes(const clvr_hull *h);

@@ -1,5 +1,6 @@
 #include "render.h"
 
+#include "hull.h"
 #include "majorant.h"
 
 #include <math.h>
@@ -29,6 +30,8 @@ struct clvr_renderer {
     cl_mem mpi_rec, mpi_pick, mpi_tau, mpi_counters;
     size_t mpi_npix;           /* pixels the MPI buffers hold */
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
+    cl_mem tf_prefix;          /* walk: prefix sums of the table's extinction (kernels/render_volume.h) */
+    clvr_adjacency adj;        /* walk: face adjacency, built at the first frame settings that ask for walk */
     cl_mem ctl;                /* per pixel, the sums of its controls (float4, kernels/pixel_cv.h) */
     cl_mem image;              /* the image clvr_renderer_read reads: means minus their control variates */
     cl_kernel k_cv;            /* kernels/render.cl: clvr_pixel_cv_image */
@@ -47,7 +50,7 @@ struct clvr_renderer {
 };
 
 static const char *const method_names[CLVR_RENDER_COUNT] = {"march", "track", "bins", "dda"};
-static const char *const estimator_names[CLVR_ESTIMATOR_COUNT] = {"delta", "urm"};
+static const char *const estimator_names[CLVR_ESTIMATOR_COUNT] = {"delta", "urm", "walk"};
 
 const char *clvr_render_method_name(uint32_t m) { return m < CLVR_RENDER_COUNT ? method_names[m] : "?"; }
 const char *clvr_render_estimator_name(uint32_t e) { return e < CLVR_ESTIMATOR_COUNT ? estimator_names[e] : "?"; }
@@ -227,6 +230,15 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->height = set->height;
     f->method = set->method;
     f->estimator = set->estimator;
+    if (set->estimator == CLVR_ESTIMATOR_WALK) {
+        /* The walk needs the face adjacency and tets; a mesh without tets
+         * renders with urm (what the walk falls back to anyway). */
+        int tets = 0;
+        for (uint64_t i = 0; i < m->num_instances && !tets; ++i) tets = m->host_instances[i].type == CLVR_CELL_TET;
+        if (!tets) f->estimator = CLVR_ESTIMATOR_URM;
+        else if (!r->adj.adj) CLVR_TRY(clvr_adjacency_build(r->cl, &r->bvh->kernels, m, &r->adj, err));
+    }
+    f->num_instances = (clvr_u32)m->num_instances;
     f->urm_steps = set->urm_steps;
     f->urm_kappa = set->urm_kappa;
     f->seed_lo = (clvr_u32)set->seed;
@@ -327,10 +339,11 @@ void clvr_renderer_destroy(clvr_renderer *r)
     clvr_cl_release(r->cl, &r->mpi_tau);
     clvr_cl_release(r->cl, &r->mpi_counters);
     clvr_cl_release(r->cl, &r->light_buf);
+    clvr_adjacency_release(r->cl, &r->adj);
     if (r->prog_render) clReleaseProgram(r->prog_render);
     clvr_majorants_destroy(r->maj);
     cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum,  &r->accum_sq,
-                      &r->counters,  &r->guides,  &r->ctl, &r->image};
+                      &r->counters,  &r->guides,  &r->ctl, &r->image, &r->tf_prefix};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -356,12 +369,35 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
                               n, lo, hi, density);
     if (n != r->tf_n) {
         clvr_cl_release(r->cl, &r->tf_buf);
+        clvr_cl_release(r->cl, &r->tf_prefix);
         r->tf_n = 0;
         CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_ONLY, (size_t)n * 4 * sizeof(float), NULL, "transfer function",
                                 &r->tf_buf, err));
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_ONLY, (size_t)n * sizeof(float), NULL,
+                                "transfer function prefix sums", &r->tf_prefix, err));
     }
     CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->tf_buf, CL_TRUE, 0, (size_t)n * 4 * sizeof(float), rgba, 0,
                                        NULL, NULL));
+    {
+        /* P[i]: the integral of the table's extinction (w, before the
+         * density) from entry 0 to entry i, in entries (the trapezoids of
+         * the linear interpolation), summed in double. */
+        float *pre = malloc((size_t)n * sizeof *pre);
+        if (!pre) {
+            s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of host memory for the transfer function");
+            goto cleanup;
+        }
+        double acc = 0.0;
+        pre[0] = 0.0f;
+        for (uint32_t i = 1; i < n; ++i) {
+            acc += 0.5 * ((double)rgba[4 * (i - 1) + 3] + (double)rgba[4 * i + 3]);
+            pre[i] = (float)acc;
+        }
+        cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->tf_prefix, CL_TRUE, 0, (size_t)n * sizeof(float), pre, 0,
+                                         NULL, NULL);
+        free(pre);
+        CLVR_CL_CHECK(rc);
+    }
     r->tf_n = n;
     r->frame.tf_size = n;
     r->frame.tf_lo = lo;
@@ -392,12 +428,14 @@ static volume_bufs volume_of(const clvr_renderer *r)
     cl_mem eb[CLVR_MAX_SPLITS];
     clvr_clustered_get_pieces(m, &pc);
     clvr_accel_get_ebox_pieces(m, b, eb);
-    return (volume_bufs){.tf = r->tf_buf, .vertices = pc.vertices[0], .idx16 = pc.idx16[0], .idx32 = pc.idx32[0],
+    return (volume_bufs){.tf = r->tf_buf, .tf_prefix = r->tf_prefix, .vertices = pc.vertices[0], .idx16 = pc.idx16[0], .idx32 = pc.idx32[0],
                          .instances = m->instances, .tlas = b->two_level.tlas, .blas = b->two_level.blas,
                          .grid = maj.cells, .blocks = maj.blocks, .sampling_bvh = b->sampling_nodes,
                          .sampling = m->sampling, .cluster_majorants = maj.clusters, .light = r->light_buf,
                          .ebox = eb[0], .hull_bvh = b->hull.nodes ? b->hull.nodes : r->tf_buf,
-                         .hull = b->hull.faces ? b->hull.faces : r->tf_buf, .vertices1 = pc.vertices[1], .vertices2 = pc.vertices[2],
+                         .hull = b->hull.faces ? b->hull.faces : r->tf_buf,
+                         .face_first = r->adj.face_first ? r->adj.face_first : r->tf_buf,
+                         .adj = r->adj.adj ? r->adj.adj : r->tf_buf, .vertices1 = pc.vertices[1], .vertices2 = pc.vertices[2],
                          .vertices3 = pc.vertices[3], .idx16_1 = pc.idx16[1], .idx16_2 = pc.idx16[2],
                          .idx16_3 = pc.idx16[3], .idx32_1 = pc.idx32[1], .idx32_2 = pc.idx32[2],
                          .idx32_3 = pc.idx32[3], .ebox1 = eb[1], .ebox2 = eb[2], .ebox3 = eb[3]};
@@ -412,7 +450,7 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
     clvr_status s = CLVR_OK;
     cl_event evt = NULL;
     volume_bufs vol = volume_of(r);
-    if (!r->light_valid && r->frame.shadows && r->frame.estimator == CLVR_ESTIMATOR_URM &&
+    if (!r->light_valid && r->frame.shadows && r->frame.estimator != CLVR_ESTIMATOR_DELTA &&
         r->frame.method != CLVR_RENDER_MARCH) {
         /* The sweep (kernels/render_volume.h, clvr_light_sweep): one launch
          * per CLVR_LIGHT_SWEEP_SLICES slices, in order from the light, each
