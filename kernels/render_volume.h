@@ -1436,6 +1436,7 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
                     const float den = sig_a + sqrt(fmax(sig_a * sig_a + 2.0f * (sig_b - sig_a) / len * want, 0.0f));
                     xs = den > 0.0f ? 2.0f * want / den : 0.0f;
                 } else {
+                    const float ps = clvr_walk_g_inverse(v, ga + want / tau * (gb - ga));
                     xs = len * (ps - pa) / (pb - pa);
                 }
                 const float xc = clamp(xs, 0.0f, len);

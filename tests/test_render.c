@@ -572,7 +572,39 @@ static void test_step_medium(clvr_cl *cl, double below, double above)
  * scalar at its middle, in double). A span whose slope is wrong, or that
  * reaches past its tet's exit, fails here (measured: slope 0, exit twice as
  * far); the homogeneous and ramp fields cannot see either. */
-static double tet_chord_tau(const clvr_mesh *m, const float *o, const float *d, double sigma_max)
+/* Integral over s in [s0, s1] (either order) of the extinction of an
+ * n-entry table (w at entries 0 .. n-1 spread over [lo, hi], linear in
+ * between, held at the ends outside), in double: split where s crosses an
+ * entry, each piece a trapezoid, exact for a linear piece. */
+static double table_integral(const float *table, uint32_t n, double lo, double hi, double s0, double s1)
+{
+    if (s0 > s1) { const double x = s0; s0 = s1; s1 = x; }
+    const double h = (hi - lo) / (double)(n - 1);
+    double acc = 0, a = s0;
+    while (a < s1) {
+        double b = s1;
+        const double pa = (a - lo) / h; /* the next entry's position after a */
+        if (pa < 0) b = fmin(b, lo);
+        else if (pa < (double)(n - 1)) b = fmin(b, lo + h * (floor(pa) + 1.0));
+        if (!(b > a)) b = s1;
+        double w2[2];
+        const double xs[2] = {a, b};
+        for (int k = 0; k < 2; ++k) {
+            const double p = fmin(fmax((xs[k] - lo) / h, 0.0), (double)(n - 1));
+            uint32_t i = (uint32_t)p;
+            if (i > n - 2) i = n - 2;
+            w2[k] = table[4 * i + 3] + (p - i) * (table[4 * (i + 1) + 3] - table[4 * i + 3]);
+        }
+        acc += 0.5 * (w2[0] + w2[1]) * (b - a);
+        a = b;
+    }
+    return acc;
+}
+
+/* Optical depth along o + t d over the tets of m (on each chord the scalar
+ * is linear) for the table at density 1. */
+static double tet_chord_tau(const clvr_mesh *m, const float *o, const float *d, const float *table, uint32_t n,
+                            double lo, double hi)
 {
     double tau = 0;
     const uint32_t *ix = m->indices[CLVR_CELL_TET];
@@ -603,18 +635,22 @@ static double tet_chord_tau(const clvr_mesh *m, const float *o, const float *d, 
             al[0] -= al[i + 1];
             be[0] -= be[i + 1];
         }
-        double lo = 0, hi = 1e30;
+        double tlo = 0, thi = 1e30;
         int empty = 0;
         for (int i = 0; i < 4; ++i) {
-            if (be[i] > 0) lo = fmax(lo, -al[i] / be[i]);
-            else if (be[i] < 0) hi = fmin(hi, -al[i] / be[i]);
+            if (be[i] > 0) tlo = fmax(tlo, -al[i] / be[i]);
+            else if (be[i] < 0) thi = fmin(thi, -al[i] / be[i]);
             else if (al[i] < 0) empty = 1;
         }
-        if (empty || hi <= lo) continue;
-        const double mid = 0.5 * (lo + hi);
-        double s = 0;
-        for (int i = 0; i < 4; ++i) s += (al[i] + be[i] * mid) * sv[i];
-        tau += sigma_max * s * (hi - lo);
+        if (empty || thi <= tlo) continue;
+        double s0 = 0, s1 = 0;
+        for (int i = 0; i < 4; ++i) {
+            s0 += (al[i] + be[i] * tlo) * sv[i];
+            s1 += (al[i] + be[i] * thi) * sv[i];
+        }
+        /* a flat scalar along the chord: the extinction at s0 times the length */
+        tau += fabs(s1 - s0) > 1e-9 ? table_integral(table, n, lo, hi, s0, s1) * (thi - tlo) / fabs(s1 - s0)
+                                    : table_integral(table, n, lo, hi, s0, s0 + 1e-9) * 1e9 * (thi - tlo);
     }
     return tau;
 }
@@ -622,7 +658,6 @@ static double tet_chord_tau(const clvr_mesh *m, const float *o, const float *d, 
 static void test_tet_spans(clvr_cl *cl)
 {
     const uint32_t W = 24, H = 24, N = 400;
-    const double sigma_max = 3.0;
     clvr_error err = {0};
     clvr_mesh m;
     if (make_box(3, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;
@@ -632,44 +667,56 @@ static void test_tet_spans(clvr_cl *cl)
     m.scalars[0] = 0.0f; /* the table's range below is [0, 1] whatever the draw */
     fixture fx;
     if (fixture_open(&fx, cl, &m, W, H)) return;
-    const float table[8] = {1, 1, 1, 0, 1, 1, 1, (float)sigma_max};
-    set_table(&fx, table, 2, 0.0f, 1.0f);
     clvr_camera cam;
     const float eye[3] = {2.2f, 1.8f, 2.6f}, at[3] = {0.5f, 0.5f, 0.5f}, up[3] = {0, 1, 0};
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 35.0f, W, H, &err), CLVR_OK, &err);
     TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
     fx.set.shadows = 0;
     fx.set.pixel_filter = CLVR_PIXEL_POINT;
-    double expect[24 * 24];
-    for (uint32_t y = 0; y < H; ++y)
-        for (uint32_t x = 0; x < W; ++x) {
-            float o[3], d[3];
-            clvr_camera_ray(&cam, x + 0.5f, y + 0.5f, o, d);
-            const double e = 1e-3; /* a centre ray grazing the box's silhouette (in float): skip */
-            const int graze = (unit_box_chord(&cam, x + 0.5f - e, y + 0.5f) > 0) !=
-                                  (unit_box_chord(&cam, x + 0.5f + e, y + 0.5f) > 0) ||
-                              (unit_box_chord(&cam, x + 0.5f, y + 0.5f - e) > 0) !=
-                                  (unit_box_chord(&cam, x + 0.5f, y + 0.5f + e) > 0);
-            expect[y * W + x] = graze ? -1.0 : 1.0 - exp(-tet_chord_tau(&fx.mesh, o, d, sigma_max));
+    /* Two tables: extinction proportional to the scalar (one bin), and
+     * seven entries over [0.15, 0.85] with zeros and a spike, so that a
+     * chord crosses several bins and both clamped ends (the walk's prefix
+     * sums and their inverse, kernels/render_volume.h). */
+    static const float ramp[8] = {1, 1, 1, 0, 1, 1, 1, 3.0f};
+    static const float bumpy[28] = {1, 1, 1, 0.5f, 1, 0.5f, 1, 0, 0.5f, 1, 1, 3.0f, 1, 1, 1, 0.2f,
+                                    1, 1, 0, 6.0f, 0.2f, 1, 1, 0, 1, 1, 1, 1.5f};
+    const struct { const float *table; uint32_t n; float lo, hi; const char *name; } tables[] = {
+        {ramp, 2, 0.0f, 1.0f, "ramp"}, {bumpy, 7, 0.15f, 0.85f, "7-entry table"}};
+    for (size_t ti = 0; ti < sizeof tables / sizeof tables[0]; ++ti) {
+        set_table(&fx, tables[ti].table, tables[ti].n, tables[ti].lo, tables[ti].hi);
+        double expect[24 * 24];
+        for (uint32_t y = 0; y < H; ++y)
+            for (uint32_t x = 0; x < W; ++x) {
+                float o[3], d[3];
+                clvr_camera_ray(&cam, x + 0.5f, y + 0.5f, o, d);
+                const double e = 1e-3; /* a centre ray grazing the box's silhouette (in float): skip */
+                const int graze = (unit_box_chord(&cam, x + 0.5f - e, y + 0.5f) > 0) !=
+                                      (unit_box_chord(&cam, x + 0.5f + e, y + 0.5f) > 0) ||
+                                  (unit_box_chord(&cam, x + 0.5f, y + 0.5f - e) > 0) !=
+                                      (unit_box_chord(&cam, x + 0.5f, y + 0.5f + e) > 0);
+                expect[y * W + x] = graze ? -1.0
+                                          : 1.0 - exp(-tet_chord_tau(&fx.mesh, o, d, tables[ti].table, tables[ti].n,
+                                                                     tables[ti].lo, tables[ti].hi));
+            }
+        for (uint32_t est = 0; est < CLVR_ESTIMATOR_COUNT; ++est) {
+            fx.set.estimator = est;
+            fx.set.method = CLVR_RENDER_DDA;
+            float *mean, *var;
+            if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
+            char what[96];
+            snprintf(what, sizeof what, "tet spans, %s, %s", tables[ti].name, clvr_render_estimator_name(est));
+            int tested, inside = 0;
+            double dsum, vsum;
+            const int bad = opacity_misses(what, est, mean, var, N, expect, (size_t)W * H, &tested, &dsum, &vsum);
+            for (size_t i = 0; i < (size_t)W * H; ++i) inside += expect[i] > 0.05;
+            printf("%s: %d pixels against the exact chord sums, %d off, mean difference %.5f (%.1f SE)\n", what,
+                   tested, bad, dsum / tested, fabs(dsum) / sqrt(vsum));
+            TU_CHECK_EQ_U64(bad, 0);
+            TU_CHECK(tested >= 400 && inside >= 200);
+            TU_CHECK(fabs(dsum) <= K_SIGMA * sqrt(vsum) + 1e-4 * tested);
+            free(mean);
+            free(var);
         }
-    for (uint32_t est = 0; est < CLVR_ESTIMATOR_COUNT; ++est) {
-        fx.set.estimator = est;
-        fx.set.method = CLVR_RENDER_DDA;
-        float *mean, *var;
-        if (render_stats(&fx, N, &mean, &var)) { free(mean); free(var); break; }
-        char what[64];
-        snprintf(what, sizeof what, "tet spans %s", clvr_render_estimator_name(est));
-        int tested, inside = 0;
-        double dsum, vsum;
-        const int bad = opacity_misses(what, est, mean, var, N, expect, (size_t)W * H, &tested, &dsum, &vsum);
-        for (size_t i = 0; i < (size_t)W * H; ++i) inside += expect[i] > 0.05;
-        printf("tet spans, %s: %d pixels against the exact chord sums, %d off, mean difference %.5f (%.1f SE)\n",
-               clvr_render_estimator_name(est), tested, bad, dsum / tested, fabs(dsum) / sqrt(vsum));
-        TU_CHECK_EQ_U64(bad, 0);
-        TU_CHECK(tested >= 400 && inside >= 200);
-        TU_CHECK(fabs(dsum) <= K_SIGMA * sqrt(vsum) + 1e-4 * tested);
-        free(mean);
-        free(var);
     }
     fixture_close(&fx);
 }
@@ -1014,9 +1061,9 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
              * the bounds are valid. Per block, not per pixel: a pixel where
              * delta tracking met no collision in N frames has a sample
              * variance of 0, which no bound can use; a block pools pixels. */
-            snprintf(what, sizeof what, "%s shadows %s: urm vs delta (track)", name, shadows ? "on" : "off");
+            snprintf(what, sizeof what, "%s shadows %s: %s vs delta (track)", name, shadows ? "on" : "off", en);
             TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, 4), 0);
-            snprintf(what, sizeof what, "%s shadows %s: urm dda vs delta track", name, shadows ? "on" : "off");
+            snprintf(what, sizeof what, "%s shadows %s: %s dda vs delta track", name, shadows ? "on" : "off", en);
             TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, 4), 0);
             if (shadows) {
                 /* A light grid of one cell: G is one number, flat
@@ -1029,7 +1076,7 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
                 fx.set.seed = 18 + 100 * est;
                 render_stats(&fx, N, &m1, &v1);
                 fx.set.light_res = CLVR_URM_DEFAULT_LIGHT_RES;
-                snprintf(what, sizeof what, "%s shadows on: urm dda, 1-cell light grid, vs delta track", name);
+                snprintf(what, sizeof what, "%s shadows on: %s dda, 1-cell light grid, vs delta track", name, en);
                 TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, 4), 0);
                 free(m1);
                 free(v1);
