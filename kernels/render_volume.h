@@ -1270,7 +1270,8 @@ typedef struct clvr_walk {
 } clvr_walk;
 
 /* Points the walk at element nb (global sorted id), finding its instance
- * (instances are sorted by first element); 0 when it is not a tet. */
+ * (instances are sorted by first element); 0, with w unchanged, when it is
+ * not a tet. */
 inline int clvr_walk_goto(const clvr_volume *v, const clvr_mesh_view *m, clvr_walk *w, uint nb)
 {
     if (nb - w->inst.first_element >= w->inst.num_elements) {
@@ -1280,8 +1281,8 @@ inline int clvr_walk_goto(const clvr_volume *v, const clvr_mesh_view *m, clvr_wa
             if (m->instances[mid].first_element <= nb) lo = mid;
             else hi = mid;
         }
+        if (m->instances[lo].type != CLVR_CELL_TET) return 0; /* w unchanged */
         w->inst = m->instances[lo];
-        if (w->inst.type != CLVR_CELL_TET) return 0;
         w->pa = clvr_view_piece(m, &w->inst);
         /* The lookup hint moves with it (its node is a node of this
          * instance's tree). */
@@ -1416,7 +1417,7 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
              * extinction is linear over the tet, its integral the trapezoid,
              * its inverse a quadratic; else the prefix sums. */
             const int one_bin = (pa <= 0.0f && pb <= 0.0f) || (pa >= last && pb >= last) ||
-                                clvr_tf_entry(qa, f->tf_size) == clvr_tf_entry(qb, f->tf_size);
+                                (qa == pa && qb == pb && clvr_tf_entry(qa, f->tf_size) == clvr_tf_entry(qb, f->tf_size));
             const float ga = one_bin ? 0.0f : clvr_walk_g(v, pa), gb = one_bin ? 0.0f : clvr_walk_g(v, pb);
             const float tau = one_bin ? 0.5f * len * (sig_a + sig_b) : f->density * (gb - ga) / (k * tf_scale);
             if (tau > 0.0f) {
