@@ -20,7 +20,7 @@
 #                               [--mappers LIST] [--sampler ld|independent] [--density D]
 #                               [--estimators LIST] [--pixel-filter box|point] [--tag NAME]
 #   defaults: build, /tmp/clvr-bench, 1M (tets of clvr-gen cellvar), 512x512, 128, 256, 3,
-#             raycast,pt,zsweep, ld, 1, delta,urm, box
+#             raycast,pt,zsweep, ld, 1, delta,urm,walk, box
 #   --pixel-filter point: clvr's image (and its reference) is the ray through each
 #           pixel's centre, the image VTK's mappers draw, instead of the antialiased
 #           pixel mean (box, clvr's default: the stricter figure, jitter noise included).
@@ -40,7 +40,7 @@ REF=128
 MAXSPP=256
 MESH=
 DENSITY=1
-ESTIMATORS=delta,urm
+ESTIMATORS=delta,urm,walk
 TAG=
 VFRAMES=3
 MAPPERS=raycast,pt,zsweep

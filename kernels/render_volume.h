@@ -1348,13 +1348,14 @@ inline void clvr_emit_begin(clvr_emit *a, int shadows, float u_pick)
 }
 
 /* Adds colour weight g (rgb, transmittance applied) emitted at org + t dir. */
-inline void clvr_emit_add(const clvr_volume *v, clvr_emit *a, float3 org, float3 dir, float t, float3 g)
+/* With shadows, G and spread: the light grid's value there (any fixed
+ * function of the position along the ray keeps the estimate unbiased: the
+ * walk holds one value over a few tets, see CLVR_WALK_LIGHT_HOLD). */
+inline void clvr_emit_add(clvr_emit *a, float t, float3 g, float G, float spread)
 {
     a->sum += g;
     const float ww = clvr_urm_lum(g);
     if (!(ww > 0.0f)) return;
-    float spread = 0.0f;
-    const float G = a->shadows ? clvr_light_at(v, org + dir * t, &spread) : 1.0f;
     a->lit += G * g;
     a->wsum += ww;
     a->tsum += ww * t;
@@ -1365,6 +1366,16 @@ inline void clvr_emit_add(const clvr_volume *v, clvr_emit *a, float3 org, float3
         a->pick_s = spread;
     }
 }
+
+/* With shadows the walk evaluates the light grid (the lit terms' control)
+ * again only once its emission points have moved this fraction of a grid
+ * cell away from the last evaluation: tets are often far smaller than the
+ * cells. Any value of the control keeps the estimate unbiased (the
+ * correction shadow ray takes the same value), a closer one lowers its
+ * variance. */
+#ifndef CLVR_WALK_LIGHT_HOLD
+#define CLVR_WALK_LIGHT_HOLD 0.25f
+#endif
 
 /* Walks [t0, t1] (raw hull gaps glo/ghi, ng of them, tell where the ray is
  * outside between two crossings): *sum the emission with the
@@ -1384,8 +1395,11 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
     *T = 1.0f;
     *t_stop = t0;
     if (!clvr_walk_enter(v, &m, org, dir, t0, fmin(t0 + probe, t1), &w)) return 0;
-    float sa = NAN, sig_a = 0.0f;
+    float sa = NAN, sig_a = 0.0f, G = 1.0f, spread = 0.0f, t_G = INFINITY;
     int zsteps = 0;
+    /* A quarter of the light grid's smallest cell, in units of t. */
+    const float3 cell = (vload3(0, f->grid_hi) - vload3(0, f->grid_lo)) / (float)f->light_res;
+    const float hold = CLVR_WALK_LIGHT_HOLD * fmin(fmin(cell.x, cell.y), cell.z) / length(dir);
     for (int iter = 0; iter < 65536; ++iter) {
         clvr_vec4 vtx[4];
         float l[4], g[4];
@@ -1441,7 +1455,13 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
                     xs = len * (ps - pa) / (pb - pa);
                 }
                 const float xc = clamp(xs, 0.0f, len);
-                clvr_emit_add(v, acc, org, dir, w.t + xc, (*T * wt) * clvr_volume_tf(v, sa + k * xc).xyz);
+                if (acc->shadows && !(fabs(w.t + xc - t_G) <= hold)) {
+                    /* the light grid here, held while the points stay within
+                     * `hold` of this one along the ray */
+                    t_G = w.t + xc;
+                    G = clvr_light_at(v, org + dir * t_G, &spread);
+                }
+                clvr_emit_add(acc, w.t + xc, (*T * wt) * clvr_volume_tf(v, sa + k * xc).xyz, G, spread);
                 *T *= clvr_exp_neg(tau);
             }
             if (*T < CLVR_URM_RR) {

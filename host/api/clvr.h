@@ -48,12 +48,13 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 4
+#define CLVR_API_VERSION_MINOR 5
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
  * function file's window: what the clvr program needs beyond 1.1, so that it
- * uses this header alone), 1003 is 1.3 (the pixel filter). */
+ * uses this header alone), 1003 is 1.3 (the pixel filter), 1004 is 1.4 (the
+ * denoiser), 1005 is 1.5 (the walk estimator: one more estimator name). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -235,7 +236,8 @@ CLVR_API clvr_result clvr_tracer_set_light(clvr_tracer *tr, const float dir[3], 
 /* Linear background colour (3 finite floats >= 0). */
 CLVR_API clvr_result clvr_tracer_set_background(clvr_tracer *tr, const float rgb[3], clvr_message *msg);
 /* Method by name ("march", "track", "bins" or "dda", as the
- * program's --method; NULL keeps it) and estimator ("delta" or "urm", --estimator; NULL
+ * program's --method; NULL keeps it) and estimator ("delta", "urm" or, since 1.5,
+ * "walk", --estimator; NULL
  * keeps the current one). Unknown names: ERR_USAGE listing the names. */
 CLVR_API clvr_result clvr_tracer_set_method(clvr_tracer *tr, const char *method, const char *estimator,
                                             clvr_message *msg);
@@ -475,7 +477,7 @@ CLVR_API clvr_scene *clvr_tracer_scene(clvr_tracer *tr);
 struct clvr_tracer_settings {
     uint32_t size;
     char method[16];          /* "march", "track", "bins", "dda" */
-    char estimator[16];       /* "delta", "urm" (track, bins, dda) */
+    char estimator[16];       /* "delta", "urm", "walk" (since 1.5) (track, bins, dda) */
     char sampler[16];         /* "ld" (low discrepancy across frames), "independent" */
     uint64_t seed;
     uint32_t urm_steps;       /* urm: minimum quadrature points per ray, >= 1 */
@@ -615,7 +617,7 @@ CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);
 /* --- names of settings (1.2) --------------------------------------------- */
 
 /* The names a setting takes, by index: setting "method" (march, track,
- * bins, dda), "estimator" (delta, urm), "sampler" (independent, ld),
+ * bins, dda), "estimator" (delta, urm, walk since 1.5), "sampler" (independent, ld),
  * "tonemap" (none, aces, filmic), "element_boxes" (auto, on, off: index =
  * CLVR_ELEMENT_BOXES_*) or, since 1.3, "pixel_filter" (box, point). Static string; NULL for an index past the end or an
  * unknown setting. Indices are stable within a major version (new names
