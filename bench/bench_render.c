@@ -118,6 +118,7 @@ typedef struct scene_gpu {
     float lo[3], hi[3];
     uint64_t elements;
     double preprocess_s;
+    int adjacency_told; /* the walk's adjacency reported once */
 } scene_gpu;
 
 static void scene_release(clvr_cl *cl, scene_gpu *g)
@@ -202,6 +203,18 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     if (s == CLVR_OK) s = clvr_renderer_set_camera(*out, &cam, err);
     if (s == CLVR_OK) s = clvr_renderer_set_tf(*out, g->table, g->table_n, g->tf.range_lo, g->tf.range_hi,
                                                g->tf.density, err);
+    if (s == CLVR_OK && (c->estimator == CLVR_ESTIMATOR_WALK || (c->estimator == CLVR_ESTIMATOR_AUTO && !rs.shadows)) &&
+        !g->adjacency_told) {
+        uint64_t bytes;
+        double build_s;
+        const char *skipped;
+        clvr_renderer_adjacency(*out, &bytes, &build_s, &skipped);
+        if (*skipped) fprintf(stderr, "bench_render: walk renders as urm: %s\n", skipped);
+        else
+            fprintf(stderr, "bench_render: face adjacency for walk: %.1f MB (%.1f bytes per element), built in %.3f s "
+                    "device\n", (double)bytes / 1e6, g->elements ? (double)bytes / (double)g->elements : 0.0, build_s);
+        g->adjacency_told = 1;
+    }
     if (s != CLVR_OK) {
         clvr_renderer_destroy(*out);
         *out = NULL;

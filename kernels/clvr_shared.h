@@ -449,12 +449,19 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* Estimators, the values of clvr_frame.estimator (track, bins and dda; march
  * has its own): delta: delta tracking, a 0/1 collision and a 0/1 shadow
  * visibility; urm: unbiased ray marching, a weighted quadrature with residual
- * ratio-tracked transmittance (kernels/render_volume.h). Same expected value;
+ * ratio-tracked transmittance; walk: tet by tet across shared faces, each
+ * tet's extinction integrated exactly (kernels/render_volume.h). Same expected value;
  * names in clvr_render_estimator_name (host/pipeline/render.c), in this order. */
 #define CLVR_ESTIMATOR_DELTA 0u
 #define CLVR_ESTIMATOR_URM 1u
 #define CLVR_ESTIMATOR_WALK 2u
-#define CLVR_ESTIMATOR_COUNT 3u
+/* auto (the default): walk without shadows, urm with (measured: without
+ * shadows walk converges faster per second on every tet mesh measured; with
+ * shadows their shared correction ray's noise dominates, and urm's cheaper
+ * frames reach 2% first on most). Settings only: the renderer resolves it
+ * (host/pipeline/render.c), a frame never carries it. */
+#define CLVR_ESTIMATOR_AUTO 3u
+#define CLVR_ESTIMATOR_COUNT 4u
 /* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
  * at least this many quadrature points per ray, and at most this much
  * majorant optical depth between two of them. */

@@ -73,7 +73,7 @@ static void test_names(void)
         const char *names[5];
     } tables[] = {
         {"method", {"march", "track", "bins", "dda", NULL}},
-        {"estimator", {"delta", "urm", "walk", NULL}},
+        {"estimator", {"delta", "urm", "walk", "auto", NULL}},
         {"sampler", {"independent", "ld", NULL}},
         {"tonemap", {"none", "aces", "filmic", NULL}},
         {"element_boxes", {"auto", "on", "off", NULL}},

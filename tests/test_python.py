@@ -418,7 +418,7 @@ def test_scene_settings(ctx):
 
 
 # clvr.h's comment on clvr_setting_name: each setting's names in index order.
-SETTING_NAMES = {"method": ["march", "track", "bins", "dda"], "estimator": ["delta", "urm", "walk"],
+SETTING_NAMES = {"method": ["march", "track", "bins", "dda"], "estimator": ["delta", "urm", "walk", "auto"],
                  "sampler": ["independent", "ld"], "tonemap": ["none", "aces", "filmic"],
                  "element_boxes": ["auto", "on", "off"]}
 

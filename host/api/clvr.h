@@ -54,7 +54,8 @@ extern "C" {
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
  * function file's window: what the clvr program needs beyond 1.1, so that it
  * uses this header alone), 1003 is 1.3 (the pixel filter), 1004 is 1.4 (the
- * denoiser), 1005 is 1.5 (the walk estimator: one more estimator name). */
+ * denoiser), 1005 is 1.5 (the walk estimator, and auto, the default: two more
+ * estimator names). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -237,7 +238,7 @@ CLVR_API clvr_result clvr_tracer_set_light(clvr_tracer *tr, const float dir[3], 
 CLVR_API clvr_result clvr_tracer_set_background(clvr_tracer *tr, const float rgb[3], clvr_message *msg);
 /* Method by name ("march", "track", "bins" or "dda", as the
  * program's --method; NULL keeps it) and estimator ("delta", "urm" or, since 1.5,
- * "walk", --estimator; NULL
+ * "walk" and "auto", --estimator; NULL
  * keeps the current one). Unknown names: ERR_USAGE listing the names. */
 CLVR_API clvr_result clvr_tracer_set_method(clvr_tracer *tr, const char *method, const char *estimator,
                                             clvr_message *msg);
@@ -477,7 +478,7 @@ CLVR_API clvr_scene *clvr_tracer_scene(clvr_tracer *tr);
 struct clvr_tracer_settings {
     uint32_t size;
     char method[16];          /* "march", "track", "bins", "dda" */
-    char estimator[16];       /* "delta", "urm", "walk" (since 1.5) (track, bins, dda) */
+    char estimator[16];       /* "delta", "urm", "walk", "auto" (since 1.5; the default) (track, bins, dda) */
     char sampler[16];         /* "ld" (low discrepancy across frames), "independent" */
     uint64_t seed;
     uint32_t urm_steps;       /* urm: minimum quadrature points per ray, >= 1 */
@@ -617,7 +618,7 @@ CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);
 /* --- names of settings (1.2) --------------------------------------------- */
 
 /* The names a setting takes, by index: setting "method" (march, track,
- * bins, dda), "estimator" (delta, urm, walk since 1.5), "sampler" (independent, ld),
+ * bins, dda), "estimator" (delta, urm, walk and auto since 1.5), "sampler" (independent, ld),
  * "tonemap" (none, aces, filmic), "element_boxes" (auto, on, off: index =
  * CLVR_ELEMENT_BOXES_*) or, since 1.3, "pixel_filter" (box, point). Static string; NULL for an index past the end or an
  * unknown setting. Indices are stable within a major version (new names

@@ -64,13 +64,13 @@ void clvr_cli_print_help(FILE *out)
         "\n"
         "Rendering:\n"
         "  --method M             march | track | bins | dda (default dda)\n"
-        "  --estimator E          walk | urm | delta (track, bins, dda; default walk): walk crosses\n"
-        "                         a tet mesh tet by tet, each one's extinction integrated exactly\n"
-        "                         and its emission sampled once (fastest to converge on tets;\n"
-        "                         other cells and MPI runs get urm); urm (unbiased ray marching)\n"
-        "                         weighs jittered quadrature points by ratio-tracked transmittance;\n"
-        "                         delta is plain delta tracking (0/1 collision and shadow); same\n"
-        "                         expected image\n"
+        "  --estimator E          auto | walk | urm | delta (track, bins, dda; default auto: walk\n"
+        "                         without shadows, urm with): walk crosses a tet mesh tet by tet,\n"
+        "                         each one's extinction integrated exactly and its emission sampled\n"
+        "                         once (other cells and MPI runs get urm); urm (unbiased ray\n"
+        "                         marching) weighs jittered quadrature points by ratio-tracked\n"
+        "                         transmittance; delta is plain delta tracking (0/1 collision and\n"
+        "                         shadow); same expected image\n"
         "  --urm-steps N          urm: at least N quadrature points per ray (default 24)\n"
         "  --shadows on|off       volumetric shadow ray toward the light (default on)\n"
         "  --sampler ld|independent  random numbers across frames: ld (default) draws the sub-pixel\n"
@@ -144,7 +144,7 @@ void clvr_cli_print_help(FILE *out)
         "  + / -                  density x1.25 / /1.25\n"
         "  S                      toggle shadows (not with march)\n"
         "  M / shift+M            next / previous method: march, track, bins, dda\n"
-        "  E / shift+E            next / previous estimator: delta, urm, walk (not with march)\n"
+        "  E / shift+E            next / previous estimator: delta, urm, walk, auto (not with march)\n"
         "  A                      pixel filter: box (antialiased) / point (pixel centres, as VTK)\n"
         "  D                      show the image denoised (--denoise: a biased preview) / as it is\n"
         "  L+left drag, ctrl+left drag, ctrl+arrows   rotate the light\n"
@@ -334,7 +334,7 @@ clvr_result clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_message 
         else if (!strcmp(a, "--estimator")) {
             const char *v = NEXT();
             if (v) {
-                s = parse_named(a, "estimator", v, "urm, walk or delta", &o->estimator, msg);
+                s = parse_named(a, "estimator", v, "auto, walk, urm or delta", &o->estimator, msg);
             }
         }
         else if (!strcmp(a, "--urm-steps")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 4096, &o->urm_steps, msg); }

@@ -102,7 +102,7 @@ typedef struct viewer {
 } viewer;
 
 static const char *const method_names[] = {"march", "track", "bins", "dda"};
-static const char *const estimator_names[] = {"delta", "urm", "walk"};
+static const char *const estimator_names[] = {"delta", "urm", "walk", "auto"};
 
 static double now_s(void)
 {
@@ -483,7 +483,7 @@ static void handle_key(viewer *v, int key, int mods)
         break;
     }
     case GLFW_KEY_E: {
-        const unsigned n = 3, i = name_index(estimator_names, n, v->ts.estimator);
+        const unsigned n = 4, i = name_index(estimator_names, n, v->ts.estimator);
         snprintf(v->ts.estimator, sizeof v->ts.estimator, "%s", estimator_names[(i + (shift ? n - 1u : 1u)) % n]);
         v->dirty_settings = 1;
         break;

@@ -141,7 +141,7 @@ static clvr_status check_options(const clvr_options *o, clvr_error *err)
     if (o->method == CLVR_RENDER_MARCH)
         return clvr_error_set(err, CLVR_ERR_USAGE, "--method march is not available under mpirun: the ranks' "
                               "images are composited with the urm estimator; use dda (the default), bins or track");
-    if (o->estimator != CLVR_ESTIMATOR_URM && o->estimator != CLVR_ESTIMATOR_WALK)
+    if (o->estimator == CLVR_ESTIMATOR_DELTA)
         return clvr_error_set(err, CLVR_ERR_USAGE, "--estimator %s is not available under mpirun: MPI mode "
                               "composites the urm estimator exactly; drop --estimator",
                               clvr_render_estimator_name(o->estimator));
@@ -465,9 +465,9 @@ static int run(mpi_run *m, const clvr_options *o)
         s = clvr_internal_status(clvr_cli_tracer_settings(o, &ts, &msg), &msg, &err);
         if (s == CLVR_OK) s = clvr_internal_render_settings(&ts, o->width, o->height, &rsv, &shadows, &err);
         /* The ranks' regions are composited with urm's records (a walk's
-         * tets would cross the regions' cuts): the default walk renders as
-         * urm here, the same expected image. */
-        if (rsv.estimator == CLVR_ESTIMATOR_WALK) rsv.estimator = CLVR_ESTIMATOR_URM;
+         * tets would cross the regions' cuts): walk and auto render as urm
+         * here, the same expected image. */
+        if (rsv.estimator != CLVR_ESTIMATOR_DELTA) rsv.estimator = CLVR_ESTIMATOR_URM;
         rsv.pixel_filter = o->pixel_filter; /* clvr_setting_name("pixel_filter") is in CLVR_PIXEL_* order */
         seed = rsv.seed;
         sampler = rsv.sampler;

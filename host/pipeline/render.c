@@ -52,7 +52,7 @@ struct clvr_renderer {
 };
 
 static const char *const method_names[CLVR_RENDER_COUNT] = {"march", "track", "bins", "dda"};
-static const char *const estimator_names[CLVR_ESTIMATOR_COUNT] = {"delta", "urm", "walk"};
+static const char *const estimator_names[CLVR_ESTIMATOR_COUNT] = {"delta", "urm", "walk", "auto"};
 
 const char *clvr_render_method_name(uint32_t m) { return m < CLVR_RENDER_COUNT ? method_names[m] : "?"; }
 const char *clvr_render_estimator_name(uint32_t e) { return e < CLVR_ESTIMATOR_COUNT ? estimator_names[e] : "?"; }
@@ -75,10 +75,10 @@ void clvr_render_settings_default(clvr_render_settings *s)
 {
     memset(s, 0, sizeof *s);
     s->method = CLVR_RENDER_DDA;
-    /* walk: the estimator that reaches a given relative error first on
-     * tet meshes (bench/render-vs-vtk.sh, README "Rendering"); a mesh
-     * without tets renders with urm (clvr_renderer_set_settings). */
-    s->estimator = CLVR_ESTIMATOR_WALK;
+    /* auto: walk without shadows, urm with, the estimators that reach a
+     * given relative error first there (bench/render-vs-vtk.sh, README
+     * "Rendering"); a mesh without tets renders with urm. */
+    s->estimator = CLVR_ESTIMATOR_AUTO;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
     s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
     s->light_res = 0; /* clvr_light_res_for the mesh */
@@ -232,8 +232,10 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->width = set->width;
     f->height = set->height;
     f->method = set->method;
-    f->estimator = set->estimator;
-    if (set->estimator == CLVR_ESTIMATOR_WALK) {
+    f->estimator = set->estimator == CLVR_ESTIMATOR_AUTO
+                       ? (set->shadows ? CLVR_ESTIMATOR_URM : CLVR_ESTIMATOR_WALK)
+                       : set->estimator;
+    if (f->estimator == CLVR_ESTIMATOR_WALK) {
         /* The walk needs the face adjacency and tets; a mesh without tets
          * renders with urm (what the walk falls back to anyway). */
         int tets = 0;
@@ -610,6 +612,13 @@ cleanup:
     if (evt) clReleaseEvent(evt);
     free(cnt);
     return s;
+}
+
+void clvr_renderer_adjacency(const clvr_renderer *r, uint64_t *bytes, double *build_s, const char **skipped)
+{
+    *bytes = r->adj.bytes;
+    *build_s = r->adj.build_s;
+    *skipped = r->adj_skipped;
 }
 
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,

@@ -143,6 +143,12 @@ clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res
 /* The majorant of every sampling cluster / macrocell / macrocell block
  * (ceil(macrocells / CLVR_DDA_BLOCK)^3, see clvr_shared.h) (tests); any may
  * be NULL. */
+/* The walk's face adjacency (built at the first settings that ask for
+ * walk): device bytes kept and the device seconds of its build, 0 and 0
+ * when none; *skipped: why walk renders as urm on this mesh ("" when it
+ * does not), valid while r lives. */
+void clvr_renderer_adjacency(const clvr_renderer *r, uint64_t *bytes, double *build_s, const char **skipped);
+
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
                                          float *global_majorant, clvr_error *err);
 

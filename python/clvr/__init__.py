@@ -965,7 +965,7 @@ def save_exr(path, image):
 
 def setting_name(setting, index):
     """The name at index in a setting's table ("method": march, track,
-    bins, dda; "estimator": delta, urm, walk; "sampler": independent, ld;
+    bins, dda; "estimator": delta, urm, walk, auto; "sampler": independent, ld;
     "tonemap": none, aces, filmic; "element_boxes": auto, on, off;
     "pixel_filter": box, point), or None
     past the end or for an unknown setting. Indices are stable within a
