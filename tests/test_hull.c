@@ -447,15 +447,21 @@ static int keep_sieve(const float *c, const float *ctx)
     return ((int)floorf(c[0])) % 2 == 0;
 }
 
-/* The lattice of n^3 mixed cubes with a ball of radius n/4 around the
- * centre and the octant above (0.6n, 0.6n, 0.6n) removed. */
-static clvr_status holed_mesh(uint32_t n, clvr_mesh *out, clvr_error *err)
+/* The lattice of n^3 cubes of the kind (FX_*) with a ball of radius n/4
+ * around the centre and the octant above (0.6n, 0.6n, 0.6n) removed. */
+static clvr_status holed_mesh_of(uint32_t n, uint32_t kind, clvr_mesh *out, clvr_error *err)
 {
     clvr_mesh m = {0};
     const float ctx[1] = {(float)n};
-    clvr_status s = fx_grid_mesh(n, FX_MIXED, 0.25f, 1.0f, 0.0f, 5, &m, err);
+    clvr_status s = fx_grid_mesh(n, kind, 0.25f, 1.0f, 0.0f, 5, &m, err);
     if (s != CLVR_OK) return s;
     return filter_mesh(&m, keep_holed, ctx, out, err);
+}
+
+/* ... of mixed cubes. */
+static clvr_status holed_mesh(uint32_t n, clvr_mesh *out, clvr_error *err)
+{
+    return holed_mesh_of(n, FX_MIXED, out, err);
 }
 
 /* ------------------------------------------------------------ 3b. gaps */
@@ -603,14 +609,16 @@ static clvr_status moments(clvr_cl *cl, fx_mesh *x, const clvr_render_settings *
     return fx_render_moments_at(cl, &x->m, &x->c, &x->a, set, eye, target, density, frames, mean, var, err);
 }
 
-/* Renders x with the hull and without (urm and delta, shadows on) and
- * compares them per pixel and per 4x4 block. */
+/* Renders x with the hull and without (urm and delta, shadows on; walk
+ * without shadows, where it crosses the tets: with the hull it re-enters
+ * past the stretches outside the mesh, without it hands the ray to urm at
+ * the first boundary) and compares them per pixel and per 4x4 block. */
 static void renders_agree(clvr_cl *cl, fx_mesh *x, const char *name, const float *eye, const float *target,
                           float density)
 {
     enum { W = 32, H = 32, FRAMES = 96 };
-    static const uint32_t est[2] = {CLVR_ESTIMATOR_URM, CLVR_ESTIMATOR_DELTA};
-    for (int ei = 0; ei < 2; ++ei) {
+    static const uint32_t est[3] = {CLVR_ESTIMATOR_URM, CLVR_ESTIMATOR_DELTA, CLVR_ESTIMATOR_WALK};
+    for (int ei = 0; ei < 3; ++ei) {
         clvr_error err = {0};
         float *m[2] = {0}, *v[2] = {0};
         for (int hull = 0; hull < 2; ++hull) {
@@ -619,7 +627,7 @@ static void renders_agree(clvr_cl *cl, fx_mesh *x, const char *name, const float
             set.width = W;
             set.height = H;
             set.estimator = est[ei];
-            set.shadows = 1;
+            set.shadows = est[ei] != CLVR_ESTIMATOR_WALK;
             set.hull = hull;
             set.seed = 1000 + (uint64_t)hull; /* independent images */
             set.sampler = CLVR_SAMPLER_INDEPENDENT;
@@ -657,6 +665,20 @@ static void test_renders(clvr_cl *cl)
         renders_agree(cl, &x, "holed lattice, camera inside the box", eye, target, 2.0f);
     }
     fx_free(cl, &x);
+    {
+        /* All tets: the walk crosses the whole lattice, leaves it at the
+         * ball and re-enters past it (with the hull) or hands the ray to urm
+         * there (without). */
+        fx_mesh t = {0};
+        TU_CHECK_STATUS(holed_mesh_of(10, FX_TETS, &t.m, &err), CLVR_OK, &err);
+        TU_CHECK_STATUS(fx_prepare(cl, &t, &err), CLVR_OK, &err);
+        if (err.status == CLVR_OK) {
+            renders_agree(cl, &t, "holed tet lattice", NULL, NULL, 2.0f);
+            const float eye[3] = {9.2f, 9.6f, 9.2f}, target[3] = {3.3f, 4.2f, 2.5f};
+            renders_agree(cl, &t, "holed tet lattice, camera inside the box", eye, target, 2.0f);
+        }
+        fx_free(cl, &t);
+    }
     static const char *files[] = {"vtk/post.vtk", "vtk/notch_stress.vtk"};
     static const float density[] = {2.0f, 100.0f}; /* the notch is thin at 2 */
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {

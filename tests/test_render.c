@@ -896,6 +896,7 @@ static void test_clip(clvr_cl *cl)
         {"planes", 0, 2, CLVR_RENDER_TRACK, CLVR_ESTIMATOR_DELTA}, {"planes", 0, 2, CLVR_RENDER_DDA, CLVR_ESTIMATOR_URM},
         {"box", 1, 0, CLVR_RENDER_DDA, CLVR_ESTIMATOR_DELTA},     {"box", 1, 0, CLVR_RENDER_TRACK, CLVR_ESTIMATOR_URM},
         {"box+plane", 1, 1, CLVR_RENDER_DDA, CLVR_ESTIMATOR_DELTA},
+        {"planes", 0, 2, CLVR_RENDER_DDA, CLVR_ESTIMATOR_WALK},   {"box+plane", 1, 1, CLVR_RENDER_DDA, CLVR_ESTIMATOR_WALK},
     };
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ++ci) {
         fx.set.method = cases[ci].method;
