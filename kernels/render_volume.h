@@ -1512,6 +1512,52 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
     return 0;
 }
 
+/* A camera ray's value from its emission sums (walk's or urm's) and its
+ * transmittance to the end, T: without shadows every point is fully lit
+ * (the whole sum, no pick); with them, the light grid's terms plus the
+ * correction shadow ray from the pick (see urm's comment). *guide: the
+ * colour unlit and the points' weighted mean depth (the denoiser's). */
+inline float4 clvr_emit_shade(const clvr_volume *v, const clvr_emit *a, float T, float3 org, float3 dir, float3 lo,
+                              float3 hi, float3 ldir, float3 bg, const float *ld, clvr_rng *rng, uint *samples,
+                              uint *nulls, uint *rays, float4 *guide)
+{
+    const clvr_frame *f = v->f;
+    float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * a->sum;
+    if (f->shadows && a->wsum > 0.0f) {
+        /* Russian roulette on the correction: where the grid is flat
+         * around the pick (spread <= CLVR_URM_SHADOW_RR_SPREAD) it is
+         * likely right there and the correction small, so the shadow
+         * ray is traced with probability CLVR_URM_SHADOW_RR_Q only and
+         * its correction divided by that (unbiased for any q > 0). */
+        const float q = a->pick_s > CLVR_URM_SHADOW_RR_SPREAD ? 1.0f : CLVR_URM_SHADOW_RR_Q;
+        c += f->light_intensity * a->lit;
+        if (q >= 1.0f || clvr_rng_next(rng) < q) {
+            const float u_s = ld ? ld[3] : clvr_rng_next(rng);
+            const float lb = clvr_urm_light(v, org + dir * a->pick_t, ldir, lo, hi, u_s, rng, samples, nulls, rays);
+            c += f->light_intensity * (lb - a->pick_g) * a->wsum * a->pick / q;
+        }
+    }
+    *guide = (float4)(a->sum + T * bg, a->wsum > 0.0f ? a->tsum / a->wsum : -1.0f);
+    return (float4)(c + T * bg, 1.0f - T);
+}
+
+/* urm's sums as a clvr_emit. */
+inline clvr_emit clvr_urm_emit(const clvr_urm *e, int shadows)
+{
+    clvr_emit a;
+    a.sum = e->sum;
+    a.lit = e->lit;
+    a.pick = e->pick;
+    a.wsum = e->wsum;
+    a.tsum = e->tsum;
+    a.pick_t = e->pick_t;
+    a.pick_g = e->pick_g;
+    a.pick_s = e->pick_s;
+    a.pick_u = e->pick_u;
+    a.shadows = shadows;
+    return a;
+}
+
 /* One camera ray with the frame's estimator. u_primary (dimension 2 of the
  * low-discrepancy sampler, the caller's draw) drives the camera ray's first
  * free flight (delta) or quadrature offset (urm). ld: the frame's
@@ -1564,18 +1610,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
             acc.tsum += T * e.tsum;
             T *= Tend;
         }
-        float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * acc.sum;
-        if (f->shadows && acc.wsum > 0.0f) {
-            const float q = acc.pick_s > CLVR_URM_SHADOW_RR_SPREAD ? 1.0f : CLVR_URM_SHADOW_RR_Q;
-            c += f->light_intensity * acc.lit;
-            if (q >= 1.0f || clvr_rng_next(rng) < q) {
-                const float u_s = ld ? ld[3] : clvr_rng_next(rng);
-                const float lb = clvr_urm_light(v, org + dir * acc.pick_t, ldir, lo, hi, u_s, rng, samples, nulls, rays);
-                c += f->light_intensity * (lb - acc.pick_g) * acc.wsum * acc.pick / q;
-            }
-        }
-        *guide = (float4)(acc.sum + T * bg.xyz, acc.wsum > 0.0f ? acc.tsum / acc.wsum : -1.0f);
-        return (float4)(c + T * bg.xyz, 1.0f - T);
+        return clvr_emit_shade(v, &acc, T, org, dir, lo, hi, ldir, bg.xyz, ld, rng, samples, nulls, rays, guide);
     }
     if (f->estimator != CLVR_ESTIMATOR_DELTA) {
         clvr_gaps g;
@@ -1583,27 +1618,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
         const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, u_primary, u_pick, &g, rng, samples, nulls);
-        /* Without shadows every point is fully lit: the whole sum, no pick. */
-        float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum;
-        if (f->shadows && e.wsum > 0.0f) {
-            /* Control variate: see the estimator's comment. */
-            /* Russian roulette on the correction: where the grid is flat
-             * around the pick (spread <= CLVR_URM_SHADOW_RR_SPREAD) it is
-             * likely right there and the correction small, so the shadow
-             * ray is traced with probability CLVR_URM_SHADOW_RR_Q only and
-             * its correction divided by that (unbiased for any q > 0). */
-            const float q = e.pick_s > CLVR_URM_SHADOW_RR_SPREAD ? 1.0f : CLVR_URM_SHADOW_RR_Q;
-            c += f->light_intensity * e.lit;
-            if (q >= 1.0f || clvr_rng_next(rng) < q) {
-                const float u_s = ld ? ld[3] : clvr_rng_next(rng);
-                const float lb = clvr_urm_light(v, org + dir * e.pick_t, ldir, lo, hi, u_s, rng, samples, nulls, rays);
-                c += f->light_intensity * (lb - e.pick_g) * e.wsum * e.pick / q;
-            }
-        }
-        /* Guides: the colour unlit (light 1 everywhere) and the points'
-         * weighted mean depth. */
-        *guide = (float4)(e.sum + Tend * bg.xyz, e.wsum > 0.0f ? e.tsum / e.wsum : -1.0f);
-        return (float4)(c + Tend * bg.xyz, 1.0f - Tend);
+        const clvr_emit a = clvr_urm_emit(&e, f->shadows != 0u);
+        return clvr_emit_shade(v, &a, Tend, org, dir, lo, hi, ldir, bg.xyz, ld, rng, samples, nulls, rays, guide);
     }
 
     float t;

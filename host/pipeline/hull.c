@@ -184,13 +184,51 @@ cleanup:
     return s;
 }
 
+/* The first steps of both the hull's and the adjacency's builds: the key
+ * of every face slot of c (layout ffb on the device), sorted with its slot
+ * into fs->keys, fs->vals; fs->keys_tmp, fs->vals_tmp are the sort's
+ * spares, left to the caller (24 bytes per face slot in all). The caller
+ * releases the four (face_sort_release), also after an error. */
+typedef struct face_sort {
+    cl_mem keys, vals, keys_tmp, vals_tmp;
+} face_sort;
+
+static void face_sort_release(clvr_cl *cl, face_sort *fs)
+{
+    clvr_cl_release(cl, &fs->keys);
+    clvr_cl_release(cl, &fs->keys_tmp);
+    clvr_cl_release(cl, &fs->vals);
+    clvr_cl_release(cl, &fs->vals_tmp);
+}
+
+static clvr_status sorted_faces(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_clustered *c, clvr_pp *pp,
+                                cl_mem ffb, cl_uint ninst, cl_uint nslots, face_sort *fs, double *build_s,
+                                clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "face keys", &fs->keys, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "face keys", &fs->keys_tmp, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face slots", &fs->vals, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face slots", &fs->vals_tmp, err));
+    clvr_clustered_pieces pc;
+    clvr_clustered_get_pieces(c, &pc);
+    CLVR_TRY(CLVR_CL_ARGS(k->hull_keys, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb), CLVR_ARG(nslots),
+                          CLVR_ARG(fs->keys), PIECE_ARGS(pc)));
+    CLVR_TRY(clvr_pp_launch(pp, k->hull_keys, nslots, 64, build_s, err));
+    CLVR_TRY(clvr_pp_sort(pp, &fs->keys, &fs->vals, &fs->keys_tmp, &fs->vals_tmp, nslots, 1, 0xffffffffull, build_s,
+                          err));
+cleanup:
+    return s;
+}
+
 clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_clustered *c, cl_mem cluster_tree,
                             int mode, clvr_hull *out, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     memset(out, 0, sizeof *out);
     uint32_t *ff = NULL;
-    cl_mem ffb = NULL, keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL, boxes = NULL;
+    cl_mem ffb = NULL, boxes = NULL;
+    face_sort fs = {0};
     clvr_pp pp;
     int pp_made = 0;
     out->box_fraction = -1.0f;
@@ -245,29 +283,23 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
     }
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(ninst + 1) * 4, ff,
                             "hull face layout", &ffb, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "hull face keys", &keys, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "hull face keys", &keys_tmp, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "hull face slots", &vals, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "hull face slots", &vals_tmp, err));
     clvr_clustered_pieces pc;
     clvr_clustered_get_pieces(c, &pc);
     CLVR_TRY(clvr_pp_create(cl, &pp, err));
     pp_made = 1;
-    CLVR_TRY(CLVR_CL_ARGS(k->hull_keys, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb), CLVR_ARG(nslots),
-                          CLVR_ARG(keys), PIECE_ARGS(pc)));
-    CLVR_TRY(clvr_pp_launch(&pp, k->hull_keys, nslots, 64, &out->build_s, err));
-    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, nslots, 1, 0xffffffffull, &out->build_s, err));
+    CLVR_TRY(sorted_faces(cl, k, c, &pp, ffb, ninst, nslots, &fs, &out->build_s, err));
+    cl_mem keys = fs.keys, vals = fs.vals;
     /* The sort's spare buffers hold the flags (slot order) and the
      * selected slots. */
-    cl_mem flags = vals_tmp, sel = keys_tmp;
+    cl_mem flags = fs.vals_tmp, sel = fs.keys_tmp;
     CLVR_TRY(CLVR_CL_ARGS(k->hull_flags, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(ffb),
                           CLVR_ARG(nslots), CLVR_ARG(keys), CLVR_ARG(vals), CLVR_ARG(flags), PIECE_ARGS(pc)));
     CLVR_TRY(clvr_pp_launch(&pp, k->hull_flags, nslots, 64, &out->build_s, err));
     uint32_t nb = 0;
     CLVR_TRY(clvr_pp_select(&pp, flags, NULL, sel, nslots, &nb, &out->build_s, err));
-    clvr_cl_release(cl, &keys);
-    clvr_cl_release(cl, &vals);
-    clvr_cl_release(cl, &vals_tmp);
+    clvr_cl_release(cl, &fs.keys);
+    clvr_cl_release(cl, &fs.vals);
+    clvr_cl_release(cl, &fs.vals_tmp);
     if (nb == 0) goto cleanup;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nb * sizeof(clvr_hull_face), NULL, "hull faces",
                             &out->faces, err));
@@ -288,10 +320,7 @@ clvr_status clvr_hull_build(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_c
 cleanup:
     if (pp_made) clvr_pp_destroy(&pp);
     clvr_cl_release(cl, &ffb);
-    clvr_cl_release(cl, &keys);
-    clvr_cl_release(cl, &keys_tmp);
-    clvr_cl_release(cl, &vals);
-    clvr_cl_release(cl, &vals_tmp);
+    face_sort_release(cl, &fs);
     clvr_cl_release(cl, &boxes);
     free(ff);
     if (s != CLVR_OK) clvr_hull_release(cl, out);
@@ -304,7 +333,7 @@ clvr_status clvr_adjacency_build(clvr_cl *cl, const clvr_bvh_kernels *k, const c
     clvr_status s = CLVR_OK;
     memset(out, 0, sizeof *out);
     uint32_t *ff = NULL;
-    cl_mem keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL;
+    face_sort fs = {0};
     clvr_pp pp;
     int pp_made = 0;
     if (c->num_instances == 0) return CLVR_OK;
@@ -313,35 +342,26 @@ clvr_status clvr_adjacency_build(clvr_cl *cl, const clvr_bvh_kernels *k, const c
     CLVR_TRY(clvr_hull_face_first(c->host_instances, c->num_instances, ff, err));
     const cl_uint ninst = (cl_uint)c->num_instances, nslots = ff[c->num_instances];
     if (nslots == 0) goto cleanup;
-    /* The same keys and sort as the hull's build (24 bytes per face slot
-     * while it runs); kept: 4 bytes per face slot. */
+    /* The hull's keys and sort (sorted_faces: 24 bytes per face slot while
+     * it runs); kept: 4 bytes per face slot. */
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(ninst + 1) * 4, ff,
                             "face adjacency layout", &out->face_first, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "face keys", &keys, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 8, NULL, "face keys", &keys_tmp, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face slots", &vals, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face slots", &vals_tmp, err));
     clvr_clustered_pieces pc;
     clvr_clustered_get_pieces(c, &pc);
     CLVR_TRY(clvr_pp_create(cl, &pp, err));
     pp_made = 1;
-    CLVR_TRY(CLVR_CL_ARGS(k->hull_keys, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(out->face_first),
-                          CLVR_ARG(nslots), CLVR_ARG(keys), PIECE_ARGS(pc)));
-    CLVR_TRY(clvr_pp_launch(&pp, k->hull_keys, nslots, 64, &out->build_s, err));
-    CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, nslots, 1, 0xffffffffull, &out->build_s, err));
-    clvr_cl_release(cl, &keys_tmp);
+    CLVR_TRY(sorted_faces(cl, k, c, &pp, out->face_first, ninst, nslots, &fs, &out->build_s, err));
+    clvr_cl_release(cl, &fs.keys_tmp);
+    clvr_cl_release(cl, &fs.vals_tmp);
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nslots * 4, NULL, "face adjacency", &out->adj, err));
     CLVR_TRY(CLVR_CL_ARGS(k->hull_adjacency, err, CLVR_ARG(c->instances), CLVR_ARG(ninst), CLVR_ARG(out->face_first),
-                          CLVR_ARG(nslots), CLVR_ARG(keys), CLVR_ARG(vals), CLVR_ARG(out->adj), PIECE_ARGS(pc)));
+                          CLVR_ARG(nslots), CLVR_ARG(fs.keys), CLVR_ARG(fs.vals), CLVR_ARG(out->adj), PIECE_ARGS(pc)));
     CLVR_TRY(clvr_pp_launch(&pp, k->hull_adjacency, nslots, 64, &out->build_s, err));
     out->num_slots = nslots;
     out->bytes = (uint64_t)nslots * 4u + (uint64_t)(ninst + 1) * 4u;
 cleanup:
     if (pp_made) clvr_pp_destroy(&pp);
-    clvr_cl_release(cl, &keys);
-    clvr_cl_release(cl, &keys_tmp);
-    clvr_cl_release(cl, &vals);
-    clvr_cl_release(cl, &vals_tmp);
+    face_sort_release(cl, &fs);
     free(ff);
     if (s != CLVR_OK) clvr_adjacency_release(cl, out);
     return s;
