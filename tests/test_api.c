@@ -296,6 +296,10 @@ int main(void)
     OK(clvr_tracer_stat(ta, "hull_empty_fraction", &he, &msg));
     OK(clvr_tracer_stat(ta, "hull_skipped", &hs, &msg));
     CHECK(hf == 0 && hb == 0 && he >= 0 && he < 0.15 && hs == 0);
+    double ab = -1, as = -1;
+    OK(clvr_tracer_stat(ta, "adjacency_bytes", &ab, &msg));
+    OK(clvr_tracer_stat(ta, "adjacency_skipped", &as, &msg));
+    CHECK(ab >= 0 && as == 0);
 
     float *ml = malloc(n * 4), *vl = malloc(n * 4), *ma = malloc(n * 4), *va = malloc(n * 4), *mn = malloc(n * 4),
           *vn = malloc(n * 4);

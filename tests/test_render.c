@@ -718,6 +718,16 @@ static void test_tet_spans(clvr_cl *cl)
             free(var);
         }
     }
+    {
+        /* The walk's adjacency: 4 bytes per face slot (4 per tet) and the
+         * slot layout, as documented (API "adjacency_bytes"). */
+        uint64_t bytes;
+        double build_s;
+        const char *skipped;
+        clvr_renderer_adjacency(fx.r, &bytes, &build_s, &skipped);
+        TU_CHECK_EQ_U64(bytes, 16u * fx.c.num_elements + 4u * (fx.c.num_instances + 1u));
+        TU_CHECK(*skipped == 0 && build_s >= 0.0);
+    }
     fixture_close(&fx);
 }
 

@@ -271,8 +271,11 @@ CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t
  * "light_s" (device seconds of the light grid's last build: urm with
  * shadows, already part of kernel_s), "image_s" (device seconds of the
  * image pass of the last clvr_tracer_read_image, the control variates'
- * fit: not part of kernel_s; 0 before one). Unknown name: ERR_USAGE
- * listing the names. */
+ * fit: not part of kernel_s; 0 before one), since 1.5 "adjacency_bytes"
+ * (device memory of the walk estimator's face adjacency, 16 bytes per tet:
+ * 0 until a frame asks for walk) and "adjacency_skipped" (1 when there was
+ * too little memory to build it: walk then renders as urm, the same
+ * image). Unknown name: ERR_USAGE listing the names. */
 CLVR_API clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg);
 
 /* --- images ------------------------------------------------------------- */

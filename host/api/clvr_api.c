@@ -1510,7 +1510,7 @@ clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, c
 static const char *const stat_names =
     "frames, rays, samples, null_collisions, kernel_s, last_frame_s, preprocess_s, kernel_build_s, elements, points, "
     "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi, hull_faces, hull_bytes, "
-    "hull_empty_fraction, hull_skipped, light_s, image_s";
+    "hull_empty_fraction, hull_skipped, light_s, image_s, adjacency_bytes, adjacency_skipped";
 
 clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg)
 {
@@ -1547,7 +1547,13 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "hull_skipped")) v = tr->sc->accel.hull_skipped[0] ? 1.0 : 0.0;
     else if (!strcmp(name, "light_s")) v = c.light_s;
     else if (!strcmp(name, "image_s")) v = c.image_s;
-    else
+    else if (!strcmp(name, "adjacency_bytes") || !strcmp(name, "adjacency_skipped")) {
+        uint64_t bytes;
+        double build_s;
+        const char *skipped;
+        clvr_renderer_adjacency(tr->renderer, &bytes, &build_s, &skipped);
+        v = name[10] == 'b' ? (double)bytes : *skipped ? 1.0 : 0.0;
+    } else
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown figure '%.64s'; use one of %s", fn, name,
                                      stat_names),
                       &e, msg);
