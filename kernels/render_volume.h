@@ -1184,13 +1184,17 @@ inline float clvr_urm_camera(const clvr_volume *v, clvr_urm *e, float3 org, floa
  * walks from tet to tet across shared faces. In a tet the scalar is affine,
  * so along the ray it is linear, and the extinction (the transfer
  * function's, piecewise linear in the scalar) is piecewise linear in t:
- * each tet's optical depth is integrated exactly (clvr_walk_depth), the
- * transmittance is exact, and the tet's emission int T sigma c dt is
- * estimated by one point t* drawn in proportion to T sigma (the colour at
- * t* times T_in (1 - exp(-tau))), unbiased, with variance from the
- * colour's change inside the tet only. Where the walk cannot go on (a face
- * without a twin in the same instance: a lookup past it; no element
- * there, another cell type), urm finishes the ray from that point. */
+ * each tet's optical depth is integrated exactly (a trapezoid inside one
+ * bin of the table, the prefix sums clvr_walk_g across bins), so the
+ * transmittance is exact; the tet's emission int T sigma c dt is estimated
+ * by one point drawn in proportion to sigma and weighted by the
+ * transmittance there (tau <= 1/4), or drawn in proportion to T sigma
+ * (thicker tets): unbiased either way, its variance only the colour's
+ * change inside the tet. Where the walk cannot go on (a boundary face with
+ * nothing found just past it and no stretch of the hull's outside the mesh
+ * after it, another cell type, a flat tet), urm finishes the ray from that
+ * point (clvr_render_track). Measured against urm: bench/results/
+ * render-converge/2026-11-29-s36-walk.md. */
 
 /* The table's extinction weight (w, before the density) at position p in
  * [0, n - 1], as clvr_tf_lookup interpolates it. */
