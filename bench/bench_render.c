@@ -203,17 +203,17 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     if (s == CLVR_OK) s = clvr_renderer_set_camera(*out, &cam, err);
     if (s == CLVR_OK) s = clvr_renderer_set_tf(*out, g->table, g->table_n, g->tf.range_lo, g->tf.range_hi,
                                                g->tf.density, err);
-    if (s == CLVR_OK && (c->estimator == CLVR_ESTIMATOR_WALK || (c->estimator == CLVR_ESTIMATOR_AUTO && !rs.shadows)) &&
-        !g->adjacency_told) {
+    if (s == CLVR_OK && !g->adjacency_told) {
+        /* Once, when the renderer built the walk's adjacency or gave it up. */
         uint64_t bytes;
         double build_s;
         const char *skipped;
         clvr_renderer_adjacency(*out, &bytes, &build_s, &skipped);
         if (*skipped) fprintf(stderr, "bench_render: walk renders as urm: %s\n", skipped);
-        else
+        else if (bytes)
             fprintf(stderr, "bench_render: face adjacency for walk: %.1f MB (%.1f bytes per element), built in %.3f s "
                     "device\n", (double)bytes / 1e6, g->elements ? (double)bytes / (double)g->elements : 0.0, build_s);
-        g->adjacency_told = 1;
+        g->adjacency_told = *skipped || bytes;
     }
     if (s != CLVR_OK) {
         clvr_renderer_destroy(*out);

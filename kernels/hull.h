@@ -209,32 +209,6 @@ CLVR_INLINE void clvr_hull_slot_load(const clvr_mesh_view *m, CLVR_GLOBAL const 
     clvr_hull_face_load(m, &inst, e, f, h);
 }
 
-/* 1 when the face at sorted position i (keys, slots: (key, slot) pairs
- * sorted by key) is a boundary face: no face with its key is the same face
- * seen from the other side. Duplicate elements (the same face from the same
- * side) do not make a face inside; a run too long to search keeps the face
- * too: a face kept needlessly costs time only, a face dropped wrongly would
- * cut medium off. */
-CLVR_INLINE clvr_u32 clvr_hull_boundary(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
-                                        CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances,
-                                        clvr_u32 num_slots, CLVR_GLOBAL const clvr_u64 *keys,
-                                        CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i)
-{
-    const clvr_u64 key = keys[i];
-    clvr_hull_face h, o;
-    clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
-    clvr_u32 j = i;
-    for (; j > 0u && i - j < CLVR_HULL_RUN && keys[j - 1u] == key; --j) {
-        clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j - 1u], &o);
-        if (clvr_hull_opposite(&h, &o)) return 0u;
-    }
-    for (j = i + 1u; j < num_slots && j - i <= CLVR_HULL_RUN && keys[j] == key; ++j) {
-        clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j], &o);
-        if (clvr_hull_opposite(&h, &o)) return 0u;
-    }
-    return 1u;
-}
-
 /* The sorted element id of the element on the other side of the face at
  * sorted position i (clvr_hull_opposite), or CLVR_BVH_NOT_FOUND: a boundary
  * face, or a run of equal keys too long to search (always safe: the walk
@@ -263,6 +237,20 @@ CLVR_INLINE clvr_u32 clvr_hull_twin(const clvr_mesh_view *m, CLVR_GLOBAL const c
         }
     }
     return CLVR_BVH_NOT_FOUND;
+}
+
+/* 1 when the face at sorted position i (keys, slots: (key, slot) pairs
+ * sorted by key) is a boundary face: no face with its key is the same face
+ * seen from the other side. Duplicate elements (the same face from the same
+ * side) do not make a face inside; a run too long to search keeps the face
+ * too: a face kept needlessly costs time only, a face dropped wrongly would
+ * cut medium off. */
+CLVR_INLINE clvr_u32 clvr_hull_boundary(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
+                                        CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances,
+                                        clvr_u32 num_slots, CLVR_GLOBAL const clvr_u64 *keys,
+                                        CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i)
+{
+    return clvr_hull_twin(m, instances, face_first, num_instances, num_slots, keys, slots, i) == CLVR_BVH_NOT_FOUND;
 }
 
 /* The face in slot `slot` and its box (8 floats: lo xyz 0, hi xyz 0). */

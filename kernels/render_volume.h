@@ -1354,10 +1354,10 @@ inline void clvr_emit_begin(clvr_emit *a, int shadows, float u_pick)
     a->shadows = shadows;
 }
 
-/* Adds colour weight g (rgb, transmittance applied) emitted at org + t dir. */
-/* With shadows, G and spread: the light grid's value there (any fixed
- * function of the position along the ray keeps the estimate unbiased: the
- * walk holds one value over a few tets, see CLVR_WALK_LIGHT_HOLD). */
+/* Adds colour weight g (rgb, transmittance applied) emitted at org + t dir;
+ * with shadows G and spread are the light grid's value there (any value
+ * keeps the estimate unbiased: the walk holds one over a few tets, see
+ * CLVR_WALK_LIGHT_HOLD). */
 inline void clvr_emit_add(clvr_emit *a, float t, float3 g, float G, float spread)
 {
     a->sum += g;

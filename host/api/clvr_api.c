@@ -1552,7 +1552,7 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
         double build_s;
         const char *skipped;
         clvr_renderer_adjacency(tr->renderer, &bytes, &build_s, &skipped);
-        v = name[10] == 'b' ? (double)bytes : *skipped ? 1.0 : 0.0;
+        v = !strcmp(name, "adjacency_bytes") ? (double)bytes : *skipped ? 1.0 : 0.0;
     } else
         return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown figure '%.64s'; use one of %s", fn, name,
                                      stat_names),

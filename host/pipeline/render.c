@@ -32,8 +32,7 @@ struct clvr_renderer {
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
     cl_mem tf_prefix;          /* walk: prefix sums of the table's extinction (kernels/render_volume.h) */
     clvr_adjacency adj;        /* walk: face adjacency, built at the first frame settings that ask for walk */
-    int adj_failed;            /* its build did not fit: walk renders as urm */
-    char adj_skipped[1024];    /* why, or "" */
+    char adj_skipped[1024];    /* why its build did not fit (walk then renders as urm), or "" */
     cl_mem ctl;                /* per pixel, the sums of its controls (float4, kernels/pixel_cv.h) */
     cl_mem image;              /* the image clvr_renderer_read reads: means minus their control variates */
     cl_kernel k_cv;            /* kernels/render.cl: clvr_pixel_cv_image */
@@ -240,17 +239,16 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
          * renders with urm (what the walk falls back to anyway). */
         int tets = 0;
         for (uint64_t i = 0; i < m->num_instances && !tets; ++i) tets = m->host_instances[i].type == CLVR_CELL_TET;
-        if (tets && !r->adj.adj && !r->adj_failed) {
+        if (tets && !r->adj.adj && !r->adj_skipped[0]) {
             /* Like the hull, the adjacency only speeds convergence: where
              * its buffers do not fit (a mesh split into pieces below the
              * device's largest allocation, docs/large-meshes.md) the frames
              * are urm's, the same image. */
             s = clvr_adjacency_build(r->cl, &r->bvh->kernels, m, &r->adj, err);
             if (s == CLVR_ERR_DEVICE_MEMORY || s == CLVR_ERR_OVERFLOW) {
-                snprintf(r->adj_skipped, sizeof r->adj_skipped, "%s", err->msg);
+                snprintf(r->adj_skipped, sizeof r->adj_skipped, "%s", err->msg[0] ? err->msg : "no room");
                 *err = (clvr_error){0};
                 s = CLVR_OK;
-                r->adj_failed = 1;
             }
             if (s != CLVR_OK) goto cleanup;
         }
