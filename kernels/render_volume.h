@@ -1218,8 +1218,12 @@ inline float clvr_walk_g(const clvr_volume *v, float p)
     return v->tf_prefix[i] + f * (a + 0.5f * f * (b - a));
 }
 
-/* A position p with G(p) = g (G is nondecreasing). */
-inline float clvr_walk_g_inverse(const clvr_volume *v, float g)
+/* A position p with G(p) = g (G is nondecreasing). The search starts from
+ * entries [lo, hi] (the caller's bracket: a tet's ends span a few entries of
+ * the table, and the search over all of them took a quarter of the walk's
+ * time on the combustor); it widens to the whole table where they do not
+ * bracket g. */
+inline float clvr_walk_g_inverse(const clvr_volume *v, float g, uint lo, uint hi)
 {
     const uint n = v->f->tf_size;
     if (g <= 0.0f) {
@@ -1231,7 +1235,10 @@ inline float clvr_walk_g_inverse(const clvr_volume *v, float g)
         const float wl = v->tf[n - 1u].w;
         return (float)(n - 1u) + (wl > 0.0f ? (g - pn) / wl : 0.0f);
     }
-    uint lo = 0u, hi = n - 1u; /* P[lo] <= g < P[hi] */
+    /* P[lo] <= g < P[hi] */
+    hi = min(hi, n - 1u);
+    if (!(v->tf_prefix[lo] <= g) || lo >= hi) lo = 0u;
+    if (!(g < v->tf_prefix[hi])) hi = n - 1u;
     while (hi - lo > 1u) {
         const uint mid = (lo + hi) / 2u;
         if (v->tf_prefix[mid] <= g) lo = mid;
@@ -1458,7 +1465,9 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
                     const float den = sig_a + sqrt(fmax(sig_a * sig_a + 2.0f * (sig_b - sig_a) / len * want, 0.0f));
                     xs = den > 0.0f ? 2.0f * want / den : 0.0f;
                 } else {
-                    const float ps = clvr_walk_g_inverse(v, ga + want / tau * (gb - ga));
+                    const float ps = clvr_walk_g_inverse(v, ga + want / tau * (gb - ga),
+                                                         clvr_tf_entry(fmin(qa, qb), f->tf_size),
+                                                         clvr_tf_entry(fmax(qa, qb), f->tf_size) + 1u);
                     xs = len * (ps - pa) / (pb - pa);
                 }
                 const float xc = clamp(xs, 0.0f, len);
