@@ -96,32 +96,54 @@ inline clvr_span clvr_span_none(void)
     return (clvr_span){0.0f, -1.0f, 0.0f, 0.0f, CLVR_BVH_NOT_FOUND, NAN, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
 }
 
-/* The span of tet vtx along the ray org + t dir from t (inside it, scalar
- * s there): barycentric gradients from the same cofactors as
- * clvr_tet_sample, exit where the first barycentric reaches 0. */
-inline clvr_span clvr_tet_span(const clvr_vec4 *vtx, float3 org, float3 dir, float t, float s)
+/* Tet vtx's barycentric coordinates l[k] at org + t dir and their rates
+ * g[k] along dir (the same cofactors as clvr_tet_sample); 0 for a flat
+ * tet. */
+inline int clvr_tet_bary(const clvr_vec4 *vtx, float3 org, float3 dir, float t, float *l, float *g)
 {
     const float3 o = (float3)(vtx[0].x, vtx[0].y, vtx[0].z);
     const float3 a = (float3)(vtx[1].x, vtx[1].y, vtx[1].z) - o, b = (float3)(vtx[2].x, vtx[2].y, vtx[2].z) - o;
     const float3 c = (float3)(vtx[3].x, vtx[3].y, vtx[3].z) - o;
     const float3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
     const float det = dot(a, bc);
-    clvr_span sp = clvr_span_none();
-    if (!(fabs(det) > 0.0f)) return sp;
+    if (!(fabs(det) > 0.0f)) return 0;
     const float inv = 1.0f / det;
     const float3 r = org + dir * t - o;
-    const float l1 = dot(r, bc) * inv, l2 = dot(r, ca) * inv, l3 = dot(r, ab) * inv, l0 = 1.0f - l1 - l2 - l3;
-    const float g1 = dot(dir, bc) * inv, g2 = dot(dir, ca) * inv, g3 = dot(dir, ab) * inv, g0 = -(g1 + g2 + g3);
-    float dt = INFINITY;
-    if (g0 < 0.0f) dt = fmin(dt, l0 / -g0);
-    if (g1 < 0.0f) dt = fmin(dt, l1 / -g1);
-    if (g2 < 0.0f) dt = fmin(dt, l2 / -g2);
-    if (g3 < 0.0f) dt = fmin(dt, l3 / -g3);
+    l[1] = dot(r, bc) * inv; l[2] = dot(r, ca) * inv; l[3] = dot(r, ab) * inv;
+    l[0] = 1.0f - l[1] - l[2] - l[3];
+    g[1] = dot(dir, bc) * inv; g[2] = dot(dir, ca) * inv; g[3] = dot(dir, ab) * inv;
+    g[0] = -(g[1] + g[2] + g[3]);
+    return 1;
+}
+
+/* Where the ray leaves the tet: the face opposite the first barycentric to
+ * reach 0 (index returned, -1 when none falls), *dt the distance to it in
+ * t (INFINITY when none). */
+inline int clvr_tet_exit(const float *l, const float *g, float *dt)
+{
+    int kx = -1;
+    *dt = INFINITY;
+    for (int k = 0; k < 4; ++k)
+        if (g[k] < 0.0f && l[k] / -g[k] < *dt) {
+            *dt = l[k] / -g[k];
+            kx = k;
+        }
+    return kx;
+}
+
+/* The span of tet vtx along the ray org + t dir from t (inside it, scalar
+ * s there): exit where the first barycentric reaches 0. */
+inline clvr_span clvr_tet_span(const clvr_vec4 *vtx, float3 org, float3 dir, float t, float s)
+{
+    clvr_span sp = clvr_span_none();
+    float l[4], g[4], dt;
+    if (!clvr_tet_bary(vtx, org, dir, t, l, g)) return sp;
+    clvr_tet_exit(l, g, &dt);
     if (!(dt > 0.0f) || !(dt < INFINITY)) return sp;
     sp.t0 = t;
     sp.t_end = t + dt;
     sp.s0 = s;
-    sp.dsdt = g0 * vtx[0].w + g1 * vtx[1].w + g2 * vtx[2].w + g3 * vtx[3].w;
+    sp.dsdt = g[0] * vtx[0].w + g[1] * vtx[1].w + g[2] * vtx[2].w + g[3] * vtx[3].w;
     return sp;
 }
 
@@ -680,6 +702,91 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
 #define CLVR_URM_SHADOW_RESIDUAL_RATE 8.0f
 #endif
 
+/* What a camera ray's emission points add up to (the walk's and urm's):
+ * sum of the weighted colours, with shadows their light-grid terms and a
+ * reservoir pick for the correction shadow ray (see urm's comment). */
+typedef struct clvr_emit {
+    float3 sum;   /* sum of the weighted colours */
+    float3 lit;   /* ... times the light grid G at each */
+    float3 pick;  /* reservoir: the pick's weighted colour over its reservoir weight */
+    float wsum;   /* reservoir: total weight */
+    float tsum;   /* sum of weight times distance: wsum's mean depth (the denoiser's depth guide) */
+    float pick_t; /* reservoir: where */
+    float pick_g; /* reservoir: G there */
+    float pick_s; /* reservoir: the spread of G there (clvr_light_at) */
+    float pick_u; /* reservoir: the one uniform that decides every pick */
+    int shadows;
+} clvr_emit;
+
+inline float clvr_urm_lum(float3 c) { return c.x + c.y + c.z; }
+
+/* One step of weighted reservoir sampling driven by a single uniform *u:
+ * takes the candidate with probability p, then rescales *u to [0, 1) so
+ * that it stays uniform given the decision. So every pick of a ray can come
+ * from one low-discrepancy dimension. */
+inline int clvr_urm_reservoir(float *u, float p)
+{
+    const int take = *u < p;
+    *u = take ? *u / p : (*u - p) / (1.0f - p);
+    *u = fmin(*u, 0x1.fffffep-1f);
+    return take;
+}
+
+inline void clvr_emit_begin(clvr_emit *a, int shadows, float u_pick)
+{
+    a->sum = a->lit = a->pick = (float3)(0.0f);
+    a->wsum = a->tsum = a->pick_t = a->pick_g = a->pick_s = 0.0f;
+    a->pick_u = u_pick;
+    a->shadows = shadows;
+}
+
+/* Adds colour weight g (rgb, transmittance applied) emitted at org + t dir,
+ * with reservoir weight ww (none when ww <= 0); with shadows G and spread
+ * are the light grid's value there (any value keeps the estimate unbiased:
+ * the walk holds one over a few tets, see CLVR_WALK_LIGHT_HOLD). */
+inline void clvr_emit_add(clvr_emit *a, float t, float3 g, float ww, float G, float spread)
+{
+    a->sum += g;
+    if (!(ww > 0.0f)) return;
+    a->lit += G * g;
+    a->wsum += ww;
+    a->tsum += ww * t;
+    if (clvr_urm_reservoir(&a->pick_u, ww / a->wsum)) {
+        a->pick = g / ww;
+        a->pick_t = t;
+        a->pick_g = G;
+        a->pick_s = spread;
+    }
+}
+
+/* With shadows the walk evaluates the light grid (the lit terms' control)
+ * again only once its emission points have moved this fraction of a grid
+ * cell away from the last evaluation: tets are often far smaller than the
+ * cells. Any value of the control keeps the estimate unbiased (the
+ * correction shadow ray takes the same value), a closer one lowers its
+ * variance. */
+#ifndef CLVR_WALK_LIGHT_HOLD
+#define CLVR_WALK_LIGHT_HOLD 0.25f
+#endif
+
+/* Appends b, which continues a's ray with a's transmittance T in front of
+ * it: b's pick replaces a's in proportion to its weight (one draw from
+ * rng, only where b has weight). */
+inline void clvr_emit_merge(clvr_emit *a, const clvr_emit *b, float T, clvr_rng *rng)
+{
+    a->sum += T * b->sum;
+    a->lit += T * b->lit;
+    const float wu = T * b->wsum;
+    if (wu > 0.0f && clvr_rng_next(rng) * (a->wsum + wu) < wu) {
+        a->pick = b->pick;
+        a->pick_t = b->pick_t;
+        a->pick_g = b->pick_g;
+        a->pick_s = b->pick_s;
+    }
+    a->wsum += wu;
+    a->tsum += T * b->tsum;
+}
+
 typedef struct clvr_urm {
     float rho_min, rho_root; /* rho_0 = rho_min + rho_root sqrt(m) clvr_urm_front(...) */
     float front;       /* exp(-CLVR_URM_FRONT tau), tau the majorant optical depth from the ray's entry
@@ -697,15 +804,7 @@ typedef struct clvr_urm {
     int alive;
     int emit;          /* 0: transmittance only (shadow ray) */
     float rate;        /* residual points per unit s over the majorant's rate (CLVR_URM_*RESIDUAL_RATE) */
-    float3 sum;        /* sum of T sigma / rho * colour */
-    float wsum;        /* reservoir: total weight */
-    float tsum;        /* sum of weight times distance: wsum's mean depth (the denoiser's depth guide) */
-    float3 lit;        /* sum of T sigma / rho * colour * G (light grid) */
-    float3 pick;       /* reservoir: T sigma / rho * colour / weight of the pick */
-    float pick_t;      /* reservoir: where */
-    float pick_g;      /* reservoir: G there */
-    float pick_s;      /* reservoir: the spread of G there (clvr_light_at) */
-    float pick_u;      /* reservoir: the one uniform that decides every pick */
+    clvr_emit acc;     /* the points' T sigma / rho * colour (reservoir weight |T sigma / rho| luminance) */
     clvr_locate_hint hint;
     clvr_span span;
 } clvr_urm;
@@ -717,12 +816,9 @@ typedef struct clvr_urm {
 inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float root, float u, float u_pick, int emit,
                            float rate, float share, clvr_rng *rng)
 {
-    e->pick_u = u_pick;
-    e->pick_g = 0.0f;
-    e->pick_s = 0.0f;
+    clvr_emit_begin(&e->acc, emit == 2, u_pick);
     e->hint = clvr_locate_hint_none();
     e->span = clvr_span_none();
-    e->lit = (float3)(0.0f);
     /* A shadow ray needs transmittance only, which the control makes nearly
      * exact between points: half the camera ray's points measured better
      * (tets-1M, 128^2, shadows: 2% in 51 instead of 46 frames, at 74% of the
@@ -744,11 +840,6 @@ inline void clvr_urm_begin(const clvr_frame *f, clvr_urm *e, float span, float r
     e->alive = 1;
     e->emit = emit;
     e->rate = rate;
-    e->sum = (float3)(0.0f);
-    e->wsum = 0.0f;
-    e->tsum = 0.0f;
-    e->pick = (float3)(0.0f);
-    e->pick_t = 0.0f;
 }
 
 /* The transmittance factor of the interval just closed (warped length
@@ -760,20 +851,6 @@ inline float clvr_urm_interval(clvr_urm *e, float sr0, float sr1)
     for (int i = 0; i < e->npts; ++i) F *= 1.0f - (e->pt_sr[i] - (sr0 + slope * e->pt_s[i])) / e->pt_mu[i];
     e->npts = 0;
     return F;
-}
-
-inline float clvr_urm_lum(float3 c) { return c.x + c.y + c.z; }
-
-/* One step of weighted reservoir sampling driven by a single uniform *u:
- * takes the candidate with probability p, then rescales *u to [0, 1) so
- * that it stays uniform given the decision. So every pick of a ray can come
- * from one low-discrepancy dimension. */
-inline int clvr_urm_reservoir(float *u, float p)
-{
-    const int take = *u < p;
-    *u = take ? *u / p : (*u - p) / (1.0f - p);
-    *u = fmin(*u, 0x1.fffffep-1f);
-    return take;
 }
 
 /* The light grid G at p: trilinear between cell centres, clamped at the
@@ -890,26 +967,10 @@ inline int clvr_urm_segment(const clvr_volume *v, clvr_urm *e, float3 org, float
         e->to_quad = 1.0f;
         if (e->emit && sr > 0.0f) {
             const float w = e->T * sr;
-            const float3 g = w * med.xyz;
-            e->sum += g;
             const float ww = fabs(w) * clvr_urm_lum(med.xyz);
-            if (ww > 0.0f) {
-                /* Weighted reservoir sampling with one uniform, rescaled to
-                 * [0, 1) after each decision so that it stays uniform given
-                 * the decision: the pick can then come from the frame's
-                 * low-discrepancy sequence like the other dimensions. */
-                float spread = 0.0f;
-                const float G = e->emit == 2 ? clvr_light_at(v, org + dir * t, &spread) : 1.0f;
-                e->lit += G * g;
-                e->wsum += ww;
-                e->tsum += ww * t;
-                if (clvr_urm_reservoir(&e->pick_u, ww / e->wsum)) {
-                    e->pick = g / ww;
-                    e->pick_t = t;
-                    e->pick_g = G;
-                    e->pick_s = spread;
-                }
-            }
+            float spread = 0.0f;
+            const float G = e->emit == 2 && ww > 0.0f ? clvr_light_at(v, org + dir * t, &spread) : 1.0f;
+            clvr_emit_add(&e->acc, t, w * med.xyz, ww, G, spread);
         }
         /* Russian roulette on the running transmittance. */
         const float aT = fabs(e->T);
@@ -1249,25 +1310,6 @@ inline float clvr_walk_g_inverse(const clvr_volume *v, float g, uint lo, uint hi
     return (float)lo + (den > 0.0f ? clamp(2.0f * r / den, 0.0f, 1.0f) : 0.0f);
 }
 
-/* Tet e's barycentric coordinates l[k] at org + t dir and their rates g[k]
- * along dir; 0 for a flat tet. */
-inline int clvr_walk_bary(const clvr_vec4 *vtx, float3 org, float3 dir, float t, float *l, float *g)
-{
-    const float3 o = (float3)(vtx[0].x, vtx[0].y, vtx[0].z);
-    const float3 a = (float3)(vtx[1].x, vtx[1].y, vtx[1].z) - o, b = (float3)(vtx[2].x, vtx[2].y, vtx[2].z) - o;
-    const float3 c = (float3)(vtx[3].x, vtx[3].y, vtx[3].z) - o;
-    const float3 bc = cross(b, c), ca = cross(c, a), ab = cross(a, b);
-    const float det = dot(a, bc);
-    if (!(fabs(det) > 0.0f)) return 0;
-    const float inv = 1.0f / det;
-    const float3 r = org + dir * t - o;
-    l[1] = dot(r, bc) * inv; l[2] = dot(r, ca) * inv; l[3] = dot(r, ab) * inv;
-    l[0] = 1.0f - l[1] - l[2] - l[3];
-    g[1] = dot(dir, bc) * inv; g[2] = dot(dir, ca) * inv; g[3] = dot(dir, ab) * inv;
-    g[0] = -(g[1] + g[2] + g[3]);
-    return 1;
-}
-
 /* The face slot (kernels/hull.h order) of tet e's face opposite vertex k. */
 inline uint clvr_walk_slot(const clvr_volume *v, uint inst_id, const clvr_instance *inst, uint e, int k)
 {
@@ -1325,7 +1367,7 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
         clvr_vec4 vtx[4];
         float l[4], g[4];
         clvr_load_tet(&w->pa, &w->inst, w->e, vtx);
-        if (!clvr_walk_bary(vtx, org, dir, t, l, g)) return 0;
+        if (!clvr_tet_bary(vtx, org, dir, t, l, g)) return 0;
         float dt = -INFINITY;
         int kx = -1;
         for (int k = 0; k < 4; ++k)
@@ -1342,54 +1384,6 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
     w->t = t;
     return 1;
 }
-
-/* What a camera ray's emission points add up to (the walk's; urm keeps the
- * same sums in clvr_urm): sum of the weighted colours, with shadows their
- * light-grid terms and a reservoir pick for the correction shadow ray
- * (see urm's comment). */
-typedef struct clvr_emit {
-    float3 sum, lit, pick;
-    float wsum, tsum, pick_t, pick_g, pick_s, pick_u;
-    int shadows;
-} clvr_emit;
-
-inline void clvr_emit_begin(clvr_emit *a, int shadows, float u_pick)
-{
-    a->sum = a->lit = a->pick = (float3)(0.0f);
-    a->wsum = a->tsum = a->pick_t = a->pick_g = a->pick_s = 0.0f;
-    a->pick_u = u_pick;
-    a->shadows = shadows;
-}
-
-/* Adds colour weight g (rgb, transmittance applied) emitted at org + t dir;
- * with shadows G and spread are the light grid's value there (any value
- * keeps the estimate unbiased: the walk holds one over a few tets, see
- * CLVR_WALK_LIGHT_HOLD). */
-inline void clvr_emit_add(clvr_emit *a, float t, float3 g, float G, float spread)
-{
-    a->sum += g;
-    const float ww = clvr_urm_lum(g);
-    if (!(ww > 0.0f)) return;
-    a->lit += G * g;
-    a->wsum += ww;
-    a->tsum += ww * t;
-    if (clvr_urm_reservoir(&a->pick_u, ww / a->wsum)) {
-        a->pick = g / ww;
-        a->pick_t = t;
-        a->pick_g = G;
-        a->pick_s = spread;
-    }
-}
-
-/* With shadows the walk evaluates the light grid (the lit terms' control)
- * again only once its emission points have moved this fraction of a grid
- * cell away from the last evaluation: tets are often far smaller than the
- * cells. Any value of the control keeps the estimate unbiased (the
- * correction shadow ray takes the same value), a closer one lowers its
- * variance. */
-#ifndef CLVR_WALK_LIGHT_HOLD
-#define CLVR_WALK_LIGHT_HOLD 0.25f
-#endif
 
 /* Walks [t0, t1] (raw hull gaps glo/ghi, ng of them, tell where the ray is
  * outside between two crossings): *sum the emission with the
@@ -1418,14 +1412,9 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
         clvr_vec4 vtx[4];
         float l[4], g[4];
         clvr_load_tet(&w.pa, &w.inst, w.e, vtx);
-        if (!clvr_walk_bary(vtx, org, dir, w.t, l, g)) return 0;
-        float dt = INFINITY;
-        int kx = -1;
-        for (int k = 0; k < 4; ++k)
-            if (g[k] < 0.0f && l[k] / -g[k] < dt) {
-                dt = l[k] / -g[k];
-                kx = k;
-            }
+        if (!clvr_tet_bary(vtx, org, dir, w.t, l, g)) return 0;
+        float dt;
+        const int kx = clvr_tet_exit(l, g, &dt);
         if (kx < 0) return 0;
         const float tb = fmin(w.t + fmax(dt, 0.0f), t1), len = tb - w.t;
         const float k = g[0] * vtx[0].w + g[1] * vtx[1].w + g[2] * vtx[2].w + g[3] * vtx[3].w;
@@ -1477,7 +1466,8 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
                     t_G = w.t + xc;
                     G = clvr_light_at(v, org + dir * t_G, &spread);
                 }
-                clvr_emit_add(acc, w.t + xc, (*T * wt) * clvr_volume_tf(v, sa + k * xc).xyz, G, spread);
+                const float3 ge = (*T * wt) * clvr_volume_tf(v, sa + k * xc).xyz;
+                clvr_emit_add(acc, w.t + xc, ge, clvr_urm_lum(ge), G, spread);
                 *T *= clvr_exp_neg(tau);
             }
             if (*T < CLVR_URM_RR) {
@@ -1557,23 +1547,6 @@ inline float4 clvr_emit_shade(const clvr_volume *v, const clvr_emit *a, float T,
     return (float4)(c + T * bg, 1.0f - T);
 }
 
-/* urm's sums as a clvr_emit. */
-inline clvr_emit clvr_urm_emit(const clvr_urm *e, int shadows)
-{
-    clvr_emit a;
-    a.sum = e->sum;
-    a.lit = e->lit;
-    a.pick = e->pick;
-    a.wsum = e->wsum;
-    a.tsum = e->tsum;
-    a.pick_t = e->pick_t;
-    a.pick_g = e->pick_g;
-    a.pick_s = e->pick_s;
-    a.pick_u = e->pick_u;
-    a.shadows = shadows;
-    return a;
-}
-
 /* One camera ray with the frame's estimator. u_primary (dimension 2 of the
  * low-discrepancy sampler, the caller's draw) drives the camera ray's first
  * free flight (delta) or quadrature offset (urm). ld: the frame's
@@ -1616,17 +1589,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
              * would otherwise spend all of them on lookups that miss. */
             const float Tend = clvr_urm_camera(v, &e, org, dir, ts, t1, (t1 - ts) / fmax(t1 - t0, 1e-30f), u_primary,
                                                clvr_rng_next(rng), &g, rng, samples, nulls);
-            acc.sum += T * e.sum;
-            acc.lit += T * e.lit;
-            const float wu = T * e.wsum;
-            if (wu > 0.0f && clvr_rng_next(rng) * (acc.wsum + wu) < wu) {
-                acc.pick = e.pick;
-                acc.pick_t = e.pick_t;
-                acc.pick_g = e.pick_g;
-                acc.pick_s = e.pick_s;
-            }
-            acc.wsum += wu;
-            acc.tsum += T * e.tsum;
+            clvr_emit_merge(&acc, &e.acc, T, rng);
             T *= Tend;
         }
         return clvr_emit_shade(v, &acc, T, org, dir, lo, hi, ldir, bg.xyz, ld, rng, samples, nulls, rays, guide);
@@ -1637,8 +1600,7 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
         clvr_urm e;
         const float u_pick = ld ? ld[4] : clvr_rng_next(rng);
         const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, 1.0f, u_primary, u_pick, &g, rng, samples, nulls);
-        const clvr_emit a = clvr_urm_emit(&e, f->shadows != 0u);
-        return clvr_emit_shade(v, &a, Tend, org, dir, lo, hi, ldir, bg.xyz, ld, rng, samples, nulls, rays, guide);
+        return clvr_emit_shade(v, &e.acc, Tend, org, dir, lo, hi, ldir, bg.xyz, ld, rng, samples, nulls, rays, guide);
     }
 
     float t;
@@ -1690,14 +1652,14 @@ inline void clvr_render_urm_record(const clvr_volume *v, float3 org, float3 dir,
     }
     clvr_urm e;
     const float Tend = clvr_urm_camera(v, &e, org, dir, t0, t1, 1.0f, u_primary, u_pick, &g, rng, samples, nulls);
-    const float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.sum +
-                     (f->shadows ? f->light_intensity : 0.0f) * e.lit;
+    const float3 c = (f->ambient + (f->shadows ? 0.0f : f->light_intensity)) * e.acc.sum +
+                     (f->shadows ? f->light_intensity : 0.0f) * e.acc.lit;
     rec->a = a;
     rec->tau = Tend;
-    rec->wsum = f->shadows ? e.wsum : 0.0f;
-    rec->pick_g = e.pick_g;
+    rec->wsum = f->shadows ? e.acc.wsum : 0.0f;
+    rec->pick_g = e.acc.pick_g;
     vstore4((float4)(c, 0.0f), 0, rec->e);
-    vstore4((float4)(e.pick, e.pick_t), 0, rec->pick);
+    vstore4((float4)(e.acc.pick, e.acc.pick_t), 0, rec->pick);
 }
 
 /* Front-to-back alpha compositing at a fixed step with a random offset per
