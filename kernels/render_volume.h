@@ -295,6 +295,22 @@ typedef struct clvr_gaps {
  * 0.002 of them outside the mesh). */
 #define CLVR_GAP_MIN 0.01f
 
+/* The hull's cut of [*t0, *t1] and its candidate gaps (clvr_hull_gaps),
+ * *n of them (0 without a hull, or past CLVR_HULL_MAX_HITS crossings, where
+ * only the cut is made); 0 when the ray misses the mesh. The walk takes
+ * them raw (it meets the boundary faces itself). */
+inline int clvr_volume_hull_crossings(const clvr_volume *v, float3 org, float3 dir, float *t0, float *t1, float *glo,
+                                      float *ghi, int *n)
+{
+    *n = 0;
+    if (v->f->hull_faces == 0u) return 1;
+    const int k = clvr_hull_gaps(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, t0, t1, glo, ghi);
+    if (k == -1) return 0;
+    if (k == -2) return clvr_volume_hull_clip(v, org, dir, t0, t1);
+    *n = k;
+    return 1;
+}
+
 /* clvr_volume_hull_clip for a camera ray, with the gaps that lie outside
  * the mesh in *g (none without a hull, or past CLVR_HULL_MAX_HITS crossings);
  * clvr_volume_clip_gaps: the clip box and planes first, as clvr_volume_clip.
@@ -303,13 +319,10 @@ typedef struct clvr_gaps {
  * inside: the gap is then kept, which costs points, never bias). */
 inline int clvr_volume_hull_gaps(const clvr_volume *v, float3 org, float3 dir, float *t0, float *t1, clvr_gaps *g)
 {
-    const clvr_frame *f = v->f;
     g->n = 0;
-    if (f->hull_faces == 0u) return 1;
     float glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
-    const int n = clvr_hull_gaps(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, t0, t1, glo, ghi);
-    if (n == -1) return 0;
-    if (n == -2) return clvr_volume_hull_clip(v, org, dir, t0, t1);
+    int n;
+    if (!clvr_volume_hull_crossings(v, org, dir, t0, t1, glo, ghi, &n)) return 0;
     const float shortest = CLVR_GAP_MIN * (*t1 - *t0);
     for (int i = 0; i < n; ++i) {
         const float a = fmax(glo[i], *t0), b = fmin(ghi[i], *t1);
@@ -1565,15 +1578,8 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
     if (f->estimator == CLVR_ESTIMATOR_WALK) {
         if (!clvr_ray_clip(f, org, dir, lo, hi, &t0, &t1)) return bg;
         float glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
-        int ng = 0;
-        if (f->hull_faces) {
-            ng = clvr_hull_gaps(v->hull_bvh, v->hull, org.x, org.y, org.z, dir.x, dir.y, dir.z, &t0, &t1, glo, ghi);
-            if (ng == -1) return bg;
-            if (ng == -2) {
-                ng = 0;
-                if (!clvr_volume_hull_clip(v, org, dir, &t0, &t1)) return bg;
-            }
-        }
+        int ng;
+        if (!clvr_volume_hull_crossings(v, org, dir, &t0, &t1, glo, ghi, &ng)) return bg;
         clvr_emit acc;
         clvr_emit_begin(&acc, f->shadows != 0u, ld ? ld[4] : clvr_rng_next(rng));
         float T, ts;
