@@ -79,6 +79,30 @@ if [ "$rc" -eq 4 ] && grep -q "CL_DEVICE_MAX_MEM_ALLOC_SIZE, lowered" "$tmp/err"
    && ! grep -q "clvr: loading" "$tmp/err" && [ ! -e "$tmp/small.png" ]; then ok
 else bad "CLVR_MAX_ALLOC_BYTES=1000000: exit $rc: $(head -c 600 "$tmp/err")"; fi
 
+# The walk estimator's face adjacency (16 bytes per tet, one buffer): a
+# mesh split into pieces below the allocation limit renders with urm and
+# says so, with no adjacency in the stats; without the limit it is built
+# and counted, silently.
+"$BUILD/clvr-gen" cellvar "$tmp/t.bin" --elements 600k --quiet || bad "clvr-gen cellvar failed"
+for lim in 9000000 0; do
+  if [ "$lim" -gt 0 ]; then export CLVR_MAX_ALLOC_BYTES=$lim; else unset CLVR_MAX_ALLOC_BYTES; fi
+  "$CLVR" "$tmp/t.bin" -o "$tmp/w$lim.pfm" --size 32x32 --spp 1 --partitions 2 --shadows off --estimator walk \
+    --stats-json "$tmp/w$lim.json" >"$tmp/out" 2>"$tmp/err" || bad "walk with limit $lim: $(head -c 600 "$tmp/err")"
+  n=$(grep -c "could not hold the walk estimator's face adjacency" "$tmp/err")
+  want=0
+  [ "$lim" -gt 0 ] && want=1
+  if [ "$n" -eq "$want" ]; then ok; else bad "walk with limit $lim: $n adjacency notices: $(head -c 600 "$tmp/err")"; fi
+done
+unset CLVR_MAX_ALLOC_BYTES
+/usr/bin/python3 - "$tmp" <<'PY' && ok || bad "adjacency bytes in --stats-json"
+import json, sys
+d = sys.argv[1]
+a, b = json.load(open(d + "/w9000000.json")), json.load(open(d + "/w0.json"))
+assert a["bytes"]["adjacency"] == 0, a["bytes"]
+# 4 bytes per face slot, 4 slots per tet, and 4 per instance cluster + 1
+assert 16 * b["elements"] < b["bytes"]["adjacency"] < 16 * b["elements"] + 4096, (b["bytes"], b["elements"])
+PY
+
 # An address space too small: clvr's own refusal, from the header. (Not
 # under AddressSanitizer, whose shadow memory alone needs terabytes of
 # address space: such a binary cannot start under ulimit -v at all.)

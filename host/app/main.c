@@ -395,6 +395,13 @@ int main(int argc, char **argv)
          * --denoise's read or without the control variates). */
         TRY(clvr_tracer_stat(tracer, "light_s", &stats.light_s, &msg));
         TRY(clvr_tracer_stat(tracer, "image_s", &stats.image_s, &msg));
+        double ab = 0.0, as = 0.0;
+        TRY(clvr_tracer_stat(tracer, "adjacency_bytes", &ab, &msg));
+        TRY(clvr_tracer_stat(tracer, "adjacency_skipped", &as, &msg));
+        stats.bytes_adjacency = (uint64_t)ab;
+        if (!o.quiet && as > 0.0)
+            fprintf(stderr, "clvr: the device could not hold the walk estimator's face adjacency (16 bytes per tet): "
+                    "urm rendered the rays instead (the same expected image; --estimator urm skips the attempt)\n");
         if (!o.quiet)
             fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp%s)\n", path, o.width, o.height, frame,
                     o.denoise ? ", denoised" : "");

@@ -115,6 +115,9 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
         fprintf(out, "light grid %.4f s (device, in the frames' sum), image pass %.4f s (device, once per image, "
                      "not in s/frame)\n",
                 s->light_s, s->image_s);
+        if (s->bytes_adjacency)
+            fprintf(out, "face adjacency of the walk estimator (built at its first frame): %.3f MB, %.2f bytes/element\n",
+                    s->bytes_adjacency / 1e6, per_element(s->bytes_adjacency, s->elements));
     }
 }
 
@@ -151,6 +154,7 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
         {"sampling", (double)s->bytes_sampling},
         {"element_boxes", (double)s->bytes_element_boxes},
         {"hull", (double)s->bytes_hull},
+        {"adjacency", (double)s->bytes_adjacency},
         {"peak_rss", (double)s->bytes_peak_rss},
         {"resident", (double)s->bytes_resident},
     };

@@ -26,6 +26,7 @@ typedef struct clvr_stats {
     uint64_t bytes_element_boxes;   /* quantized element boxes of point location (kernels/locate.h) */
     uint64_t bytes_hull;            /* boundary faces and their tree that camera rays are cut to (0: none kept) */
     uint64_t hull_faces;
+    uint64_t bytes_adjacency;       /* the walk's face adjacency, built at its first frame (0: not built) */
     double hull_empty_fraction;     /* share of a ray's box chord outside the mesh (the hull's probe) */
     uint64_t bytes_peak_rss;        /* the process's peak resident set (VmHWM) when the stats are written */
     uint64_t bytes_resident;        /* its resident set once the mesh is freed and the renderer is ready:
