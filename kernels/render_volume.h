@@ -764,7 +764,8 @@ inline void clvr_emit_add(clvr_emit *a, float t, float3 g, float ww, float G, fl
     a->lit += G * g;
     a->wsum += ww;
     a->tsum += ww * t;
-    if (clvr_urm_reservoir(&a->pick_u, ww / a->wsum)) {
+    /* The pick serves the correction shadow ray only. */
+    if (a->shadows && clvr_urm_reservoir(&a->pick_u, ww / a->wsum)) {
         a->pick = g / ww;
         a->pick_t = t;
         a->pick_g = G;
