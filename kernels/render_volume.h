@@ -1382,15 +1382,12 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
         float l[4], g[4];
         clvr_load_tet(&w->pa, &w->inst, w->e, vtx);
         if (!clvr_tet_bary(vtx, org, dir, t, l, g)) return 0;
-        float dt = -INFINITY;
-        int kx = -1;
-        for (int k = 0; k < 4; ++k)
-            if (g[k] > 0.0f && -l[k] / g[k] > dt) {
-                dt = -l[k] / g[k];
-                kx = k;
-            }
+        /* The face the ray entered by: where the reversed ray leaves. */
+        for (int k = 0; k < 4; ++k) g[k] = -g[k];
+        float back;
+        const int kx = clvr_tet_exit(l, g, &back);
         if (kx < 0) return 0;
-        t = fmax(t + fmin(dt, 0.0f), t_from);
+        t = fmax(t - fmax(back, 0.0f), t_from);
         if (t <= t_from) break;
         const uint nb = v->adj[clvr_walk_slot(v, w->h.inst, &w->inst, w->e, kx)];
         if (nb == CLVR_BVH_NOT_FOUND || !clvr_walk_goto(v, m, w, nb)) break;
