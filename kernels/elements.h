@@ -210,6 +210,49 @@ CLVR_FORCE_INLINE int clvr_tet_sample(const clvr_vec4 *vtx, float px, float py, 
     return 1;
 }
 
+#if defined(__OPENCL_VERSION__) && defined(CLVR_DEVICE_SIMD)
+/* clvr_tet_sample on four tets at once (v: tet j's vertex i at v[4j + i]),
+ * one float4 lane per tet and no early outs: bit j of the result is set
+ * when tet j holds the point, with its scalar in lane j of *scalar. The
+ * same expressions as clvr_tet_sample, lane by lane. Only where a
+ * work-item's float4 arithmetic runs on SIMD lanes (CLVR_DEVICE_SIMD: a CPU
+ * device); a GPU would do four tets' work per thread. */
+CLVR_FORCE_INLINE clvr_u32 clvr_tet_sample4(const clvr_vec4 *v, float px, float py, float pz, float4 *scalar)
+{
+    const float4 ox = (float4)(v[0].x, v[4].x, v[8].x, v[12].x), oy = (float4)(v[0].y, v[4].y, v[8].y, v[12].y),
+                 oz = (float4)(v[0].z, v[4].z, v[8].z, v[12].z);
+    const float4 ax = (float4)(v[1].x, v[5].x, v[9].x, v[13].x) - ox, ay = (float4)(v[1].y, v[5].y, v[9].y, v[13].y) - oy,
+                 az = (float4)(v[1].z, v[5].z, v[9].z, v[13].z) - oz;
+    const float4 bx = (float4)(v[2].x, v[6].x, v[10].x, v[14].x) - ox, by = (float4)(v[2].y, v[6].y, v[10].y, v[14].y) - oy,
+                 bz = (float4)(v[2].z, v[6].z, v[10].z, v[14].z) - oz;
+    const float4 cx = (float4)(v[3].x, v[7].x, v[11].x, v[15].x) - ox, cy = (float4)(v[3].y, v[7].y, v[11].y, v[15].y) - oy,
+                 cz = (float4)(v[3].z, v[7].z, v[11].z, v[15].z) - oz;
+    const float4 rx = px - ox, ry = py - oy, rz = pz - oz;
+    const float4 bcx = by * cz - bz * cy, bcy = bz * cx - bx * cz, bcz = bx * cy - by * cx;
+    const float4 det = ax * bcx + ay * bcy + az * bcz;
+    const float4 la = fabs(ax) + fabs(ay) + fabs(az), lb = fabs(bx) + fabs(by) + fabs(bz);
+    const float4 lc = fabs(cx) + fabs(cy) + fabs(cz);
+    const float4 inv = 1.0f / det;
+    const float4 u = (rx * bcx + ry * bcy + rz * bcz) * inv;
+    const float4 cax = cy * az - cz * ay, cay = cz * ax - cx * az, caz = cx * ay - cy * ax;
+    const float4 vv = (rx * cax + ry * cay + rz * caz) * inv;
+    const float4 abx = ay * bz - az * by, aby = az * bx - ax * bz, abz = ax * by - ay * bx;
+    const float4 w = (rx * abx + ry * aby + rz * abz) * inv;
+    const float lo = -CLVR_ELEMENT_EPS;
+    const int4 in = (fabs(det) > 1e-12f * la * lb * lc) & (fabs(det) < INFINITY) & (u >= lo) & (vv >= lo) &
+                    (w >= lo) & (u + vv + w <= 1.0f + CLVR_ELEMENT_EPS);
+    const float4 w0 = (float4)(v[0].w, v[4].w, v[8].w, v[12].w), w1 = (float4)(v[1].w, v[5].w, v[9].w, v[13].w),
+                 w2 = (float4)(v[2].w, v[6].w, v[10].w, v[14].w), w3 = (float4)(v[3].w, v[7].w, v[11].w, v[15].w);
+    float4 s = 0.0f;
+    s += (1.0f - u - vv - w) * w0;
+    s += u * w1;
+    s += vv * w2;
+    s += w * w3;
+    *scalar = s;
+    return (clvr_u32)((in.x & 1) | (in.y & 2) | (in.z & 4) | (in.w & 8));
+}
+#endif
+
 /* ------------------------------------------------ pyramid (VTK_PYRAMID) */
 
 /* base 0 (0,0) 1 (1,0) 2 (1,1) 3 (0,1) scaled by (1 - w), apex 4 */
