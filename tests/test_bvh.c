@@ -10,8 +10,10 @@
  *   host and device point location agree with brute force (same element, or
  *   a neighbour brute force also accepts, with the same scalar), with each
  *   other (same element; the device runs CLVR_LOCATE_INCOHERENT, the host
- *   CLVR_LOCATE_COHERENT) and across the two query hints on the host (same
- *   element, same scalar bits),
+ *   CLVR_LOCATE_COHERENT; on PoCL the device tests a tet leaf's candidates
+ *   four at a time, clvr_tet_sample4, so this compares it with the host's
+ *   one-by-one clvr_tet_sample) and across the two query hints on the host
+ *   (same element, same scalar bits),
  * - the same on the meshes in tests/data (vtk, umesh) when they load. */
 #include "test_util.h"
 
