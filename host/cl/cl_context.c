@@ -561,13 +561,13 @@ clvr_status clvr_cl_build(clvr_cl *cl, const char *entry, const char *options, c
      * (kernels/clvr_shared.h) on PoCL's CPU devices alone. CLVR_DEVICE_SIMD
      * there too: a work-item's float4 arithmetic runs on SIMD lanes, so
      * point location tests four tets at once (kernels/locate.h). */
-    const int prefetch = (cl->device_type & CL_DEVICE_TYPE_CPU) && is_pocl_platform(cl->platform_name);
+    const int pocl_cpu = (cl->device_type & CL_DEVICE_TYPE_CPU) && is_pocl_platform(cl->platform_name);
     /* CLVR_BUILD_OPTIONS (developers): more options for every program, e.g.
      * NVIDIA's -cl-nv-verbose, whose registers and spills CLVR_BUILD_LOG=1
      * then prints. */
     const char *extra = getenv("CLVR_BUILD_OPTIONS");
     sb_printf(&opts, "-cl-std=CL1.2 -DCLVR_WG=%u%s%s %s %s", (unsigned)(cl->max_work_group_size < 256 ? cl->max_work_group_size : 256),
-              prefetch ? " -DCLVR_DEVICE_PREFETCH -DCLVR_DEVICE_SIMD" : "",
+              pocl_cpu ? " -DCLVR_DEVICE_PREFETCH -DCLVR_DEVICE_SIMD" : "",
               cl->fp32_correct_div_sqrt ? " -cl-fp32-correctly-rounded-divide-sqrt" : "", options ? options : "",
               extra ? extra : "");
     rc = CLVR_FAULT_CODE("clBuildProgram", CL_BUILD_PROGRAM_FAILURE);
