@@ -455,12 +455,20 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #define CLVR_ESTIMATOR_DELTA 0u
 #define CLVR_ESTIMATOR_URM 1u
 #define CLVR_ESTIMATOR_WALK 2u
-/* auto (the default): walk without shadows, urm with (measured: without
- * shadows walk converges faster per second on every tet mesh measured; with
- * shadows their shared correction ray's noise dominates, and urm's cheaper
- * frames reach 2% first on most). Settings only: the renderer resolves it
- * (host/pipeline/render.c), a frame never carries it. */
+/* auto (the default): walk without shadows; with shadows walk on meshes of
+ * at most CLVR_AUTO_WALK_SHADOWS_MAX elements, urm on larger ones. Measured
+ * (bench/render-vs-vtk.sh, 256^2, time to 2%): without shadows walk
+ * converges faster per second on every tet mesh measured. With shadows the
+ * two share the correction ray's noise, and the walk's cost grows with the
+ * tets a ray crosses (about N^(1/3)) where urm's points do not: urm reached
+ * 2% first on post (616k tets, 0.43 against 0.54 s) and the 1M tets (0.71
+ * against 0.96 s), walk on the combustor (258k, 0.44 against 0.58 s) and
+ * the notch cut into 13k tets (19 against 32 ms); fire_ug (63k) tied, and
+ * the blunt fin (225k) went to urm by 20% (0.12 against 0.14 s). The bound
+ * lies between 258k and 616k. Settings only: the renderer resolves it
+ * (clvr_estimator_auto, host/pipeline/render.c), a frame never carries it. */
 #define CLVR_ESTIMATOR_AUTO 3u
+#define CLVR_AUTO_WALK_SHADOWS_MAX 400000u
 #define CLVR_ESTIMATOR_COUNT 4u
 /* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
  * at least this many quadrature points per ray, and at most this much

@@ -68,6 +68,18 @@ assert d["render"]["rays_per_s"] > 0
 assert d["render"]["image_s"] > 0 and d["render"]["light_s"] > 0, d["render"]
 PYEOF
 
+# --estimator auto with shadows (the default) walks a small tet mesh (its face
+# adjacency is built), urm does not (clvr_estimator_auto).
+for est in auto urm; do
+  expect 0 "" -- "$CLVR" --device "$DEV" --size 16x16 --spp 1 --quiet --estimator $est -o "$tmp/post-$est.png" \
+    --stats-json "$tmp/post-$est.json" "$DATA/vtk/post.vtk"
+done
+$PY - "$tmp/post-auto.json" "$tmp/post-urm.json" <<'PYEOF' && ok || bad "auto with shadows walks post.vtk's 8,750 tets"
+import json, sys
+a, u = (json.load(open(p))["bytes"].get("adjacency", 0) for p in sys.argv[1:])
+assert a == 16 * 8750 + 8 and u == 0, (a, u)
+PYEOF
+
 # --info on every natively read test file.
 for f in "$DATA"/vtk/*.vtk "$DATA"/umesh/*.umesh; do
   expect 0 "" -- "$CLVR" --info "$f"

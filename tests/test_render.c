@@ -754,6 +754,13 @@ static void test_light_grid(clvr_cl *cl)
     TU_CHECK_EQ_U64(clvr_light_res_for(4u * 24 * 24 * 24 - 1), 23);
     TU_CHECK_EQ_U64(clvr_light_res_for(4u * 24 * 24 * 24), 24);
     TU_CHECK_EQ_U64(clvr_light_res_for(UINT64_MAX), CLVR_URM_DEFAULT_LIGHT_RES);
+    /* --estimator auto (CLVR_ESTIMATOR_AUTO's comment): walk, or urm with
+     * shadows on meshes above CLVR_AUTO_WALK_SHADOWS_MAX elements, where the
+     * grid is 24 per axis whichever it is. */
+    TU_CHECK_EQ_U64(clvr_estimator_auto(0, UINT64_MAX), CLVR_ESTIMATOR_WALK);
+    TU_CHECK_EQ_U64(clvr_estimator_auto(1, 13127), CLVR_ESTIMATOR_WALK);
+    TU_CHECK_EQ_U64(clvr_estimator_auto(1, CLVR_AUTO_WALK_SHADOWS_MAX), CLVR_ESTIMATOR_WALK);
+    TU_CHECK_EQ_U64(clvr_estimator_auto(1, CLVR_AUTO_WALK_SHADOWS_MAX + 1u), CLVR_ESTIMATOR_URM);
     clvr_error err = {0};
     clvr_mesh m;
     if (make_box(6, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;

@@ -74,9 +74,10 @@ void clvr_render_settings_default(clvr_render_settings *s)
 {
     memset(s, 0, sizeof *s);
     s->method = CLVR_RENDER_DDA;
-    /* auto: walk without shadows, urm with, the estimators that reach a
-     * given relative error first there (bench/render-vs-vtk.sh, README
-     * "Rendering"); a mesh without tets renders with urm. */
+    /* auto: walk, or urm with shadows on large meshes (clvr_estimator_auto),
+     * the estimators that reach a given relative error first there
+     * (bench/render-vs-vtk.sh, README "Rendering"); a mesh without tets
+     * renders with urm. */
     s->estimator = CLVR_ESTIMATOR_AUTO;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
     s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
@@ -168,6 +169,11 @@ cleanup:
     return s;
 }
 
+uint32_t clvr_estimator_auto(int shadows, uint64_t elements)
+{
+    return !shadows || elements <= CLVR_AUTO_WALK_SHADOWS_MAX ? CLVR_ESTIMATOR_WALK : CLVR_ESTIMATOR_URM;
+}
+
 uint32_t clvr_light_res_for(uint64_t elements)
 {
     uint32_t r = CLVR_URM_DEFAULT_LIGHT_RES;
@@ -231,9 +237,8 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->width = set->width;
     f->height = set->height;
     f->method = set->method;
-    f->estimator = set->estimator == CLVR_ESTIMATOR_AUTO
-                       ? (set->shadows ? CLVR_ESTIMATOR_URM : CLVR_ESTIMATOR_WALK)
-                       : set->estimator;
+    f->estimator =
+        set->estimator == CLVR_ESTIMATOR_AUTO ? clvr_estimator_auto(set->shadows, m->num_elements) : set->estimator;
     if (f->estimator == CLVR_ESTIMATOR_WALK) {
         /* The walk needs the face adjacency and tets; a mesh without tets
          * renders with urm (what the walk falls back to anyway). */

@@ -84,6 +84,11 @@ void clvr_render_settings_default(clvr_render_settings *s);
  * changes (the PLOT3D post, whose 616k elements keep 24, loses its
  * 2-frame 2% at 16). */
 uint32_t clvr_light_res_for(uint64_t elements);
+/* What --estimator auto renders with (CLVR_ESTIMATOR_AUTO's comment): walk,
+ * or urm with shadows on a mesh of more than CLVR_AUTO_WALK_SHADOWS_MAX
+ * elements. The renderer then falls back to urm where the walk cannot run
+ * (no tets, no room for the adjacency). */
+uint32_t clvr_estimator_auto(int shadows, uint64_t elements);
 
 /* Per-frame figures, summed over the frames accumulated so far. */
 typedef struct clvr_render_counters {
