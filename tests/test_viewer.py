@@ -117,9 +117,13 @@ def mean_abs_diff(a, b):
 
 def start_xvfb():
     """Starts a private Xvfb on a free display (-displayfd); returns (process, ":N").
-    xvfb-run is not used: its cleanup sometimes fails with exit status 5."""
+    xvfb-run is not used: its cleanup sometimes fails with exit status 5.
+    -noreset: by default the server resets when its last client leaves, and a
+    session that connects during the reset fails ("Failed to open display");
+    under ASan beside test_mpi (ctest -j2) two sessions did."""
     rfd, wfd = os.pipe()
-    proc = subprocess.Popen(["Xvfb", "-displayfd", str(wfd), "-screen", "0", "640x480x24", "-nolisten", "tcp"],
+    proc = subprocess.Popen(["Xvfb", "-displayfd", str(wfd), "-screen", "0", "640x480x24", "-nolisten", "tcp",
+                             "-noreset"],
                             pass_fds=(wfd,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     os.close(wfd)
     data = b""
