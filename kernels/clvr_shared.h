@@ -458,7 +458,10 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* auto (the default): walk without shadows; with shadows walk on meshes of
  * at most CLVR_AUTO_WALK_SHADOWS_MAX elements, urm on larger ones. Measured
  * (bench/render-vs-vtk.sh, 256^2, time to 2%): without shadows walk
- * converges faster per second on every tet mesh measured. With shadows the
+ * reached 2% first on the combustor, fire_ug and the notch cut into tets
+ * (about 2x: urm needed a second frame or twice the frame there), and was
+ * up to 30% slower on post, the 1M tets and the blunt fin, all far under
+ * VTK's frame. With shadows the
  * two share the correction ray's noise, and the walk's cost grows with the
  * tets a ray crosses (about N^(1/3)) where urm's points do not: urm reached
  * 2% first on post (616k tets, 0.43 against 0.54 s) and the 1M tets (0.71

@@ -755,8 +755,8 @@ static void test_light_grid(clvr_cl *cl)
     TU_CHECK_EQ_U64(clvr_light_res_for(4u * 24 * 24 * 24), 24);
     TU_CHECK_EQ_U64(clvr_light_res_for(UINT64_MAX), CLVR_URM_DEFAULT_LIGHT_RES);
     /* --estimator auto (CLVR_ESTIMATOR_AUTO's comment): walk, or urm with
-     * shadows on meshes above CLVR_AUTO_WALK_SHADOWS_MAX elements, where the
-     * grid is 24 per axis whichever it is. */
+     * shadows on meshes above CLVR_AUTO_WALK_SHADOWS_MAX elements.
+     * test_cli_e2e checks that the renderer applies it. */
     TU_CHECK_EQ_U64(clvr_estimator_auto(0, UINT64_MAX), CLVR_ESTIMATOR_WALK);
     TU_CHECK_EQ_U64(clvr_estimator_auto(1, 13127), CLVR_ESTIMATOR_WALK);
     TU_CHECK_EQ_U64(clvr_estimator_auto(1, CLVR_AUTO_WALK_SHADOWS_MAX), CLVR_ESTIMATOR_WALK);
