@@ -478,35 +478,34 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * majorant optical depth between two of them. */
 #define CLVR_URM_DEFAULT_STEPS 24u
 #define CLVR_URM_DEFAULT_KAPPA 0.25f
-/* urm with shadows: cells per axis of the light grid (a control variate for
- * the shadow rays, kernels/render_volume.h): at most CLVR_URM_LIGHT_RES (the
- * buffer's size), CLVR_URM_DEFAULT_LIGHT_RES by default. 256^2, seconds to
- * the second shadowed frame, 32 -> 24 per axis: post 0.42 -> 0.39, tets-1M
- * 0.79 -> 0.69, blunt fin 0.20 -> 0.18, igloo 0.23 -> 0.19, gmsh-point 0.44
- * -> 0.38, with the error within 0.06 point; 20 and 16 lose 0.2-0.3 point on
- * post and tets-1M for little more time saved
- * (bench/results/render-converge/2026-11-25-s25-root.md). */
-#define CLVR_URM_LIGHT_RES 32u
-#define CLVR_URM_DEFAULT_LIGHT_RES 24u
-/* The light grid is made by a sweep toward the light (kernels/
- * render_volume.h, clvr_light_sweep): slices of cells taken from the
- * light's side, each cell's optical depth integrated over the segment that
- * reaches CLVR_LIGHT_SWEEP_SLICES slices nearer the light, plus that
- * slice's depth interpolated where the segment ends (the first slices
- * integrate to the box's exit). CLVR_LIGHT_SWEEP_POINTS points per slice
- * crossed and one per CLVR_LIGHT_SWEEP_DEPTH of majorant optical depth.
- * Fewer slices per step interpolate more often and blur the shadows (1:
- * post's error after 1 / 2 shadowed frames 3.96 / 1.69% -> 4.56 / 2.32%);
- * 8 keeps it (4.00 / 1.73%) at half the rays' cost. */
-#define CLVR_LIGHT_SWEEP_SLICES 8u
-#define CLVR_LIGHT_SWEEP_POINTS 1.0f
-#define CLVR_LIGHT_SWEEP_DEPTH 0.5f
-/* Launches of the sweep for a grid of r cells per axis: one per
- * CLVR_LIGHT_SWEEP_SLICES slices, then one from depth to transmittance. */
-CLVR_INLINE clvr_u32 clvr_light_sweep_steps(clvr_u32 r)
-{
-    return (r + CLVR_LIGHT_SWEEP_SLICES - 1u) / CLVR_LIGHT_SWEEP_SLICES + 1u;
-}
+/* urm and walk with shadows: the light grid (a control variate for the
+ * shadow rays, kernels/render_volume.h) lies in light space: r x r columns
+ * along the light over the grid domain's extent across it, each with
+ * clvr_light_depth(r) nodes from the domain's light side to its far side
+ * (clvr_light_space gives the frame). r is at most CLVR_URM_LIGHT_RES,
+ * CLVR_URM_DEFAULT_LIGHT_RES by default on meshes of about 65k elements or
+ * more (clvr_light_res_for). Columns replaced an axis-aligned grid of 24^3
+ * cells swept slice by slice toward the light (session 40): a column's
+ * nodes share one integration toward the light, so the same time buys
+ * about 8 times the nodes, and shadow edges, which run along the light,
+ * lie along the columns. 256^2, fire_ug cut into 62,772 tets, walk, error
+ * after 1 / 2 shadowed frames: 24^3 swept 2.55 / 1.77%; 64^3 swept (10x
+ * the time) 1.95 / 1.21%; columns 40^2 x 20 2.23 / 1.42%, 48^2 x 14 2.68
+ * / 1.77%, 64^2 x 32 1.86 / 1.16%, 56^2 x 40 1.85 / 1.15%
+ * (bench/results/render-converge/2026-11-29-s40-light-step.md). */
+#define CLVR_URM_LIGHT_RES 96u
+#define CLVR_URM_DEFAULT_LIGHT_RES 64u
+/* Nodes per column of a light grid of r x r columns, and in all. */
+/* (one column of one node, r = 1: G = 1 everywhere, for tests) */
+CLVR_INLINE clvr_u32 clvr_light_depth(clvr_u32 r) { return r >= 4u ? r / 2u : r < 2u ? r : 2u; }
+CLVR_INLINE clvr_u32 clvr_light_nodes(clvr_u32 r) { return r * r * clvr_light_depth(r); }
+/* Index of node j (from the light) of column (a, b). */
+CLVR_INLINE int clvr_light_node(int a, int b, int j, int r) { return (j * r + b) * r + a; }
+/* A column integrates the optical depth between two nodes at
+ * CLVR_LIGHT_COLUMN_POINTS jittered points per node interval plus one per
+ * CLVR_LIGHT_COLUMN_DEPTH of majorant optical depth. */
+#define CLVR_LIGHT_COLUMN_POINTS 1.0f
+#define CLVR_LIGHT_COLUMN_DEPTH 0.5f
 
 /* Index of macrocell (x, y, z) in a grid of r cells per axis (x fastest):
  * the one definition shared by the majorant kernels and the DDA. */
@@ -593,13 +592,20 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 312 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 380 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
     float grid_lo[4];         /* domain of the macrocell grid (majorants: must cover the mesh) */
     float grid_hi[4];
     float light_dir[4];       /* unit vector toward the directional light */
+    /* The light grid's frame (clvr_light_space): rows 0-2 the unit axes
+     * e1, e2 across the light and L = light_dir, each with in [3] the
+     * smallest e1 and e2 coordinate and the largest L coordinate of the
+     * grid domain; row 3 the column spacing along e1 and e2 and the node
+     * spacing along L. Node (a, b, j) lies at (u0 + (a + 1/2) du) e1 +
+     * (v0 + (b + 1/2) dv) e2 + (w1 - j dw) L. */
+    float light_space[4][4];
     float background[4];      /* linear rgb of rays that leave the volume */
     float ambient;            /* light that reaches every collision */
     float light_intensity;    /* light from light_dir when the shadow ray gets through */
@@ -621,7 +627,7 @@ typedef struct clvr_frame {
     clvr_u32 estimator;       /* CLVR_ESTIMATOR_* */
     clvr_u32 urm_steps;       /* urm: at least this many quadrature points per ray */
     float urm_kappa;          /* urm: at most this majorant optical depth between two points */
-    clvr_u32 light_res;       /* urm with shadows: light grid cells per axis over the grid domain */
+    clvr_u32 light_res;       /* with shadows: light grid columns per axis (clvr_light_nodes) */
     clvr_u32 num_clip_planes; /* planes in use, 0..CLVR_MAX_CLIP_PLANES */
     /* MPI mode (docs/mpi-compositing.md): mixed into the random streams of
      * the estimator (not of the sub-pixel position, which every rank must
@@ -642,7 +648,7 @@ typedef struct clvr_frame {
      * (still bounds on a shorter interval). */
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 316, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 380, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

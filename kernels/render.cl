@@ -22,26 +22,19 @@
 #define CLVR_VOLUME_PARAM(T, name) __global const T *name,
 #define CLVR_VOLUME_BIND(T, name) v.name = name;
 
-/* The light grid (urm with shadows): step `step` of its sweep
- * (clvr_light_sweep) over r x (r * M / per_item) work items (M =
- * CLVR_LIGHT_SWEEP_SLICES), each making `per_item` of the step's M slices
- * (a divisor of M) for lateral cell (a, b): work item (a, b + r g) slices
- * g per_item ... The host asks for 1 on a GPU (8 times the lanes) and M on
- * a CPU, where a work item's setup costs more than the lanes gain. Same
- * parameters as clvr_render_frame then the grid (the host passes the
- * grid's buffer as both; this kernel reads and writes it through `out`
- * only). */
+/* The light grid (with shadows): one work item per column (a, b) of its
+ * r x r (clvr_light_column). Same parameters as clvr_render_frame then the
+ * grid. */
 __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr_camera *cam,
-                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out, uint step, uint per_item)
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float *out)
 {
     const clvr_frame f = *fp;
-    const int r = (int)f.light_res, a = (int)get_global_id(0), bg = (int)get_global_id(1);
-    const int k = (int)per_item, groups = (int)CLVR_LIGHT_SWEEP_SLICES / k;
-    if (a >= r || bg >= r * groups) return;
+    const int r = (int)f.light_res, a = (int)get_global_id(0), b = (int)get_global_id(1);
+    if (a >= r || b >= r) return;
     clvr_volume v;
     v.f = &f;
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
-    clvr_light_sweep(&v, a, bg % r, (bg / r) * k, (bg / r + 1) * k, (int)step, out);
+    clvr_light_column(&v, a, b, out);
     (void)cam;
 }
 /* One frame: adds each pixel's sample to accum (and its square to

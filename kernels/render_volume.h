@@ -247,8 +247,8 @@ inline int clvr_ray_clip(const clvr_frame *f, float3 org, float3 dir, float3 lo,
 
 /* Cuts [t0, t1] to the part of the ray between its first and last crossing
  * of the mesh's boundary faces (kernels/hull.h); 0 when the ray misses the
- * mesh. Camera rays and shadow rays are cut (the light grid's sweep, whose
- * segments are short, takes the box and clip planes only). Nothing
+ * mesh. Camera rays and shadow rays are cut (the light grid's columns,
+ * whose segments are short, take the box and clip planes only). Nothing
  * changes without a hull (or with settings.hull off). 256^2, frames to 2%
  * relative RMSE without / with shadows, against no cut: PLOT3D combustor
  * 8 / 11 -> 3 / 4, kiefer_tet10 7 / 8 -> 4 / 4, post 2 / 3 -> 2 / 2, at
@@ -659,9 +659,10 @@ inline int clvr_delta_track(const clvr_volume *v, float3 org, float3 dir, float 
  *  - Russian roulette on the running weight below CLVR_URM_RR.
  *  - Direct light, I sum_k g_k T_l(x_k) (g_k: the quadrature terms, T_l:
  *    transmittance toward the light), with a control variate: a light grid
- *    G (transmittance toward the light at the cell centres of a coarse grid,
- *    computed on the device whenever the transfer function, the light or the
- *    grid changes, clvr_light_grid) interpolated at every quadrature point,
+ *    G (transmittance toward the light at the nodes of a coarse grid in
+ *    light space, computed on the device whenever the transfer function,
+ *    the light or the grid changes, clvr_light_grid) interpolated at every
+ *    quadrature point,
  *    plus one shadow ray from a point b picked by weighted reservoir
  *    sampling (weight |T sigma / rho| luminance(c)):
  *      I [sum_k g_k G(x_k) + W g_b / w_b (T_l(b) - G(b))]
@@ -774,19 +775,22 @@ inline void clvr_emit_add(clvr_emit *a, float t, float3 g, float ww, float G, fl
 }
 
 /* With shadows the walk evaluates the light grid (the lit terms' control)
- * at points this fraction of a grid cell apart along the ray and
- * interpolates linearly between them for its emission points: tets are
- * often smaller than the cells, and the grid is trilinear, nearly linear
- * over a cell's length. Any value of the control keeps the estimate
+ * at points this many of the grid's smallest spacings apart along the ray
+ * and interpolates linearly between them for its emission points: tets
+ * are often smaller than the spacing, and the grid is trilinear, nearly
+ * linear over that length. Any value of the control keeps the estimate
  * unbiased (the correction shadow ray takes the same value), a closer one
  * lowers its variance. 256^2, shadows, ms per frame and error after 1 / 2
  * frames against the value held from the last evaluation until the points
- * had moved a quarter of a cell: fire_ug 125 -> 108 ms, 2.79 / 1.83 ->
- * 2.47 / 1.74%; post 273 -> 238 ms, 2.48 / 1.41 -> 2.37 / 1.29%;
- * combustor 199 -> 202 ms, 2.94 / 1.71 -> 2.86 / 1.63%
+ * had moved a quarter of a cell (the axis-aligned 24^3 grid of session 39,
+ * a step of 1): fire_ug 125 -> 108 ms, 2.79 / 1.83 -> 2.47 / 1.74%; post
+ * 273 -> 238 ms, 2.48 / 1.41 -> 2.37 / 1.29%; combustor 199 -> 202 ms,
+ * 2.94 / 1.71 -> 2.86 / 1.63%. With the light-space grid, whose columns
+ * are about half as far apart, 1 -> 2: fire_ug 116 -> 108 ms, combustor
+ * 197 -> 195 ms, errors within 0.06 point
  * (bench/results/render-converge/2026-11-29-s40-light-step.md). */
 #ifndef CLVR_WALK_LIGHT_STEP
-#define CLVR_WALK_LIGHT_STEP 1.0f
+#define CLVR_WALK_LIGHT_STEP 2.0f
 #endif
 
 /* Appends b, which continues a's ray with a's transmittance T in front of
@@ -873,26 +877,28 @@ inline float clvr_urm_interval(clvr_urm *e, float sr0, float sr1)
     return F;
 }
 
-/* The light grid G at p: trilinear between cell centres, clamped at the
- * faces (any G keeps the estimate unbiased; a close one lowers its variance).
- * *spread: the largest minus the smallest of the 8 values interpolated, a
- * cheap sign of how far G may be from the truth there (0 where the light
- * is uniform around p). */
+/* The light grid G at p: trilinear between its nodes in light space
+ * (clvr_light_space), clamped at the faces (any G keeps the estimate
+ * unbiased; a close one lowers its variance). *spread: the largest minus
+ * the smallest of the 8 values interpolated, a cheap sign of how far G may
+ * be from the truth there (0 where the light is uniform around p). */
 inline float clvr_light_at(const clvr_volume *v, float3 p, float *spread)
 {
     const clvr_frame *f = v->f;
-    const int r = (int)f->light_res;
-    const float3 lo = vload3(0, f->grid_lo), hi = vload3(0, f->grid_hi);
-    /* fmax: a flat mesh (zero extent on an axis) must not divide by 0. */
-    const float3 q = clamp((p - lo) / fmax(hi - lo, (float3)(1e-30f)) * (float)r - 0.5f, (float3)(0.0f),
-                           (float3)((float)(r - 1)));
-    const int3 c0 = min(convert_int3_rtz(q), (int3)(r - 2 > 0 ? r - 2 : 0)), c1 = min(c0 + 1, (int3)(r - 1));
+    const int r = (int)f->light_res, n = (int)clvr_light_depth(f->light_res);
+    const float4 lu = vload4(0, f->light_space[0]), lv = vload4(0, f->light_space[1]);
+    const float4 lw = vload4(0, f->light_space[2]), h = vload4(0, f->light_space[3]);
+    const float3 q = clamp((float3)((dot(p, lu.xyz) - lu.w) / h.x - 0.5f, (dot(p, lv.xyz) - lv.w) / h.y - 0.5f,
+                                    (lw.w - dot(p, lw.xyz)) / h.z),
+                           (float3)(0.0f), (float3)((float)(r - 1), (float)(r - 1), (float)(n - 1)));
+    const int3 c0 = min(convert_int3_rtz(q), (int3)(max(r - 2, 0), max(r - 2, 0), max(n - 2, 0)));
+    const int3 c1 = min(c0 + 1, (int3)(r - 1, r - 1, n - 1));
     const float3 w = q - convert_float3(c0);
     __global const float *g = v->light;
-    const float a0 = g[clvr_grid_index(c0.x, c0.y, c0.z, r)], a1 = g[clvr_grid_index(c1.x, c0.y, c0.z, r)];
-    const float b0 = g[clvr_grid_index(c0.x, c1.y, c0.z, r)], b1 = g[clvr_grid_index(c1.x, c1.y, c0.z, r)];
-    const float d0 = g[clvr_grid_index(c0.x, c0.y, c1.z, r)], d1 = g[clvr_grid_index(c1.x, c0.y, c1.z, r)];
-    const float e0 = g[clvr_grid_index(c0.x, c1.y, c1.z, r)], e1 = g[clvr_grid_index(c1.x, c1.y, c1.z, r)];
+    const float a0 = g[clvr_light_node(c0.x, c0.y, c0.z, r)], a1 = g[clvr_light_node(c1.x, c0.y, c0.z, r)];
+    const float b0 = g[clvr_light_node(c0.x, c1.y, c0.z, r)], b1 = g[clvr_light_node(c1.x, c1.y, c0.z, r)];
+    const float d0 = g[clvr_light_node(c0.x, c0.y, c1.z, r)], d1 = g[clvr_light_node(c1.x, c0.y, c1.z, r)];
+    const float e0 = g[clvr_light_node(c0.x, c1.y, c1.z, r)], e1 = g[clvr_light_node(c1.x, c1.y, c1.z, r)];
     *spread = fmax(fmax(fmax(a0, a1), fmax(b0, b1)), fmax(fmax(d0, d1), fmax(e0, e1))) -
               fmin(fmin(fmin(a0, a1), fmin(b0, b1)), fmin(fmin(d0, d1), fmin(e0, e1)));
     return mix(mix(mix(a0, a1, w.x), mix(b0, b1, w.x), w.y), mix(mix(d0, d1, w.x), mix(e0, e1, w.x), w.y), w.z);
@@ -1063,143 +1069,54 @@ inline float clvr_urm_light(const clvr_volume *v, float3 p, float3 ldir, float3 
 }
 
 /* ------------------------------------------------------------ light grid
- * Made by a sweep toward the light (its parameters and figures:
- * CLVR_LIGHT_SWEEP_SLICES in clvr_shared.h). Optical depth, not
- * transmittance, is carried from slice to slice and interpolated: it is
- * linear across a slice where the medium is uniform, so there the sweep is
- * exact; a last pass turns it into transmittance. The grid is a control
- * variate (clvr_light_at): an error in it costs variance, never bias. The
- * sweep replaced one urm ray per cell toward the light (24^3 rays), which
- * cost 2-3 times as much: 256^2, first shadowed frame with the grid, post
- * 241 -> 216 ms, the 13k-tet notch 49 -> 32 ms; errors after 1 / 2 frames
- * post 3.96 / 1.69 -> 4.00 / 1.73%, combustor 4.87 / 2.36 -> 4.89 / 2.39%,
- * notch 1.84 / 0.71 -> 1.85 / 0.72%.
+ * r x r columns along the light (clvr_light_space, CLVR_URM_LIGHT_RES in
+ * clvr_shared.h for the figures), each integrated from the grid domain's
+ * light side away from the light, its optical depth turned into
+ * transmittance at every node. The grid is a control variate
+ * (clvr_light_at): an error in it costs variance, never bias.
  *
  * Adds the optical depth of [a, b) (majorant m) along org + t dir to *tau:
  * jittered midpoints (offset u), `rate` per unit length and one per
- * CLVR_LIGHT_SWEEP_DEPTH of majorant optical depth; none where m is 0.
+ * CLVR_LIGHT_COLUMN_DEPTH of majorant optical depth; none where m is 0.
  * Returns 0 (CLVR_FOR_EACH_SEGMENT goes on). */
 inline int clvr_tau_segment(const clvr_volume *v, float3 org, float3 dir, float a, float b, float m, float rate,
                             float u, clvr_locate_hint *h, clvr_span *sp, float *tau)
 {
     if (!(m > 0.0f) || !(b > a)) return 0;
     const float len = b - a;
-    const int n = clamp((int)ceil(len * (rate + m * (1.0f / CLVR_LIGHT_SWEEP_DEPTH))), 1, 1024);
+    const int n = clamp((int)ceil(len * (rate + m * (1.0f / CLVR_LIGHT_COLUMN_DEPTH))), 1, 1024);
     const float ds = len / (float)n;
     for (int j = 0; j < n; ++j) *tau += clvr_volume_at_ray(v, org, dir, a + ((float)j + u) * ds, h, sp).w * ds;
     return 0;
 }
 
-/* Cell (lateral a, b; slice c along axis k) as (x, y, z), and its grid
- * index. */
-inline int3 clvr_light_cell(int k, int c, int a, int b)
-{
-    return k == 0 ? (int3)(c, a, b) : k == 1 ? (int3)(a, c, b) : (int3)(a, b, c);
-}
-
-inline int clvr_light_index(int k, int c, int a, int b, int r)
-{
-    const int3 q = clvr_light_cell(k, c, a, b);
-    return clvr_grid_index(q.x, q.y, q.z, r);
-}
-
-inline float clvr_f3(float3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
-
-/* The sweep axis and its direction: *sgn +1 when the light lies toward +k;
- * *cells: cells crossed per unit length along the light on that axis. */
-inline int clvr_light_axis(const clvr_frame *f, int *sgn, float *cells)
-{
-    const float3 lo = vload3(0, f->grid_lo), hi = vload3(0, f->grid_hi), ldir = vload3(0, f->light_dir);
-    const float3 ext = hi - lo;
-    int k = 0;
-    float best = -1.0f;
-    for (int a = 0; a < 3; ++a) {
-        const float e = clvr_f3(ext, a);
-        const float c = e > 1e-30f ? clvr_f3(ldir, a) * (float)f->light_res / e : 0.0f;
-        if (fabs(c) > best) {
-            best = fabs(c);
-            k = a;
-            *sgn = c > 0.0f ? 1 : -1;
-        }
-    }
-    *cells = best;
-    return k;
-}
-
-/* Slice `s` (counted from the light) of the sweep for lateral cell (a, b):
- * the cell's optical depth over the segment toward the light that reaches
- * the centre plane of the slice M nearer the light, plus that slice's depth
- * interpolated bilinearly where the segment ends; the first M slices, and a
- * segment that ends past the outermost cell centres, integrate to the box's
- * exit instead. */
-inline void clvr_light_slice(const clvr_volume *v, int a, int b, int s, int k, int sgn, float cells,
-                             __global float *grid)
+/* Column (a, b) of the light grid: transmittance toward the light at each
+ * of its nodes. Each interval between two nodes is cut to the box and clip
+ * planes on its own (outside the mesh the lookups find no medium, and a
+ * hull walk per interval would cost more than the interval); the lookup
+ * hint and span carry from one to the next. */
+inline void clvr_light_column(const clvr_volume *v, int a, int b, __global float *grid)
 {
     const clvr_frame *f = v->f;
-    const int r = (int)f->light_res, M = (int)CLVR_LIGHT_SWEEP_SLICES;
-    const int c = sgn > 0 ? r - 1 - s : s;
-    const float3 lo = vload3(0, f->grid_lo), hi = vload3(0, f->grid_hi), ldir = vload3(0, f->light_dir);
+    const int r = (int)f->light_res, n = (int)clvr_light_depth(f->light_res);
+    const float4 lu = vload4(0, f->light_space[0]), lv = vload4(0, f->light_space[1]);
+    const float4 lw = vload4(0, f->light_space[2]), h = vload4(0, f->light_space[3]);
     const float3 vlo = vload3(0, f->vol_lo), vhi = vload3(0, f->vol_hi);
-    const float3 h = (hi - lo) / (float)r;
-    const int i = clvr_light_index(k, c, a, b, r);
-    const float3 p = lo + (convert_float3(clvr_light_cell(k, c, a, b)) + 0.5f) * h;
-    float s1 = s < M || !(cells > 0.0f) ? INFINITY : (float)M / cells, tau_up = 0.0f;
-    if (s1 < INFINITY) {
-        const float3 q = (p + ldir * s1 - lo) / fmax(h, (float3)(1e-30f)) - 0.5f; /* in cell centres */
-        const int ka = k == 0 ? 1 : 0, kb = k == 2 ? 1 : 2;
-        const float qa = clvr_f3(q, ka), qb = clvr_f3(q, kb);
-        if (qa < 0.0f || qa > (float)(r - 1) || qb < 0.0f || qb > (float)(r - 1)) {
-            /* Past the outermost cell centres, where nothing is there to
-             * interpolate (the path may leave the box sideways): to the
-             * box's exit. */
-            s1 = INFINITY;
-        } else {
-            const int a0 = min((int)qa, max(r - 2, 0)), b0 = min((int)qb, max(r - 2, 0));
-            const int a1 = min(a0 + 1, r - 1), b1 = min(b0 + 1, r - 1);
-            const float wa = qa - (float)a0, wb = qb - (float)b0;
-            const int cu = c + sgn * M;
-            tau_up = mix(mix(grid[clvr_light_index(k, cu, a0, b0, r)], grid[clvr_light_index(k, cu, a1, b0, r)], wa),
-                         mix(grid[clvr_light_index(k, cu, a0, b1, r)], grid[clvr_light_index(k, cu, a1, b1, r)], wa),
-                         wb);
-        }
-    }
-    float s0 = 0.0f, tau = 0.0f;
-    /* The box and clip planes only: outside the mesh the lookups find no
-     * medium, and a hull walk per cell would cost more than the segment. */
-    if (clvr_ray_clip(f, p, ldir, vlo, vhi, &s0, &s1)) {
-        clvr_rng rng = clvr_rng_make((uint)i, 0x11647u, f->seed_lo, f->seed_hi);
-        const float u = clvr_rng_next(&rng), rate = cells * CLVR_LIGHT_SWEEP_POINTS;
-        clvr_locate_hint hint = clvr_locate_hint_none();
-        clvr_span span = clvr_span_none();
-        CLVR_FOR_EACH_SEGMENT(v, p, ldir, s0, s1, sa, sb, sm,
-                              clvr_tau_segment(v, p, ldir, sa, sb, sm, rate, u, &hint, &span, &tau));
-    }
-    grid[i] = tau + tau_up;
-}
-
-/* Step `step` of the sweep for lateral cell (a, b), its parts j0 .. j1 - 1
- * of M (M = CLVR_LIGHT_SWEEP_SLICES): slices step * M + j, each depending
- * on the slice M nearer the light only, so the M slices of a step can be
- * made side by side (r^2 M work items: a GPU has many more lanes than the
- * r^2 = 576 columns of a 24^3 grid). At step clvr_light_sweep_steps - 1,
- * optical depth to transmittance for cells j, j + M, ... of the column. */
-inline void clvr_light_sweep(const clvr_volume *v, int a, int b, int j0, int j1, int step, __global float *grid)
-{
-    const clvr_frame *f = v->f;
-    const int r = (int)f->light_res, M = (int)CLVR_LIGHT_SWEEP_SLICES;
-    int sgn = 1;
-    float cells = 0.0f;
-    const int k = clvr_light_axis(f, &sgn, &cells);
-    const int last = step + 1 >= (int)clvr_light_sweep_steps((uint)r);
-    for (int j = j0; j < j1; ++j) {
-        if (last) {
-            for (int c = j; c < r; c += M) {
-                const int i = clvr_light_index(k, c, a, b, r);
-                grid[i] = exp(-grid[i]);
-            }
-        } else if (step * M + j < r) {
-            clvr_light_slice(v, a, b, step * M + j, k, sgn, cells, grid);
-        }
+    const float3 org = (lu.w + ((float)a + 0.5f) * h.x) * lu.xyz + (lv.w + ((float)b + 0.5f) * h.y) * lv.xyz +
+                       lw.w * lw.xyz;
+    const float3 dir = -lw.xyz;
+    clvr_rng rng = clvr_rng_make((uint)(b * r + a), 0x11647u, f->seed_lo, f->seed_hi);
+    const float u = clvr_rng_next(&rng), rate = CLVR_LIGHT_COLUMN_POINTS / h.z;
+    clvr_locate_hint hint = clvr_locate_hint_none();
+    clvr_span span = clvr_span_none();
+    float tau = 0.0f;
+    grid[clvr_light_node(a, b, 0, r)] = 1.0f;
+    for (int j = 1; j < n; ++j) {
+        float s0 = (float)(j - 1) * h.z, s1 = (float)j * h.z;
+        if (clvr_ray_clip(f, org, dir, vlo, vhi, &s0, &s1))
+            CLVR_FOR_EACH_SEGMENT(v, org, dir, s0, s1, sa, sb, sm,
+                                  clvr_tau_segment(v, org, dir, sa, sb, sm, rate, u, &hint, &span, &tau));
+        grid[clvr_light_node(a, b, j, r)] = exp(-tau);
     }
 }
 
@@ -1423,9 +1340,9 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
     float sa = NAN, sig_a = 0.0f, G = 1.0f, spread = 0.0f;
     float t_A = INFINITY, t_B = -INFINITY, G_A = 1.0f, G_B = 1.0f, s_A = 0.0f, s_B = 0.0f;
     int zsteps = 0;
-    /* The light grid's smallest cell, in units of t. */
-    const float3 cell = (vload3(0, f->grid_hi) - vload3(0, f->grid_lo)) / (float)f->light_res;
-    const float step = CLVR_WALK_LIGHT_STEP * fmin(fmin(cell.x, cell.y), cell.z) / length(dir);
+    /* The light grid's smallest spacing, in units of t. */
+    const float step = CLVR_WALK_LIGHT_STEP *
+                       fmin(fmin(f->light_space[3][0], f->light_space[3][1]), f->light_space[3][2]) / length(dir);
     for (int iter = 0; iter < 65536; ++iter) {
         clvr_vec4 vtx[4];
         float l[4], g[4];

@@ -555,7 +555,7 @@ static int run(mpi_run *m, const clvr_options *o)
      * only; their product is the global one (docs/mpi-compositing.md). */
     const double render0 = now(), comm0 = m->comm_s;
     if (shadows) {
-        const size_t cap = (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES;
+        const size_t cap = clvr_light_nodes(CLVR_URM_LIGHT_RES);
         uint32_t res = 0;
         grid = malloc(cap * sizeof(float));
         grid_all = malloc(cap * sizeof(float));
@@ -563,7 +563,7 @@ static int run(mpi_run *m, const clvr_options *o)
                              : clvr_error_set(&err, CLVR_ERR_NO_MEMORY, "out of memory for the light grid");
         s = agree(m, s, &err);
         if (s != CLVR_OK) goto done;
-        const size_t ng = (size_t)res * res * res; /* the same on every rank: the same settings */
+        const size_t ng = clvr_light_nodes(res); /* the same on every rank: the same settings */
         t = now();
         MPI_Allreduce(grid, grid_all, (int)ng, MPI_FLOAT, MPI_PROD, m->comm);
         m->comm_s += now() - t;

@@ -12,7 +12,7 @@
  * function), compared byte for byte. */
 typedef struct light_key {
     float vol[6], grid[6], light_dir[3], urm_kappa;
-    uint32_t u[9];
+    uint32_t u[8];
     float planes[CLVR_MAX_CLIP_PLANES * 4]; /* the shadow rays are clipped too */
 } light_key;
 
@@ -39,7 +39,7 @@ struct clvr_renderer {
     cl_mem guides;             /* settings.guides: 8 floats per pixel (kernels/render.cl); else 8 floats in all,
                                 * never written, so that no buffer is bound to two of the kernel's parameters */
     int guides_full;           /* guides holds a whole image's */
-    cl_mem light_buf;          /* urm with shadows: the light grid (frame.light_res^3) */
+    cl_mem light_buf;          /* with shadows: the light grid (clvr_light_nodes(frame.light_res)) */
     int light_valid;           /* light_buf matches the frame and transfer function */
     light_key light_key;       /* the frame fields light_buf was made for */
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
@@ -177,8 +177,42 @@ uint32_t clvr_estimator_auto(int shadows, uint64_t elements)
 uint32_t clvr_light_res_for(uint64_t elements)
 {
     uint32_t r = CLVR_URM_DEFAULT_LIGHT_RES;
-    while (r > 8u && (uint64_t)r * r * r * 4u > elements) --r;
+    while (r > 8u && (uint64_t)clvr_light_nodes(r) > 2u * elements) --r;
     return r;
+}
+
+void clvr_light_space(const float lo[3], const float hi[3], const float ldir[3], uint32_t r, float out[4][4])
+{
+    const double L[3] = {ldir[0], ldir[1], ldir[2]};
+    int k = 0;
+    for (int i = 1; i < 3; ++i)
+        if (fabs(L[i]) < fabs(L[k])) k = i;
+    const double ax[3] = {k == 0, k == 1, k == 2};
+    double e1[3] = {L[1] * ax[2] - L[2] * ax[1], L[2] * ax[0] - L[0] * ax[2], L[0] * ax[1] - L[1] * ax[0]};
+    const double n1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    for (int i = 0; i < 3; ++i) e1[i] /= n1;
+    const double e2[3] = {L[1] * e1[2] - L[2] * e1[1], L[2] * e1[0] - L[0] * e1[2], L[0] * e1[1] - L[1] * e1[0]};
+    const double *axes[3] = {e1, e2, L};
+    double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int c = 0; c < 8; ++c) {
+        const double p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+        for (int a = 0; a < 3; ++a) {
+            const double d = p[0] * axes[a][0] + p[1] * axes[a][1] + p[2] * axes[a][2];
+            mn[a] = fmin(mn[a], d);
+            mx[a] = fmax(mx[a], d);
+        }
+    }
+    for (int a = 0; a < 3; ++a)
+        for (int i = 0; i < 3; ++i) out[a][i] = (float)axes[a][i];
+    out[0][3] = (float)mn[0];
+    out[1][3] = (float)mn[1];
+    out[2][3] = (float)mx[2];
+    /* A flat extent (a flat box seen edge-on) must not divide by 0. */
+    const uint32_t n = clvr_light_depth(r);
+    out[3][0] = (float)fmax((mx[0] - mn[0]) / r, 1e-30);
+    out[3][1] = (float)fmax((mx[1] - mn[1]) / r, 1e-30);
+    out[3][2] = (float)fmax((mx[2] - mn[2]) / (n > 1u ? n - 1u : 1u), 1e-30);
+    out[3][3] = 0.0f;
 }
 
 clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_settings *set, clvr_error *err)
@@ -188,15 +222,14 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         set->pixel_filter > CLVR_PIXEL_POINT ||
         set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
         set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
-        set->light_res > CLVR_URM_LIGHT_RES ||
-        (set->light_per_item && CLVR_LIGHT_SWEEP_SLICES % set->light_per_item != 0))
+        set->light_res > CLVR_URM_LIGHT_RES)
         return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
                               "pixel filter %u, %ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, "
-                              "light grid %u: 0..%u, %u slices per work item)", set->method,
+                              "light grid %u: 0..%u)", set->method,
                               set->estimator, set->sampler, set->pixel_filter, set->width, set->height, set->bins,
                               set->segments,
                               set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
-                              CLVR_URM_LIGHT_RES, set->light_per_item);
+                              CLVR_URM_LIGHT_RES);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
@@ -278,6 +311,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         f->hull_faces = set->hull && hl->kept ? hl->num_faces : 0u;
     }
     f->light_res = set->light_res ? set->light_res : clvr_light_res_for(m->num_elements);
+    clvr_light_space(f->grid_lo, f->grid_hi, f->light_dir, f->light_res, f->light_space);
     {
         /* The light grid depends on these fields only (and on the transfer
          * function): a new image size, exposure, sampler or a shadows toggle
@@ -292,7 +326,6 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         k.urm_kappa = f->urm_kappa;
         k.u[0] = f->urm_steps; k.u[1] = f->seed_lo; k.u[2] = f->seed_hi; k.u[3] = f->method;
         k.u[4] = f->grid_res; k.u[5] = f->bins; k.u[6] = f->segments; k.u[7] = f->light_res;
-        k.u[8] = set->light_per_item;
         memcpy(k.planes, f->clip_planes, sizeof k.planes);
         if (memcmp(&k, &r->light_key, sizeof k) != 0) r->light_valid = 0;
         r->light_key = k;
@@ -335,7 +368,7 @@ clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const 
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_light_grid", &r->k_light, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_pixel_cv_image", &r->k_cv, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE,
-                            (size_t)CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * CLVR_URM_LIGHT_RES * sizeof(float), NULL,
+                            (size_t)clvr_light_nodes(CLVR_URM_LIGHT_RES) * sizeof(float), NULL,
                             "light grid", &r->light_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_frame), NULL, "frame parameters", &r->frame_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_camera), NULL, "camera", &r->cam_buf, err));
@@ -473,33 +506,19 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
     volume_bufs vol = volume_of(r);
     if (!r->light_valid && r->frame.shadows && r->frame.estimator != CLVR_ESTIMATOR_DELTA &&
         r->frame.method != CLVR_RENDER_MARCH) {
-        /* The sweep (kernels/render_volume.h, clvr_light_sweep): one launch
-         * per CLVR_LIGHT_SWEEP_SLICES slices, in order from the light, each
-         * slice of a launch its own work items, then one that turns optical
-         * depth into transmittance. */
+        /* One work item per column (kernels/render_volume.h,
+         * clvr_light_column): 4096 at the default 64 x 64, enough lanes for
+         * a GPU; a CPU's work-groups take 64 columns each. */
         const cl_uint n = r->frame.light_res;
         const size_t local[2] = {8, 8};
-        /* Slices per work item: all of a step's on a CPU (PoCL's time as
-         * with one work item per column: post 25 ms), one on a GPU, whose
-         * lanes 24 x 24 columns leave idle (the H200: 79 ms, more than 2
-         * CPU cores' 38.5). */
-        const cl_uint per_item = r->set.light_per_item                          ? r->set.light_per_item
-                                 : (r->cl->device_type & CL_DEVICE_TYPE_CPU) ? CLVR_LIGHT_SWEEP_SLICES
-                                                                             : 1u;
-        r->light_s = 0.0;
-        for (cl_uint step = 0; step < clvr_light_sweep_steps(n); ++step) {
-            CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
-                                  CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf), CLVR_ARG(step),
-                                  CLVR_ARG(per_item)));
-            CLVR_TRY(clvr_cl_run2d(r->cl, r->k_light, n, (size_t)n * (CLVR_LIGHT_SWEEP_SLICES / per_item), local, &evt,
-                                   err));
-            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-            const double dt = clvr_cl_event_seconds(evt);
-            r->kernel_s += dt;
-            r->light_s += dt;
-            clReleaseEvent(evt);
-            evt = NULL;
-        }
+        CLVR_TRY(CLVR_CL_ARGS(r->k_light, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
+                              CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->light_buf)));
+        CLVR_TRY(clvr_cl_run2d(r->cl, r->k_light, n, n, local, &evt, err));
+        CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+        r->light_s = clvr_cl_event_seconds(evt);
+        r->kernel_s += r->light_s;
+        clReleaseEvent(evt);
+        evt = NULL;
         r->light_valid = 1;
     }
 cleanup:
@@ -739,7 +758,7 @@ cleanup:
 clvr_status clvr_renderer_set_light_grid(clvr_renderer *r, const float *grid, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    const size_t n = (size_t)r->frame.light_res * r->frame.light_res * r->frame.light_res;
+    const size_t n = clvr_light_nodes(r->frame.light_res);
     CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, n * sizeof(float), grid, 0, NULL,
                                        NULL));
     r->light_valid = 1;
@@ -755,7 +774,7 @@ clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res
     if (!r->light_valid)
         return clvr_error_set(err, CLVR_ERR_INTERNAL, "no light grid yet (it is made by a urm frame with shadows)");
     if (out)
-        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, (size_t)n * n * n * sizeof(float),
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->light_buf, CL_TRUE, 0, (size_t)clvr_light_nodes(n) * sizeof(float),
                                           out, 0, NULL, NULL));
 cleanup:
     return s;

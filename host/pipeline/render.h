@@ -27,12 +27,9 @@ typedef struct clvr_render_settings {
     uint32_t estimator;        /* CLVR_ESTIMATOR_* (track, bins, dda) */
     uint32_t urm_steps;        /* urm: minimum quadrature points per ray (>= 1) */
     float urm_kappa;           /* urm: largest majorant optical depth between two points (> 0) */
-    uint32_t light_res;        /* urm with shadows: light grid cells per axis, 1..CLVR_URM_LIGHT_RES, or 0
-                                * (the default): clvr_light_res_for the mesh's elements; any keeps the
-                                * image unbiased, a coarser one is noisier */
-    uint32_t light_per_item;   /* light grid sweep: slices per work item, a divisor of CLVR_LIGHT_SWEEP_SLICES,
-                                * or 0 (the default): all of a step's on a CPU device, 1 elsewhere (the grid
-                                * is the same bit for bit; tests set 1 to run a GPU's launch on PoCL) */
+    uint32_t light_res;        /* with shadows: light grid columns per axis (clvr_light_nodes), 1..
+                                * CLVR_URM_LIGHT_RES, or 0 (the default): clvr_light_res_for the mesh's
+                                * elements; any keeps the image unbiased, a coarser one is noisier */
     uint32_t width, height;
     uint64_t seed;
     uint32_t sampler;          /* CLVR_SAMPLER_*: ld (default) or independent frames */
@@ -74,16 +71,19 @@ typedef struct clvr_render_settings {
 /* Sensible defaults (dda, 512x512, shadows on, ...). */
 void clvr_render_settings_default(clvr_render_settings *s);
 
-/* The light grid's cells per axis for a mesh of `elements` elements (the
+/* The light grid's columns per axis for a mesh of `elements` elements (the
  * whole mesh's, on every MPI rank alike): CLVR_URM_DEFAULT_LIGHT_RES, or
- * fewer where the grid would have more than a cell per 4 elements (not
- * below 8). The grid's cost is a fixed cost of the first shadowed frame; a
- * grid finer than the mesh adds nothing it can resolve. 256^2, the notch
- * cut into 13k tets (14 instead of 24 per axis): first shadowed frame
- * 31.7 -> 27 ms at the same error; no mesh of 55,296 elements or more
- * changes (the PLOT3D post, whose 616k elements keep 24, loses its
- * 2-frame 2% at 16). */
+ * fewer where the grid would have more than 2 nodes per element (not below
+ * 8). The grid's cost is a fixed cost of the first shadowed frame, about in
+ * proportion to its nodes; a grid much finer than the mesh adds nothing it
+ * can resolve. */
 uint32_t clvr_light_res_for(uint64_t elements);
+/* The light grid's frame (clvr_frame.light_space) for r x r columns over
+ * the box [lo, hi] and the unit direction toward the light ldir: e1 = the
+ * unit vector across ldir from ldir x (the axis least along it), e2 =
+ * ldir x e1; the columns tile the box's extent along e1 and e2, the nodes
+ * its extent along ldir, the first on its light side. */
+void clvr_light_space(const float lo[3], const float hi[3], const float ldir[3], uint32_t r, float out[4][4]);
 /* What --estimator auto renders with (CLVR_ESTIMATOR_AUTO's comment): walk,
  * or urm with shadows on a mesh of more than CLVR_AUTO_WALK_SHADOWS_MAX
  * elements. The renderer then falls back to urm where the walk cannot run
@@ -139,10 +139,11 @@ clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float 
  * error unless the settings asked for guides. */
 clvr_status clvr_renderer_read_guides(clvr_renderer *r, float *guide, clvr_error *err);
 
-/* The urm light grid (transmittance toward the light at the centres of
- * frame light_res^3 cells over the grid domain, x fastest) as last built by
- * a frame with urm and shadows; *res gets light_res. out: light_res^3
- * floats, or NULL for *res only. An error before such a frame. */
+/* The light grid (transmittance toward the light at the nodes of
+ * frame light_res^2 columns, clvr_light_node order, clvr_light_space's
+ * frame) as last built by a frame with urm or walk and shadows; *res gets
+ * light_res. out: clvr_light_nodes(light_res) floats, or NULL for *res
+ * only. An error before such a frame. */
 clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res, clvr_error *err);
 
 /* The majorant of every sampling cluster / macrocell / macrocell block
@@ -170,8 +171,8 @@ clvr_status clvr_renderer_mpi_record(clvr_renderer *r, uint32_t frame, uint32_t 
  * from distance pick_t[p] on pixel p's camera ray (< 0: no ray, tau 1). */
 clvr_status clvr_renderer_mpi_shadow(clvr_renderer *r, uint32_t frame, uint32_t rank_key, const float *pick_t,
                                      float *tau, uint64_t *samples, clvr_error *err);
-/* The light grid (*res = light_res cells per axis, res^3 floats, at most
- * CLVR_URM_LIGHT_RES^3): computed for the current frame and transfer
+/* The light grid (*res = light_res columns per axis,
+ * clvr_light_nodes(res) floats, at most clvr_light_nodes(CLVR_URM_LIGHT_RES)): computed for the current frame and transfer
  * function when out of date, then copied out (clvr_renderer_read_light);
  * and replaced by a given one of the same size (the product over ranks),
  * kept until the settings or transfer function change. */
