@@ -1091,10 +1091,10 @@ inline int clvr_tau_segment(const clvr_volume *v, float3 org, float3 dir, float 
 }
 
 /* Column (a, b) of the light grid: transmittance toward the light at each
- * of its nodes. Each interval between two nodes is cut to the box and clip
- * planes on its own (outside the mesh the lookups find no medium, and a
- * hull walk per interval would cost more than the interval); the lookup
- * hint and span carry from one to the next. */
+ * of its nodes. The column is cut to the box and clip planes once (outside
+ * the mesh the lookups find no medium, and a hull walk would cost more
+ * than it saves), each interval between two nodes to that; the lookup
+ * hint and span carry from one interval to the next. */
 inline void clvr_light_column(const clvr_volume *v, int a, int b, __global float *grid)
 {
     const clvr_frame *f = v->f;
@@ -1109,11 +1109,12 @@ inline void clvr_light_column(const clvr_volume *v, int a, int b, __global float
     const float u = clvr_rng_next(&rng), rate = CLVR_LIGHT_COLUMN_POINTS / h.z;
     clvr_locate_hint hint = clvr_locate_hint_none();
     clvr_span span = clvr_span_none();
-    float tau = 0.0f;
+    float tau = 0.0f, c0 = 0.0f, c1 = INFINITY;
+    const int cut = clvr_ray_clip(f, org, dir, vlo, vhi, &c0, &c1);
     grid[clvr_light_node(a, b, 0, r)] = 1.0f;
     for (int j = 1; j < n; ++j) {
-        float s0 = (float)(j - 1) * h.z, s1 = (float)j * h.z;
-        if (clvr_ray_clip(f, org, dir, vlo, vhi, &s0, &s1))
+        const float s0 = fmax((float)(j - 1) * h.z, c0), s1 = fmin((float)j * h.z, c1);
+        if (cut && s0 <= s1)
             CLVR_FOR_EACH_SEGMENT(v, org, dir, s0, s1, sa, sb, sm,
                                   clvr_tau_segment(v, org, dir, sa, sb, sm, rate, u, &hint, &span, &tau));
         grid[clvr_light_node(a, b, j, r)] = exp(-tau);

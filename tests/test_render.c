@@ -193,18 +193,31 @@ static void set_table(fixture *fx, const float *table, uint32_t n, float lo, flo
 /* The camera ray through image point (px, py) (origin o, direction d) and
  * its span [t0, t1] inside the unit box [0, 1]^3 (slab test in double);
  * returns 0 when it misses. */
-static int unit_box_span(const clvr_camera *cam, float px, float py, float *o, float *d, double *t0, double *t1)
+/* The span [t0, t1] (t >= 0) of the ray o + t d inside the unit box [0, 1]^3
+ * (slab test in double; an axis the ray runs parallel to keeps it whole or
+ * misses); returns 0 when it misses. */
+static int unit_box_slab(const double o[3], const double d[3], double *t0, double *t1)
 {
-    clvr_camera_ray(cam, px, py, o, d);
     *t0 = 0;
     *t1 = 1e30;
     for (int k = 0; k < 3; ++k) {
+        if (d[k] == 0) {
+            if (o[k] < 0 || o[k] > 1) return 0;
+            continue;
+        }
         double a = (0.0 - o[k]) / d[k], b = (1.0 - o[k]) / d[k];
         if (a > b) { double t = a; a = b; b = t; }
         *t0 = a > *t0 ? a : *t0;
         *t1 = b < *t1 ? b : *t1;
     }
     return *t1 > *t0;
+}
+
+static int unit_box_span(const clvr_camera *cam, float px, float py, float *o, float *d, double *t0, double *t1)
+{
+    clvr_camera_ray(cam, px, py, o, d);
+    const double od[3] = {o[0], o[1], o[2]}, dd[3] = {d[0], d[1], d[2]};
+    return unit_box_slab(od, dd, t0, t1);
 }
 
 /* Length of that ray inside the unit box, 0 when it misses. */
@@ -743,22 +756,6 @@ static void test_tet_spans(clvr_cl *cl)
  * depth-to-transmittance step, integrates from the wrong side, puts a node
  * at another place than clvr_light_space says or leaves a column out is
  * off by far more than the bound. */
-static double box_chord_toward(const double p[3], const double d[3])
-{
-    double t0 = 0, t1 = 1e30;
-    for (int k = 0; k < 3; ++k) {
-        if (d[k] == 0) {
-            if (p[k] < 0 || p[k] > 1) return 0;
-            continue;
-        }
-        double a = (0 - p[k]) / d[k], b = (1 - p[k]) / d[k];
-        if (a > b) { double c = a; a = b; b = c; }
-        t0 = fmax(t0, a);
-        t1 = fmin(t1, b);
-    }
-    return t1 > t0 ? t1 - t0 : 0;
-}
-
 static void test_light_grid(clvr_cl *cl)
 {
     /* Columns per axis for the mesh's element count: at most 2 nodes per
@@ -839,7 +836,8 @@ static void test_light_grid(clvr_cl *cl)
                         p[k] = u * ls[0][k] + v * ls[1][k] + w * ls[2][k];
                         d[k] = ld[k];
                     }
-                    const double chord = box_chord_toward(p, d);
+                    double t0, t1;
+                    const double chord = unit_box_slab(p, d, &t0, &t1) ? t1 - t0 : 0;
                     const double e = fabs(g[clvr_light_node((int)a, (int)b, (int)j, (int)res)] - exp(-sigma * chord));
                     worst = fmax(worst, e);
                     sum += e;
