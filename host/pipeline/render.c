@@ -40,6 +40,7 @@ struct clvr_renderer {
                                 * never written, so that no buffer is bound to two of the kernel's parameters */
     int guides_full;           /* guides holds a whole image's */
     cl_mem light_buf;          /* with shadows: the light grid (clvr_light_nodes(frame.light_res)) */
+    uint32_t light_nodes;      /* floats light_buf holds */
     int light_valid;           /* light_buf matches the frame and transfer function */
     light_key light_key;       /* the frame fields light_buf was made for */
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
@@ -330,6 +331,16 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         if (memcmp(&k, &r->light_key, sizeof k) != 0) r->light_valid = 0;
         r->light_key = k;
     }
+    if (r->light_nodes != clvr_light_nodes(f->light_res)) {
+        /* Sized to the grid in use (512 KB at the default 64 x 64 x 32,
+         * 1.8 MB at CLVR_URM_LIGHT_RES): bound to every frame, with shadows
+         * or not. A new size means a new grid (light_res is in the key). */
+        clvr_cl_release(r->cl, &r->light_buf);
+        r->light_nodes = 0;
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_WRITE, (size_t)clvr_light_nodes(f->light_res) * sizeof(float),
+                                NULL, "light grid", &r->light_buf, err));
+        r->light_nodes = clvr_light_nodes(f->light_res);
+    }
     CLVR_TRY(alloc_image(r, err));
     /* A new grid resolution or domain needs the elements rasterized again. */
     CLVR_TRY(update_majorants(r, 0, err));
@@ -367,9 +378,6 @@ clvr_status clvr_renderer_create(clvr_cl *cl, const clvr_clustered *mesh, const 
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_frame", &r->k_render, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_light_grid", &r->k_light, err));
     CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_pixel_cv_image", &r->k_cv, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE,
-                            (size_t)clvr_light_nodes(CLVR_URM_LIGHT_RES) * sizeof(float), NULL,
-                            "light grid", &r->light_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_frame), NULL, "frame parameters", &r->frame_buf, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(clvr_camera), NULL, "camera", &r->cam_buf, err));
     CLVR_TRY(clvr_renderer_set_settings(r, settings, err));
