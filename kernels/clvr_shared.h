@@ -455,23 +455,21 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #define CLVR_ESTIMATOR_DELTA 0u
 #define CLVR_ESTIMATOR_URM 1u
 #define CLVR_ESTIMATOR_WALK 2u
-/* auto (the default): walk without shadows; with shadows walk on meshes of
- * at most CLVR_AUTO_WALK_SHADOWS_MAX elements, urm on larger ones. Measured
- * (bench/render-vs-vtk.sh, 256^2, time to 2%): without shadows walk
+/* auto (the default): walk, with shadows or not (the renderer falls back to
+ * urm where the walk cannot run). Measured (bench_render --converge, 256^2,
+ * seconds to 2% relative RMSE, medians of 3 seeds): without shadows walk
  * reached 2% first on the combustor, fire_ug and the notch cut into tets
- * (about 2x: urm needed a second frame or twice the frame there), and was
- * up to 30% slower on post, the 1M tets and the blunt fin, all far under
- * VTK's frame. With shadows the
- * two share the correction ray's noise, and the walk's cost grows with the
- * tets a ray crosses (about N^(1/3)) where urm's points do not: urm reached
- * 2% first on post (616k tets, 0.43 against 0.54 s) and the 1M tets (0.71
- * against 0.96 s), walk on the combustor (258k, 0.44 against 0.58 s) and
- * the notch cut into 13k tets (19 against 32 ms); fire_ug (63k) tied, and
- * the blunt fin (225k) went to urm by 20% (0.12 against 0.14 s). The bound
- * lies between 258k and 616k. Settings only: the renderer resolves it
- * (clvr_estimator_auto, host/pipeline/render.c), a frame never carries it. */
+ * (about 2x) and was up to 30% slower on post, the 1M tets and the blunt
+ * fin, all far under VTK's frame. With shadows (session 41, two runs of
+ * seven meshes with the 64-column grid, one with the 96-column grid of
+ * CLVR_URM_DEFAULT_LIGHT_RES): walk 1.5-2x sooner on fire_ug, the notch
+ * cut, the 1M tets and (96 columns) post, urm 18-27% sooner on the blunt
+ * fin (both one frame) and 0-8% on the combustor and the built-in scene
+ * (both two frames). Sessions 39-40 took urm with shadows above 400k
+ * elements; no bound by size fitted both the 1M tets and post. Settings
+ * only: the renderer resolves it (clvr_estimator_auto,
+ * host/pipeline/render.c), a frame never carries it. */
 #define CLVR_ESTIMATOR_AUTO 3u
-#define CLVR_AUTO_WALK_SHADOWS_MAX 400000u
 #define CLVR_ESTIMATOR_COUNT 4u
 /* urm defaults (clvr_render_settings; measured with bench/render-vs-vtk.sh):
  * at least this many quadrature points per ray, and at most this much
@@ -483,8 +481,14 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * along the light over the grid domain's extent across it, each with
  * clvr_light_depth(r) nodes from the domain's light side to its far side
  * (clvr_light_space gives the frame). r is at most CLVR_URM_LIGHT_RES,
- * CLVR_URM_DEFAULT_LIGHT_RES by default on meshes of about 65k elements or
- * more (clvr_light_res_for). Columns replaced an axis-aligned grid of 24^3
+ * CLVR_URM_DEFAULT_LIGHT_RES by default on meshes of 221k elements or
+ * more, fewer below (clvr_light_res_for: at most 2 nodes per element).
+ * 96 instead of 64 columns (session 41, 256^2, walk, shadows, error after
+ * one frame; the grid's ms): post 2.29 -> 1.82-1.96% (one frame instead
+ * of two, 0.56 -> 0.31 s), combustor 2.47 -> 2.19-2.23%, 1M tets 1.78 ->
+ * 1.60%, built-in 2.30 -> 2.23%, blunt fin 1.20 -> 1.18%; the grid 19 ->
+ * 41 ms on post, 21 -> 42 on the combustor, 41 -> 100 on the 1M tets, a
+ * cost of the first frame only. Columns replaced an axis-aligned grid of 24^3
  * cells swept slice by slice toward the light (session 40): a column's
  * nodes share one integration toward the light, so the same time buys
  * about 8 times the nodes, and shadow edges, which run along the light,
@@ -494,7 +498,7 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
  * / 1.77%, 64^2 x 32 1.86 / 1.16%, 56^2 x 40 1.85 / 1.15%
  * (bench/results/render-converge/2026-11-29-s40-light-step.md). */
 #define CLVR_URM_LIGHT_RES 96u
-#define CLVR_URM_DEFAULT_LIGHT_RES 64u
+#define CLVR_URM_DEFAULT_LIGHT_RES 96u
 /* Nodes per column of a light grid of r x r columns, and in all. */
 /* (one column of one node, r = 1: G = 1 everywhere, for tests) */
 CLVR_INLINE clvr_u32 clvr_light_depth(clvr_u32 r) { return r >= 4u ? r / 2u : r < 2u ? r : 2u; }
@@ -503,9 +507,18 @@ CLVR_INLINE clvr_u32 clvr_light_nodes(clvr_u32 r) { return r * r * clvr_light_de
 CLVR_INLINE int clvr_light_node(int a, int b, int j, int r) { return (j * r + b) * r + a; }
 /* A column integrates the optical depth between two nodes at
  * CLVR_LIGHT_COLUMN_POINTS jittered points per node interval plus one per
- * CLVR_LIGHT_COLUMN_DEPTH of majorant optical depth. */
+ * CLVR_LIGHT_COLUMN_DEPTH of majorant optical depth. The grid is a control
+ * variate, so its integration error costs variance: a depth of 0.125
+ * instead of 0.5 (session 41, 64 columns, walk, shadows, error after one
+ * frame) took the combustor 2.47 -> 2.36%, post 2.29 -> 2.16%, at 2-4 ms
+ * more grid; 4 points per interval instead of 1 did as well (2.35 / 2.23%)
+ * at 4 ms more (bench/results/render-converge/2026-11-29-s41-grid.md). */
+#ifndef CLVR_LIGHT_COLUMN_POINTS
 #define CLVR_LIGHT_COLUMN_POINTS 1.0f
-#define CLVR_LIGHT_COLUMN_DEPTH 0.5f
+#endif
+#ifndef CLVR_LIGHT_COLUMN_DEPTH
+#define CLVR_LIGHT_COLUMN_DEPTH 0.125f
+#endif
 
 /* Index of macrocell (x, y, z) in a grid of r cells per axis (x fastest):
  * the one definition shared by the majorant kernels and the DDA. */

@@ -69,15 +69,23 @@ assert d["render"]["image_s"] > 0 and d["render"]["light_s"] > 0, d["render"]
 PYEOF
 
 # --estimator auto with shadows (the default) walks a small tet mesh (its face
-# adjacency is built), urm does not (clvr_estimator_auto).
+# adjacency is built), urm does not (clvr_estimator_auto); on a mesh without
+# tets (notch_stress: hexes and wedges) auto renders with urm. --stats-json
+# says which estimator the frames used.
 for est in auto urm; do
   expect 0 "" -- "$CLVR" --device "$DEV" --size 16x16 --spp 1 --quiet --estimator $est -o "$tmp/post-$est.png" \
     --stats-json "$tmp/post-$est.json" "$DATA/vtk/post.vtk"
 done
-$PY - "$tmp/post-auto.json" "$tmp/post-urm.json" <<'PYEOF' && ok || bad "auto with shadows walks post.vtk's 8,750 tets"
+expect 0 "" -- "$CLVR" --device "$DEV" --size 16x16 --spp 1 --quiet -o "$tmp/notch-auto.png" \
+  --stats-json "$tmp/notch-auto.json" "$DATA/vtk/notch_stress.vtk"
+$PY - "$tmp/post-auto.json" "$tmp/post-urm.json" "$tmp/notch-auto.json" <<'PYEOF' && ok || bad "auto with shadows walks post.vtk's 8,750 tets, notch_stress's hexes get urm"
 import json, sys
-a, u = (json.load(open(p))["bytes"].get("adjacency", 0) for p in sys.argv[1:])
+pa, pu, na = (json.load(open(p)) for p in sys.argv[1:])
+a, u = (d["bytes"].get("adjacency", 0) for d in (pa, pu))
 assert a == 16 * 8750 + 8 and u == 0, (a, u)
+used = [d["render"]["estimator"] for d in (pa, pu, na)]
+assert used == ["walk", "urm", "urm"], used
+assert na["bytes"].get("adjacency", 0) == 0, na["bytes"]
 PYEOF
 
 # --info on every natively read test file.

@@ -768,14 +768,15 @@ static void test_light_grid(clvr_cl *cl)
     TU_CHECK_EQ_U64(clvr_light_res_for(13127), 37);
     TU_CHECK_EQ_U64(clvr_light_res_for(64u * 64u * 16u - 1u), 63);
     TU_CHECK_EQ_U64(clvr_light_res_for(64u * 64u * 16u), 64);
+    TU_CHECK_EQ_U64(clvr_light_res_for(96u * 96u * 24u - 1u), 95);
+    TU_CHECK_EQ_U64(clvr_light_res_for(96u * 96u * 24u), 96);
     TU_CHECK_EQ_U64(clvr_light_res_for(UINT64_MAX), CLVR_URM_DEFAULT_LIGHT_RES);
-    /* --estimator auto (CLVR_ESTIMATOR_AUTO's comment): walk, or urm with
-     * shadows on meshes above CLVR_AUTO_WALK_SHADOWS_MAX elements.
-     * test_cli_e2e checks that the renderer applies it. */
+    /* --estimator auto (CLVR_ESTIMATOR_AUTO's comment): walk, with shadows
+     * or not, on every mesh. test_cli_e2e checks that the renderer applies
+     * it (and that a mesh without tets renders with urm). */
     TU_CHECK_EQ_U64(clvr_estimator_auto(0, UINT64_MAX), CLVR_ESTIMATOR_WALK);
     TU_CHECK_EQ_U64(clvr_estimator_auto(1, 13127), CLVR_ESTIMATOR_WALK);
-    TU_CHECK_EQ_U64(clvr_estimator_auto(1, CLVR_AUTO_WALK_SHADOWS_MAX), CLVR_ESTIMATOR_WALK);
-    TU_CHECK_EQ_U64(clvr_estimator_auto(1, CLVR_AUTO_WALK_SHADOWS_MAX + 1u), CLVR_ESTIMATOR_URM);
+    TU_CHECK_EQ_U64(clvr_estimator_auto(1, UINT64_MAX), CLVR_ESTIMATOR_WALK);
     clvr_error err = {0};
     clvr_mesh m;
     if (make_box(6, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;
@@ -1102,7 +1103,7 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
                 fx.set.light_res = 1;
                 fx.set.seed = 18 + 100 * est;
                 render_stats(&fx, N, &m1, &v1);
-                fx.set.light_res = CLVR_URM_DEFAULT_LIGHT_RES;
+                fx.set.light_res = 0; /* the default: clvr_light_res_for the mesh */
                 snprintf(what, sizeof what, "%s shadows on: %s dda, 1-node light grid, vs delta track", name, en);
                 TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, 4), 0);
                 free(m1);

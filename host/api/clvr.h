@@ -48,14 +48,15 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 5
+#define CLVR_API_VERSION_MINOR 6
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
  * function file's window: what the clvr program needs beyond 1.1, so that it
  * uses this header alone), 1003 is 1.3 (the pixel filter), 1004 is 1.4 (the
  * denoiser), 1005 is 1.5 (the walk estimator, and auto, the default: two more
- * estimator names). */
+ * estimator names), 1006 is 1.6 (clvr_render_stats.estimator: what auto
+ * resolved to). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -513,6 +514,9 @@ typedef struct clvr_render_stats {
     double kernel_s, last_frame_s; /* device seconds: all frames, the last one */
     uint32_t width, height;
     char method[16];
+    char estimator[16]; /* since 1.6: what the frames render with ("delta", "urm", "walk"): "auto" resolved,
+                         * and "urm" where the walk cannot run (a mesh without tets, no room for its
+                         * face adjacency, an MPI run) */
 } clvr_render_stats;
 CLVR_API clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out, clvr_message *msg);
 

@@ -1958,6 +1958,7 @@ clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out
     d.width = tr->rs.width;
     d.height = tr->rs.height;
     snprintf(d.method, sizeof d.method, "%s", clvr_render_method_name(tr->rs.method));
+    snprintf(d.estimator, sizeof d.estimator, "%s", clvr_render_estimator_name(clvr_renderer_estimator(tr->renderer)));
     return finish(versioned_out(fn, "clvr_render_stats", out, &d, sizeof d, &e), &e, msg);
 }
 

@@ -65,7 +65,7 @@ void clvr_cli_print_help(FILE *out)
         "Rendering:\n"
         "  --method M             march | track | bins | dda (default dda)\n"
         "  --estimator E          auto | walk | urm | delta (track, bins, dda; default auto: walk,\n"
-        "                         or urm with shadows above 400k elements): walk crosses a tet mesh\n"
+        "                         --stats says which one rendered): walk crosses a tet mesh\n"
         "                         tet by tet, each one's extinction integrated exactly and its\n"
         "                         emission sampled once (other cells and MPI runs get urm); urm\n"
         "                         (unbiased ray marching) weighs jittered quadrature points by\n"

@@ -18,6 +18,7 @@ void clvr_stats_from_dataset(clvr_stats *s, const clvr_dataset_info *d)
 void clvr_stats_from_render(clvr_stats *s, const clvr_render_stats *rc)
 {
     snprintf(s->method, sizeof s->method, "%s", rc->method);
+    snprintf(s->estimator, sizeof s->estimator, "%s", rc->estimator);
     s->width = rc->width;
     s->height = rc->height;
     s->frames = rc->frames;
@@ -105,9 +106,9 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 s->bytes_resident ? (double)s->bytes_peak_rss / (double)s->bytes_resident : 0.0);
     }
     if (s->have_render) {
-        fprintf(out, "\nrender: %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
+        fprintf(out, "\nrender: %s, %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
                      "%.2f null collisions/ray\n",
-                s->method, s->width, s->height, (unsigned long long)s->frames,
+                s->method, s->estimator, s->width, s->height, (unsigned long long)s->frames,
                 s->frame_s, s->rays_per_s / 1e6, s->samples_per_ray, s->null_collisions_per_ray);
         /* The two device passes that s/frame does not show by itself: the
          * light grid is inside its sum (once per transfer function), the
@@ -196,7 +197,7 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
     jnum(f, "    ", "preprocess_s", s->preprocess_s, 0);
     fprintf(f, "  },\n");
     if (s->have_render) {
-        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n", s->method);
+        fprintf(f, "  \"render\": {\n    \"method\": \"%s\",\n    \"estimator\": \"%s\",\n", s->method, s->estimator);
         for (size_t i = 0; i < nr; ++i) jnum(f, "    ", r[i].k, r[i].v, i + 1 < nr);
         fprintf(f, "  },\n");
     }

@@ -43,6 +43,7 @@ typedef struct clvr_stats {
     double stage_s[CLVR_STATS_MAX_STAGES];
     /* render */
     char method[16];
+    char estimator[16]; /* what the frames rendered with (auto resolved) */
     uint32_t width, height;
     uint64_t frames, rays, samples, null_collisions;
     double frame_s, rays_per_s, samples_per_ray, null_collisions_per_ray, render_wall_s;

@@ -76,6 +76,7 @@ typedef struct viewer {
     /* Image: the renderer's size is the framebuffer's. */
     uint32_t img_w, img_h;       /* size of rgba / rgba8 contents */
     uint64_t img_spp;            /* accumulated frames in rgba */
+    char estimator_used[16];     /* what the frames render with (clvr_render_stats: auto resolved) */
     float *rgba;
     uint8_t *rgba8;
     size_t img_cap;              /* pixels allocated */
@@ -715,6 +716,7 @@ static clvr_result render_frame(viewer *v)
     v->img_w = v->width;
     v->img_h = v->height;
     v->img_spp = c.frames;
+    snprintf(v->estimator_used, sizeof v->estimator_used, "%s", c.estimator);
     /* Counters restart with the accumulation. */
     uint64_t rays = c.frames <= 1 || c.rays < v->rays_last ? c.rays : c.rays - v->rays_last;
     v->rays_last = c.rays;
@@ -846,8 +848,10 @@ static void update_title(viewer *v, int force)
     v->rays_since_title = 0;
     const char *mesh = v->o->mesh_path ? strrchr(v->o->mesh_path, '/') : NULL;
     mesh = mesh ? mesh + 1 : v->o->mesh_path ? v->o->mesh_path : "default scene";
-    char method[48];
+    char method[64];
     if (is_march(v)) snprintf(method, sizeof method, "march");
+    else if (v->estimator_used[0] && strcmp(v->estimator_used, v->ts.estimator))
+        snprintf(method, sizeof method, "%s %s (%s)", v->ts.method, v->ts.estimator, v->estimator_used);
     else snprintf(method, sizeof method, "%s %s", v->ts.method, v->ts.estimator);
     snprintf(v->title, sizeof v->title,
              "clvr | %s | %s | %llu spp | %.1f fps | %.2f Mrays/s | %s [%.4g, %.4g] density %.3g | shadows %s | %s",

@@ -75,10 +75,8 @@ void clvr_render_settings_default(clvr_render_settings *s)
 {
     memset(s, 0, sizeof *s);
     s->method = CLVR_RENDER_DDA;
-    /* auto: walk, or urm with shadows on large meshes (clvr_estimator_auto),
-     * the estimators that reach a given relative error first there
-     * (bench/render-vs-vtk.sh, README "Rendering"); a mesh without tets
-     * renders with urm. */
+    /* auto: walk (clvr_estimator_auto, README "Rendering"); a mesh without
+     * tets renders with urm. */
     s->estimator = CLVR_ESTIMATOR_AUTO;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
     s->urm_kappa = CLVR_URM_DEFAULT_KAPPA;
@@ -172,7 +170,9 @@ cleanup:
 
 uint32_t clvr_estimator_auto(int shadows, uint64_t elements)
 {
-    return !shadows || elements <= CLVR_AUTO_WALK_SHADOWS_MAX ? CLVR_ESTIMATOR_WALK : CLVR_ESTIMATOR_URM;
+    (void)shadows;
+    (void)elements;
+    return CLVR_ESTIMATOR_WALK;
 }
 
 uint32_t clvr_light_res_for(uint64_t elements)
@@ -332,9 +332,10 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         r->light_key = k;
     }
     if (r->light_nodes != clvr_light_nodes(f->light_res)) {
-        /* Sized to the grid in use (512 KB at the default 64 x 64 x 32,
-         * 1.8 MB at CLVR_URM_LIGHT_RES): bound to every frame, with shadows
-         * or not. A new size means a new grid (light_res is in the key). */
+        /* Sized to the grid in use (1.8 MB at the default 96 x 96 x 48 on
+         * meshes of 221k elements or more, 98 KB on 13k tets): bound to
+         * every frame, with shadows or not. A new size means a new grid
+         * (light_res is in the key). */
         clvr_cl_release(r->cl, &r->light_buf);
         r->light_nodes = 0;
         CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_WRITE, (size_t)clvr_light_nodes(f->light_res) * sizeof(float),
@@ -515,7 +516,7 @@ static clvr_status ensure_light(clvr_renderer *r, clvr_error *err)
     if (!r->light_valid && r->frame.shadows && r->frame.estimator != CLVR_ESTIMATOR_DELTA &&
         r->frame.method != CLVR_RENDER_MARCH) {
         /* One work item per column (kernels/render_volume.h,
-         * clvr_light_column): 4096 at the default 64 x 64, enough lanes for
+         * clvr_light_column): 9216 at the default 96 x 96, enough lanes for
          * a GPU; a CPU's work-groups take 64 columns each. */
         const cl_uint n = r->frame.light_res;
         const size_t local[2] = {8, 8};
@@ -650,6 +651,8 @@ void clvr_renderer_adjacency(const clvr_renderer *r, uint64_t *bytes, double *bu
     *build_s = r->adj.build_s;
     *skipped = r->adj_skipped;
 }
+
+uint32_t clvr_renderer_estimator(const clvr_renderer *r) { return r->frame.estimator; }
 
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
                                          float *global_majorant, clvr_error *err)

@@ -85,9 +85,10 @@ uint32_t clvr_light_res_for(uint64_t elements);
  * its extent along ldir, the first on its light side. */
 void clvr_light_space(const float lo[3], const float hi[3], const float ldir[3], uint32_t r, float out[4][4]);
 /* What --estimator auto renders with (CLVR_ESTIMATOR_AUTO's comment): walk,
- * or urm with shadows on a mesh of more than CLVR_AUTO_WALK_SHADOWS_MAX
- * elements. The renderer then falls back to urm where the walk cannot run
- * (no tets, no room for the adjacency). */
+ * whatever the shadows and the mesh's size (the arguments are what a rule
+ * by shadows or size reads; none fitted the measurements). The renderer then
+ * falls back to urm where the walk cannot run (no tets, no room for the
+ * adjacency); clvr_renderer_estimator says what it renders with. */
 uint32_t clvr_estimator_auto(int shadows, uint64_t elements);
 
 /* Per-frame figures, summed over the frames accumulated so far. */
@@ -154,6 +155,10 @@ clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res
  * when none; *skipped: why walk renders as urm on this mesh ("" when it
  * does not), valid while r lives. */
 void clvr_renderer_adjacency(const clvr_renderer *r, uint64_t *bytes, double *build_s, const char **skipped);
+/* The estimator the frames render with (CLVR_ESTIMATOR_*, never AUTO): the
+ * settings' as resolved by the last settings (auto, and urm where the walk
+ * cannot run). */
+uint32_t clvr_renderer_estimator(const clvr_renderer *r);
 
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
                                          float *global_majorant, clvr_error *err);
