@@ -190,9 +190,6 @@ static void set_table(fixture *fx, const float *table, uint32_t n, float lo, flo
 }
 
 /* ---- 1. homogeneous box against 1 - exp(-sigma d) */
-/* The camera ray through image point (px, py) (origin o, direction d) and
- * its span [t0, t1] inside the unit box [0, 1]^3 (slab test in double);
- * returns 0 when it misses. */
 /* The span [t0, t1] (t >= 0) of the ray o + t d inside the unit box [0, 1]^3
  * (slab test in double; an axis the ray runs parallel to keeps it whole or
  * misses); returns 0 when it misses. */
@@ -213,6 +210,8 @@ static int unit_box_slab(const double o[3], const double d[3], double *t0, doubl
     return *t1 > *t0;
 }
 
+/* The camera ray through image point (px, py) (origin o, direction d) and
+ * its span [t0, t1] inside the unit box; returns 0 when it misses. */
 static int unit_box_span(const clvr_camera *cam, float px, float py, float *o, float *d, double *t0, double *t1)
 {
     clvr_camera_ray(cam, px, py, o, d);
@@ -774,9 +773,7 @@ static void test_light_grid(clvr_cl *cl)
     /* --estimator auto (CLVR_ESTIMATOR_AUTO's comment): walk, with shadows
      * or not, on every mesh. test_cli_e2e checks that the renderer applies
      * it (and that a mesh without tets renders with urm). */
-    TU_CHECK_EQ_U64(clvr_estimator_auto(0, UINT64_MAX), CLVR_ESTIMATOR_WALK);
-    TU_CHECK_EQ_U64(clvr_estimator_auto(1, 13127), CLVR_ESTIMATOR_WALK);
-    TU_CHECK_EQ_U64(clvr_estimator_auto(1, UINT64_MAX), CLVR_ESTIMATOR_WALK);
+    TU_CHECK_EQ_U64(clvr_estimator_auto(), CLVR_ESTIMATOR_WALK);
     clvr_error err = {0};
     clvr_mesh m;
     if (make_box(6, CLVR_SCENE_MIX_TET, CLVR_SCENE_FIELD_CONSTANT, &m)) return;

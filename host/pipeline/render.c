@@ -168,12 +168,7 @@ cleanup:
     return s;
 }
 
-uint32_t clvr_estimator_auto(int shadows, uint64_t elements)
-{
-    (void)shadows;
-    (void)elements;
-    return CLVR_ESTIMATOR_WALK;
-}
+uint32_t clvr_estimator_auto(void) { return CLVR_ESTIMATOR_WALK; }
 
 uint32_t clvr_light_res_for(uint64_t elements)
 {
@@ -272,7 +267,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->height = set->height;
     f->method = set->method;
     f->estimator =
-        set->estimator == CLVR_ESTIMATOR_AUTO ? clvr_estimator_auto(set->shadows, m->num_elements) : set->estimator;
+        set->estimator == CLVR_ESTIMATOR_AUTO ? clvr_estimator_auto() : set->estimator;
     if (f->estimator == CLVR_ESTIMATOR_WALK) {
         /* The walk needs the face adjacency and tets; a mesh without tets
          * renders with urm (what the walk falls back to anyway). */

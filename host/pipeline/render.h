@@ -85,11 +85,11 @@ uint32_t clvr_light_res_for(uint64_t elements);
  * its extent along ldir, the first on its light side. */
 void clvr_light_space(const float lo[3], const float hi[3], const float ldir[3], uint32_t r, float out[4][4]);
 /* What --estimator auto renders with (CLVR_ESTIMATOR_AUTO's comment): walk,
- * whatever the shadows and the mesh's size (the arguments are what a rule
- * by shadows or size reads; none fitted the measurements). The renderer then
- * falls back to urm where the walk cannot run (no tets, no room for the
- * adjacency); clvr_renderer_estimator says what it renders with. */
-uint32_t clvr_estimator_auto(int shadows, uint64_t elements);
+ * whatever the shadows and the mesh's size (no rule by either fitted the
+ * measurements). The renderer then falls back to urm where the walk cannot
+ * run (no tets, no room for the adjacency); clvr_renderer_estimator says
+ * what it renders with. */
+uint32_t clvr_estimator_auto(void);
 
 /* Per-frame figures, summed over the frames accumulated so far. */
 typedef struct clvr_render_counters {
