@@ -321,7 +321,7 @@ static clvr_status write_stats_json(const char *path, const rank_stats *rs, int 
 }
 
 /* Adds frame `frame`'s camera-ray offsets from the pixel centres (what
- * kernels/render.cl's clvr_mpi_camera_ray draws from the frame's seed, the
+ * kernels/render_mpi.cl's clvr_mpi_camera_ray draws from the frame's seed, the
  * same on every rank) to ctl, 4 per pixel as clvr_render_frame's controls.
  * The first uniform of a frame differs between ranks (their own streams),
  * so it is left at 0: the composited image gets the jitter's control

@@ -26,7 +26,8 @@ struct clvr_renderer {
     clvr_majorants *maj;       /* cluster majorants and the macrocell grid */
     cl_program prog_render;
     cl_kernel k_render, k_light;
-    cl_kernel k_mpi_record, k_mpi_shadow; /* MPI mode's two phases, made at their first use */
+    cl_program prog_mpi;                  /* kernels/render_mpi.cl, built at the first MPI frame */
+    cl_kernel k_mpi_record, k_mpi_shadow; /* MPI mode's two phases */
     cl_mem mpi_rec, mpi_pick, mpi_tau, mpi_counters;
     size_t mpi_npix;           /* pixels the MPI buffers hold */
     cl_mem frame_buf, cam_buf, tf_buf, accum, accum_sq, counters;
@@ -399,6 +400,7 @@ void clvr_renderer_destroy(clvr_renderer *r)
     clvr_cl_release(r->cl, &r->light_buf);
     clvr_adjacency_release(r->cl, &r->adj);
     if (r->prog_render) clReleaseProgram(r->prog_render);
+    if (r->prog_mpi) clReleaseProgram(r->prog_mpi);
     clvr_majorants_destroy(r->maj);
     cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum,  &r->accum_sq,
                       &r->counters,  &r->guides,  &r->ctl, &r->image, &r->tf_prefix};
@@ -666,8 +668,9 @@ static clvr_status mpi_prepare(clvr_renderer *r, uint32_t frame, uint32_t rank_k
     if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "MPI phase before a transfer function");
     if (r->frame.estimator != CLVR_ESTIMATOR_URM || r->frame.method == CLVR_RENDER_MARCH)
         return clvr_error_set(err, CLVR_ERR_USAGE, "MPI mode composites the urm estimator only");
-    if (!r->k_mpi_record) CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_mpi_record", &r->k_mpi_record, err));
-    if (!r->k_mpi_shadow) CLVR_TRY(clvr_cl_kernel(r->prog_render, "clvr_render_mpi_shadow", &r->k_mpi_shadow, err));
+    if (!r->prog_mpi) CLVR_TRY(clvr_cl_build(r->cl, "render_mpi.cl", NULL, &r->prog_mpi, err));
+    if (!r->k_mpi_record) CLVR_TRY(clvr_cl_kernel(r->prog_mpi, "clvr_render_mpi_record", &r->k_mpi_record, err));
+    if (!r->k_mpi_shadow) CLVR_TRY(clvr_cl_kernel(r->prog_mpi, "clvr_render_mpi_shadow", &r->k_mpi_shadow, err));
     if (r->mpi_npix != npix) {
         clvr_cl_release(r->cl, &r->mpi_rec);
         clvr_cl_release(r->cl, &r->mpi_pick);
