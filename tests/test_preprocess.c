@@ -621,6 +621,51 @@ static void test_data_meshes(clvr_cl *cl)
     printf("%d data meshes loaded\n", loaded);
 }
 
+/* The split's segments: 2^20 elements at least on a few compute units, 2^17
+ * on many (a GPU's, where one work item walks a segment alone). The
+ * reference split with 132 compute units over 64 x 64 x 40 hexes (163,840
+ * elements: two segments) is a valid clustering, with one instance more than
+ * with 2 compute units at most (the one that the first segment's end closes). */
+static void test_split_segments(void)
+{
+    clvr_error err = {0};
+    TU_CHECK_EQ_U64(clvr_pp_segment_floor(2), 1ull << 20);
+    TU_CHECK_EQ_U64(clvr_pp_segment_floor(31), 1ull << 20);
+    TU_CHECK_EQ_U64(clvr_pp_segment_floor(32), 1ull << 17);
+    TU_CHECK_EQ_U64(clvr_pp_segment_floor(132), 1ull << 17);
+    clvr_preprocess_options o;
+    clvr_preprocess_options_default(&o);
+    o.keep_order = 1;
+    clvr_preprocess_options r;
+    TU_CHECK_STATUS(clvr_pp_options_resolve(&o, &r, &err), CLVR_OK, &err);
+    const uint64_t tens[CLVR_CELL_TYPE_COUNT] = {10000000, 0, 0, 0};
+    clvr_pp_layout L;
+    clvr_pp_layout_make(&L, tens);
+    clvr_pp_split_plan few, many;
+    clvr_pp_split_plan_make(&few, &L, &r, 2, 2000000);
+    clvr_pp_split_plan_make(&many, &L, &r, 132, 2000000);
+    TU_CHECK_EQ_U64(few.seg_len[0], 1250000);
+    TU_CHECK_EQ_U64(few.nseg[0], 8);
+    TU_CHECK_EQ_U64(many.seg_len[0], 1u << 17);
+    TU_CHECK_EQ_U64(many.nseg[0], (10000000 + (1u << 17) - 1) >> 17);
+
+    clvr_mesh m = {0};
+    TU_CHECK_STATUS(make_grid(&m, 64, 64, 40, 0, &err), CLVR_OK, &err);
+    clvr_clustered a = {0}, b = {0};
+    clvr_clustered_host ha = {0}, hb = {0};
+    TU_CHECK_STATUS(clvr_pp_ref_preprocess(&m, &o, 2, &a, &ha, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_pp_ref_preprocess(&m, &o, 132, &b, &hb, &err), CLVR_OK, &err);
+    printf("split segments: 163840 hexes -> %llu instances with 2 compute units, %llu with 132\n",
+           (unsigned long long)a.num_instances, (unsigned long long)b.num_instances);
+    TU_CHECK(b.num_instances >= a.num_instances && b.num_instances <= a.num_instances + 1);
+    check_clustered("hex 64x64x40, reference with 132 compute units", &m, &b, &hb, 0);
+    clvr_clustered_host_free(&ha);
+    clvr_clustered_host_free(&hb);
+    free(a.host_instances);
+    free(b.host_instances);
+    clvr_mesh_free(&m);
+}
+
 int main(int argc, char **argv)
 {
     int big = argc > 1 && strcmp(argv[1], "--big") == 0;
@@ -641,6 +686,7 @@ int main(int argc, char **argv)
         clvr_cl_destroy(&cl);
         return tu_finish("test_preprocess --big");
     }
+    test_split_segments();
     test_errors(&cl);
     test_workspace(&cl);
     test_quantize_box(&cl);

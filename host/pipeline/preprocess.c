@@ -96,6 +96,16 @@ float clvr_pp_scale(const clvr_box *b)
     return ext > 0.0f ? 65536.0f / ext : 0.0f;
 }
 
+uint64_t clvr_pp_segment_floor(uint32_t compute_units)
+{
+    /* One work item walks a segment alone, one element after another: on the
+     * H200 (132 compute units) that was 1.6 us an element, so 2^20-element
+     * segments made the split 1.65 s at 1M and at 10M elements alike (session
+     * 42). Many compute units get segments of 2^17 (about 2 instances of
+     * 58k elements and a partial one, which the segment's end closes). */
+    return compute_units >= 32 ? 1ull << 17 : 1ull << 20;
+}
+
 void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, const clvr_preprocess_options *o,
                              uint32_t compute_units, uint64_t num_vertices)
 {
@@ -114,7 +124,7 @@ void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, con
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         uint64_t n = l->count[t];
         uint64_t seg = (n + 4ull * cu - 1) / (4ull * cu);
-        if (seg < (1ull << 20)) seg = 1ull << 20;
+        if (seg < clvr_pp_segment_floor(cu)) seg = clvr_pp_segment_floor(cu);
         p->seg_len[t] = (uint32_t)(seg > 0xffffffffull ? 0xffffffffull : seg);
         p->nseg[t] = n ? (uint32_t)((n + p->seg_len[t] - 1) / p->seg_len[t]) : 0;
         uint32_t vpe = clvr_cell_vertex_count(t);

@@ -101,8 +101,10 @@ typedef struct clvr_pp_split_plan {
     uint32_t rec_max;         /* records per segment at most (the stride of the record table) */
     uint32_t rec_base[CLVR_CELL_TYPE_COUNT], total_segments;
 } clvr_pp_split_plan;
-/* o must be resolved. Segments are long (>= 2^20 elements) so that the
- * greedy split, which closes an instance at every segment end, loses little. */
+/* o must be resolved. Segments are long (clvr_pp_segment_floor elements at
+ * least) so that the greedy split, which closes an instance at every segment
+ * end, loses little. */
+uint64_t clvr_pp_segment_floor(uint32_t compute_units);
 void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, const clvr_preprocess_options *o,
                              uint32_t compute_units, uint64_t num_vertices);
 /* Resolved options (defaults applied, checked): CLVR_ERR_USAGE when invalid. */
