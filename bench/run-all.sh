@@ -64,10 +64,10 @@ list_devices() {
     #       type CPU, vendor V, OpenCL 3.0 ..., driver 3.1+debian
     awk '
       /^platform [0-9]+: / { p = $0; sub(/^platform [0-9]+: /, "", p); sub(/ \(.*$/, "", p) }
-      /^  device [0-9]+:[0-9]+  / { if (id != "") print id "\t" name "\t" p "\t" drv
-                                    id = $2; name = $0; sub(/^  device [0-9]+:[0-9]+  /, "", name); drv = "" }
+      /^  device [0-9]+:[0-9]+  / { if (id != "") print id "\t" name "\t" dp "\t" drv
+                                    id = $2; dp = p; name = $0; sub(/^  device [0-9]+:[0-9]+  /, "", name); drv = "" }
       /^      .*driver / { d = $0; sub(/.*driver /, "", d); sub(/[ ,].*$/, "", d); drv = d }
-      END { if (id != "") print id "\t" name "\t" p "\t" drv }' <<<"$out"
+      END { if (id != "") print id "\t" name "\t" dp "\t" drv }' <<<"$out"
   elif command -v clinfo >/dev/null 2>&1; then
     clinfo -l 2>/dev/null | awk '
       /^Platform #[0-9]+: / { pi = $2; sub(/#/, "", pi); sub(/:$/, "", pi); p = $0; sub(/^Platform #[0-9]+: /, "", p) }

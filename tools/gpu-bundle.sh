@@ -19,7 +19,9 @@
 # The ICD: the system's /etc/OpenCL/vendors if it has one, else an ICD file
 # naming libnvidia-opencl.so.1 where the driver put it (found by ldconfig or
 # under /usr/local/nvidia).
-# Results of the first such run: bench/results/gpu/2026-11-28-nvidia-h200.md.
+# bench/gpu-session.sh runs the same in a fixed time budget, with a cold-compile
+# build log and convergence runs (session 42).
+# Results: bench/results/gpu/2026-11-28-nvidia-h200.md, 2026-11-29-nvidia-h200-s42.md.
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
@@ -58,10 +60,12 @@ if [ "$ROOT" != "$SRC" ]; then
   mkdir -p "$(dirname "$SRC")" && ln -sfn "$ROOT" "$SRC" || exit 1
 fi
 export LD_LIBRARY_PATH=$ROOT/build-bundle/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-if [ -z "$(ls /etc/OpenCL/vendors/*.icd 2>/dev/null)" ] && [ -z "${OCL_ICD_VENDORS:-}" ]; then
+# A system ICD directory may list PoCL alone (the H200 machine of session 42 did):
+# then NVIDIA's library joins a copy of it.
+if ! grep -qs nvidia /etc/OpenCL/vendors/*.icd && [ -z "${OCL_ICD_VENDORS:-}" ]; then
   lib=$(ldconfig -p | awk '/libnvidia-opencl.so.1/ { print $NF; exit }')
   [ -n "$lib" ] || lib=$(ls /usr/local/nvidia/lib64/libnvidia-opencl.so.1 2>/dev/null || true)
-  mkdir -p "$ROOT/build-bundle/icd"
+  mkdir -p "$ROOT/build-bundle/icd" && cp /etc/OpenCL/vendors/*.icd "$ROOT/build-bundle/icd/" 2>/dev/null
   echo "${lib:-libnvidia-opencl.so.1}" >"$ROOT/build-bundle/icd/nvidia.icd"
   export OCL_ICD_VENDORS=$ROOT/build-bundle/icd
 fi
@@ -81,6 +85,6 @@ timeout "${BENCH_LIMIT:-300}" "$ROOT/bench/run-all.sh" --build "$ROOT/build-bund
 echo "run-all (render) exit $?"; grep -E "^run-all.sh|failed" "$OUT/run-all.log"
 EOF
 chmod +x "$B/run-on-device.sh"
-tar cf - --exclude='*.o' --exclude='*.o.d' --exclude=CMakeFiles "$B" | xz -T"${CLVR_JOBS:-2}" -6 >"$OUTF.tmp"
+tar cf - --exclude='*.o' --exclude='*.o.d' --exclude="$B/CMakeFiles/*.dir" --exclude="$B/CMakeFiles/CMakeScratch" "$B" | xz -T"${CLVR_JOBS:-2}" -6 >"$OUTF.tmp"
 mv "$OUTF.tmp" "$OUTF"
 echo "gpu-bundle.sh: wrote $OUTF ($(du -h "$OUTF" | cut -f1)); there: tar xJf $(basename "$OUTF") && bash $B/run-on-device.sh OUTDIR"
