@@ -17,10 +17,9 @@
 #include "render_volume.h"
 #include "pixel_cv.h"
 
-/* Parameters: the frame, the camera, the arrays of CLVR_VOLUME_ARRAYS in
- * their order, then the outputs (host/pipeline/render.c binds them in this order). */
-#define CLVR_VOLUME_PARAM(T, name) __global const T *name,
-#define CLVR_VOLUME_BIND(T, name) v.name = name;
+/* Parameters: the frame, the camera, the arrays (CLVR_VOLUME_PARAM,
+ * kernels/render_volume.h), then the outputs (host/pipeline/render.c binds
+ * them in this order). */
 
 /* The light grid (with shadows): one work item per column (a, b) of its
  * r x r (clvr_light_column). Same parameters as clvr_render_frame then the
@@ -55,13 +54,9 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
     v.f = &f;
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_BIND)
 
-    clvr_rng rng = clvr_rng_make(pixel, f.frame_index, f.seed_lo, f.seed_hi);
+    clvr_rng rng;
     float ld[CLVR_LD_DIMS];
-    const float *ldp = NULL;
-    if (f.sampler == CLVR_SAMPLER_LD) {
-        clvr_ld_sample(pixel, f.frame_index, f.seed_lo, f.seed_hi, ld);
-        ldp = ld;
-    }
+    const float *ldp = clvr_pixel_streams(&f, pixel, f.seed_lo, f.seed_hi, &rng, ld);
     float3 org, dir;
     float2 d;
     clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir, &d);

@@ -8,10 +8,6 @@
 #include "locate.h"
 #include "render_volume.h"
 
-/* Parameters as kernels/render.cl's. */
-#define CLVR_VOLUME_PARAM(T, name) __global const T *name,
-#define CLVR_VOLUME_BIND(T, name) v.name = name;
-
 /* MPI mode (docs/mpi-compositing.md). The sub-pixel position comes from the
  * frame's seed, the same on every rank, so that all ranks trace the same
  * camera ray; the estimator's draws come from the seed mixed with
@@ -20,25 +16,16 @@
 inline void clvr_mpi_streams(const clvr_frame *f, uint pixel, uint phase, clvr_rng *rng, float *ld, const float **ldp)
 {
     const uint lo = f->seed_lo ^ (f->mpi_rank_key * 0x9E3779B9u), hi = f->seed_hi ^ (0x632BE5ABu * (phase + 1u));
-    *rng = clvr_rng_make(pixel, f->frame_index, lo, hi);
-    *ldp = NULL;
-    if (f->sampler == CLVR_SAMPLER_LD) {
-        clvr_ld_sample(pixel, f->frame_index, lo, hi, ld);
-        *ldp = ld;
-    }
+    *ldp = clvr_pixel_streams(f, pixel, lo, hi, rng, ld);
 }
 
 inline void clvr_mpi_camera_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y, float3 *org,
                                 float3 *dir)
 {
     const uint pixel = y * f->width + x;
-    clvr_rng rng = clvr_rng_make(pixel, f->frame_index, f->seed_lo, f->seed_hi);
+    clvr_rng rng;
     float ld[CLVR_LD_DIMS];
-    const float *ldp = NULL;
-    if (f->sampler == CLVR_SAMPLER_LD) {
-        clvr_ld_sample(pixel, f->frame_index, f->seed_lo, f->seed_hi, ld);
-        ldp = ld;
-    }
+    const float *ldp = clvr_pixel_streams(f, pixel, f->seed_lo, f->seed_hi, &rng, ld);
     float2 jit; /* rank 0 draws it again on the host (host/mpi/mpi_main.c, add_jitters) */
     clvr_render_primary_ray(cam, f, x, y, &rng, ldp, org, dir, &jit);
 }

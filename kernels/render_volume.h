@@ -18,6 +18,11 @@ typedef struct clvr_volume {
     CLVR_VOLUME_ARRAYS(CLVR_VOLUME_FIELD)
 } clvr_volume;
 #undef CLVR_VOLUME_FIELD
+/* A kernel takes the arrays as parameters (CLVR_VOLUME_PARAM, in
+ * CLVR_VOLUME_ARRAYS's order, which host/pipeline/render.c binds) and fills
+ * its clvr_volume v from them (CLVR_VOLUME_BIND). */
+#define CLVR_VOLUME_PARAM(T, name) __global const T *name,
+#define CLVR_VOLUME_BIND(T, name) v.name = name;
 
 /* Transfer function at scalar s: rgb colour and extinction in w. Points
  * outside the mesh have no medium (all zero). */
@@ -1633,6 +1638,17 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, fl
 /* Primary ray through pixel (x, y) at its sub-pixel position
  * (clvr_pixel_jitter). *jit: the position's offset from the centre, in
  * pixels (a control of kernels/pixel_cv.h). */
+/* A pixel's random streams for the frame, keyed by (lo, hi): the generator,
+ * and with the ld sampler its CLVR_LD_DIMS uniforms in ld. Returns ld, or
+ * NULL for the independent sampler. */
+inline const float *clvr_pixel_streams(const clvr_frame *f, uint pixel, uint lo, uint hi, clvr_rng *rng, float *ld)
+{
+    *rng = clvr_rng_make(pixel, f->frame_index, lo, hi);
+    if (f->sampler != CLVR_SAMPLER_LD) return NULL;
+    clvr_ld_sample(pixel, f->frame_index, lo, hi, ld);
+    return ld;
+}
+
 inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
                                     clvr_rng *rng, const float *ld, float3 *org, float3 *dir, float2 *jit)
 {

@@ -111,6 +111,7 @@ void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, con
 {
     memset(p, 0, sizeof *p);
     uint32_t cu = compute_units ? compute_units : 1;
+    const uint64_t seg_floor = clvr_pp_segment_floor(cu);
     p->max_elems = o->max_instance_elements;
     if (o->index_bits == 16) p->vlimit = CLVR_INSTANCE_MAX_VERTS16 - 1u;
     else {
@@ -124,7 +125,7 @@ void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, con
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
         uint64_t n = l->count[t];
         uint64_t seg = (n + 4ull * cu - 1) / (4ull * cu);
-        if (seg < clvr_pp_segment_floor(cu)) seg = clvr_pp_segment_floor(cu);
+        if (seg < seg_floor) seg = seg_floor;
         p->seg_len[t] = (uint32_t)(seg > 0xffffffffull ? 0xffffffffull : seg);
         p->nseg[t] = n ? (uint32_t)((n + p->seg_len[t] - 1) / p->seg_len[t]) : 0;
         uint32_t vpe = clvr_cell_vertex_count(t);
