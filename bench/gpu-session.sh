@@ -33,20 +33,9 @@ rm -rf "$R" && mkdir -p "$R" "$OUT"
 pack() { tar czf "$OUT/res.tgz.tmp" -C "$R" . && mv "$OUT/res.tgz.tmp" "$OUT/res.tgz"; }
 stamp() { echo "[$(($(date +%s) - T0)) s] $*" | tee -a "$R/timeline.txt"; }
 
-# The environment run-on-device.sh sets up: CTest's absolute paths, the bundled
-# libraries, an ICD naming NVIDIA's library when the system has none.
-SRC=$(sed -n 's/^SRC=\([^ ]*\).*/\1/p' "$B/run-on-device.sh")
-if [ -n "$SRC" ] && [ "$ROOT" != "$SRC" ] && [ ! -e "$SRC" ]; then mkdir -p "$(dirname "$SRC")" && ln -sfn "$ROOT" "$SRC"; fi
-export LD_LIBRARY_PATH=$B/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-# A system ICD directory may list PoCL alone (the H200 machine of session 42 did):
-# then NVIDIA's library joins a copy of it.
-if ! grep -qs nvidia /etc/OpenCL/vendors/*.icd && [ -z "${OCL_ICD_VENDORS:-}" ]; then
-  lib=$(ldconfig -p | awk '/libnvidia-opencl.so.1/ { print $NF; exit }')
-  [ -n "$lib" ] || lib=$(ls /usr/local/nvidia/lib64/libnvidia-opencl.so.1 2>/dev/null || true)
-  mkdir -p "$B/icd" && cp /etc/OpenCL/vendors/*.icd "$B/icd/" 2>/dev/null
-  echo "${lib:-libnvidia-opencl.so.1}" >"$B/icd/nvidia.icd"
-  export OCL_ICD_VENDORS=$B/icd
-fi
+# The bundle's environment (tools/gpu-bundle.sh's env.sh): CTest's absolute
+# paths, the bundled libraries, NVIDIA's ICD where the system lists none.
+. "$B/env.sh" || exit 1
 
 stamp "phase 1: devices"
 "$B/clvr" --list-devices >"$R/devices.txt" 2>&1 || { cat "$R/devices.txt"; pack; exit 1; }

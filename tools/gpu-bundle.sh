@@ -44,20 +44,17 @@ done | sort -u | while read -r lib; do
   esac
 done
 
-cat >"$B/run-on-device.sh" <<EOF
-#!/usr/bin/env bash
-# Written by tools/gpu-bundle.sh: the tests and benchmarks on the first GPU.
-set -u
+# env.sh: the environment on the device, sourced by run-on-device.sh and
+# bench/gpu-session.sh. ROOT is the tree the bundle lies in there.
+cat >"$B/env.sh" <<EOF
+# Written by tools/gpu-bundle.sh; source it (it sets ROOT and the environment).
 SRC=$PWD                       # the tree the bundle was built in (CTest's paths)
 EOF
-cat >>"$B/run-on-device.sh" <<'EOF'
-ROOT=$(cd "$(dirname "$0")/.." && pwd)
-OUT=${1:?usage: run-on-device.sh OUTDIR [TESTS-REGEX]}
-REGEX=${2:-}
-mkdir -p "$OUT"
+cat >>"$B/env.sh" <<'EOF'
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 if [ "$ROOT" != "$SRC" ]; then
-  if [ -e "$SRC" ] && [ ! -L "$SRC" ]; then echo "run-on-device.sh: $SRC exists and is not this tree: run from there" >&2; exit 1; fi
-  mkdir -p "$(dirname "$SRC")" && ln -sfn "$ROOT" "$SRC" || exit 1
+  if [ -e "$SRC" ] && [ ! -L "$SRC" ]; then echo "gpu bundle: $SRC exists and is not this tree: run from there" >&2; return 1; fi
+  mkdir -p "$(dirname "$SRC")" && ln -sfn "$ROOT" "$SRC" || return 1
 fi
 export LD_LIBRARY_PATH=$ROOT/build-bundle/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 # A system ICD directory may list PoCL alone (the H200 machine of session 42 did):
@@ -69,6 +66,16 @@ if ! grep -qs nvidia /etc/OpenCL/vendors/*.icd && [ -z "${OCL_ICD_VENDORS:-}" ];
   echo "${lib:-libnvidia-opencl.so.1}" >"$ROOT/build-bundle/icd/nvidia.icd"
   export OCL_ICD_VENDORS=$ROOT/build-bundle/icd
 fi
+EOF
+
+cat >"$B/run-on-device.sh" <<'EOF'
+#!/usr/bin/env bash
+# Written by tools/gpu-bundle.sh: the tests and benchmarks on the first GPU.
+set -u
+. "$(dirname "$0")/env.sh" || exit 1
+OUT=${1:?usage: run-on-device.sh OUTDIR [TESTS-REGEX]}
+REGEX=${2:-}
+mkdir -p "$OUT"
 "$ROOT/build-bundle/clvr" --list-devices || exit 1
 ( cd "$ROOT/build-bundle" &&
   CLVR_TEST_DEVICE=${CLVR_TEST_DEVICE:-gpu} timeout "${CTEST_LIMIT:-300}" ctest -j"${CTEST_JOBS:-8}" --timeout 240 \
