@@ -62,14 +62,14 @@ print(f"1 frame: {100 * rmse([0] * (w * h)):.3f}%  2 frames: {100 * rmse([1] * (
 order = sorted(range(w * h), key=spread, reverse=True)
 rnd = list(range(w * h))
 random.Random(1).shuffle(rnd)
+rnd_inside = [i for i in rnd if i in inside_set]
 for frac in (0.1, 0.2, 0.3, 0.5, 0.7):
     n = int(frac * len(inside))
     pick_s = [0] * (w * h)
     for i in order[:n]:
         pick_s[i] = 1
-    ins = [i for i in rnd if i in inside_set] if frac == 0.1 else ins
     pick_r = [0] * (w * h)
-    for i in ins[:n]:
+    for i in rnd_inside[:n]:
         pick_r[i] = 1
     print(f"second frame on {frac:.0%} of the inside pixels: by neighbour spread {100 * rmse(pick_s):.3f}%, "
           f"at random {100 * rmse(pick_r):.3f}%")
