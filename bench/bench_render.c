@@ -24,6 +24,7 @@
  *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise] [--no-pixel-cv]
+ *                [--adaptive T]
  *                [--repeats K]
  *
  * --repeats (--converge): K measured runs per configuration with seeds 1 ..
@@ -41,6 +42,10 @@
  * which is the unbiased estimate's.
  * --pixel-filter: the image the frames converge to (render.h; the
  * reference of --converge uses it too), box (default) or point.
+ * --adaptive T: adaptive sampling's threshold (render.h settings.adaptive;
+ * 0: off; default CLVR_ADAPTIVE_DEFAULT); an estimator variant's @T suffix
+ * (walk@0) sets it for that variant alone, for A/B rows in one run. --converge checks the image after
+ * each frame and after its refine pass; spp there is samples per pixel.
  * --no-pixel-cv: the images read are the plain means, without the
  * per-pixel control variates (kernels/pixel_cv.h; render.h settings.pixel_cv;
  * for A/B runs). The --converge reference is always made without them; the
@@ -94,6 +99,7 @@ typedef struct config {
     uint32_t pixel_filter; /* CLVR_PIXEL_*: --pixel-filter (the reference's too) */
     int guides;         /* --denoise (converge): keep the denoiser's guides, report the denoised error apart */
     int no_pixel_cv;    /* --no-pixel-cv: images read without the per-pixel control variates (render.h) */
+    float adaptive;     /* --adaptive T: render.h settings.adaptive (default CLVR_ADAPTIVE_DEFAULT; 0 off) */
 } config;
 
 typedef struct row {
@@ -192,6 +198,7 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
     rs.hull = !c->no_hull;
     rs.pixel_filter = c->pixel_filter;
     rs.pixel_cv = !c->no_pixel_cv;
+    rs.adaptive = c->adaptive;
     rs.guides = c->guides;
     rs.shadows = c->shadows && c->method != CLVR_RENDER_MARCH;
     if (c->macrocells) rs.macrocells = c->macrocells;
@@ -327,7 +334,9 @@ static const char *base_name(const char *p)
  * interpolated spp and time as well; with the ld sampler the error falls
  * faster than 1/n and the fit is pessimistic. */
 typedef struct conv_point {
-    uint32_t spp;
+    uint32_t spp;      /* frames */
+    int refined;       /* after the frame's refine pass (adaptive sampling) */
+    double spp_mean;   /* samples per pixel, frames and refine passes */
     double dev_s, wall_s, rmse_raw, rmse, rmse_rel;
     double rmse_rel_dn; /* --denoise: the denoised image's (biased; NaN otherwise) */
 } conv_point;
@@ -343,12 +352,21 @@ typedef struct est_variant {
     uint32_t estimator, urm_steps;
     float urm_kappa;
     uint32_t light_res;
+    float adaptive; /* @T: adaptive sampling's threshold for this variant; < 0: --adaptive's */
 } est_variant;
 
+/* name[:urm-steps[:urm-kappa[:light-res]]][@adaptive] */
 static int parse_variant(const char *s, est_variant *v)
 {
     char name[32];
-    size_t n = strcspn(s, ":");
+    v->adaptive = -1.0f;
+    const char *at = strchr(s, '@');
+    if (at) {
+        char *end;
+        v->adaptive = strtof(at + 1, &end);
+        if (*end || !(v->adaptive >= 0.0f) || !isfinite(v->adaptive)) return 0;
+    }
+    size_t n = strcspn(s, ":@");
     if (n >= sizeof name) return 0;
     memcpy(name, s, n);
     name[n] = 0;
@@ -372,6 +390,10 @@ static void variant_label(const est_variant *v, char *buf, size_t cap)
     else if (v->urm_steps) snprintf(buf, cap, "%s:%u:%g", clvr_render_estimator_name(v->estimator), v->urm_steps,
                                (double)v->urm_kappa);
     else snprintf(buf, cap, "%s", clvr_render_estimator_name(v->estimator));
+    if (v->adaptive >= 0.0f) {
+        const size_t l = strlen(buf);
+        snprintf(buf + l, cap - l, "@%g", (double)v->adaptive);
+    }
 }
 
 typedef struct conv_ref {
@@ -389,7 +411,10 @@ typedef struct conv_result {
     char label[48];
     double frame_s;                 /* mean device time of one frame (the light grid apart) */
     double light_s;                 /* device time of the light grid (urm with shadows: once, before the first frame) */
-    double samples_per_ray, rays_per_pixel;
+    double samples_per_ray, rays_per_pixel; /* rays per pixel: per sample */
+    double spp_per_frame;           /* samples per pixel a frame and its refine pass add */
+    double refine_fraction;         /* adaptive sampling: pixels in the refine list / all pixels */
+    double adaptive;                /* its threshold (0: off) */
     uint32_t npoints;
     conv_point pts[MAX_POINTS];
     int reached;
@@ -465,6 +490,8 @@ static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *b
     /* Plain box samples: the measured runs' control variate is checked
      * against an image made without it. */
     c.no_pixel_cv = 1;
+    /* Every pixel the same count of samples: its moments are per frame. */
+    c.adaptive = 0.0f;
     if (!sum || !sq || !out->img || !out->inside) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory");
         goto done;
@@ -527,6 +554,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
     out->at.rmse_rel_dn = out->at_dn.rmse_rel_dn = NAN; /* not measured until a checkpoint says */
     out->shadows = c->shadows;
     out->estimator = c->estimator;
+    out->adaptive = c->adaptive;
     out->load_before = bench_load1();
     if (!img || (dn && !dimg)) {
         free(img);
@@ -537,34 +565,45 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
     double wall = 0.0, fit_acc = 0.0;
     uint32_t fit_n = 0, next = 1;
     for (uint32_t n = 1; s == CLVR_OK && n <= max_spp; ++n) {
-        double t0 = clvr_clock_monotonic_s();
-        s = clvr_renderer_frame(rd, err);
-        wall += clvr_clock_monotonic_s() - t0;
-        if (s != CLVR_OK || n != next) continue;
-        /* checkpoints every frame up to 16, then in steps of n/16 (about 6%) */
-        next = n < 16 ? n + 1 : n + n / 16;
-        if (next > max_spp && n < max_spp) next = max_spp;
-        s = clvr_renderer_read(rd, img, &rc, err);
-        if (s != CLVR_OK) break;
-        const double mse = inside_mse(img, ref, npix);
-        /* The image pass (the control variates) is part of what a reader waits for. */
-        conv_point pt = {n, rc.kernel_s + rc.image_s, wall + rc.image_s, sqrt(mse), sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0,
-                         NAN};
-        pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
-        if (dn) {
-            s = denoised_image(rd, dn, w, h, dimg, &out->dn_s, err);
+        const int check = n == next;
+        if (check) {
+            /* checkpoints every frame up to 16, then in steps of n/16 (about 6%) */
+            next = n < 16 ? n + 1 : n + n / 16;
+            if (next > max_spp && n < max_spp) next = max_spp;
+        }
+        /* The frame, then (adaptive sampling) its refine pass: a checkpoint
+         * after each, so that the figure sees the image a reader could stop
+         * at. */
+        for (int half = 0; half < 2 && s == CLVR_OK; ++half) {
+            if (half && !(c->adaptive > 0.0f)) break;
+            double t0 = clvr_clock_monotonic_s();
+            s = half ? clvr_renderer_refine(rd, err) : clvr_renderer_full_frame(rd, err);
+            wall += clvr_clock_monotonic_s() - t0;
+            if (s != CLVR_OK || !check) continue;
+            s = clvr_renderer_read(rd, img, &rc, err);
             if (s != CLVR_OK) break;
-            const double md = inside_mse(dimg, ref, npix);
-            pt.rmse_rel_dn = ref->ref_mean > 0 ? sqrt(md > ref->ref_var ? md - ref->ref_var : 0.0) / ref->ref_mean : 0.0;
-            if (!out->reached_dn && pt.rmse_rel_dn <= target) { out->reached_dn = 1; out->at_dn = pt; }
+            const double mse = inside_mse(img, ref, npix);
+            /* The image pass (the control variates) and the choice of the
+             * refine list are part of what a reader waits for. */
+            conv_point pt = {n, half, n + (double)rc.refine_passes * (double)rc.refine_pixels / (double)npix,
+                             rc.kernel_s + rc.image_s + rc.select_s, wall + rc.image_s, sqrt(mse),
+                             sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0, NAN};
+            pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
+            if (dn) {
+                s = denoised_image(rd, dn, w, h, dimg, &out->dn_s, err);
+                if (s != CLVR_OK) break;
+                const double md = inside_mse(dimg, ref, npix);
+                pt.rmse_rel_dn = ref->ref_mean > 0 ? sqrt(md > ref->ref_var ? md - ref->ref_var : 0.0) / ref->ref_mean : 0.0;
+                if (!out->reached_dn && pt.rmse_rel_dn <= target) { out->reached_dn = 1; out->at_dn = pt; }
+            }
+            if (out->npoints < MAX_POINTS) out->pts[out->npoints++] = pt;
+            /* Fit mse * samples over the frames' own checkpoints with n >= 4. */
+            if (n >= 4 && !half) {
+                fit_acc += (pt.rmse_rel * pt.rmse_rel) * pt.spp_mean;
+                ++fit_n;
+            }
+            if (!out->reached && pt.rmse_rel <= target) { out->reached = 1; out->at = pt; }
         }
-        if (out->npoints < MAX_POINTS) out->pts[out->npoints++] = pt;
-        /* Fit mse * n over checkpoints with n >= 4. */
-        if (n >= 4) {
-            fit_acc += (pt.rmse_rel * pt.rmse_rel) * n;
-            ++fit_n;
-        }
-        if (!out->reached && pt.rmse_rel <= target) { out->reached = 1; out->at = pt; }
         if (out->reached && n >= 16) break;
     }
     if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &rc, err);
@@ -572,10 +611,16 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
     out->light_s = rc.light_s;
     out->frame_s = rc.frames ? (rc.kernel_s - rc.light_s) / (double)rc.frames : 0.0;
     out->samples_per_ray = rc.rays ? (double)rc.samples / (double)rc.rays : 0.0;
-    out->rays_per_pixel = rc.frames ? (double)rc.rays / ((double)rc.frames * (double)npix) : 0.0;
+    {
+        /* Per sample: a frame's refine pass adds samples to some pixels. */
+        const double samples = (double)rc.frames * (double)npix + (double)rc.refine_passes * (double)rc.refine_pixels;
+        out->rays_per_pixel = samples > 0 ? (double)rc.rays / samples : 0.0;
+        out->spp_per_frame = rc.frames ? samples / ((double)rc.frames * (double)npix) : 1.0;
+        out->refine_fraction = (double)rc.refine_pixels / (double)npix;
+    }
     if (fit_n) {
         out->fit_spp = fit_acc / fit_n / (target * target);
-        out->fit_s = out->fit_spp * out->frame_s;
+        out->fit_s = out->fit_spp / out->spp_per_frame * out->frame_s;
     }
     out->load_after = bench_load1();
 done:
@@ -597,8 +642,9 @@ static void json_str(FILE *f, const char *s)
 
 static void json_point(FILE *f, const conv_point *p)
 {
-    fprintf(f, "{\"spp\": %u, \"device_s\": %.6g, \"wall_s\": %.6g, \"rmse_raw\": %.6g, \"rmse\": %.6g, \"rmse_rel\": %.6g",
-            p->spp, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
+    fprintf(f, "{\"spp\": %.4g, \"frames\": %u, \"refined\": %d, \"device_s\": %.6g, \"wall_s\": %.6g, "
+               "\"rmse_raw\": %.6g, \"rmse\": %.6g, \"rmse_rel\": %.6g",
+            p->spp_mean, p->spp, p->refined, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
     if (isfinite(p->rmse_rel_dn)) fprintf(f, ", \"rmse_rel_denoised\": %.6g", p->rmse_rel_dn);
     fprintf(f, "}");
 }
@@ -645,6 +691,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
             if (est[e].urm_steps) c.urm_steps = est[e].urm_steps;
             if (est[e].urm_kappa > 0.0f) c.urm_kappa = est[e].urm_kappa;
             if (est[e].light_res) c.light_res = est[e].light_res;
+            if (est[e].adaptive >= 0.0f) c.adaptive = est[e].adaptive;
             uint32_t order[MAX_REPEATS], nrun = repeats;
             for (uint32_t k = 0; k < nrun; ++k) {
                 if (converge_one(cl, &g, &c, &refs[sh], w, h, max_spp, target, dn, 1 + k, &runs[k], &err) != CLVR_OK)
@@ -667,20 +714,21 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
         }
     }
     printf("| estimator | shadows | elements | frame ms | light grid ms | samples/ray | lookups/pixel to %.0f%% | "
-           "ref mean rgb (inside) | ref own rel RMSE | spp to %.0f%% rel | s to %.0f%% rel (device) | s (wall) | "
-           "1/n fit spp | fit s | load |\n",
+           "ref mean rgb (inside) | ref own rel RMSE | refined pixels | spp to %.0f%% rel | s to %.0f%% rel (device) | "
+           "s (wall) | 1/n fit spp | fit s | load |\n",
            target * 100, target * 100, target * 100);
-    printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int sh = sh_lo; sh <= sh_hi; ++sh)
         for (uint32_t e = 0; e < nest; ++e) {
             const conv_result *r = &res[sh][e];
-            printf("| %s | %s | %" PRIu64 " | %.1f | %.1f | %.2f | %s%.0f | %.4f | %.4f | %s%u | %s%.3f | %.3f | %.1f | %.3f | "
-                   "%.2f |\n",
+            const double last_spp = r->npoints ? r->pts[r->npoints - 1].spp_mean : (double)max_spp;
+            printf("| %s | %s | %" PRIu64 " | %.1f | %.1f | %.2f | %s%.0f | %.4f | %.4f | %.1f%% | %s%.2f | %s%.3f | %.3f | "
+                   "%.1f | %.3f | %.2f |\n",
                    r->label, sh ? "on" : "off", g.elements, r->frame_s * 1e3, r->light_s * 1e3, r->samples_per_ray,
-                   r->reached ? "" : ">", r->samples_per_ray * r->rays_per_pixel * (r->reached ? r->at.spp : max_spp),
+                   r->reached ? "" : ">", r->samples_per_ray * r->rays_per_pixel * (r->reached ? r->at.spp_mean : last_spp),
                    refs[sh].ref_mean,
-                   refs[sh].ref_mean > 0 ? sqrt(refs[sh].ref_var) / refs[sh].ref_mean : 0.0, r->reached ? "" : ">",
-                   r->reached ? r->at.spp : max_spp, r->reached ? "" : ">",
+                   refs[sh].ref_mean > 0 ? sqrt(refs[sh].ref_var) / refs[sh].ref_mean : 0.0, 100.0 * r->refine_fraction,
+                   r->reached ? "" : ">", r->reached ? r->at.spp_mean : last_spp, r->reached ? "" : ">",
                    r->reached ? r->at.dev_s : conv_last_s(r),
                    r->reached ? r->at.wall_s : NAN, r->fit_spp, r->fit_s, r->load_after);
         }
@@ -710,7 +758,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                 char raw[64] = "", den[64] = "";
                 for (uint32_t i = 0; i < r->npoints; ++i) {
                     const conv_point *p = &r->pts[i];
-                    if (p->spp != 1 && p->spp != 2 && p->spp != 4) continue;
+                    if ((p->spp != 1 && p->spp != 2 && p->spp != 4) || p->refined) continue;
                     const size_t lr = strlen(raw), ld = strlen(den);
                     snprintf(raw + lr, sizeof raw - lr, "%s%.2f%%", lr ? " / " : "", p->rmse_rel * 100);
                     snprintf(den + ld, sizeof den - ld, "%s%.2f%%", ld ? " / " : "", p->rmse_rel_dn * 100);
@@ -756,11 +804,13 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
             for (uint32_t e = 0; e < nest; ++e) {
                 const conv_result *r = &res[sh][e];
                 fprintf(f, "%s\n  {\"estimator\": \"%s\", \"label\": \"%s\", \"shadows\": %d, \"frame_s\": %.6g, \"light_s\": %.6g, \"samples_per_ray\": %.6g, "
-                           "\"rays_per_pixel\": %.6g, \"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
+                           "\"rays_per_pixel\": %.6g, \"adaptive\": %.6g, \"refine_fraction\": %.6g, "
+                           "\"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
                            "\"ref_own_rmse\": %.6g, \"reached\": %d, \"fit_spp\": %.6g, \"fit_s\": %.6g, "
                            "\"load_before\": %.2f, \"load_after\": %.2f, ",
                         first ? "" : ",", clvr_render_estimator_name(r->estimator), r->label, sh, r->frame_s,
-                        r->light_s, r->samples_per_ray, r->rays_per_pixel, refs[sh].ref_s, refs[sh].ref_mean,
+                        r->light_s, r->samples_per_ray, r->rays_per_pixel, r->adaptive, r->refine_fraction,
+                        refs[sh].ref_s, refs[sh].ref_mean,
                         sqrt(refs[sh].ref_var), r->reached, r->fit_spp, r->fit_s, r->load_before, r->load_after);
                 if (dn)
                     fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, "
@@ -810,7 +860,7 @@ static int usage(void)
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent] [--estimators delta,urm[:steps[:kappa[:light-res]]]]\n"
             "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n"
-            "                    [--denoise] [--no-pixel-cv] [--repeats K]\n");
+            "                    [--denoise] [--no-pixel-cv] [--adaptive T] [--repeats K]\n");
     return 2;
 }
 
@@ -824,11 +874,12 @@ int main(int argc, char **argv)
     clvr_render_settings defaults;
     clvr_render_settings_default(&defaults);
     uint32_t estimator = defaults.estimator, ref_estimator = CLVR_ESTIMATOR_URM, urm_steps = 0;
-    est_variant conv_est[MAX_EST] = {{CLVR_ESTIMATOR_DELTA, 0, 0.0f, 0}, {CLVR_ESTIMATOR_URM, 0, 0.0f, 0}};
+    est_variant conv_est[MAX_EST] = {{CLVR_ESTIMATOR_DELTA, 0, 0.0f, 0, -1.0f}, {CLVR_ESTIMATOR_URM, 0, 0.0f, 0, -1.0f}};
     uint32_t nconv_est = 2;
     int shadow_lo = 0, shadow_hi = 1;
     float urm_kappa = 0.0f;
     int quick = 0, shadows = 1, converge = 0, size_set = 0, frames_set = 0, no_hull = 0, denoise = 0, no_cv = 0;
+    float adaptive = CLVR_ADAPTIVE_DEFAULT;
     double target = 0.02, budget = 30.0;
     float density = 1.0f;
     for (int i = 1; i < argc; ++i) {
@@ -854,6 +905,11 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--no-hull")) no_hull = 1;
         else if (!strcmp(a, "--denoise")) denoise = 1;
         else if (!strcmp(a, "--no-pixel-cv")) no_cv = 1;
+        else if (!strcmp(a, "--adaptive") && v) {
+            char *end;
+            adaptive = strtof(argv[++i], &end);
+            if (*end || !(adaptive >= 0.0f) || !isfinite(adaptive)) return usage();
+        }
         else if (!strcmp(a, "--sampler") && v) {
             const char *sv = argv[++i];
             if (!strcmp(sv, "ld")) sampler = CLVR_SAMPLER_LD;
@@ -921,14 +977,14 @@ int main(int argc, char **argv)
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
                     config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
-                                pixel_filter, 0, no_cv};
+                                pixel_filter, 0, no_cv, adaptive};
                     if (c.macrocells < 1 || c.macrocells > 1024) return usage();
                     snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
                 config c = {m, 0, shadows && m != CLVR_RENDER_MARCH, "", sampler, estimator, urm_steps, urm_kappa, 0,
-                            no_hull, pixel_filter, 0, no_cv};
+                            no_hull, pixel_filter, 0, no_cv, adaptive};
                 snprintf(c.label, sizeof c.label, "%s", clvr_render_method_name(m));
                 cfg[ncfg++] = c;
             }
@@ -943,7 +999,7 @@ int main(int argc, char **argv)
     }
     if (converge) {
         const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
-                             no_hull, pixel_filter, denoise, no_cv};
+                             no_hull, pixel_filter, denoise, no_cv, adaptive};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, repeats, json);
         clvr_cl_destroy(&cl);

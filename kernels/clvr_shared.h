@@ -605,7 +605,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 380 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 384 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -660,8 +660,12 @@ typedef struct clvr_frame {
      * outside is gone, as in ParaView; the majorants are left as they are
      * (still bounds on a shorter interval). */
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
+    /* Adaptive sampling (render.h settings.adaptive): 0 for a frame over
+     * every pixel; else a refine pass, one work item per pixel of its list,
+     * whose sample goes to the refine sums (clvr_render_frame). */
+    clvr_u32 pass_pixels;
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 380, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 384, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

@@ -36,7 +36,14 @@
  * 4.55 / 1.98 / 1.01 -> 2.98 / 1.67 / 0.97%, 1M tets 4.11 / 1.65 / 0.81 ->
  * 1.83 / 1.10 / 0.73%; the jitter alone (no u term) gave 2.29% and 3.47%
  * after one frame, a fit over the shadow ray's offset or urm's pick lost
- * (bench/results/render-converge/2026-11-28-s32-pixel-cv.md). */
+ * (bench/results/render-converge/2026-11-28-s32-pixel-cv.md).
+ *
+ * With adaptive sampling (render.h settings.adaptive) some pixels also
+ * have refine samples, kept in their own sums. A pixel's M and (D, U) then
+ * take in all its samples, but the fit still reads its neighbours' frames
+ * alone: how many refine samples a neighbour got depends on the values
+ * around that neighbour, the pixel's own among them, and a fit that read
+ * them would no longer be independent of the pixel's draws. */
 #ifndef CLVR_PIXEL_CV_H
 #define CLVR_PIXEL_CV_H
 
@@ -82,8 +89,11 @@ CLVR_INLINE int clvr_pixel_cv_flat(CLVR_GLOBAL const float *sum, clvr_u32 w, clv
 
 /* sum: the frames' summed rgba samples per pixel; ctl: per pixel the summed
  * controls (dx, dy, u - 1/2, unused); inv_n: 1 / frames; w x h row by row.
+ * refine (NULL: none): per pixel the refine passes' summed samples and
+ * controls (8 floats), nsamp its count of samples, frames included.
  * out: pixel (x, y)'s mean rgba minus its control variate. */
-CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const float *ctl, float inv_n, clvr_u32 w,
+CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const float *ctl, float inv_n,
+                               CLVR_GLOBAL const float *refine, CLVR_GLOBAL const clvr_u32 *nsamp, clvr_u32 w,
                                clvr_u32 h, clvr_u32 x, clvr_u32 y, float *out)
 {
     /* Normal equations A c = B of the fit: A symmetric 4x4 (lower half
@@ -91,7 +101,14 @@ CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const f
     float A[4][4] = {{0.0f}}, B[4][4] = {{0.0f}};
     int beside_x = 0, beside_y = 0;
     const clvr_u64 p = (clvr_u64)y * w + (clvr_u64)x;
+    /* The pixel's own mean and mean controls (c[0] unused). */
+    float c[4] = {0.0f, ctl[4u * p] * inv_n, ctl[4u * p + 1u] * inv_n, ctl[4u * p + 2u] * inv_n};
     for (int k = 0; k < 4; ++k) out[k] = sum[4u * p + (clvr_u64)k] * inv_n;
+    if (refine) {
+        const float inv = 1.0f / (float)nsamp[p];
+        for (int k = 0; k < 4; ++k) out[k] = (sum[4u * p + (clvr_u64)k] + refine[8u * p + (clvr_u64)k]) * inv;
+        for (int k = 0; k < 3; ++k) c[k + 1] = (ctl[4u * p + (clvr_u64)k] + refine[8u * p + 4u + (clvr_u64)k]) * inv;
+    }
     if (clvr_pixel_cv_flat(sum, w, h, x, y)) return;
     for (int oy = -1; oy <= 1; ++oy)
         for (int ox = -1; ox <= 1; ++ox) {
@@ -130,7 +147,6 @@ CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const f
             A[i][j] = s / A[j][j];
         }
     }
-    const float c[4] = {0.0f, ctl[4u * p] * inv_n, ctl[4u * p + 1u] * inv_n, ctl[4u * p + 2u] * inv_n};
     for (int k = 0; k < 4; ++k) {
         float z[4], coef[4];
         for (int i = 0; i < 4; ++i) { /* L z = B */

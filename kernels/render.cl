@@ -39,16 +39,39 @@ __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr
 /* One frame: adds each pixel's sample to accum (and its square to
  * accum_sq), its controls to ctl (the camera ray's offset from the pixel
  * centre and its first uniform minus 1/2, kernels/pixel_cv.h), its counters
- * and, when asked, its denoiser guides. */
+ * and, when asked, its denoiser guides. nsamp[pixel] counts the pixel's
+ * samples, frames and refine passes alike, and numbers its random streams.
+ *
+ * A refine pass (f.pass_pixels > 0, adaptive sampling, render.h): one work
+ * item per pixel of list[0 .. pass_pixels), its sample and controls added to
+ * refine[2 pixel] and refine[2 pixel + 1] instead (zeroed when the list was
+ * made), so that accum, accum_sq and ctl keep the frames' sums alone: the
+ * pixel control variates fit those (clvr_pixel_cv_image), whose counts do
+ * not depend on the list. No guides. */
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,
                                 CLVR_VOLUME_ARRAYS(CLVR_VOLUME_PARAM) __global float4 *accum,
                                 __global float4 *accum_sq, __global float4 *ctl, __global uint *counters,
-                                __global float4 *guides)
+                                __global float4 *guides, __global uint *nsamp, __global float4 *refine,
+                                __global const uint *list)
 {
-    const uint x = get_global_id(0), y = get_global_id(1);
     const clvr_frame f = *fp;
-    if (x >= f.width || y >= f.height) return;
-    const uint pixel = y * f.width + x;
+    const int pass = f.pass_pixels > 0u;
+    uint x, y, pixel;
+    if (pass) {
+        const uint i = get_global_id(0);
+        if (i >= f.pass_pixels) return;
+        pixel = list[i];
+        x = pixel % f.width;
+        y = pixel / f.width;
+    } else {
+        x = get_global_id(0);
+        y = get_global_id(1);
+        if (x >= f.width || y >= f.height) return;
+        pixel = y * f.width + x;
+    }
+    const int first = !pass && f.frame_index == 0; /* overwrites the pixel's sums */
+    const uint index = first ? 0u : nsamp[pixel];
+    nsamp[pixel] = index + 1u;
 
     clvr_volume v;
     v.f = &f;
@@ -56,7 +79,7 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
 
     clvr_rng rng;
     float ld[CLVR_LD_DIMS];
-    const float *ldp = clvr_pixel_streams(&f, pixel, f.seed_lo, f.seed_hi, &rng, ld);
+    const float *ldp = clvr_pixel_streams(&f, pixel, index, f.seed_lo, f.seed_hi, &rng, ld);
     float3 org, dir;
     float2 d;
     clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir, &d);
@@ -70,30 +93,36 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
     } else {
         result = clvr_render_track(&v, org, dir, u, &rng, ldp, &samples, &nulls, &rays, &guide);
     }
-    if (f.guides) {
+    if (f.guides && !pass) {
         /* Two float4 per pixel: albedo rgb and the frames with a depth, then
          * the sum of those depths (kernels/denoise.h reads their means). */
         const int hit = guide.w >= 0.0f;
         const float4 g0 = (float4)(guide.xyz, hit ? 1.0f : 0.0f), g1 = (float4)(hit ? guide.w : 0.0f, 0.0f, 0.0f, 0.0f);
-        if (f.frame_index == 0) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = g1; }
+        if (first) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = g1; }
         else { guides[2u * pixel] += g0; guides[2u * pixel + 1u] += g1; }
     }
     const float4 c4 = (float4)(d, u - 0.5f, 0.0f);
-    if (f.frame_index == 0) { accum[pixel] = result; accum_sq[pixel] = result * result; ctl[pixel] = c4; }
+    if (pass) {
+        refine[2u * pixel] += result;
+        refine[2u * pixel + 1u] += c4;
+    } else if (first) { accum[pixel] = result; accum_sq[pixel] = result * result; ctl[pixel] = c4; }
     else { accum[pixel] += result; accum_sq[pixel] += result * result; ctl[pixel] += c4; }
     /* Counters: rays, samples (extinction lookups), null collisions, per
-     * pixel, summed over frames. */
+     * pixel, summed over frames and refine passes. */
     __global uint *c = counters + 3u * pixel;
-    if (f.frame_index == 0) { c[0] = rays; c[1] = samples; c[2] = nulls; }
+    if (first) { c[0] = rays; c[1] = samples; c[2] = nulls; }
     else { c[0] += rays; c[1] += samples; c[2] += nulls; }
 }
 
 /* The image so far, its means minus their control variates
  * (kernels/pixel_cv.h): sum and ctl as clvr_render_frame accumulates them,
- * inv_n = 1 / frames. clvr_pixel_cv's arithmetic in the same order, the four
- * channels as one float4 (a third of the time of the scalar loops on PoCL;
- * test_pixel_cv compares the two). */
+ * inv_n = 1 / frames; with has_refine, a pixel's own mean and controls also
+ * take in its refine sums (clvr_render_frame), over its nsamp samples, while
+ * the fit still reads the neighbours' frames alone. clvr_pixel_cv's
+ * arithmetic in the same order, the four channels as one float4 (a third of
+ * the time of the scalar loops on PoCL; test_pixel_cv compares the two). */
 __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const float4 *ctl, float inv_n, uint w, uint h,
+                                  __global const float4 *refine, __global const uint *nsamp, uint has_refine,
                                   __global float4 *out)
 {
     /* The reference's bits: no fused multiply-add (NVIDIA's compiler fuses
@@ -102,7 +131,12 @@ __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const flo
     const uint x = get_global_id(0), y = get_global_id(1);
     if (x >= w || y >= h) return;
     const ulong p = (ulong)y * w + x;
-    const float4 mean = sum[p] * inv_n;
+    float4 mean = sum[p] * inv_n, cp = ctl[p] * inv_n;
+    if (has_refine) {
+        const float inv = 1.0f / (float)nsamp[p];
+        mean = (sum[p] + refine[2u * p]) * inv;
+        cp = (ctl[p] + refine[2u * p + 1u]) * inv;
+    }
     if (clvr_pixel_cv_flat((__global const float *)sum, w, h, x, y)) { /* the neighbours all the same: no fit */
         out[p] = mean;
         return;
@@ -147,6 +181,5 @@ __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const flo
     const float4 z0 = b0 / l00, z1 = (b1 - l10 * z0) / l11, z2 = (b2 - l20 * z0 - l21 * z1) / l22,
                  z3 = (b3 - l30 * z0 - l31 * z1 - l32 * z2) / l33;
     const float4 c3 = z3 / l33, c2 = (z2 - l32 * c3) / l22, c1 = (z1 - l21 * c2 - l31 * c3) / l11;
-    const float4 cp = ctl[p] * inv_n;
     out[p] = mean - (c1 * cp.x + c2 * cp.y + c3 * cp.z);
 }

@@ -16,7 +16,7 @@
 inline void clvr_mpi_streams(const clvr_frame *f, uint pixel, uint phase, clvr_rng *rng, float *ld, const float **ldp)
 {
     const uint lo = f->seed_lo ^ (f->mpi_rank_key * 0x9E3779B9u), hi = f->seed_hi ^ (0x632BE5ABu * (phase + 1u));
-    *ldp = clvr_pixel_streams(f, pixel, lo, hi, rng, ld);
+    *ldp = clvr_pixel_streams(f, pixel, f->frame_index, lo, hi, rng, ld);
 }
 
 inline void clvr_mpi_camera_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y, float3 *org,
@@ -25,7 +25,7 @@ inline void clvr_mpi_camera_ray(__global const clvr_camera *cam, const clvr_fram
     const uint pixel = y * f->width + x;
     clvr_rng rng;
     float ld[CLVR_LD_DIMS];
-    const float *ldp = clvr_pixel_streams(f, pixel, f->seed_lo, f->seed_hi, &rng, ld);
+    const float *ldp = clvr_pixel_streams(f, pixel, f->frame_index, f->seed_lo, f->seed_hi, &rng, ld);
     float2 jit; /* rank 0 draws it again on the host (host/mpi/mpi_main.c, add_jitters) */
     clvr_render_primary_ray(cam, f, x, y, &rng, ldp, org, dir, &jit);
 }

@@ -1635,20 +1635,22 @@ inline float4 clvr_render_march(const clvr_volume *v, float3 org, float3 dir, fl
     return (float4)(c + T * bg.xyz, 1.0f - T);
 }
 
-/* Primary ray through pixel (x, y) at its sub-pixel position
- * (clvr_pixel_jitter). *jit: the position's offset from the centre, in
- * pixels (a control of kernels/pixel_cv.h). */
-/* A pixel's random streams for the frame, keyed by (lo, hi): the generator,
- * and with the ld sampler its CLVR_LD_DIMS uniforms in ld. Returns ld, or
- * NULL for the independent sampler. */
-inline const float *clvr_pixel_streams(const clvr_frame *f, uint pixel, uint lo, uint hi, clvr_rng *rng, float *ld)
+/* A pixel's random streams for its sample number `index` (its frames and
+ * refine passes so far), keyed by (lo, hi): the generator, and with the ld
+ * sampler point `index` of the pixel's sequence (CLVR_LD_DIMS uniforms) in
+ * ld. Returns ld, or NULL for the independent sampler. */
+inline const float *clvr_pixel_streams(const clvr_frame *f, uint pixel, uint index, uint lo, uint hi, clvr_rng *rng,
+                                       float *ld)
 {
-    *rng = clvr_rng_make(pixel, f->frame_index, lo, hi);
+    *rng = clvr_rng_make(pixel, index, lo, hi);
     if (f->sampler != CLVR_SAMPLER_LD) return NULL;
-    clvr_ld_sample(pixel, f->frame_index, lo, hi, ld);
+    clvr_ld_sample(pixel, index, lo, hi, ld);
     return ld;
 }
 
+/* Primary ray through pixel (x, y) at its sub-pixel position
+ * (clvr_pixel_jitter). *jit: the position's offset from the centre, in
+ * pixels (a control of kernels/pixel_cv.h). */
 inline void clvr_render_primary_ray(__global const clvr_camera *cam, const clvr_frame *f, uint x, uint y,
                                     clvr_rng *rng, const float *ld, float3 *org, float3 *dir, float2 *jit)
 {

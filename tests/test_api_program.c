@@ -294,6 +294,33 @@ static void test_on_device(clvr_context *ctx)
     CHECK(!strcmp(clvr_tracer_pixel_filter(tr), "point")); /* a refused name changes nothing */
     CHECK_FAILS(clvr_tracer_set_pixel_filter(tr, NULL, &msg), CLVR_RESULT_ERR_USAGE, "filter");
     CHECK_FAILS(clvr_tracer_set_pixel_filter(NULL, "box", &msg), CLVR_RESULT_ERR_USAGE, "tr");
+    /* Adaptive sampling (1.7): on by default (0.1), kept across
+     * clvr_tracer_set_settings, 0 turns it off; a negative or non-finite
+     * threshold is refused and changes nothing; "refine_pixels" counts the
+     * listed pixels (none when off). */
+    CHECK(clvr_tracer_adaptive(tr) == 0.1f);
+    CHECK(clvr_tracer_adaptive(NULL) == 0.0f);
+    {
+        double listed = -1.0, passes = -1.0;
+        OK(clvr_tracer_set_adaptive(tr, 0.1f, &msg)); /* restarts the accumulation */
+        OK(clvr_tracer_render(tr, 2, &msg));
+        OK(clvr_tracer_stat(tr, "refine_passes", &passes, &msg));
+        OK(clvr_tracer_stat(tr, "refine_pixels", &listed, &msg));
+        CHECK(passes == 2.0 && listed >= 0.0);
+        OK(clvr_tracer_set_adaptive(tr, 0.0f, &msg));
+        OK(clvr_tracer_set_settings(tr, &ts, &msg));
+        CHECK(clvr_tracer_adaptive(tr) == 0.0f);
+        OK(clvr_tracer_render(tr, 2, &msg));
+        OK(clvr_tracer_stat(tr, "refine_passes", &passes, &msg));
+        OK(clvr_tracer_stat(tr, "refine_pixels", &listed, &msg));
+        CHECK(passes == 0.0 && listed == 0.0);
+        OK(clvr_tracer_set_adaptive(tr, 0.25f, &msg));
+        CHECK(clvr_tracer_adaptive(tr) == 0.25f);
+        CHECK_FAILS(clvr_tracer_set_adaptive(tr, -1.0f, &msg), CLVR_RESULT_ERR_USAGE, "threshold");
+        CHECK_FAILS(clvr_tracer_set_adaptive(tr, NAN, &msg), CLVR_RESULT_ERR_USAGE, "threshold");
+        CHECK(clvr_tracer_adaptive(tr) == 0.25f);
+        CHECK_FAILS(clvr_tracer_set_adaptive(NULL, 0.1f, &msg), CLVR_RESULT_ERR_USAGE, "tr");
+    }
     clvr_tracer_destroy(tr);
     clvr_dataset_destroy(ds);
 }

@@ -177,7 +177,9 @@ def jitter_control(tmp):
         for kind in err:
             out = os.path.join(tmp, f"jit-{kind}-{seed}.pfm")
             if kind == "single":
-                p = subprocess.run(args + ["-o", out], capture_output=True, text=True, timeout=TIMEOUT, env=mpi_env())
+                # Every pixel 2 samples, as under mpirun (no adaptive sampling there).
+                p = subprocess.run(args + ["--adaptive", "off", "-o", out], capture_output=True, text=True,
+                                   timeout=TIMEOUT, env=mpi_env())
             else:
                 p = run_mpi(2, args + ["-o", out], {"CLVR_MPI_TEST_BREAK": "jitter"} if kind == "broken" else None)
             if not check(p.returncode == 0 and os.path.exists(out), f"jitter control: {kind} seed {seed} renders",

@@ -23,29 +23,41 @@
 #include "accel.h"
 #include "test_util.h"
 
-/* The device pass over sum and ctl (w x h, 4 floats per pixel each) into out. */
-static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *ctl, float inv_n, uint32_t w,
-                      uint32_t h, float *out)
+/* The device pass over sum and ctl (w x h, 4 floats per pixel each), and
+ * refine (8 floats per pixel) and nsamp when refine is not NULL, into out. */
+static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *ctl, float inv_n, const float *refine,
+                      const uint32_t *nsamp, uint32_t w, uint32_t h, float *out)
 {
     clvr_error err = {0};
     clvr_status s = CLVR_OK;
-    const size_t bytes = (size_t)w * h * 4 * sizeof(float);
-    cl_mem bs = NULL, bc = NULL, bo = NULL;
+    const size_t npix = (size_t)w * h, bytes = npix * 4 * sizeof(float);
+    cl_mem bs = NULL, bc = NULL, bo = NULL, br = NULL, bn = NULL;
     const size_t local[2] = {8, 8};
+    const float zero[8] = {0.0f};
+    const uint32_t one = 1;
     s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, (void *)sum, "sums", &bs, &err);
     if (s == CLVR_OK)
         s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, (void *)ctl, "controls", &bc, &err);
+    if (s == CLVR_OK)
+        s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, refine ? npix * 8 * sizeof(float) : sizeof zero,
+                           refine ? (void *)refine : (void *)zero, "refine sums", &br, &err);
+    if (s == CLVR_OK)
+        s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, refine ? npix * sizeof(uint32_t) : sizeof one,
+                           refine ? (void *)nsamp : (void *)&one, "sample counts", &bn, &err);
     if (s == CLVR_OK) s = clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, bytes, NULL, "image", &bo, &err);
-    const cl_uint cw = w, ch = h;
+    const cl_uint cw = w, ch = h, has_refine = refine != NULL;
     const cl_float cn = inv_n;
     if (s == CLVR_OK)
-        s = CLVR_CL_ARGS(k, &err, CLVR_ARG(bs), CLVR_ARG(bc), CLVR_ARG(cn), CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(bo));
+        s = CLVR_CL_ARGS(k, &err, CLVR_ARG(bs), CLVR_ARG(bc), CLVR_ARG(cn), CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(br),
+                         CLVR_ARG(bn), CLVR_ARG(has_refine), CLVR_ARG(bo));
     if (s == CLVR_OK) s = clvr_cl_run2d(cl, k, w, h, local, NULL, &err);
     if (s == CLVR_OK && clEnqueueReadBuffer(cl->queue, bo, CL_TRUE, 0, bytes, out, 0, NULL, NULL) != CL_SUCCESS)
         s = clvr_error_set(&err, CLVR_ERR_OPENCL, "clEnqueueReadBuffer(image) failed");
     clvr_cl_release(cl, &bs);
     clvr_cl_release(cl, &bc);
     clvr_cl_release(cl, &bo);
+    clvr_cl_release(cl, &br);
+    clvr_cl_release(cl, &bn);
     if (s != CLVR_OK) {
         fprintf(stderr, "device pass: %s\n", err.msg);
         ++tu_fail_;
@@ -54,45 +66,62 @@ static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *c
     return 0;
 }
 
-static void run_ref(const float *sum, const float *ctl, float inv_n, uint32_t w, uint32_t h, float *out)
+static void run_ref(const float *sum, const float *ctl, float inv_n, const float *refine, const uint32_t *nsamp,
+                    uint32_t w, uint32_t h, float *out)
 {
     for (uint32_t y = 0; y < h; ++y)
-        for (uint32_t x = 0; x < w; ++x) clvr_pixel_cv(sum, ctl, inv_n, w, h, x, y, out + 4 * ((size_t)y * w + x));
+        for (uint32_t x = 0; x < w; ++x)
+            clvr_pixel_cv(sum, ctl, inv_n, refine, nsamp, w, h, x, y, out + 4 * ((size_t)y * w + x));
 }
 
 static void test_device_vs_reference(clvr_cl *cl, cl_kernel k)
 {
     static const uint32_t sizes[][2] = {{1, 1}, {1, 7}, {7, 1}, {2, 2}, {37, 53}, {131, 67}, {256, 3}};
     for (size_t si = 0; si < sizeof sizes / sizeof sizes[0]; ++si)
-        for (uint32_t frames = 1; frames <= 3; frames += 2) {
-            const uint32_t w = sizes[si][0], h = sizes[si][1];
-            const size_t n = (size_t)w * h * 4;
+        for (uint32_t variant = 0; variant < 3; ++variant) {
+            /* 1 frame, 3 frames, 3 frames with refine samples in a random
+             * third of the pixels (adaptive sampling). */
+            const uint32_t frames = variant ? 3 : 1, w = sizes[si][0], h = sizes[si][1];
+            const size_t npix = (size_t)w * h, n = npix * 4;
             float *sum = malloc(n * sizeof(float)), *ctl = malloc(n * sizeof(float));
             float *dev = malloc(n * sizeof(float)), *ref = malloc(n * sizeof(float));
-            uint64_t st = 1000 + si * 10 + frames;
+            float *refine = variant == 2 ? calloc(npix * 8, sizeof(float)) : NULL;
+            uint32_t *nsamp = variant == 2 ? malloc(npix * sizeof(uint32_t)) : NULL;
+            uint64_t st = 1000 + si * 10 + variant;
             for (size_t i = 0; i < n; ++i) {
                 sum[i] = (float)frames * 2.0f * tu_randf(&st);
                 /* controls: sums of frames draws in [-1/2, 1/2) */
                 ctl[i] = (i % 4 == 3) ? 0.0f : (float)frames * (tu_randf(&st) - 0.5f);
             }
+            for (size_t p = 0; refine && p < npix; ++p) {
+                const uint32_t extra = tu_randf(&st) < 1.0f / 3.0f ? 1u + (uint32_t)(2.0f * tu_randf(&st)) : 0u;
+                nsamp[p] = frames + extra;
+                for (int c = 0; c < 4 && extra; ++c) {
+                    refine[8 * p + (size_t)c] = (float)extra * 2.0f * tu_randf(&st);
+                    refine[8 * p + 4 + (size_t)c] = c == 3 ? 0.0f : (float)extra * (tu_randf(&st) - 0.5f);
+                }
+            }
             const int nan_pixel = w * h >= 9;
             const size_t np = ((size_t)(h / 2) * w + w / 2);
             if (nan_pixel) sum[4 * np + 1] = NAN;
             const float inv_n = 1.0f / (float)frames;
-            if (!run_device(cl, k, sum, ctl, inv_n, w, h, dev)) {
-                run_ref(sum, ctl, inv_n, w, h, ref);
+            if (!run_device(cl, k, sum, ctl, inv_n, refine, nsamp, w, h, dev)) {
+                run_ref(sum, ctl, inv_n, refine, nsamp, w, h, ref);
                 double worst = 0.0;
                 uint64_t nonfinite = 0, changed = 0;
-                for (size_t p = 0; p < (size_t)w * h; ++p)
+                for (size_t p = 0; p < npix; ++p)
                     for (int c = 0; c < 4; ++c) {
                         const size_t i = 4 * p + (size_t)c;
                         if (nan_pixel && p == np) continue;
                         nonfinite += !isfinite(dev[i]);
                         const double d = fabs((double)dev[i] - (double)ref[i]) / (1.0 + fabs((double)ref[i]));
                         if (d > worst) worst = d;
-                        changed += dev[i] != sum[i] * inv_n;
+                        const float mean = refine ? (sum[i] + refine[8 * p + (size_t)c]) / (float)nsamp[p] : sum[i] * inv_n;
+                        changed += dev[i] != mean;
                     }
-                if (worst > 1e-4) fprintf(stderr, "%ux%u, %u frames: device and reference differ by %g\n", w, h, frames, worst);
+                if (worst > 1e-4)
+                    fprintf(stderr, "%ux%u, %u frames%s: device and reference differ by %g\n", w, h, frames,
+                            refine ? " and refine samples" : "", worst);
                 TU_CHECK(worst <= 1e-4);
                 TU_CHECK_EQ_U64(nonfinite, 0);
                 /* 1x1 has no neighbour (nothing to fit): the mean; larger ones move. */
@@ -103,6 +132,8 @@ static void test_device_vs_reference(clvr_cl *cl, cl_kernel k)
             free(ctl);
             free(dev);
             free(ref);
+            free(refine);
+            free(nsamp);
         }
 }
 
@@ -114,7 +145,7 @@ static void test_exact_cases(clvr_cl *cl, cl_kernel k)
     uint64_t st = 5;
     /* Controls all 0: the fit's terms vanish, the image is the mean. */
     for (size_t i = 0; i < n; ++i) sum[i] = 3.0f * tu_randf(&st);
-    if (!run_device(cl, k, sum, ctl, 1.0f, w, h, out)) TU_CHECK(memcmp(out, sum, n * sizeof(float)) == 0);
+    if (!run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, w, h, out)) TU_CHECK(memcmp(out, sum, n * sizeof(float)) == 0);
     /* Linear in the rays' positions (centre + jitter), the first uniform
      * at 1/2: each pixel comes out as the value at its centre. */
     const float a[4] = {0.5f, 1.0f, -0.25f, 0.75f}, gx[4] = {0.02f, -0.03f, 0.01f, 0.0f},
@@ -127,7 +158,7 @@ static void test_exact_cases(clvr_cl *cl, cl_kernel k)
         ctl[4 * p + 2] = 0.0f;
         for (int c = 0; c < 4; ++c) sum[4 * p + (size_t)c] = a[c] + gx[c] * (x + dx) + gy[c] * (y + dy);
     }
-    if (!run_device(cl, k, sum, ctl, 1.0f, w, h, out)) {
+    if (!run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, w, h, out)) {
         double worst = 0.0, moved = 0.0;
         for (size_t p = 0; p < (size_t)w * h; ++p)
             for (int c = 0; c < 4; ++c) {
@@ -156,8 +187,8 @@ static void test_exact_cases(clvr_cl *cl, cl_kernel k)
             if (x == px && y == py)
                 for (int c = 0; c < 4; ++c) sum[4 * p + (size_t)c] = 2.0f;
         }
-        if (ref && !run_device(cl, k, sum, ctl, 1.0f, w, h, out)) {
-            run_ref(sum, ctl, 1.0f, w, h, ref);
+        if (ref && !run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, w, h, out)) {
+            run_ref(sum, ctl, 1.0f, NULL, NULL, w, h, ref);
             uint64_t flat = 0, flat_bad = 0, off = 0;
             for (size_t p = 0; p < (size_t)w * h; ++p) {
                 const uint32_t x = (uint32_t)(p % w), y = (uint32_t)(p / w);

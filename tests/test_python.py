@@ -398,6 +398,12 @@ def test_scene_settings(ctx):
     r3 = clvr.Renderer(sc, width=8, height=8, method="track", estimator="delta", seed=5, pixel_filter="point")
     r1.set_settings(pixel_filter="point")
     check(r3.settings["pixel_filter"] == "point" and r1.settings["pixel_filter"] == "point", "point filter set")
+    # Adaptive sampling (API 1.7): 0.1 by default, 0 off, a negative threshold refused.
+    check(abs(r1.settings["adaptive"] - 0.1) < 1e-6, "adaptive sampling at 0.1 by default")
+    r1.set_settings(adaptive=0)
+    check(r1.settings["adaptive"] == 0.0, "adaptive sampling off")
+    raises(lambda: r1.set_settings(adaptive=-1), clvr.InputError, "threshold", "adaptive -1")
+    r1.set_settings(adaptive=0.1)
     # The denoiser (API 1.4): off by default, the denoised image refused without its guides, then a smoother image
     # of the same frames.
     check(r1.settings["denoise"] is False, "no denoiser guides by default")

@@ -48,7 +48,7 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 6
+#define CLVR_API_VERSION_MINOR 7
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
@@ -56,7 +56,7 @@ extern "C" {
  * uses this header alone), 1003 is 1.3 (the pixel filter), 1004 is 1.4 (the
  * denoiser), 1005 is 1.5 (the walk estimator, and auto, the default: two more
  * estimator names), 1006 is 1.6 (clvr_render_stats.estimator: what auto
- * resolved to). */
+ * resolved to), 1007 is 1.7 (adaptive sampling: clvr_tracer_set_adaptive). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -725,6 +725,24 @@ CLVR_API int clvr_tracer_denoise(const clvr_tracer *tr);
  * whose rays never met the medium stay as they are. ERR_USAGE before a
  * frame, or unless clvr_tracer_set_denoise(tr, 1) came before the frames. */
 CLVR_API clvr_result clvr_tracer_read_denoised(clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg);
+
+/* ======================================================================== *
+ * API 1.7: adaptive sampling.
+ * ======================================================================== */
+
+/* threshold > 0 (the default, 0.1): each frame is followed by one more
+ * sample in the pixels whose 8 neighbours' luminance, after the first frame
+ * of the accumulation, has a standard deviation above threshold times the
+ * mean of the other pixels that met the medium (edges of the medium, the
+ * noisiest regions; a few percent of the pixels at the default). The choice
+ * never reads a pixel's own samples, so the expected image is the same; it
+ * converges faster per second. 0 turns it off (one sample per pixel per
+ * frame). The statistic "refine_pixels" says how many pixels are refined.
+ * A change restarts the accumulation. ERR_USAGE for a negative or
+ * non-finite threshold. */
+CLVR_API clvr_result clvr_tracer_set_adaptive(clvr_tracer *tr, float threshold, clvr_message *msg);
+/* The threshold in use; 0 for off or a NULL tracer. */
+CLVR_API float clvr_tracer_adaptive(const clvr_tracer *tr);
 
 #ifdef __cplusplus
 }

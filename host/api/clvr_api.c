@@ -1510,7 +1510,8 @@ clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, c
 static const char *const stat_names =
     "frames, rays, samples, null_collisions, kernel_s, last_frame_s, preprocess_s, kernel_build_s, elements, points, "
     "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi, hull_faces, hull_bytes, "
-    "hull_empty_fraction, hull_skipped, light_s, image_s, adjacency_bytes, adjacency_skipped";
+    "hull_empty_fraction, hull_skipped, light_s, image_s, adjacency_bytes, adjacency_skipped, refine_pixels, "
+    "refine_passes, select_s";
 
 clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg)
 {
@@ -1547,6 +1548,9 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "hull_skipped")) v = tr->sc->accel.hull_skipped[0] ? 1.0 : 0.0;
     else if (!strcmp(name, "light_s")) v = c.light_s;
     else if (!strcmp(name, "image_s")) v = c.image_s;
+    else if (!strcmp(name, "refine_pixels")) v = (double)c.refine_pixels;
+    else if (!strcmp(name, "refine_passes")) v = (double)c.refine_passes;
+    else if (!strcmp(name, "select_s")) v = c.select_s;
     else if (!strcmp(name, "adjacency_bytes") || !strcmp(name, "adjacency_skipped")) {
         uint64_t bytes;
         double build_s;
@@ -1876,6 +1880,24 @@ const char *clvr_tracer_pixel_filter(const clvr_tracer *tr)
 {
     return tr ? clvr_setting_name("pixel_filter", tr->rs.pixel_filter) : NULL;
 }
+
+clvr_result clvr_tracer_set_adaptive(clvr_tracer *tr, float threshold, clvr_message *msg)
+{
+    clvr_error e = {0};
+    static const char fn[] = "clvr_tracer_set_adaptive";
+    if (!tr) return finish(NULL_ARG(fn, "tr"), &e, msg);
+    if (!(threshold >= 0.0f) || !isfinite(threshold))
+        return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: threshold %g; use 0 (off) or a finite number > 0 "
+                                     "(default %g)", fn, (double)threshold, (double)CLVR_ADAPTIVE_DEFAULT),
+                      &e, msg);
+    const float old = tr->rs.adaptive;
+    tr->rs.adaptive = threshold;
+    const clvr_status s = apply_settings(tr, &e);
+    if (s != CLVR_OK) tr->rs.adaptive = old;
+    return finish(s, &e, msg);
+}
+
+float clvr_tracer_adaptive(const clvr_tracer *tr) { return tr ? tr->rs.adaptive : 0.0f; }
 
 clvr_result clvr_tracer_set_denoise(clvr_tracer *tr, int on, clvr_message *msg)
 {

@@ -40,6 +40,8 @@ typedef struct clvr_options {
     uint32_t sampler;            /* --sampler: index in clvr_setting_name("sampler", i) */
     uint32_t pixel_filter;       /* --pixel-filter: index in clvr_setting_name("pixel_filter", i)
                                   * (clvr_tracer_set_pixel_filter, not in the settings struct) */
+    float adaptive;              /* --adaptive T|off: clvr_tracer_set_adaptive's threshold (off: 0); < 0: the
+                                  * library's default */
     /* clustering */
     uint32_t leaf_size;          /* --leaf-size N: 1, 4, 8, 16, 32 */
     uint32_t sampling_size;      /* --sampling-size N: elements per sampling cluster, 0: default */

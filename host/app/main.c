@@ -246,6 +246,7 @@ int main(int argc, char **argv)
     if (clvr_cli_tracer_settings(&o, &ts, &err) != CLVR_RESULT_OK) { rc = fail_msg(&err); goto cleanup; }
     TRY(clvr_tracer_create_on(scene, &ts, o.width, o.height, &tracer, &msg));
     TRY(clvr_tracer_set_pixel_filter(tracer, clvr_setting_name("pixel_filter", o.pixel_filter), &msg));
+    if (o.adaptive >= 0.0f) TRY(clvr_tracer_set_adaptive(tracer, o.adaptive, &msg));
     if (o.denoise) TRY(clvr_tracer_set_denoise(tracer, 1, &msg));
     clvr_scene_destroy(scene); /* the tracer holds it */
     scene = NULL;
@@ -395,6 +396,9 @@ int main(int argc, char **argv)
          * --denoise's read or without the control variates). */
         TRY(clvr_tracer_stat(tracer, "light_s", &stats.light_s, &msg));
         TRY(clvr_tracer_stat(tracer, "image_s", &stats.image_s, &msg));
+        TRY(clvr_tracer_stat(tracer, "refine_pixels", &stats.refine_pixels, &msg));
+        TRY(clvr_tracer_stat(tracer, "select_s", &stats.select_s, &msg));
+        stats.adaptive = clvr_tracer_adaptive(tracer);
         double ab = 0.0, as = 0.0;
         TRY(clvr_tracer_stat(tracer, "adjacency_bytes", &ab, &msg));
         TRY(clvr_tracer_stat(tracer, "adjacency_skipped", &as, &msg));

@@ -116,6 +116,11 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
         fprintf(out, "light grid %.4f s (device, in the frames' sum), image pass %.4f s (device, once per image, "
                      "not in s/frame)\n",
                 s->light_s, s->image_s);
+        if (s->adaptive > 0.0 && s->width && s->height)
+            fprintf(out, "adaptive sampling (threshold %g): %.0f pixels (%.1f%%) got one more sample per frame (in "
+                         "s/frame), chosen in %.4f s (host, once)\n",
+                    s->adaptive, s->refine_pixels, 100.0 * s->refine_pixels / ((double)s->width * s->height),
+                    s->select_s);
         if (s->bytes_adjacency)
             fprintf(out, "face adjacency of the walk estimator (built at its first frame): %.3f MB, %.2f bytes/element\n",
                     s->bytes_adjacency / 1e6, per_element(s->bytes_adjacency, s->elements));
@@ -171,6 +176,9 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
         {"wall_s", s->render_wall_s},
         {"light_s", s->light_s},
         {"image_s", s->image_s},
+        {"adaptive", s->adaptive},
+        {"refine_pixels", s->refine_pixels},
+        {"select_s", s->select_s},
     };
     const size_t nb = sizeof b / sizeof b[0], nr = sizeof r / sizeof r[0];
     fprintf(f, "{\n");

@@ -49,6 +49,9 @@ typedef struct clvr_stats {
     double frame_s, rays_per_s, samples_per_ray, null_collisions_per_ray, render_wall_s;
     double light_s; /* device seconds of the light grid's last build (part of frame_s's sum) */
     double image_s; /* device seconds of the image pass that made the image written (not in frame_s) */
+    double adaptive;      /* adaptive sampling's threshold (0: off) */
+    double refine_pixels; /* pixels that get one more sample per frame (in frame_s; the frames count them once) */
+    double select_s;      /* host seconds of choosing them (once) */
 } clvr_stats;
 
 /* The figures of the input, of the preprocessing and of the frames, from

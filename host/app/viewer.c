@@ -364,6 +364,7 @@ static void print_command_line(viewer *v)
     if (strcmp(v->ts.sampler, dts.sampler)) appendf(line, cap, " --sampler %s", v->ts.sampler);
     if (strcmp(clvr_tracer_pixel_filter(v->tr), "box"))
         appendf(line, cap, " --pixel-filter %s", clvr_tracer_pixel_filter(v->tr));
+    if (o->adaptive >= 0.0f) appendf(line, cap, " --adaptive %g", (double)clvr_tracer_adaptive(v->tr));
     if (v->denoise) appendf(line, cap, " --denoise");
     if (v->ts.step != dts.step) appendf(line, cap, " --step %.9g", (double)v->ts.step);
     if (v->ts.bins != dts.bins) appendf(line, cap, " --bins %u", v->ts.bins);

@@ -2,6 +2,7 @@
 
 #include "hull.h"
 #include "majorant.h"
+#include "clock.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -40,6 +41,7 @@ struct clvr_renderer {
     cl_mem guides;             /* settings.guides: 8 floats per pixel (kernels/render.cl); else 8 floats in all,
                                 * never written, so that no buffer is bound to two of the kernel's parameters */
     int guides_full;           /* guides holds a whole image's */
+    int refine_full;           /* refine holds a whole image's */
     cl_mem light_buf;          /* with shadows: the light grid (clvr_light_nodes(frame.light_res)) */
     uint32_t light_nodes;      /* floats light_buf holds */
     int light_valid;           /* light_buf matches the frame and transfer function */
@@ -47,6 +49,16 @@ struct clvr_renderer {
     uint32_t tf_n;             /* entries in tf_buf (0: no transfer function yet) */
     uint32_t accum_w, accum_h; /* size of accum buffers */
     uint64_t frames;
+    /* Adaptive sampling (settings.adaptive, clvr_renderer_refine). */
+    cl_mem nsamp;              /* per pixel, its samples (frames and refine passes): numbers its random streams */
+    cl_mem refine;             /* settings.adaptive: per pixel the refine passes' sums of samples and controls
+                                * (2 float4); else 2 float4 in all, never written (no buffer is bound to two of
+                                * the kernel's parameters) */
+    cl_mem list;               /* the refine list, pixel indices row by row (at least one entry) */
+    uint32_t list_n;           /* pixels in the list */
+    int list_made;             /* the list belongs to this accumulation (reset with it) */
+    uint64_t refine_passes;
+    double select_s;           /* host seconds of making the list (read, choice, upload) */
     double kernel_s, last_frame_s, light_s;
     double image_s;            /* device time of the last clvr_renderer_read's image pass (clvr_pixel_cv_image) */
     size_t local[2];           /* work-group shape of the render kernel */
@@ -89,6 +101,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
      * independent frames ask for CLVR_SAMPLER_INDEPENDENT. */
     s->sampler = CLVR_SAMPLER_LD;
     s->pixel_cv = 1;
+    s->adaptive = CLVR_ADAPTIVE_DEFAULT;
     s->shadows = 1;
     s->hull = 1;
     s->bins = 32;
@@ -138,13 +151,27 @@ cleanup:
     return s;
 }
 
+/* A change of settings, camera or transfer function: the accumulation
+ * starts again, and so does the refine list. */
+static void restart(clvr_renderer *r)
+{
+    r->frames = 0;
+    r->kernel_s = 0.0;
+    r->image_s = 0.0;
+    r->list_made = 0;
+    r->list_n = 0;
+    r->refine_passes = 0;
+    r->select_s = 0.0;
+}
+
 static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_cl *cl = r->cl;
     size_t npix = (size_t)r->set.width * r->set.height;
+    const int refine_full = r->set.adaptive > 0.0f;
     if (r->accum && r->accum_w == r->set.width && r->accum_h == r->set.height && r->guides &&
-        r->guides_full == !!r->set.guides)
+        r->guides_full == !!r->set.guides && r->refine_full == refine_full)
         return CLVR_OK;
     clvr_cl_release(cl, &r->guides);
     clvr_cl_release(cl, &r->accum);
@@ -152,6 +179,9 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
     clvr_cl_release(cl, &r->counters);
     clvr_cl_release(cl, &r->ctl);
     clvr_cl_release(cl, &r->image);
+    clvr_cl_release(cl, &r->nsamp);
+    clvr_cl_release(cl, &r->refine);
+    clvr_cl_release(cl, &r->list);
     r->accum_w = r->accum_h = 0;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 4 * sizeof(float), NULL, "image accumulator", &r->accum, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * 4 * sizeof(float), NULL, "image second moments",
@@ -163,6 +193,12 @@ static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
     r->guides_full = !!r->set.guides;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (r->guides_full ? npix : 1) * 8 * sizeof(float), NULL,
                             "denoiser guides", &r->guides, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, npix * sizeof(cl_uint), NULL, "pixel sample counts", &r->nsamp,
+                            err));
+    r->refine_full = refine_full;
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (refine_full ? npix : 1) * 8 * sizeof(float), NULL,
+                            "adaptive sampling sums", &r->refine, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY, sizeof(cl_uint), NULL, "adaptive sampling list", &r->list, err));
     r->accum_w = r->set.width;
     r->accum_h = r->set.height;
 cleanup:
@@ -227,6 +263,9 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
                               set->segments,
                               set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
                               CLVR_URM_LIGHT_RES);
+    if (!(set->adaptive >= 0.0f) || !isfinite(set->adaptive))
+        return clvr_error_set(err, CLVR_ERR_USAGE, "adaptive sampling threshold %g: expected 0 (off) or a finite "
+                              "number > 0 (default %g)", (double)set->adaptive, (double)CLVR_ADAPTIVE_DEFAULT);
     uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
@@ -341,9 +380,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     CLVR_TRY(alloc_image(r, err));
     /* A new grid resolution or domain needs the elements rasterized again. */
     CLVR_TRY(update_majorants(r, 0, err));
-    r->frames = 0;
-    r->kernel_s = 0.0;
-    r->image_s = 0.0;
+    restart(r);
 cleanup:
     return s;
 }
@@ -402,8 +439,8 @@ void clvr_renderer_destroy(clvr_renderer *r)
     if (r->prog_render) clReleaseProgram(r->prog_render);
     if (r->prog_mpi) clReleaseProgram(r->prog_mpi);
     clvr_majorants_destroy(r->maj);
-    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum,  &r->accum_sq,
-                      &r->counters,  &r->guides,  &r->ctl, &r->image, &r->tf_prefix};
+    cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum,  &r->accum_sq, &r->counters, &r->guides,
+                      &r->ctl,       &r->image,   &r->tf_prefix, &r->nsamp, &r->refine, &r->list};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -413,9 +450,7 @@ clvr_status clvr_renderer_set_camera(clvr_renderer *r, const clvr_camera *cam, c
     clvr_status s = CLVR_OK;
     r->cam = *cam;
     CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->cam_buf, CL_TRUE, 0, sizeof r->cam, &r->cam, 0, NULL, NULL));
-    r->frames = 0;
-    r->kernel_s = 0.0;
-    r->image_s = 0.0;
+    restart(r);
 cleanup:
     return s;
 }
@@ -465,9 +500,7 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
     r->frame.density = density;
     CLVR_TRY(update_majorants(r, 1, err));
     r->light_valid = 0;
-    r->frames = 0;
-    r->kernel_s = 0.0;
-    r->image_s = 0.0;
+    restart(r);
 cleanup:
     return s;
 }
@@ -534,13 +567,16 @@ cleanup:
 
 uint64_t clvr_renderer_frames(const clvr_renderer *r) { return r->frames; }
 
-clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
+/* One pass of the render kernel: a frame over every pixel (pass_pixels 0)
+ * or a refine pass over the list. */
+static clvr_status render_pass(clvr_renderer *r, uint32_t pass_pixels, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     clvr_cl *cl = r->cl;
     cl_event evt = NULL;
     if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "clvr_renderer_frame before a transfer function");
     r->frame.frame_index = (clvr_u32)r->frames;
+    r->frame.pass_pixels = pass_pixels;
     CLVR_TRY(upload_frame(r, err));
     cl_kernel k = r->k_render;
     volume_bufs vol = volume_of(r);
@@ -548,14 +584,134 @@ clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
     /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
     CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
                           CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->ctl), CLVR_ARG(r->counters),
-                          CLVR_ARG(r->guides)));
-    CLVR_TRY(clvr_cl_run2d(cl, k, r->set.width, r->set.height, r->local, &evt, err));
+                          CLVR_ARG(r->guides), CLVR_ARG(r->nsamp), CLVR_ARG(r->refine), CLVR_ARG(r->list)));
+    if (pass_pixels) {
+        const size_t wg = r->local[0] * r->local[1];
+        const size_t global = (pass_pixels + wg - 1) / wg * wg;
+        CLVR_CL_CHECK(clEnqueueNDRangeKernel(cl->queue, k, 1, NULL, &global, &wg, 0, NULL, &evt));
+    } else {
+        CLVR_TRY(clvr_cl_run2d(cl, k, r->set.width, r->set.height, r->local, &evt, err));
+    }
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
     r->last_frame_s = clvr_cl_event_seconds(evt);
     r->kernel_s += r->last_frame_s;
-    r->frames++;
 cleanup:
     if (evt) clReleaseEvent(evt);
+    r->frame.pass_pixels = 0;
+    return s;
+}
+
+clvr_status clvr_renderer_full_frame(clvr_renderer *r, clvr_error *err)
+{
+    clvr_status s = render_pass(r, 0, err);
+    if (s == CLVR_OK) r->frames++;
+    return s;
+}
+
+int clvr_adaptive_pick(const float *sum, float inv_n, uint32_t w, uint32_t h, float threshold, uint32_t *list,
+                       uint32_t *count)
+{
+    const size_t npix = (size_t)w * h;
+    double *lum = malloc(npix * sizeof *lum);
+    if (!lum) return 1;
+    /* S and K: the luminance summed over the pixels whose rays met the
+     * medium (alpha > 0), and their number. */
+    double S = 0.0, K = 0.0;
+    for (size_t i = 0; i < npix; ++i) {
+        const float *q = sum + 4 * i;
+        lum[i] = ((double)q[0] + (double)q[1] + (double)q[2]) * (double)inv_n / 3.0;
+        if (q[3] > 0.0f && isfinite(lum[i])) {
+            S += lum[i];
+            K += 1.0;
+        }
+    }
+    uint32_t n = 0;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t p = (size_t)y * w + x;
+            /* The scale without the pixel's own value: the mean over the
+             * other pixels that met the medium. */
+            const int own = sum[4 * p + 3] > 0.0f && isfinite(lum[p]);
+            const double k = K - own, scale = k > 0.0 ? (S - (own ? lum[p] : 0.0)) / k : 0.0;
+            if (!(scale > 0.0)) continue;
+            double m = 0.0, m2 = 0.0;
+            int c = 0;
+            for (int oy = -1; oy <= 1; ++oy)
+                for (int ox = -1; ox <= 1; ++ox) {
+                    const int xx = (int)x + ox, yy = (int)y + oy;
+                    if ((ox == 0 && oy == 0) || xx < 0 || yy < 0 || xx >= (int)w || yy >= (int)h) continue;
+                    const double v = lum[(size_t)yy * w + (size_t)xx];
+                    if (!isfinite(v)) continue;
+                    m += v;
+                    m2 += v * v;
+                    ++c;
+                }
+            if (c < 2) continue;
+            m /= c;
+            const double var = m2 / c - m * m;
+            if (var > (double)threshold * threshold * scale * scale) list[n++] = (uint32_t)p;
+        }
+    free(lum);
+    *count = n;
+    return 0;
+}
+
+/* The refine list from the frames so far (once per accumulation). */
+static clvr_status make_list(clvr_renderer *r, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const double t0 = clvr_clock_monotonic_s();
+    const uint32_t w = r->set.width, h = r->set.height;
+    const size_t npix = (size_t)w * h;
+    float *sum = malloc(npix * 4 * sizeof(float));
+    uint32_t *list = malloc(npix * sizeof(uint32_t)), n = 0;
+    if (!sum || !list) {
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of host memory for the adaptive sampling list (%ux%u)", w, h);
+        goto cleanup;
+    }
+    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->accum, CL_TRUE, 0, npix * 4 * sizeof(float), sum, 0, NULL,
+                                      NULL));
+    if (clvr_adaptive_pick(sum, 1.0f / (float)r->frames, w, h, r->set.adaptive, list, &n)) {
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of host memory for the adaptive sampling list (%ux%u)", w, h);
+        goto cleanup;
+    }
+    clvr_cl_release(r->cl, &r->list);
+    CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_ONLY, (n ? n : 1) * sizeof(cl_uint), NULL, "adaptive sampling list",
+                            &r->list, err));
+    if (n)
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->list, CL_TRUE, 0, n * sizeof(cl_uint), list, 0, NULL,
+                                           NULL));
+    {
+        const cl_float zero = 0.0f;
+        CLVR_CL_CHECK(clEnqueueFillBuffer(r->cl->queue, r->refine, &zero, sizeof zero, 0, npix * 8 * sizeof(float), 0,
+                                          NULL, NULL));
+        CLVR_CL_CHECK(clFinish(r->cl->queue));
+    }
+    r->list_n = n;
+    r->list_made = 1;
+cleanup:
+    free(sum);
+    free(list);
+    r->select_s = clvr_clock_monotonic_s() - t0;
+    return s;
+}
+
+clvr_status clvr_renderer_refine(clvr_renderer *r, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    if (!(r->set.adaptive > 0.0f)) return CLVR_OK;
+    if (r->frames == 0) return clvr_error_set(err, CLVR_ERR_INTERNAL, "clvr_renderer_refine before a frame");
+    if (!r->list_made) CLVR_TRY(make_list(r, err));
+    if (r->list_n) CLVR_TRY(render_pass(r, r->list_n, err));
+    r->refine_passes++;
+cleanup:
+    return s;
+}
+
+clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err)
+{
+    clvr_status s = clvr_renderer_full_frame(r, err);
+    if (s == CLVR_OK) s = clvr_renderer_refine(r, err);
     return s;
 }
 
@@ -598,6 +754,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
 {
     clvr_status s = CLVR_OK;
     cl_uint *cnt = NULL;
+    float *ref = NULL;
     cl_event evt = NULL;
     size_t npix = (size_t)r->set.width * r->set.height;
     if (rgba && r->set.pixel_cv) {
@@ -605,13 +762,28 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
          * the device: a least-squares fit per pixel. */
         if (r->frames == 0) return clvr_error_set(err, CLVR_ERR_INTERNAL, "no frame rendered yet");
         const cl_float inv_n = 1.0f / (float)r->frames;
-        const cl_uint w = r->set.width, h = r->set.height;
+        const cl_uint w = r->set.width, h = r->set.height, has_refine = r->list_n > 0;
         CLVR_TRY(CLVR_CL_ARGS(r->k_cv, err, CLVR_ARG(r->accum), CLVR_ARG(r->ctl), CLVR_ARG(inv_n), CLVR_ARG(w),
-                              CLVR_ARG(h), CLVR_ARG(r->image)));
+                              CLVR_ARG(h), CLVR_ARG(r->refine), CLVR_ARG(r->nsamp), CLVR_ARG(has_refine),
+                              CLVR_ARG(r->image)));
         CLVR_TRY(clvr_cl_run2d(r->cl, r->k_cv, w, h, r->local, &evt, err));
         CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->image, CL_TRUE, 0, npix * 4 * sizeof(float), rgba, 0,
                                           NULL, NULL));
         r->image_s = clvr_cl_event_seconds(evt);
+    } else if (rgba && r->list_n) {
+        /* Each pixel's mean over its own count of samples. */
+        CLVR_TRY(clvr_renderer_read_moments(r, rgba, NULL, err));
+        ref = malloc(npix * 8 * sizeof(float));
+        cnt = malloc(npix * sizeof(cl_uint));
+        if (!ref || !cnt) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading the image"); goto cleanup; }
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->refine, CL_TRUE, 0, npix * 8 * sizeof(float), ref, 0, NULL,
+                                          NULL));
+        CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->nsamp, CL_TRUE, 0, npix * sizeof(cl_uint), cnt, 0, NULL,
+                                          NULL));
+        for (size_t i = 0; i < npix; ++i)
+            for (size_t k = 0; k < 4; ++k) rgba[4 * i + k] = (rgba[4 * i + k] + ref[8 * i + k]) / (float)cnt[i];
+        free(cnt);
+        cnt = NULL;
     } else if (rgba) {
         CLVR_TRY(clvr_renderer_read_moments(r, rgba, NULL, err));
         float inv = 1.0f / (float)r->frames;
@@ -624,6 +796,9 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         counters->light_s = r->light_s;
         counters->image_s = r->image_s;
         counters->last_frame_s = r->last_frame_s;
+        counters->refine_passes = r->refine_passes;
+        counters->refine_pixels = r->list_n;
+        counters->select_s = r->select_s;
         if (r->frames) {
             cnt = malloc(npix * 3 * sizeof(cl_uint));
             if (!cnt) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading counters"); goto cleanup; }
@@ -639,6 +814,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
 cleanup:
     if (evt) clReleaseEvent(evt);
     free(cnt);
+    free(ref);
     return s;
 }
 

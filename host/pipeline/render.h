@@ -22,6 +22,9 @@ const char *clvr_render_estimator_name(uint32_t estimator);
 uint32_t clvr_render_method_from_name(const char *name);
 uint32_t clvr_render_estimator_from_name(const char *name);
 
+/* The default adaptive sampling threshold (settings.adaptive). */
+#define CLVR_ADAPTIVE_DEFAULT 0.1f
+
 typedef struct clvr_render_settings {
     uint32_t method;           /* CLVR_RENDER_* */
     uint32_t estimator;        /* CLVR_ESTIMATOR_* (track, bins, dda) */
@@ -38,6 +41,14 @@ typedef struct clvr_render_settings {
                                 * variates of its jitter and first uniform (kernels/pixel_cv.h; the same
                                 * expected image, less noise); 0: the plain means */
     int guides;                /* nonzero: frames also accumulate the denoiser's guides (clvr_renderer_read_guides) */
+    /* Adaptive sampling (clvr_renderer_refine): > 0 (default
+     * CLVR_ADAPTIVE_DEFAULT): after each frame, one more sample in the
+     * pixels whose 8 neighbours' values spread (standard deviation of their
+     * luminance, after the accumulation's first frames) by more than
+     * `adaptive` times the mean of the other pixels that met the medium; 0:
+     * every pixel gets one sample per frame. The choice never reads the
+     * pixel's own samples, so every pixel keeps its expected value. */
+    float adaptive;
     int shadows;
     /* Nonzero (default): every camera ray is cut to the part between its
      * first and last crossing of the mesh's boundary faces, where the
@@ -100,6 +111,9 @@ typedef struct clvr_render_counters {
     double kernel_s;          /* device time of the render kernel, all frames (the light grid's included) */
     double last_frame_s;      /* device time of the last frame */
     double light_s;           /* device time of the light grid's last build (urm with shadows; part of kernel_s) */
+    uint64_t refine_passes;   /* adaptive sampling: refine passes so far (clvr_renderer_refine) */
+    uint64_t refine_pixels;   /* pixels each refine pass renders (0: none, or no list yet) */
+    double select_s;          /* host seconds of making the refine list (once per accumulation; not in kernel_s) */
     double image_s;           /* device time of the image pass of the last clvr_renderer_read that read the image
                                * (kernels/pixel_cv.h; not part of kernel_s; 0 without the control variates) */
 } clvr_render_counters;
@@ -120,8 +134,27 @@ clvr_status clvr_renderer_set_camera(clvr_renderer *r, const clvr_camera *cam, c
 clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n, float lo, float hi, float density,
                                  clvr_error *err);
 
-/* Renders one more sample per pixel. */
+/* Renders one more sample per pixel (clvr_renderer_full_frame), then, with
+ * settings.adaptive, one more in the pixels that need it
+ * (clvr_renderer_refine). */
 clvr_status clvr_renderer_frame(clvr_renderer *r, clvr_error *err);
+/* The two halves of clvr_renderer_frame, for benches that read the image
+ * between them. The first refine pass of an accumulation reads the frames
+ * so far and makes the list of pixels (clvr_adaptive_pick), kept until the
+ * next change; every refine pass renders one sample in each listed pixel.
+ * Without settings.adaptive, refine does nothing. */
+clvr_status clvr_renderer_full_frame(clvr_renderer *r, clvr_error *err);
+clvr_status clvr_renderer_refine(clvr_renderer *r, clvr_error *err);
+/* The choice of adaptive sampling, on the host (it runs once per
+ * accumulation): sum, w x h rgba sums of frames, inv_n 1 / frames. Lists in
+ * list (room for w * h) the pixels, row by row, whose 8 neighbours'
+ * luminance ((r + g + b) / 3 of the means) has a standard deviation above
+ * threshold times the mean luminance of the pixels that met the medium
+ * (alpha > 0), the pixel itself left out of that mean: nothing the pixel
+ * drew decides whether it is listed. *count: how many. Returns nonzero when
+ * out of host memory. */
+int clvr_adaptive_pick(const float *sum, float inv_n, uint32_t w, uint32_t h, float threshold, uint32_t *list,
+                       uint32_t *count);
 /* Frames accumulated since the last change (clvr_render_counters.frames,
  * without reading the per-pixel counters). */
 uint64_t clvr_renderer_frames(const clvr_renderer *r);
@@ -131,7 +164,8 @@ uint64_t clvr_renderer_frames(const clvr_renderer *r);
 clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counters *counters, clvr_error *err);
 
 /* The sum of per-frame samples (not the mean), for tests that need per-pixel
- * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL). */
+ * variances: rgba_sum, rgba_sumsq (width * height * 4 each; may be NULL).
+ * The frames' only: refine passes' samples are kept apart. */
 clvr_status clvr_renderer_read_moments(clvr_renderer *r, float *rgba_sum, float *rgba_sumsq, clvr_error *err);
 
 /* The denoiser's guides (kernels/denoise.h) of the frames so far: per pixel

@@ -185,6 +185,8 @@ _PROTOS = {
     "clvr_tracer_set_denoise": (ctypes.c_int, [_P, ctypes.c_int, _M]),  # API 1.4
     "clvr_tracer_denoise": (ctypes.c_int, [_P]),
     "clvr_tracer_read_denoised": (ctypes.c_int, [_P, _P, ctypes.c_size_t, _M]),
+    "clvr_tracer_set_adaptive": (ctypes.c_int, [_P, ctypes.c_float, _M]),  # API 1.7
+    "clvr_tracer_adaptive": (ctypes.c_float, [_P]),
     "clvr_default_size": (None, [ctypes.POINTER(_U32), ctypes.POINTER(_U32)]),
     "clvr_frame_box": (ctypes.c_int, [_c_float3, _c_float3, _P, _F, _F, _F, _F, _U32, _U32, _c_float3, _c_float3,
                                       _M]),
@@ -737,7 +739,10 @@ class Renderer(_Handle):
     light_intensity, ambient, shadows, background, clip_box, clip_lo,
     clip_hi, clip_planes, pixel_filter: "box", the default, antialiased,
     or "point", the ray through each pixel's centre as VTK draws; denoise:
-    True keeps the guides that image(denoised=True) needs, off by default)."""
+    True keeps the guides that image(denoised=True) needs, off by default;
+    adaptive: adaptive sampling's threshold, 0.1 by default, 0 off: each
+    frame also gives one more sample to the pixels whose neighbours differ
+    the most, the same expected image)."""
 
     def __init__(self, mesh, device="pocl", width=512, height=512, field=None, **settings):
         if not isinstance(mesh, (Mesh, Scene)):
@@ -747,6 +752,7 @@ class Renderer(_Handle):
             _count(what, v, 1, 65536)
         settings = dict(settings)
         denoise = settings.pop("denoise", None)
+        adaptive = settings.pop("adaptive", None)
         pixel_filter = settings.pop("pixel_filter", None)
         if pixel_filter is not None:
             setting_index("pixel_filter", pixel_filter)  # a bad name fails before any device work
@@ -769,6 +775,8 @@ class Renderer(_Handle):
             _call(_lib.clvr_tracer_set_pixel_filter, self._h, _text("pixel_filter", pixel_filter))
         if denoise is not None:
             _call(_lib.clvr_tracer_set_denoise, self._h, 1 if denoise else 0)
+        if adaptive is not None:
+            _call(_lib.clvr_tracer_set_adaptive, self._h, float(adaptive))
         self.width, self.height = int(width), int(height)
         self._seed = int(ts.seed)  # the renderer's default, as the program's --seed
 
@@ -781,12 +789,14 @@ class Renderer(_Handle):
         d = _settings_dict(ts)
         d["pixel_filter"] = _lib.clvr_tracer_pixel_filter(self._h).decode()
         d["denoise"] = bool(_lib.clvr_tracer_denoise(self._h))
+        d["adaptive"] = float(_lib.clvr_tracer_adaptive(self._h))
         return d
 
     def set_settings(self, **kw):
         """Changes the given settings (all checked; all or none applied)."""
         kw = dict(kw)
         denoise = kw.pop("denoise", None)
+        adaptive = kw.pop("adaptive", None)
         pixel_filter = kw.pop("pixel_filter", None)
         if pixel_filter is not None:
             setting_index("pixel_filter", pixel_filter)  # checked before anything changes
@@ -799,6 +809,8 @@ class Renderer(_Handle):
             _call(_lib.clvr_tracer_set_pixel_filter, self._h, _text("pixel_filter", pixel_filter))
         if denoise is not None:
             _call(_lib.clvr_tracer_set_denoise, self._h, 1 if denoise else 0)
+        if adaptive is not None:
+            _call(_lib.clvr_tracer_set_adaptive, self._h, float(adaptive))
         self._seed = int(ts.seed)
 
     _destroy = staticmethod(_lib.clvr_tracer_destroy)
