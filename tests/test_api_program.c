@@ -298,7 +298,7 @@ static void test_on_device(clvr_context *ctx)
      * clvr_tracer_set_settings, 0 turns it off; a negative or non-finite
      * threshold is refused and changes nothing; "refine_pixels" counts the
      * listed pixels (none when off). */
-    CHECK(clvr_tracer_adaptive(tr) == 0.1f);
+    CHECK(clvr_tracer_adaptive(tr) == CLVR_ADAPTIVE_DEFAULT && CLVR_ADAPTIVE_DEFAULT == 0.1f);
     CHECK(clvr_tracer_adaptive(NULL) == 0.0f);
     {
         double listed = -1.0, passes = -1.0;

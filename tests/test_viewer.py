@@ -7,7 +7,7 @@ C / shift+C restore the first image bit for bit; that resize re-allocates the
 image; that the title reports spp, rates, method and device; that X, P and K
 write files; and that K's command line, rendered offline at the same spp,
 reproduces the viewer's accumulated image. The estimator: --estimator and
---urm-steps start the viewer, E / shift+E cycle it (and A the pixel filter), the title and the K line
+--urm-steps start the viewer, E / shift+E cycle it (and A the pixel filter, V adaptive sampling), the title and the K line
 carry it. The window and the P key's PNG use the exposure and tone curve of
 `clvr -o x.png` (the PNG equals the offline one byte for byte). Also: without a display --view fails
 with one line naming the fix, a bad script command fails with its line number,
@@ -252,6 +252,7 @@ title
 key E shift
 key E
 key A
+key V
 frames 3
 save acc.pfm
 key P
@@ -285,12 +286,15 @@ def estimator_session(xvfb, tmp):
         check(" dda delta " in titles[0], "--estimator delta starts the viewer with delta (title)", titles[0])
         check(" dda urm " in titles[1], "E switches to urm (title)", titles[1])
         check(" dda urm " in titles[2], "shift+E then E come back to urm (title)", titles[2])
+        check(" spp + adaptive |" in titles[0], "adaptive sampling on by default (title)", titles[0])
+        check(" spp + adaptive |" not in titles[2], "V turns adaptive sampling off (title)", titles[2])
     view_txt = os.path.join(d, "clvr-view.txt")
     if not check(os.path.exists(view_txt), "K wrote clvr-view.txt"):
         return
     with open(view_txt) as f:
         line = f.read().strip()
-    for opt in ["--estimator urm", "--urm-steps 5", "--exposure 0.5", "--tonemap filmic", "--pixel-filter point"]:
+    for opt in ["--estimator urm", "--urm-steps 5", "--exposure 0.5", "--tonemap filmic", "--pixel-filter point",
+                "--adaptive off"]:
         check(opt in line, f"the K line has {opt}", line)
     base = shlex.split(line)[1:]
 
@@ -307,7 +311,7 @@ def estimator_session(xvfb, tmp):
     if not check(m is not None, "save acc.pfm reports its spp", out):
         return
     spp = m.group(3)
-    p = offline(["--spp", "2", "--estimator", "delta", "--pixel-filter", "box"], "off_d.pfm")
+    p = offline(["--spp", "2", "--estimator", "delta", "--pixel-filter", "box", "--adaptive", "0.1"], "off_d.pfm")
     if p:
         dd = max_diff(read_pfm(os.path.join(d, "d.pfm")), read_pfm(p))
         check(dd <= 1e-6, "the viewer's first frames are --estimator delta's, offline", dd, 0.0)

@@ -741,6 +741,8 @@ CLVR_API clvr_result clvr_tracer_read_denoised(clvr_tracer *tr, float *rgba, siz
  * A change restarts the accumulation. ERR_USAGE for a negative or
  * non-finite threshold. */
 CLVR_API clvr_result clvr_tracer_set_adaptive(clvr_tracer *tr, float threshold, clvr_message *msg);
+/* A new tracer's threshold (render.h defines the same, token for token). */
+#define CLVR_ADAPTIVE_DEFAULT 0.1f
 /* The threshold in use; 0 for off or a NULL tracer. */
 CLVR_API float clvr_tracer_adaptive(const clvr_tracer *tr);
 

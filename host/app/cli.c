@@ -151,6 +151,7 @@ void clvr_cli_print_help(FILE *out)
         "  M / shift+M            next / previous method: march, track, bins, dda\n"
         "  E / shift+E            next / previous estimator: delta, urm, walk, auto (not with march)\n"
         "  A                      pixel filter: box (antialiased) / point (pixel centres, as VTK)\n"
+        "  V                      adaptive sampling on / off (--adaptive)\n"
         "  D                      show the image denoised (--denoise: a biased preview) / as it is\n"
         "  L+left drag, ctrl+left drag, ctrl+arrows   rotate the light\n"
         "  X / P                  save the accumulated image as clvr-view-NNN.exr / .png (the PNG\n"

@@ -72,6 +72,8 @@ typedef struct viewer {
     int dirty_settings, dirty_camera, dirty_tf;
     int filter_point;          /* A: the point pixel filter (clvr_tracer_set_pixel_filter) instead of box */
     int denoise;               /* D: the window shows clvr_tracer_read_denoised (a biased preview) */
+    float adaptive;            /* V: adaptive sampling's threshold (clvr_tracer_set_adaptive), 0: off */
+    float adaptive_on;         /* the threshold V turns it back on with (the starting one, else the default) */
 
     /* Image: the renderer's size is the framebuffer's. */
     uint32_t img_w, img_h;       /* size of rgba / rgba8 contents */
@@ -364,7 +366,8 @@ static void print_command_line(viewer *v)
     if (strcmp(v->ts.sampler, dts.sampler)) appendf(line, cap, " --sampler %s", v->ts.sampler);
     if (strcmp(clvr_tracer_pixel_filter(v->tr), "box"))
         appendf(line, cap, " --pixel-filter %s", clvr_tracer_pixel_filter(v->tr));
-    if (o->adaptive >= 0.0f) appendf(line, cap, " --adaptive %g", (double)clvr_tracer_adaptive(v->tr));
+    if (v->adaptive > 0.0f) appendf(line, cap, " --adaptive %g", (double)v->adaptive);
+    else appendf(line, cap, " --adaptive off");
     if (v->denoise) appendf(line, cap, " --denoise");
     if (v->ts.step != dts.step) appendf(line, cap, " --step %.9g", (double)v->ts.step);
     if (v->ts.bins != dts.bins) appendf(line, cap, " --bins %u", v->ts.bins);
@@ -492,6 +495,10 @@ static void handle_key(viewer *v, int key, int mods)
     }
     case GLFW_KEY_A: /* antialiasing: the box filter, or the point filter of VTK's ray casters */
         v->filter_point = !v->filter_point;
+        v->dirty_settings = 1;
+        break;
+    case GLFW_KEY_V: /* adaptive sampling: refine passes on the noisiest pixels, or one sample per pixel a frame */
+        v->adaptive = v->adaptive > 0.0f ? 0.0f : v->adaptive_on;
         v->dirty_settings = 1;
         break;
     case GLFW_KEY_D: /* the denoised preview (guides kept by the kernel), or the estimate itself */
@@ -680,6 +687,7 @@ static clvr_result apply_edits(viewer *v)
         if (clvr_tracer_set_pixel_filter(v->tr, v->filter_point ? "point" : "box", &msg) != CLVR_RESULT_OK)
             return lib_fail(v, &msg);
         if (clvr_tracer_set_denoise(v->tr, v->denoise, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
+        if (clvr_tracer_set_adaptive(v->tr, v->adaptive, &msg) != CLVR_RESULT_OK) return lib_fail(v, &msg);
         v->dirty_settings = 0;
     }
     if (v->dirty_camera) {
@@ -855,8 +863,8 @@ static void update_title(viewer *v, int force)
         snprintf(method, sizeof method, "%s %s (%s)", v->ts.method, v->ts.estimator, v->estimator_used);
     else snprintf(method, sizeof method, "%s %s", v->ts.method, v->ts.estimator);
     snprintf(v->title, sizeof v->title,
-             "clvr | %s | %s | %llu spp | %.1f fps | %.2f Mrays/s | %s [%.4g, %.4g] density %.3g | shadows %s | %s",
-             mesh, method, (unsigned long long)v->img_spp, v->fps, v->mrays,
+             "clvr | %s | %s | %llu spp%s | %.1f fps | %.2f Mrays/s | %s [%.4g, %.4g] density %.3g | shadows %s | %s",
+             mesh, method, (unsigned long long)v->img_spp, v->adaptive > 0.0f ? " + adaptive" : "", v->fps, v->mrays,
              v->map_name, (double)v->range_lo, (double)v->range_hi,
              (double)(v->density / v->density_factor),
              is_march(v) ? "n/a" : v->shadows ? "on" : "off", v->device);
@@ -1039,6 +1047,8 @@ clvr_result clvr_viewer_run(const clvr_options *o, clvr_tracer *tr, const char *
     v->tr = tr;
     v->filter_point = !strcmp(clvr_tracer_pixel_filter(tr), "point");
     v->denoise = clvr_tracer_denoise(tr);
+    v->adaptive = clvr_tracer_adaptive(tr);
+    v->adaptive_on = v->adaptive > 0.0f ? v->adaptive : CLVR_ADAPTIVE_DEFAULT; /* started with --adaptive off */
     v->device = device ? device : "";
     v->shadows = o->shadows;
     v->err = err;

@@ -22,7 +22,9 @@ const char *clvr_render_estimator_name(uint32_t estimator);
 uint32_t clvr_render_method_from_name(const char *name);
 uint32_t clvr_render_estimator_from_name(const char *name);
 
-/* The default adaptive sampling threshold (settings.adaptive). */
+/* The default adaptive sampling threshold (settings.adaptive); clvr.h
+ * defines the same for the API's users, token for token (a compiler that
+ * sees both checks they agree). */
 #define CLVR_ADAPTIVE_DEFAULT 0.1f
 
 typedef struct clvr_render_settings {
