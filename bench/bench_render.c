@@ -413,7 +413,7 @@ typedef struct conv_result {
     double light_s;                 /* device time of the light grid (urm with shadows: once, before the first frame) */
     double samples_per_ray, rays_per_pixel; /* rays per pixel: per sample */
     double spp_per_frame;           /* samples per pixel a frame and its refine pass add */
-    double refine_fraction;         /* adaptive sampling: pixels in the refine list / all pixels */
+    double refine_fraction;         /* adaptive sampling: pixels a refine pass renders / all pixels (mean over passes) */
     double adaptive;                /* its threshold (0: off) */
     uint32_t npoints;
     conv_point pts[MAX_POINTS];
@@ -585,7 +585,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
             const double mse = inside_mse(img, ref, npix);
             /* The image pass (the control variates) and the choice of the
              * refine list are part of what a reader waits for. */
-            conv_point pt = {n, half, n + (double)rc.refine_passes * (double)rc.refine_pixels / (double)npix,
+            conv_point pt = {n, half, n + (double)rc.refine_samples / (double)npix,
                              rc.kernel_s + rc.image_s + rc.select_s, wall + rc.image_s, sqrt(mse),
                              sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0, NAN};
             pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
@@ -613,10 +613,10 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
     out->samples_per_ray = rc.rays ? (double)rc.samples / (double)rc.rays : 0.0;
     {
         /* Per sample: a frame's refine pass adds samples to some pixels. */
-        const double samples = (double)rc.frames * (double)npix + (double)rc.refine_passes * (double)rc.refine_pixels;
+        const double samples = (double)rc.frames * (double)npix + (double)rc.refine_samples;
         out->rays_per_pixel = samples > 0 ? (double)rc.rays / samples : 0.0;
         out->spp_per_frame = rc.frames ? samples / ((double)rc.frames * (double)npix) : 1.0;
-        out->refine_fraction = (double)rc.refine_pixels / (double)npix;
+        out->refine_fraction = rc.refine_passes ? (double)rc.refine_samples / (double)rc.refine_passes / (double)npix : 0.0;
     }
     if (fit_n) {
         out->fit_spp = fit_acc / fit_n / (target * target);

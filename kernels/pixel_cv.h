@@ -90,10 +90,12 @@ CLVR_INLINE int clvr_pixel_cv_flat(CLVR_GLOBAL const float *sum, clvr_u32 w, clv
 /* sum: the frames' summed rgba samples per pixel; ctl: per pixel the summed
  * controls (dx, dy, u - 1/2, unused); inv_n: 1 / frames; w x h row by row.
  * refine (NULL: none): per pixel the refine passes' summed samples and
- * controls (8 floats), nsamp its count of samples, frames included.
+ * controls (8 floats), read where nsamp, its count of samples, exceeds
+ * frames (frames = 1 / inv_n).
  * out: pixel (x, y)'s mean rgba minus its control variate. */
 CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const float *ctl, float inv_n,
-                               CLVR_GLOBAL const float *refine, CLVR_GLOBAL const clvr_u32 *nsamp, clvr_u32 w,
+                               CLVR_GLOBAL const float *refine, CLVR_GLOBAL const clvr_u32 *nsamp, clvr_u32 frames,
+                               clvr_u32 w,
                                clvr_u32 h, clvr_u32 x, clvr_u32 y, float *out)
 {
     /* Normal equations A c = B of the fit: A symmetric 4x4 (lower half
@@ -104,7 +106,7 @@ CLVR_INLINE void clvr_pixel_cv(CLVR_GLOBAL const float *sum, CLVR_GLOBAL const f
     /* The pixel's own mean and mean controls (c[0] unused). */
     float c[4] = {0.0f, ctl[4u * p] * inv_n, ctl[4u * p + 1u] * inv_n, ctl[4u * p + 2u] * inv_n};
     for (int k = 0; k < 4; ++k) out[k] = sum[4u * p + (clvr_u64)k] * inv_n;
-    if (refine) {
+    if (refine && nsamp[p] > frames) {
         const float inv = 1.0f / (float)nsamp[p];
         for (int k = 0; k < 4; ++k) out[k] = (sum[4u * p + (clvr_u64)k] + refine[8u * p + (clvr_u64)k]) * inv;
         for (int k = 0; k < 3; ++k) c[k + 1] = (ctl[4u * p + (clvr_u64)k] + refine[8u * p + 4u + (clvr_u64)k]) * inv;

@@ -44,8 +44,9 @@ __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr
  *
  * A refine pass (f.pass_pixels > 0, adaptive sampling, render.h): one work
  * item per pixel of list[0 .. pass_pixels), its sample and controls added to
- * refine[2 pixel] and refine[2 pixel + 1] instead (zeroed when the list was
- * made), so that accum, accum_sq and ctl keep the frames' sums alone: the
+ * refine[2 pixel] and refine[2 pixel + 1] instead (written by the pixel's
+ * first refine sample: never zeroed, and read only where nsamp exceeds the
+ * frames), so that accum, accum_sq and ctl keep the frames' sums alone: the
  * pixel control variates fit those (clvr_pixel_cv_image), whose counts do
  * not depend on the list. No guides. */
 __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const clvr_camera *cam,
@@ -102,7 +103,8 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
         else { guides[2u * pixel] += g0; guides[2u * pixel + 1u] += g1; }
     }
     const float4 c4 = (float4)(d, u - 0.5f, 0.0f);
-    if (pass) {
+    if (pass && index == f.frame_index) { refine[2u * pixel] = result; refine[2u * pixel + 1u] = c4; }
+    else if (pass) {
         refine[2u * pixel] += result;
         refine[2u * pixel + 1u] += c4;
     } else if (first) { accum[pixel] = result; accum_sq[pixel] = result * result; ctl[pixel] = c4; }
@@ -116,13 +118,14 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
 
 /* The image so far, its means minus their control variates
  * (kernels/pixel_cv.h): sum and ctl as clvr_render_frame accumulates them,
- * inv_n = 1 / frames; with has_refine, a pixel's own mean and controls also
- * take in its refine sums (clvr_render_frame), over its nsamp samples, while
- * the fit still reads the neighbours' frames alone. clvr_pixel_cv's
+ * inv_n = 1 / frames; with refine_frames (the frames, or 0 before any
+ * refine pass), a pixel with more samples than that (nsamp) also takes its
+ * refine sums (clvr_render_frame) into its own mean and controls, while the
+ * fit still reads the neighbours' frames alone. clvr_pixel_cv's
  * arithmetic in the same order, the four channels as one float4 (a third of
  * the time of the scalar loops on PoCL; test_pixel_cv compares the two). */
 __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const float4 *ctl, float inv_n, uint w, uint h,
-                                  __global const float4 *refine, __global const uint *nsamp, uint has_refine,
+                                  __global const float4 *refine, __global const uint *nsamp, uint refine_frames,
                                   __global float4 *out)
 {
     /* The reference's bits: no fused multiply-add (NVIDIA's compiler fuses
@@ -132,7 +135,7 @@ __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const flo
     if (x >= w || y >= h) return;
     const ulong p = (ulong)y * w + x;
     float4 mean = sum[p] * inv_n, cp = ctl[p] * inv_n;
-    if (has_refine) {
+    if (refine_frames && nsamp[p] > refine_frames) {
         const float inv = 1.0f / (float)nsamp[p];
         mean = (sum[p] + refine[2u * p]) * inv;
         cp = (ctl[p] + refine[2u * p + 1u]) * inv;

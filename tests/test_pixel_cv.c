@@ -26,7 +26,7 @@
 /* The device pass over sum and ctl (w x h, 4 floats per pixel each), and
  * refine (8 floats per pixel) and nsamp when refine is not NULL, into out. */
 static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *ctl, float inv_n, const float *refine,
-                      const uint32_t *nsamp, uint32_t w, uint32_t h, float *out)
+                      const uint32_t *nsamp, uint32_t frames, uint32_t w, uint32_t h, float *out)
 {
     clvr_error err = {0};
     clvr_status s = CLVR_OK;
@@ -45,11 +45,11 @@ static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *c
         s = clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, refine ? npix * sizeof(uint32_t) : sizeof one,
                            refine ? (void *)nsamp : (void *)&one, "sample counts", &bn, &err);
     if (s == CLVR_OK) s = clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, bytes, NULL, "image", &bo, &err);
-    const cl_uint cw = w, ch = h, has_refine = refine != NULL;
+    const cl_uint cw = w, ch = h, refine_frames = refine ? frames : 0u;
     const cl_float cn = inv_n;
     if (s == CLVR_OK)
         s = CLVR_CL_ARGS(k, &err, CLVR_ARG(bs), CLVR_ARG(bc), CLVR_ARG(cn), CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(br),
-                         CLVR_ARG(bn), CLVR_ARG(has_refine), CLVR_ARG(bo));
+                         CLVR_ARG(bn), CLVR_ARG(refine_frames), CLVR_ARG(bo));
     if (s == CLVR_OK) s = clvr_cl_run2d(cl, k, w, h, local, NULL, &err);
     if (s == CLVR_OK && clEnqueueReadBuffer(cl->queue, bo, CL_TRUE, 0, bytes, out, 0, NULL, NULL) != CL_SUCCESS)
         s = clvr_error_set(&err, CLVR_ERR_OPENCL, "clEnqueueReadBuffer(image) failed");
@@ -67,11 +67,11 @@ static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *c
 }
 
 static void run_ref(const float *sum, const float *ctl, float inv_n, const float *refine, const uint32_t *nsamp,
-                    uint32_t w, uint32_t h, float *out)
+                    uint32_t frames, uint32_t w, uint32_t h, float *out)
 {
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w; ++x)
-            clvr_pixel_cv(sum, ctl, inv_n, refine, nsamp, w, h, x, y, out + 4 * ((size_t)y * w + x));
+            clvr_pixel_cv(sum, ctl, inv_n, refine, nsamp, frames, w, h, x, y, out + 4 * ((size_t)y * w + x));
 }
 
 static void test_device_vs_reference(clvr_cl *cl, cl_kernel k)
@@ -96,6 +96,9 @@ static void test_device_vs_reference(clvr_cl *cl, cl_kernel k)
             for (size_t p = 0; refine && p < npix; ++p) {
                 const uint32_t extra = tu_randf(&st) < 1.0f / 3.0f ? 1u + (uint32_t)(2.0f * tu_randf(&st)) : 0u;
                 nsamp[p] = frames + extra;
+                /* A pixel without refine samples has never-written sums: NaN
+                 * here, which must not reach its image. */
+                for (int c = 0; c < 8 && !extra; ++c) refine[8 * p + (size_t)c] = NAN;
                 for (int c = 0; c < 4 && extra; ++c) {
                     refine[8 * p + (size_t)c] = (float)extra * 2.0f * tu_randf(&st);
                     refine[8 * p + 4 + (size_t)c] = c == 3 ? 0.0f : (float)extra * (tu_randf(&st) - 0.5f);
@@ -105,8 +108,8 @@ static void test_device_vs_reference(clvr_cl *cl, cl_kernel k)
             const size_t np = ((size_t)(h / 2) * w + w / 2);
             if (nan_pixel) sum[4 * np + 1] = NAN;
             const float inv_n = 1.0f / (float)frames;
-            if (!run_device(cl, k, sum, ctl, inv_n, refine, nsamp, w, h, dev)) {
-                run_ref(sum, ctl, inv_n, refine, nsamp, w, h, ref);
+            if (!run_device(cl, k, sum, ctl, inv_n, refine, nsamp, frames, w, h, dev)) {
+                run_ref(sum, ctl, inv_n, refine, nsamp, frames, w, h, ref);
                 double worst = 0.0;
                 uint64_t nonfinite = 0, changed = 0;
                 for (size_t p = 0; p < npix; ++p)
@@ -116,7 +119,8 @@ static void test_device_vs_reference(clvr_cl *cl, cl_kernel k)
                         nonfinite += !isfinite(dev[i]);
                         const double d = fabs((double)dev[i] - (double)ref[i]) / (1.0 + fabs((double)ref[i]));
                         if (d > worst) worst = d;
-                        const float mean = refine ? (sum[i] + refine[8 * p + (size_t)c]) / (float)nsamp[p] : sum[i] * inv_n;
+                        const float mean = refine && nsamp[p] > frames ? (sum[i] + refine[8 * p + (size_t)c]) / (float)nsamp[p]
+                                                                       : sum[i] * inv_n;
                         changed += dev[i] != mean;
                     }
                 if (worst > 1e-4)
@@ -145,7 +149,7 @@ static void test_exact_cases(clvr_cl *cl, cl_kernel k)
     uint64_t st = 5;
     /* Controls all 0: the fit's terms vanish, the image is the mean. */
     for (size_t i = 0; i < n; ++i) sum[i] = 3.0f * tu_randf(&st);
-    if (!run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, w, h, out)) TU_CHECK(memcmp(out, sum, n * sizeof(float)) == 0);
+    if (!run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, 1, w, h, out)) TU_CHECK(memcmp(out, sum, n * sizeof(float)) == 0);
     /* Linear in the rays' positions (centre + jitter), the first uniform
      * at 1/2: each pixel comes out as the value at its centre. */
     const float a[4] = {0.5f, 1.0f, -0.25f, 0.75f}, gx[4] = {0.02f, -0.03f, 0.01f, 0.0f},
@@ -158,7 +162,7 @@ static void test_exact_cases(clvr_cl *cl, cl_kernel k)
         ctl[4 * p + 2] = 0.0f;
         for (int c = 0; c < 4; ++c) sum[4 * p + (size_t)c] = a[c] + gx[c] * (x + dx) + gy[c] * (y + dy);
     }
-    if (!run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, w, h, out)) {
+    if (!run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, 1, w, h, out)) {
         double worst = 0.0, moved = 0.0;
         for (size_t p = 0; p < (size_t)w * h; ++p)
             for (int c = 0; c < 4; ++c) {
@@ -187,8 +191,8 @@ static void test_exact_cases(clvr_cl *cl, cl_kernel k)
             if (x == px && y == py)
                 for (int c = 0; c < 4; ++c) sum[4 * p + (size_t)c] = 2.0f;
         }
-        if (ref && !run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, w, h, out)) {
-            run_ref(sum, ctl, 1.0f, NULL, NULL, w, h, ref);
+        if (ref && !run_device(cl, k, sum, ctl, 1.0f, NULL, NULL, 1, w, h, out)) {
+            run_ref(sum, ctl, 1.0f, NULL, NULL, 1, w, h, ref);
             uint64_t flat = 0, flat_bad = 0, off = 0;
             for (size_t p = 0; p < (size_t)w * h; ++p) {
                 const uint32_t x = (uint32_t)(p % w), y = (uint32_t)(p / w);

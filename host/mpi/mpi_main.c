@@ -676,7 +676,7 @@ static int run(mpi_run *m, const clvr_options *o)
         const float inv_n = 1.0f / (float)(frames ? frames : 1);
         for (uint32_t y = 0; y < o->height; ++y)
             for (uint32_t x = 0; x < o->width; ++x)
-                clvr_pixel_cv(sumf, ctlf, inv_n, NULL, NULL, o->width, o->height, x, y, img + 4 * ((size_t)y * o->width + x));
+                clvr_pixel_cv(sumf, ctlf, inv_n, NULL, NULL, 0, o->width, o->height, x, y, img + 4 * ((size_t)y * o->width + x));
         clvr_image_display display = {o->exposure, (clvr_tonemap)o->tonemap, o->transparent, NULL};
         s = clvr_image_write_display(o->output, o->width, o->height, img, &display, &err);
     }
