@@ -364,6 +364,11 @@ def main():
         check(p.returncode == 2 and len(msgs) == 1 and "--estimator delta" in msgs[0] and "urm" in msgs[0],
               "--estimator delta is refused once, with the fix", f"exit {p.returncode}: {p.stderr[-1500:]}",
               "exit 2, one message")
+        p = run_mpi(2, clvr_args(out, 1, True, ("--adaptive", "0.2")), timeout=120)
+        msgs = [l for l in p.stderr.splitlines() if l.startswith("clvr:")]
+        check(p.returncode == 2 and len(msgs) == 1 and "--adaptive 0.2" in msgs[0] and "--adaptive off" in msgs[0],
+              "--adaptive 0.2 is refused once, with the fix", f"exit {p.returncode}: {p.stderr[-1500:]}",
+              "exit 2, one message")
         # Stats: rank 0 writes the per-rank table and JSON.
         js = os.path.join(tmp, "stats.json")
         p = run_mpi(2, clvr_args(out, 1, True, ("--stats-json", js)), timeout=TIMEOUT)

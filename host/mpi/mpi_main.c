@@ -158,6 +158,12 @@ static clvr_status check_options(const clvr_options *o, clvr_error *err)
     if (o->denoise)
         return clvr_error_set(err, CLVR_ERR_USAGE, "--denoise is not available under mpirun yet; render the image "
                               "without it, or with clvr on one process");
+    /* The default runs without it (rank 0 composites every pixel once per
+     * frame); asked for by name, it is refused rather than dropped. */
+    if (o->adaptive > 0.0f)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "--adaptive %g is not available under mpirun yet: every pixel gets "
+                              "one sample per frame there; drop the option (or --adaptive off), or render with clvr "
+                              "on one process", (double)o->adaptive);
     return CLVR_OK;
 }
 
