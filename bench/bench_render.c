@@ -355,17 +355,22 @@ typedef struct est_variant {
     float adaptive; /* @T: adaptive sampling's threshold for this variant; < 0: --adaptive's */
 } est_variant;
 
+/* An adaptive sampling threshold (render.h settings.adaptive): a whole
+ * string that is a finite number >= 0. Returns 0 otherwise. */
+static int parse_adaptive(const char *s, float *out)
+{
+    char *end;
+    *out = strtof(s, &end);
+    return end != s && !*end && *out >= 0.0f && isfinite(*out);
+}
+
 /* name[:urm-steps[:urm-kappa[:light-res]]][@adaptive] */
 static int parse_variant(const char *s, est_variant *v)
 {
     char name[32];
     v->adaptive = -1.0f;
     const char *at = strchr(s, '@');
-    if (at) {
-        char *end;
-        v->adaptive = strtof(at + 1, &end);
-        if (*end || !(v->adaptive >= 0.0f) || !isfinite(v->adaptive)) return 0;
-    }
+    if (at && !parse_adaptive(at + 1, &v->adaptive)) return 0;
     size_t n = strcspn(s, ":@");
     if (n >= sizeof name) return 0;
     memcpy(name, s, n);
@@ -413,7 +418,7 @@ typedef struct conv_result {
     double light_s;                 /* device time of the light grid (urm with shadows: once, before the first frame) */
     double samples_per_ray, rays_per_pixel; /* rays per pixel: per sample */
     double spp_per_frame;           /* samples per pixel a frame and its refine pass add */
-    double refine_fraction;         /* adaptive sampling: pixels a refine pass renders / all pixels (mean over passes) */
+    double refine_fraction;         /* adaptive sampling: pixels a refine pass renders / all pixels */
     double adaptive;                /* its threshold (0: off) */
     uint32_t npoints;
     conv_point pts[MAX_POINTS];
@@ -616,7 +621,7 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
         const double samples = (double)rc.frames * (double)npix + (double)rc.refine_samples;
         out->rays_per_pixel = samples > 0 ? (double)rc.rays / samples : 0.0;
         out->spp_per_frame = rc.frames ? samples / ((double)rc.frames * (double)npix) : 1.0;
-        out->refine_fraction = rc.refine_passes ? (double)rc.refine_samples / (double)rc.refine_passes / (double)npix : 0.0;
+        out->refine_fraction = rc.refine_passes ? (double)rc.refine_pixels / (double)npix : 0.0;
     }
     if (fit_n) {
         out->fit_spp = fit_acc / fit_n / (target * target);
@@ -906,9 +911,7 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--denoise")) denoise = 1;
         else if (!strcmp(a, "--no-pixel-cv")) no_cv = 1;
         else if (!strcmp(a, "--adaptive") && v) {
-            char *end;
-            adaptive = strtof(argv[++i], &end);
-            if (*end || !(adaptive >= 0.0f) || !isfinite(adaptive)) return usage();
+            if (!parse_adaptive(argv[++i], &adaptive)) return usage();
         }
         else if (!strcmp(a, "--sampler") && v) {
             const char *sv = argv[++i];

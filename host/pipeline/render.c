@@ -56,10 +56,9 @@ struct clvr_renderer {
                                 * the kernel's parameters) */
     cl_mem list;               /* the refine list, pixel indices row by row (at least one entry) */
     uint32_t list_n;           /* pixels in the list */
-    int list_made;             /* the list belongs to this accumulation (reset with it) */
-    int refined;               /* a list was made this accumulation: refine holds sums where nsamp > frames */
-    uint64_t refine_passes;
-    uint64_t refine_samples;   /* samples the refine passes rendered, all pixels together */
+    int list_made;             /* the list belongs to this accumulation (reset with it): refine holds sums
+                                * where nsamp > frames */
+    uint64_t refine_passes;    /* each renders the list_n pixels of the one list */
     double select_s;           /* host seconds of making the list (read, choice, upload) */
     double kernel_s, last_frame_s, light_s;
     double image_s;            /* device time of the last clvr_renderer_read's image pass (clvr_pixel_cv_image) */
@@ -162,9 +161,7 @@ static void restart(clvr_renderer *r)
     r->image_s = 0.0;
     r->list_made = 0;
     r->list_n = 0;
-    r->refined = 0;
     r->refine_passes = 0;
-    r->refine_samples = 0;
     r->select_s = 0.0;
 }
 
@@ -689,7 +686,6 @@ static clvr_status make_list(clvr_renderer *r, clvr_error *err)
      * (clvr_render_frame), and only pixels with more samples than frames
      * are read (a 2048^2 image's 134 MB, first touched by a fill, took
      * 0.25 s on PoCL). */
-    r->refined = 1;
     r->list_n = n;
     r->list_made = 1;
 cleanup:
@@ -707,7 +703,6 @@ clvr_status clvr_renderer_refine(clvr_renderer *r, clvr_error *err)
     if (!r->list_made) CLVR_TRY(make_list(r, err));
     if (r->list_n) CLVR_TRY(render_pass(r, r->list_n, err));
     r->refine_passes++;
-    r->refine_samples += r->list_n;
 cleanup:
     return s;
 }
@@ -768,7 +763,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         const cl_float inv_n = 1.0f / (float)r->frames;
         /* refine_frames: 0, no refine sums; else the frames, below which a
          * pixel's count means no refine sample of its own. */
-        const cl_uint w = r->set.width, h = r->set.height, refine_frames = r->refined ? (cl_uint)r->frames : 0u;
+        const cl_uint w = r->set.width, h = r->set.height, refine_frames = r->list_made ? (cl_uint)r->frames : 0u;
         CLVR_TRY(CLVR_CL_ARGS(r->k_cv, err, CLVR_ARG(r->accum), CLVR_ARG(r->ctl), CLVR_ARG(inv_n), CLVR_ARG(w),
                               CLVR_ARG(h), CLVR_ARG(r->refine), CLVR_ARG(r->nsamp), CLVR_ARG(refine_frames),
                               CLVR_ARG(r->image)));
@@ -776,7 +771,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->image, CL_TRUE, 0, npix * 4 * sizeof(float), rgba, 0,
                                           NULL, NULL));
         r->image_s = clvr_cl_event_seconds(evt);
-    } else if (rgba && r->refined) {
+    } else if (rgba && r->list_made) {
         /* Each pixel's mean over its own count of samples. */
         CLVR_TRY(clvr_renderer_read_moments(r, rgba, NULL, err));
         ref = malloc(npix * 8 * sizeof(float));
@@ -807,7 +802,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         counters->last_frame_s = r->last_frame_s;
         counters->refine_passes = r->refine_passes;
         counters->refine_pixels = r->list_n;
-        counters->refine_samples = r->refine_samples;
+        counters->refine_samples = r->refine_passes * r->list_n;
         counters->select_s = r->select_s;
         if (r->frames) {
             cnt = malloc(npix * 3 * sizeof(cl_uint));

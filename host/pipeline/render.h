@@ -115,7 +115,7 @@ typedef struct clvr_render_counters {
     double light_s;           /* device time of the light grid's last build (urm with shadows; part of kernel_s) */
     uint64_t refine_passes;   /* adaptive sampling: refine passes so far (clvr_renderer_refine) */
     uint64_t refine_pixels;   /* pixels the refine list holds (0: none, or no list yet) */
-    uint64_t refine_samples;  /* samples all refine passes rendered so far, all pixels together */
+    uint64_t refine_samples;  /* samples all refine passes rendered so far, all pixels together (passes x pixels) */
     double select_s;          /* host seconds of making the refine list (once per accumulation; not in kernel_s) */
     double image_s;           /* device time of the image pass of the last clvr_renderer_read that read the image
                                * (kernels/pixel_cv.h; not part of kernel_s; 0 without the control variates) */
