@@ -13,17 +13,10 @@ their mean; REF's own noise not subtracted) of A alone, of (A + B) / 2 everywher
 does (its pixel control variates fit the accumulated image, and the ld sampler
 stratifies the two frames): the combustor's 2-spp image is at 1.13%, not 1.43%.
 """
-import math, random, struct, sys
+import math, os, random, sys
 
-
-def read_pfm(path):
-    with open(path, 'rb') as f:
-        kind = f.readline().strip()
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        n = w * h * (3 if kind == b'PF' else 1)
-        data = struct.unpack(('<' if scale < 0 else '>') + 'f' * n, f.read(4 * n))
-    return w, h, data
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'tests'))
+from checklib import read_pfm  # noqa: E402 (the tests' PFM reader)
 
 
 def lum(d, i):

@@ -23,6 +23,21 @@ class Checks:
         print(f"{self.passed} passed, {self.failed} failed")
 
 
+def read_pfm(path):
+    """Reads a PFM (what clvr writes for -o x.pfm): returns (width, height,
+    data), data the floats as stored, rows bottom to top, 3 per pixel for a
+    colour PFM (PF), 1 for a grey one (Pf)."""
+    import struct
+
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        n = w * h * (3 if kind == b"PF" else 1)
+        data = struct.unpack(("<" if scale < 0 else ">") + "%df" % n, f.read(4 * n))
+    return w, h, data
+
+
 def read_png(path):
     """Decodes an 8-bit, non-interlaced grey/RGB/RGBA PNG (what clvr writes)
     without third-party modules: returns (width, height, channels, rows), rows

@@ -45,12 +45,11 @@ import math
 import os
 import shutil
 import signal
-import struct
 import subprocess
 import sys
 import tempfile
 
-from checklib import Checks
+from checklib import Checks, read_pfm
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BUILD = os.environ.get("CLVR_BUILD_DIR", os.path.join(HERE, "..", "build"))
@@ -100,16 +99,6 @@ def run_single(out, seed, shadows):
 def run_mpi(n, args, extra_env=None, timeout=TIMEOUT):
     cmd = [MPIEXEC, "--oversubscribe", "-n", str(n), *args]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=mpi_env(extra_env))
-
-
-def read_pfm(path):
-    with open(path, "rb") as f:
-        kind = f.readline().strip()
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        n = w * h * (3 if kind == b"PF" else 1)
-        data = struct.unpack(("<" if scale < 0 else ">") + "%df" % n, f.read(4 * n))
-    return w, h, data
 
 
 def block_means(path):

@@ -27,7 +27,7 @@ import subprocess
 import sys
 import tempfile
 
-from checklib import Checks, read_png
+from checklib import Checks, read_png, read_pfm as read_pfm_stored
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.environ.get("CLVR_SHARED_DATA", os.path.join(HERE, "data"))
@@ -59,14 +59,8 @@ def run(args, env=None, cwd=None, timeout=180):
 
 def read_pfm(path):
     """Returns (w, h, rows top to bottom of [(r, g, b), ...])."""
-    with open(path, "rb") as f:
-        data = f.read()
-    parts = data.split(b"\n", 3)
-    assert parts[0] == b"PF", f"{path}: not a colour PFM"
-    w, h = map(int, parts[1].split())
-    scale = float(parts[2])
-    fmt = "<" if scale < 0 else ">"
-    floats = struct.unpack(fmt + "%df" % (w * h * 3), parts[3][: w * h * 12])
+    w, h, floats = read_pfm_stored(path)
+    assert len(floats) == w * h * 3, f"{path}: not a colour PFM"
     rows = []
     for y in range(h):  # PFM stores rows bottom to top
         base = (h - 1 - y) * w * 3
