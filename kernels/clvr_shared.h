@@ -449,14 +449,16 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 /* Estimators, the values of clvr_frame.estimator (track, bins and dda; march
  * has its own): delta: delta tracking, a 0/1 collision and a 0/1 shadow
  * visibility; urm: unbiased ray marching, a weighted quadrature with residual
- * ratio-tracked transmittance; walk: tet by tet across shared faces, each
- * tet's extinction integrated exactly (kernels/render_volume.h). Same expected value;
+ * ratio-tracked transmittance; walk: cell by cell across shared faces, each
+ * tet's extinction integrated exactly, other cells' through a control and a
+ * correction (kernels/render_volume.h). Same expected value;
  * names in clvr_render_estimator_name (host/pipeline/render.c), in this order. */
 #define CLVR_ESTIMATOR_DELTA 0u
 #define CLVR_ESTIMATOR_URM 1u
 #define CLVR_ESTIMATOR_WALK 2u
-/* auto (the default): walk, with shadows or not (the renderer falls back to
- * urm where the walk cannot run). Measured (bench_render --converge, 256^2,
+/* auto (the default): walk through tets, with shadows or not (the renderer
+ * falls back to urm where the walk cannot run, and auto hands a ray to urm
+ * at the first cell that is not a tet: clvr_frame.walk_cells). Measured (bench_render --converge, 256^2,
  * seconds to 2% relative RMSE, medians of 3 seeds): without shadows walk
  * reached 2% first on the combustor, fire_ug and the notch cut into tets
  * (about 2x) and was up to 30% slower on post, the 1M tets and the blunt
@@ -605,7 +607,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 384 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 388 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -664,8 +666,11 @@ typedef struct clvr_frame {
      * every pixel; else a refine pass, one work item per pixel of its list,
      * whose sample goes to the refine sums (clvr_render_frame). */
     clvr_u32 pass_pixels;
+    /* The walk (CLVR_ESTIMATOR_WALK): nonzero, through every cell type;
+     * 0 (auto), through tets, handing the ray to urm at any other cell. */
+    clvr_u32 walk_cells;
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 384, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 388, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

@@ -3,10 +3,12 @@
  * map, exact reproduction of linear fields, points on faces, edges and
  * vertices, points outside, Newton hexes against their tet decomposition,
  * non-planar shared faces seen by both neighbours, degenerate, inverted and
- * NaN input. */
+ * NaN input; and kernels/cell_ray.h, where a ray leaves a cell, against
+ * bisection on the containment test. */
 #include "test_util.h"
 
 #include "../kernels/elements.h"
+#include "../kernels/cell_ray.h"
 
 static const char *type_name(uint32_t t)
 {
@@ -367,6 +369,117 @@ static void test_known_values(void)
     TU_CHECK(!clvr_element_sample(CLVR_CELL_WEDGE, w, 0.6f, 0.6f, 0.5f, &s));
 }
 
+
+/* Inside test of world point p in cell v, no slack. */
+static int inside_exact(uint32_t type, const clvr_vec4 *v, const double *p)
+{
+    float u, vv, w;
+    return clvr_element_invert(type, v, (float)p[0], (float)p[1], (float)p[2], &u, &vv, &w) &&
+           clvr_element_param_inside(type, u, vv, w, 0.0f);
+}
+
+/* The cell's own interpolation at world point p (its coordinates by
+ * Newton, a point on a face a hair outside taken as it comes). */
+static double interp_at(uint32_t type, const clvr_vec4 *v, const double *p)
+{
+    float u, vv, w, N[CLVR_CELL_MAX_VERTS], Nu[CLVR_CELL_MAX_VERTS], Nv[CLVR_CELL_MAX_VERTS], Nw[CLVR_CELL_MAX_VERTS];
+    if (!clvr_element_invert(type, v, (float)p[0], (float)p[1], (float)p[2], &u, &vv, &w)) return NAN;
+    clvr_element_shape(type, u, vv, w, N, Nu, Nv, Nw);
+    double s = 0.0;
+    for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) s += (double)N[i] * v[i].w;
+    return s;
+}
+
+/* clvr_cell_exit (the walk's step through a cell that is not a tet) on
+ * cells distorted by `jit` of their edge, so that quad faces are twisted
+ * bilinear patches: from random inside points in random directions, the
+ * exit's t against a march and bisection on the containment test (the
+ * first point outside), and its scalar against the cell's interpolation
+ * there. Then backward: the face the ray came in by, and from that entry,
+ * skipping that face, the same exit again. */
+static void test_cell_exit(uint32_t type, float jit)
+{
+    uint64_t rs = 777 + type + (uint64_t)(jit * 1000.0f);
+    int tried = 0, bad_t = 0, bad_s = 0, bad_skip = 0, none = 0;
+    double worst_t = 0.0, worst_s = 0.0;
+    for (int trial = 0; trial < 300; ++trial) {
+        clvr_vec4 v[CLVR_CELL_MAX_VERTS];
+        make_element(type, jit, 2.0f, 5.0f, &rs, v);
+        for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) v[i].w = 10.0f * tu_randf(&rs) - 3.0f;
+        for (int k = 0; k < 10; ++k) {
+            float pu, pv, pw, x, y, z;
+            random_param(type, 0.1f, &rs, &pu, &pv, &pw);
+            if (type == CLVR_CELL_PYRAMID && pw > 0.7f) continue;
+            clvr_element_forward(type, v, pu, pv, pw, &x, &y, &z);
+            float d[3];
+            double dl = 0.0;
+            for (int a = 0; a < 3; ++a) {
+                d[a] = 2.0f * tu_randf(&rs) - 1.0f;
+                dl += (double)d[a] * d[a];
+            }
+            if (dl < 0.01) continue;
+            /* The ray starts 3 units before the point, so t_in = 3. */
+            const float org[3] = {x - 3.0f * d[0], y - 3.0f * d[1], z - 3.0f * d[2]};
+            const double P[3] = {x, y, z};
+            if (!inside_exact(type, v, P)) continue;
+            ++tried;
+            float t_out = NAN, s_out = NAN;
+            const int f = clvr_cell_exit(type, v, org, d, 3.0f, -1, &t_out, &s_out);
+            if (f < 0) {
+                ++none;
+                continue;
+            }
+            /* March (steps of 1/400 of the cell's 2-unit size) to the first
+             * point outside, then bisect. */
+            const double h = 0.005 / sqrt(dl);
+            double a = 0.0, b = 0.0;
+            for (int i = 1; i < 4000; ++i) {
+                const double q[3] = {x + d[0] * h * i, y + d[1] * h * i, z + d[2] * h * i};
+                if (!inside_exact(type, v, q)) {
+                    b = h * i;
+                    a = h * (i - 1);
+                    break;
+                }
+            }
+            for (int i = 0; i < 40 && b > 0.0; ++i) {
+                const double m = 0.5 * (a + b), q[3] = {x + d[0] * m, y + d[1] * m, z + d[2] * m};
+                if (inside_exact(type, v, q)) a = m;
+                else b = m;
+            }
+            const double te = 3.0 + 0.5 * (a + b), et = fabs(t_out - te) * sqrt(dl);
+            if (et > worst_t) worst_t = et;
+            if (!(et < 1e-3)) {
+                if (bad_t < 3)
+                    fprintf(stderr, "%s jit %g: exit at t %.6f, bisection %.6f (face %d)\n", type_name(type),
+                            (double)jit, (double)t_out, te, f);
+                ++bad_t;
+                continue;
+            }
+            const double q[3] = {org[0] + d[0] * te, org[1] + d[1] * te, org[2] + d[2] * te};
+            const double want = interp_at(type, v, q), es = fabs(s_out - want);
+            if (es > worst_s) worst_s = es;
+            if (!(es < 1e-2)) ++bad_s;
+            /* Backward to the entry face, then forward from the entry
+             * skipping it. */
+            const float back[3] = {-d[0], -d[1], -d[2]};
+            float t_back, s_back;
+            const int fin = clvr_cell_exit(type, v, org, back, -3.0f, -1, &t_back, &s_back);
+            float t2 = NAN, s2 = NAN;
+            const int f2 = fin < 0 ? -1 : clvr_cell_exit(type, v, org, d, -t_back, fin, &t2, &s2);
+            if (f2 != f || !(fabs(t2 - t_out) * sqrt(dl) < 1e-3)) ++bad_skip;
+        }
+    }
+    if (bad_t || bad_s || bad_skip || none)
+        fprintf(stderr, "%s jit %g: %d rays: %d exits off in t (worst %g), %d in the scalar (worst %g), "
+                "%d not found again from the entry, %d without an exit\n", type_name(type), (double)jit, tried, bad_t,
+                worst_t, bad_s, worst_s, bad_skip, none);
+    TU_CHECK(tried > 1500);
+    TU_CHECK_EQ_U64(bad_t, 0);
+    TU_CHECK_EQ_U64(bad_s, 0);
+    TU_CHECK(bad_skip <= tried / 500);
+    TU_CHECK_EQ_U64(none, 0);
+}
+
 int main(void)
 {
     for (uint32_t t = 0; t < 4; ++t) {
@@ -381,5 +494,9 @@ int main(void)
     test_nonplanar_shared_face();
     test_degenerate();
     test_known_values();
+    for (uint32_t t = CLVR_CELL_PYRAMID; t <= CLVR_CELL_HEX; ++t) {
+        test_cell_exit(t, 0.0f);
+        test_cell_exit(t, 0.2f);
+    }
     return tu_finish("test_elements");
 }

@@ -318,6 +318,43 @@ static int blob_box(clvr_mesh *m)
     return 1;
 }
 
+/* [-1, 1]^3 in 3^3 cubes of cells of the kind (CLVR_SCENE_MIX_*), their
+ * inner vertices moved by up to a fifth of a cube (faces become twisted
+ * bilinear patches), the scalar 0 and 1 on alternate lattice vertices (a
+ * checkerboard): along a ray, the scalar inside a cell is far from the
+ * line between its faces' values, the walk's control through cells that
+ * are not tets (kernels/render_volume.h clvr_walk_cell), so its correction
+ * carries the image there. */
+static int coarse_box(clvr_scene_mix mix, clvr_mesh *m)
+{
+    clvr_error err = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = p.ny = p.nz = 3;
+    for (int k = 0; k < 3; ++k) {
+        p.lo[k] = -1.0f;
+        p.hi[k] = 1.0f;
+    }
+    p.mix = mix;
+    p.field = CLVR_SCENE_FIELD_CONSTANT;
+    p.jitter = 0.2f;
+    p.seed = 11;
+    if (clvr_scene_box(&p, m, &err) != CLVR_OK) {
+        fprintf(stderr, "%s\n", err.msg);
+        ++tu_fail_;
+        return 1;
+    }
+    /* Lattice index of each vertex: its position rounded (the jitter is
+     * under half a cube). */
+    for (uint64_t i = 0; i < m->num_vertices; ++i) {
+        int parity = 0;
+        for (int k = 0; k < 3; ++k) parity += (int)lrintf((m->positions[3 * i + (uint64_t)k] + 1.0f) * 1.5f);
+        m->scalars[i] = (float)(parity & 1);
+    }
+    clvr_mesh_update_ranges(m);
+    return 0;
+}
+
 /* The unit box of 4^3 cells, hexes, tets, wedges and pyramids side by
  * side, with the given scalar field, opened as a w x h fixture seen by *cam
  * from (2.2, 1.8, 2.6), shadows off. Returns 0 when it is ready. */
@@ -1519,6 +1556,10 @@ int main(void)
     {
         clvr_mesh m;
         if (!blob_box(&m)) methods_agree(&cl, &m, "mixed box", 256);
+    }
+    {
+        clvr_mesh m;
+        if (!coarse_box(CLVR_SCENE_MIX_HEX, &m)) methods_agree(&cl, &m, "coarse jittered hexes", 256);
     }
     {
         char path[4096];

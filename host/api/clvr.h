@@ -273,7 +273,8 @@ CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t
  * shadows, already part of kernel_s), "image_s" (device seconds of the
  * image pass of the last clvr_tracer_read_image, the control variates'
  * fit: not part of kernel_s; 0 before one), since 1.5 "adjacency_bytes"
- * (device memory of the walk estimator's face adjacency, 16 bytes per tet:
+ * (device memory of the walk estimator's face adjacency, 4 bytes per face
+ * of each cell, 16 per tet:
  * 0 until a frame asks for walk) and "adjacency_skipped" (1 when there was
  * too little memory to build it: walk then renders as urm, the same
  * image). Unknown name: ERR_USAGE listing the names. */
@@ -515,8 +516,8 @@ typedef struct clvr_render_stats {
     uint32_t width, height;
     char method[16];
     char estimator[16]; /* since 1.6: what the frames render with ("delta", "urm", "walk"): "auto" resolved,
-                         * and "urm" where the walk cannot run (a mesh without tets, no room for its
-                         * face adjacency, an MPI run) */
+                         * and "urm" where the walk cannot run (under "auto" a mesh without tets, no
+                         * room for its face adjacency, an MPI run) */
 } clvr_render_stats;
 CLVR_API clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out, clvr_message *msg);
 

@@ -404,7 +404,7 @@ int main(int argc, char **argv)
         TRY(clvr_tracer_stat(tracer, "adjacency_skipped", &as, &msg));
         stats.bytes_adjacency = (uint64_t)ab;
         if (!o.quiet && as > 0.0)
-            fprintf(stderr, "clvr: the device could not hold the walk estimator's face adjacency (16 bytes per tet): "
+            fprintf(stderr, "clvr: the device could not hold the walk estimator's face adjacency (4 bytes per cell face): "
                     "urm rendered the rays instead (the same expected image; --estimator urm skips the attempt)\n");
         if (!o.quiet)
             fprintf(stderr, "clvr: wrote %s (%ux%u, %u spp%s)\n", path, o.width, o.height, frame,

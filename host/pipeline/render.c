@@ -310,11 +310,15 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->estimator =
         set->estimator == CLVR_ESTIMATOR_AUTO ? clvr_estimator_auto() : set->estimator;
     if (f->estimator == CLVR_ESTIMATOR_WALK) {
-        /* The walk needs the face adjacency and tets; a mesh without tets
-         * renders with urm (what the walk falls back to anyway). */
-        int tets = 0;
-        for (uint64_t i = 0; i < m->num_instances && !tets; ++i) tets = m->host_instances[i].type == CLVR_CELL_TET;
-        if (tets && !r->adj.adj && !r->adj_skipped[0]) {
+        /* The walk needs the face adjacency; auto walks tets only (the
+         * walk through other cells, clvr_walk_cell, reached 2% sooner than
+         * urm on the notch's coarse hexes and later on finer CFD hexes:
+         * bench/results/render-converge/2026-11-30-s44-cell-walk.md), so
+         * a mesh without tets renders with urm then. */
+        f->walk_cells = set->estimator == CLVR_ESTIMATOR_WALK;
+        int walked = f->walk_cells;
+        for (uint64_t i = 0; i < m->num_instances && !walked; ++i) walked = m->host_instances[i].type == CLVR_CELL_TET;
+        if (walked && !r->adj.adj && !r->adj_skipped[0]) {
             /* Like the hull, the adjacency only speeds convergence: where
              * its buffers do not fit (a mesh split into pieces below the
              * device's largest allocation, docs/large-meshes.md) the frames
@@ -327,7 +331,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
             }
             if (s != CLVR_OK) goto cleanup;
         }
-        if (!tets || !r->adj.adj) f->estimator = CLVR_ESTIMATOR_URM;
+        if (!walked || !r->adj.adj) f->estimator = CLVR_ESTIMATOR_URM;
     }
     f->num_instances = (clvr_u32)m->num_instances;
     f->urm_steps = set->urm_steps;
