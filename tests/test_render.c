@@ -281,41 +281,41 @@ static int opacity_misses(const char *what, uint32_t est, const float *mean, con
     return bad;
 }
 
-/* The unit box [0, 1]^3 of n^3 cubes of cell mix `mix` with scalar field
- * `field` (CLVR_SCENE_FIELD_CONSTANT: 1 everywhere); 0 when it is made. */
-static int make_box(uint32_t n, uint32_t mix, uint32_t field, clvr_mesh *m)
+/* The box [lo, lo + size]^3 of n^3 cubes of cell mix `mix` with scalar
+ * field `field` (CLVR_SCENE_FIELD_CONSTANT: 1 everywhere), inner vertices
+ * moved by up to `jitter` of a cube; 0 when it is made. */
+static int box_of(uint32_t n, float lo, float size, uint32_t mix, uint32_t field, float jitter, clvr_mesh *m)
 {
     clvr_error err = {0};
     clvr_scene_box_params p;
     clvr_scene_box_params_init(&p);
     p.nx = p.ny = p.nz = n;
+    for (int k = 0; k < 3; ++k) {
+        p.lo[k] = lo;
+        p.hi[k] = lo + size;
+    }
     p.mix = mix;
     p.field = field;
     p.value = 1.0f;
+    p.jitter = jitter;
+    p.seed = 11;
     if (clvr_scene_box(&p, m, &err) == CLVR_OK) return 0;
     fprintf(stderr, "%s\n", err.msg);
     ++tu_fail_;
     return 1;
 }
 
+/* The unit box [0, 1]^3 (box_of). */
+static int make_box(uint32_t n, uint32_t mix, uint32_t field, clvr_mesh *m)
+{
+    return box_of(n, 0.0f, 1.0f, mix, field, 0.0f, m);
+}
+
 /* [-1, 1]^3 in 10^3 cells of all four types with the blobs field: dense
  * features, empty space and silhouettes at a 28x28 image's pixel scale. */
 static int blob_box(clvr_mesh *m)
 {
-    clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 10;
-    for (int k = 0; k < 3; ++k) {
-        p.lo[k] = -1.0f;
-        p.hi[k] = 1.0f;
-    }
-    p.mix = CLVR_SCENE_MIX_MIXED;
-    p.field = CLVR_SCENE_FIELD_BLOBS;
-    if (clvr_scene_box(&p, m, &err) == CLVR_OK) return 0;
-    fprintf(stderr, "%s\n", err.msg);
-    ++tu_fail_;
-    return 1;
+    return box_of(10, -1.0f, 2.0f, CLVR_SCENE_MIX_MIXED, CLVR_SCENE_FIELD_BLOBS, 0.0f, m);
 }
 
 /* [-1, 1]^3 in 3^3 cubes of cells of the kind (CLVR_SCENE_MIX_*), their
@@ -327,23 +327,7 @@ static int blob_box(clvr_mesh *m)
  * carries the image there. */
 static int coarse_box(clvr_scene_mix mix, clvr_mesh *m)
 {
-    clvr_error err = {0};
-    clvr_scene_box_params p;
-    clvr_scene_box_params_init(&p);
-    p.nx = p.ny = p.nz = 3;
-    for (int k = 0; k < 3; ++k) {
-        p.lo[k] = -1.0f;
-        p.hi[k] = 1.0f;
-    }
-    p.mix = mix;
-    p.field = CLVR_SCENE_FIELD_CONSTANT;
-    p.jitter = 0.2f;
-    p.seed = 11;
-    if (clvr_scene_box(&p, m, &err) != CLVR_OK) {
-        fprintf(stderr, "%s\n", err.msg);
-        ++tu_fail_;
-        return 1;
-    }
+    if (box_of(3, -1.0f, 2.0f, mix, CLVR_SCENE_FIELD_CONSTANT, 0.2f, m)) return 1;
     /* Lattice index of each vertex: its position rounded (the jitter is
      * under half a cube). */
     for (uint64_t i = 0; i < m->num_vertices; ++i) {
