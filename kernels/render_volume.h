@@ -1501,7 +1501,9 @@ inline float clvr_walk_draw(float tau, float u, float *want)
 }
 
 /* Residual points per unit t of a cell other than a tet, as a multiple of
- * the spread of the table's extinction over the cell (see clvr_walk_cell). */
+ * the spread of the table's extinction over the cell (see clvr_walk_cell).
+ * fire_ug's 10k hexes, 128^2, error after one frame without pieces: rate 1
+ * 8.9%, 4 5.5%, 16 4.2%, 64 4.0% (urm 2.6%); the pieces did the rest. */
 #ifndef CLVR_WALK_RESIDUAL_RATE
 #define CLVR_WALK_RESIDUAL_RATE 4.0f
 #endif
@@ -1535,34 +1537,11 @@ inline float clvr_walk_cell_scalar(uint type, const clvr_vec4 *vtx, float3 p, in
     return fallback;
 }
 
-/* The walk through a cell other than a tet over [ta, ta + len]: the
- * scalar is not linear along the ray there, so the walk integrates a
- * control exactly and corrects it without bias.
- * - Control: the scalar linear from sa to sb, the faces' values where the
- *   ray enters and leaves (exact there, clvr_cell_exit), its extinction
- *   sigma~ (the table's) integrated exactly as in a tet (clvr_walk_ctl),
- *   depth tau.
- * - The cell's extinction lies in [sig_lo, sig_hi], the table's bounds
- *   over its vertices' scalar range (the interpolant is a convex
- *   combination of them), and so does the control's: |sigma - sigma~| <=
- *   delta = sig_hi - sig_lo.
- * - Transmittance: exp(-tau) times, over the points of a Poisson process
- *   of rate mu = CLVR_WALK_RESIDUAL_RATE delta, the product of
- *   1 - (sigma - sigma~) / mu: its mean is exp(-int (sigma - sigma~)) (the
- *   process's generating functional), each factor in [0, 2] at a rate of 1.
- *   A cell with delta 0 has sigma = sigma~: no points, exact, as a tet.
- * - Emission int T sigma c: one point x, drawn as a tet's from the control
- *   (clvr_walk_draw) with probability 1 - e and uniformly with e = delta
- *   len / (tau + delta len), so that every x where sigma can be positive
- *   can be drawn; its value T(x) sigma(x) c(x) / pdf(x) at the cell's own
- *   scalar there, T(x) from the process's points before x. (Taking the
- *   control's colour at x and adding the difference at the process's
- *   points instead, no solve at x, measured 4-5x the error per frame on
- *   the notch, fire_ug and the built-in scene: rare points with large
- *   weights.)
- * Each point is one Newton solve in the cell (clvr_walk_cell_scalar). */
-/* Pieces of a cell's chord: at most this many, each with a spread bound
- * delta * length of at most CLVR_WALK_PIECE_DEPTH (see clvr_walk_cell). */
+/* Pieces of a cell's chord: at most this many, each with a bound on
+ * |sigma c - sigma~ c~| times its length of at most CLVR_WALK_PIECE_DEPTH
+ * (see clvr_walk_cell). fire_ug's hexes, 128^2, error after one frame at
+ * rate 4: 0.05, 3.2% at 20 ms a frame; 0.02, 2.7% at 28 ms (urm: 2.6% at
+ * 19-23 ms); a bound on the extinction alone (no colour) at 0.03: 3.5%. */
 #ifndef CLVR_WALK_MAX_PIECES
 #define CLVR_WALK_MAX_PIECES 8
 #endif
@@ -1622,6 +1601,42 @@ inline void clvr_walk_piece(const clvr_volume *v, const clvr_vec4 *vtx, uint typ
     *T *= clvr_exp_neg(c.tau) * R;
 }
 
+/* The walk through a cell other than a tet over [ta, ta + len]: the
+ * scalar is not linear along the ray there, so the walk integrates a
+ * control exactly and corrects it without bias.
+ * - Control: the scalar linear from sa to sb, the faces' values where the
+ *   ray enters and leaves (exact there, clvr_cell_exit), its extinction
+ *   sigma~ (the table's) integrated exactly as in a tet (clvr_walk_ctl),
+ *   depth tau.
+ * - The cell's extinction lies in [sig_lo, sig_hi], the table's bounds
+ *   over its vertices' scalar range (the interpolant is a convex
+ *   combination of them), and so does the control's: |sigma - sigma~| <=
+ *   delta = sig_hi - sig_lo.
+ * - Transmittance: exp(-tau) times, over the points of a Poisson process
+ *   of rate mu = CLVR_WALK_RESIDUAL_RATE delta, the product of
+ *   1 - (sigma - sigma~) / mu: its mean is exp(-int (sigma - sigma~)) (the
+ *   process's generating functional), each factor in [1 - 1/rate,
+ *   1 + 1/rate]. A cell with delta 0 has sigma = sigma~: no points, exact,
+ *   as a tet.
+ * - Emission int T sigma c: one point x, drawn as a tet's from the control
+ *   (clvr_walk_draw) with probability 1 - e and uniformly with e = delta
+ *   len / (tau + delta len), so that every x where sigma can be positive
+ *   can be drawn; its value T(x) sigma(x) c(x) / pdf(x) at the cell's own
+ *   scalar there, T(x) from the process's points before x. (Taking the
+ *   control's colour at x and adding the difference at the process's
+ *   points instead, no solve at x, measured 4-5x the error per frame on
+ *   the notch, fire_ug and the built-in scene: rare points with large
+ *   weights.)
+ * - Pieces: where the bound on |sigma c - sigma~ c~| times the chord
+ *   exceeds CLVR_WALK_PIECE_DEPTH, the chord is cut into up to
+ *   CLVR_WALK_MAX_PIECES equal pieces at Newton points, each with its own
+ *   control (clvr_walk_piece): a field that curves inside a cell gets
+ *   more points, as urm's majorant-driven ones.
+ * Each point is one Newton solve in the cell (clvr_walk_cell_scalar).
+ * Measured (bench/results/render-converge/2026-11-30-s44-cell-walk.md):
+ * 2% in half urm's time on the notch's coarse FE hexes, 1.1-1.9x urm's on
+ * finer CFD hexes, the built-in scene and the AMR-like mesh, so auto
+ * leaves other cells to urm. */
 inline void clvr_walk_cell(const clvr_volume *v, const clvr_vec4 *vtx, uint type, float3 org, float3 dir, float ta,
                            float sa, float sb, float len, float u, clvr_rng *rng, clvr_emit *acc, float *T,
                            clvr_walk_light *L, uint *samples, uint *nulls)
