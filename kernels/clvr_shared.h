@@ -458,8 +458,9 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #define CLVR_ESTIMATOR_WALK 2u
 /* auto (the default): walk through tets, with shadows or not (the renderer
  * falls back to urm where the walk cannot run, and auto hands a ray to urm
- * at the first cell that is not a tet: clvr_frame.walk_cells). Measured (bench_render --converge, 256^2,
- * seconds to 2% relative RMSE, medians of 3 seeds): without shadows walk
+ * at the first cell that is not a tet: clvr_frame.walk_cells). Measured
+ * (bench_render --converge, 256^2, seconds to 2% relative RMSE, medians of
+ * 3 seeds): without shadows walk
  * reached 2% first on the combustor, fire_ug and the notch cut into tets
  * (about 2x) and was up to 30% slower on post, the 1M tets and the blunt
  * fin, all far under VTK's frame. With shadows (session 41, two runs of
