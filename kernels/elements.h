@@ -469,6 +469,17 @@ CLVR_INLINE void clvr_element_forward(clvr_u32 type, const clvr_vec4 *vtx, float
     *x = sx; *y = sy; *z = sz;
 }
 
+/* Newton's start in a cell of the type: its clvr_<name>_invert's (a tet's
+ * map is linear: any). */
+CLVR_INLINE void clvr_element_start(clvr_u32 type, float *u, float *v, float *w)
+{
+    const float sp[3] = {CLVR_PYRAMID_START}, sw[3] = {CLVR_WEDGE_START}, sh[3] = {CLVR_HEX_START};
+    const float *s0 = type == CLVR_CELL_PYRAMID ? sp : type == CLVR_CELL_WEDGE ? sw : sh;
+    *u = s0[0];
+    *v = s0[1];
+    *w = s0[2];
+}
+
 /* Containment and interpolation for a type other than tets: Newton started
  * from *u, *v, *w (a point nearby found inside the element) when start is
  * set, from the type's own start otherwise (clvr_element_invert); as
@@ -483,11 +494,7 @@ CLVR_FORCE_INLINE int clvr_element_sample_near_settled(clvr_u32 type, const clvr
                                                        float *scalar, int *settled)
 {
     float a, b, c, N[CLVR_CELL_MAX_VERTS];
-    if (!start) { /* the type's own start, as its clvr_<name>_invert's (a tet's map is linear: any) */
-        const float sp[3] = {CLVR_PYRAMID_START}, sw[3] = {CLVR_WEDGE_START}, sh[3] = {CLVR_HEX_START};
-        const float *s0 = type == CLVR_CELL_PYRAMID ? sp : type == CLVR_CELL_WEDGE ? sw : sh;
-        *u = s0[0]; *v = s0[1]; *w = s0[2];
-    }
+    if (!start) clvr_element_start(type, u, v, w);
     *settled = 0;
     /* Newton's last shape functions interpolate: one evaluation fewer. */
     if (!clvr_newton_solve(type, vtx, px, py, pz, *u, *v, *w, &a, &b, &c, N)) return 0;

@@ -1258,17 +1258,17 @@ inline float clvr_walk_g_inverse(const clvr_volume *v, float g, uint lo, uint hi
     return (float)lo + (den > 0.0f ? clamp(2.0f * r / den, 0.0f, 1.0f) : 0.0f);
 }
 
-/* The face slot (kernels/hull.h order) of tet e's face opposite vertex k. */
-inline uint clvr_walk_slot(const clvr_volume *v, uint inst_id, const clvr_instance *inst, uint e, int k)
-{
-    return v->face_first[inst_id] + (e - inst->first_element) * 4u + (k == 0 ? 1u : k == 1 ? 2u : k == 2 ? 0u : 3u);
-}
-
 /* The first face slot of cell e (its faces' slots follow in
  * clvr_hull_face_code order). */
 inline uint clvr_walk_slots(const clvr_volume *v, uint inst_id, const clvr_instance *inst, uint e)
 {
     return v->face_first[inst_id] + (e - inst->first_element) * clvr_hull_face_count(inst->type);
+}
+
+/* The face slot of tet e's face opposite vertex k. */
+inline uint clvr_walk_slot(const clvr_volume *v, uint inst_id, const clvr_instance *inst, uint e, int k)
+{
+    return clvr_walk_slots(v, inst_id, inst, e) + (k == 0 ? 1u : k == 1 ? 2u : k == 2 ? 0u : 3u);
 }
 
 /* Where the walk stands: the cell, its instance and the ray parameter. */
@@ -1515,11 +1515,7 @@ inline float clvr_walk_cell_scalar(uint type, const clvr_vec4 *vtx, float3 p, in
 {
     float a, b, c, N[CLVR_CELL_MAX_VERTS];
     for (int attempt = 0; attempt < 2; ++attempt) {
-        if (!*have) {
-            const float sp[3] = {CLVR_PYRAMID_START}, sw[3] = {CLVR_WEDGE_START}, sh[3] = {CLVR_HEX_START};
-            const float *s0 = type == CLVR_CELL_PYRAMID ? sp : type == CLVR_CELL_WEDGE ? sw : sh;
-            uvw[0] = s0[0]; uvw[1] = s0[1]; uvw[2] = s0[2];
-        }
+        if (!*have) clvr_element_start(type, uvw, uvw + 1, uvw + 2);
         const int ok = type == CLVR_CELL_HEX
                            ? clvr_newton_solve(CLVR_CELL_HEX, vtx, p.x, p.y, p.z, uvw[0], uvw[1], uvw[2], &a, &b, &c, N)
                            : clvr_newton_solve(type, vtx, p.x, p.y, p.z, uvw[0], uvw[1], uvw[2], &a, &b, &c, N);
@@ -1648,9 +1644,8 @@ inline void clvr_walk_cell(const clvr_volume *v, const clvr_vec4 *vtx, uint type
         lo = fmin(lo, vtx[i].w);
         hi = fmax(hi, vtx[i].w);
     }
-    const float last = (float)(f->tf_size - 1u), tf_scale = last / (f->tf_hi - f->tf_lo);
-    const uint i0 = clvr_tf_entry(clamp((lo - f->tf_lo) * tf_scale, 0.0f, last), f->tf_size);
-    const uint i1 = f->tf_size < 2u ? 0u : clvr_tf_entry(clamp((hi - f->tf_lo) * tf_scale, 0.0f, last), f->tf_size) + 1u;
+    const uint n = f->tf_size, i0 = clvr_tf_entry(clvr_tf_position(lo, f->tf_lo, f->tf_hi, n), n);
+    const uint i1 = n < 2u ? 0u : clvr_tf_entry(clvr_tf_position(hi, f->tf_lo, f->tf_hi, n), n) + 1u;
     float4 tlo = v->tf[i0], thi = tlo;
     for (uint i = i0 + 1u; i <= i1; ++i) {
         tlo = fmin(tlo, v->tf[i]);
@@ -1818,9 +1813,7 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
         {
             const float3 q = org + dir * (0.5f * (fmax(glo[i], tx) + fmin(ghi[i], t1)));
             float sq;
-            uint eq;
-            clvr_locate_hint hq = clvr_locate_hint_none();
-            if (clvr_locate_hinted(&m, q.x, q.y, q.z, &hq, &sq, &eq)) return 0;
+            if (clvr_locate_point(m, q.x, q.y, q.z, &sq)) return 0;
         }
         if (ghi[i] >= t1) return 1; /* the rest is outside: done */
         w.h = clvr_locate_hint_none();
