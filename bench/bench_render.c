@@ -431,6 +431,9 @@ typedef struct conv_result {
     double load_before, load_after;
     uint32_t nrep;                  /* --repeats: runs behind the row (the median's) */
     double rep_s[MAX_REPEATS];      /* each run's device seconds to the target, NaN where missed */
+    int picked;                     /* auto's pilot ran (clvr_renderer_pick): pick holds it (the last run's) */
+    clvr_render_pick pick;
+    double pilot_s;
 } conv_result;
 
 /* 1 when the ray from org along dir meets the box [lo, hi]. */
@@ -588,10 +591,11 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
             s = clvr_renderer_read(rd, img, &rc, err);
             if (s != CLVR_OK) break;
             const double mse = inside_mse(img, ref, npix);
-            /* The image pass (the control variates) and the choice of the
-             * refine list are part of what a reader waits for. */
+            /* The image pass (the control variates), the choice of the
+             * refine list and auto's pilot (host seconds, its kernels
+             * included) are part of what a reader waits for. */
             conv_point pt = {n, half, n + (double)rc.refine_samples / (double)npix,
-                             rc.kernel_s + rc.image_s + rc.select_s, wall + rc.image_s, sqrt(mse),
+                             rc.kernel_s + rc.image_s + rc.select_s + rc.pilot_s, wall + rc.image_s, sqrt(mse),
                              sqrt(mse > ref->ref_var ? mse - ref->ref_var : 0.0), 0.0, NAN};
             pt.rmse_rel = ref->ref_mean > 0 ? pt.rmse / ref->ref_mean : 0.0;
             if (dn) {
@@ -614,6 +618,8 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
     if (s == CLVR_OK) s = clvr_renderer_read(rd, NULL, &rc, err);
     if (s != CLVR_OK) goto done;
     out->light_s = rc.light_s;
+    out->picked = clvr_renderer_pick(rd, &out->pick);
+    out->pilot_s = rc.pilot_s;
     out->frame_s = rc.frames ? (rc.kernel_s - rc.light_s) / (double)rc.frames : 0.0;
     out->samples_per_ray = rc.rays ? (double)rc.samples / (double)rc.rays : 0.0;
     {
@@ -821,6 +827,11 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                     fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, "
                                "\"spp_denoised\": %u, ",
                             refs[sh].bias_rel, r->dn_s, r->reached_dn, r->reached_dn ? r->at_dn.spp : 0u);
+                if (r->picked)
+                    fprintf(f, "\"pick\": {\"walk_cells\": %u, \"pixels\": %u, \"var\": [%.6g, %.6g], "
+                               "\"work\": [%.6g, %.6g], \"pilot_s\": %.6g}, ",
+                            r->pick.walk_cells, r->pick.pixels, r->pick.var[0], r->pick.var[1], r->pick.work[0],
+                            r->pick.work[1], r->pilot_s);
                 fprintf(f, "\"repeats_s\": [");
                 for (uint32_t k = 0; k < r->nrep; ++k) {
                     if (isnan(r->rep_s[k])) fprintf(f, "%snull", k ? ", " : "");

@@ -457,8 +457,10 @@ inline float clvr_tf_max_extinction(__global const float4 *tf, uint n, float lo,
 #define CLVR_ESTIMATOR_URM 1u
 #define CLVR_ESTIMATOR_WALK 2u
 /* auto (the default): walk through tets, with shadows or not (the renderer
- * falls back to urm where the walk cannot run, and auto hands a ray to urm
- * at the first cell that is not a tet: clvr_frame.walk_cells). Measured
+ * falls back to urm where the walk cannot run). At cells that are not tets
+ * a pilot before the first frame picks, by variance x counted cost, the
+ * walk through them or urm from the first of them (clvr_frame.walk_cells;
+ * host/pipeline/render.c, pilot_pick). Measured
  * (bench_render --converge, 256^2, seconds to 2% relative RMSE, medians of
  * 3 seeds): without shadows walk
  * reached 2% first on the combustor, fire_ug and the notch cut into tets
@@ -608,7 +610,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 388 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 392 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -670,8 +672,12 @@ typedef struct clvr_frame {
     /* The walk (CLVR_ESTIMATOR_WALK): nonzero, through every cell type;
      * 0 (auto), through tets, handing the ray to urm at any other cell. */
     clvr_u32 walk_cells;
+    /* auto's pilot (host/pipeline/render.c, pilot_pick): 0 for frames and
+     * refine passes; way + 1 for a pass over the pilot's list (each pixel
+     * twice: two samples), written to refine[way x pass_pixels + i] alone. */
+    clvr_u32 pilot;
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 388, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 392, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

@@ -70,9 +70,15 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
         if (x >= f.width || y >= f.height) return;
         pixel = y * f.width + x;
     }
+    /* auto's pilot (f.pilot = way + 1; host/pipeline/render.c,
+     * pilot_pick): list entry i's sample goes to refine[way x pass_pixels +
+     * i] and nothing else is touched. A pixel is listed twice in a row, as
+     * samples 0 and 1 of streams of its own (the seed's high word
+     * flipped), so that the frames' samples do not depend on the pilot. */
+    const int pilot = f.pilot > 0u;
     const int first = !pass && f.frame_index == 0; /* overwrites the pixel's sums */
-    const uint index = first ? 0u : nsamp[pixel];
-    nsamp[pixel] = index + 1u;
+    const uint index = pilot ? (uint)get_global_id(0) & 1u : first ? 0u : nsamp[pixel];
+    if (!pilot) nsamp[pixel] = index + 1u;
 
     clvr_volume v;
     v.f = &f;
@@ -80,7 +86,7 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
 
     clvr_rng rng;
     float ld[CLVR_LD_DIMS];
-    const float *ldp = clvr_pixel_streams(&f, pixel, index, f.seed_lo, f.seed_hi, &rng, ld);
+    const float *ldp = clvr_pixel_streams(&f, pixel, index, f.seed_lo, pilot ? ~f.seed_hi : f.seed_hi, &rng, ld);
     float3 org, dir;
     float2 d;
     clvr_render_primary_ray(cam, &f, x, y, &rng, ldp, &org, &dir, &d);
@@ -93,6 +99,10 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
         guide = (float4)(result.xyz, result.w > 0.0f ? 0.0f : -1.0f); /* no depth: one flat layer */
     } else {
         result = clvr_render_track(&v, org, dir, u, &rng, ldp, &samples, &nulls, &rays, &guide);
+    }
+    if (pilot) { /* rgb and the work (the pilot's cost, counted) */
+        refine[(f.pilot - 1u) * f.pass_pixels + get_global_id(0)] = (float4)(result.xyz, (float)samples);
+        return;
     }
     if (f.guides && !pass) {
         /* Two float4 per pixel: albedo rgb and the frames with a depth, then

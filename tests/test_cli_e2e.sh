@@ -70,22 +70,27 @@ PYEOF
 
 # --estimator auto with shadows (the default) walks a small tet mesh (its face
 # adjacency is built), urm does not (clvr_estimator_auto); on a mesh without
-# tets (notch_stress: hexes and wedges) auto renders with urm. --stats-json
-# says which estimator the frames used.
+# tets (notch_stress: hexes and wedges) auto's pilot picks the walk through
+# them or urm (it needs the adjacency either way, 24 bytes a hex, 18 a
+# wedge), and says which: --stats-json's render.estimator and
+# render.pilot_walk_cells (-1 on a tet mesh, where no pilot runs).
 for est in auto urm; do
   expect 0 "" -- "$CLVR" --device "$DEV" --size 16x16 --spp 1 --quiet --estimator $est -o "$tmp/post-$est.png" \
     --stats-json "$tmp/post-$est.json" "$DATA/vtk/post.vtk"
 done
 expect 0 "" -- "$CLVR" --device "$DEV" --size 16x16 --spp 1 --quiet -o "$tmp/notch-auto.png" \
   --stats-json "$tmp/notch-auto.json" "$DATA/vtk/notch_stress.vtk"
-$PY - "$tmp/post-auto.json" "$tmp/post-urm.json" "$tmp/notch-auto.json" <<'PYEOF' && ok || bad "auto with shadows walks post.vtk's 8,750 tets, notch_stress's hexes get urm"
+$PY - "$tmp/post-auto.json" "$tmp/post-urm.json" "$tmp/notch-auto.json" <<'PYEOF' && ok || bad "auto with shadows walks post.vtk's 8,750 tets; on notch_stress's hexes its pilot picks and says so"
 import json, sys
 pa, pu, na = (json.load(open(p)) for p in sys.argv[1:])
 a, u = (d["bytes"].get("adjacency", 0) for d in (pa, pu))
 assert a == 16 * 8750 + 8 and u == 0, (a, u)
 used = [d["render"]["estimator"] for d in (pa, pu, na)]
-assert used == ["walk", "urm", "urm"], used
-assert na["bytes"].get("adjacency", 0) == 0, na["bytes"]
+assert used[:2] == ["walk", "urm"] and used[2] in ("walk", "urm"), used
+r = na["render"]
+assert r["pilot_walk_cells"] == (1 if used[2] == "walk" else 0) and r["pilot_pixels"] > 0 and r["pilot_s"] > 0, r
+assert pa["render"]["pilot_walk_cells"] == -1 and pa["render"]["pilot_s"] == 0, pa["render"]
+assert na["bytes"].get("adjacency", 0) > 0, na["bytes"]
 PYEOF
 
 # --info on every natively read test file.

@@ -48,7 +48,7 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 7
+#define CLVR_API_VERSION_MINOR 8
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
@@ -56,7 +56,9 @@ extern "C" {
  * uses this header alone), 1003 is 1.3 (the pixel filter), 1004 is 1.4 (the
  * denoiser), 1005 is 1.5 (the walk estimator, and auto, the default: two more
  * estimator names), 1006 is 1.6 (clvr_render_stats.estimator: what auto
- * resolved to), 1007 is 1.7 (adaptive sampling: clvr_tracer_set_adaptive). */
+ * resolved to), 1007 is 1.7 (adaptive sampling: clvr_tracer_set_adaptive), 1008
+ * is 1.8 (auto's pilot on meshes with cells other than tets, and its
+ * statistics "pilot_s", "pilot_pixels", "pilot_walk_cells"). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -277,7 +279,15 @@ CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t
  * of each cell, 16 per tet:
  * 0 until a frame asks for walk) and "adjacency_skipped" (1 when there was
  * too little memory to build it: walk then renders as urm, the same
- * image). Unknown name: ERR_USAGE listing the names. */
+ * image), "refine_pixels", "refine_passes" and "select_s" (adaptive
+ * sampling: pixels refined, passes, host seconds of the choice), since
+ * 1.8 "pilot_s" (host seconds, kernels included, of auto's pilot before
+ * this accumulation's first frame: on a mesh with cells other than tets,
+ * once per change of settings or transfer function; 0 without one, not
+ * part of kernel_s), "pilot_pixels" (its pixels) and "pilot_walk_cells"
+ * (1: it picked the walk through every cell; 0: urm at the cells other
+ * than tets; -1: no pilot since the last settings). Unknown name:
+ * ERR_USAGE listing the names. */
 CLVR_API clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg);
 
 /* --- images ------------------------------------------------------------- */

@@ -1511,7 +1511,7 @@ static const char *const stat_names =
     "frames, rays, samples, null_collisions, kernel_s, last_frame_s, preprocess_s, kernel_build_s, elements, points, "
     "instances, leaves, sampling_clusters, device_bytes, density, range_lo, range_hi, hull_faces, hull_bytes, "
     "hull_empty_fraction, hull_skipped, light_s, image_s, adjacency_bytes, adjacency_skipped, refine_pixels, "
-    "refine_passes, select_s";
+    "refine_passes, select_s, pilot_s, pilot_pixels, pilot_walk_cells";
 
 clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, clvr_message *msg)
 {
@@ -1551,6 +1551,12 @@ clvr_result clvr_tracer_stat(clvr_tracer *tr, const char *name, double *value, c
     else if (!strcmp(name, "refine_pixels")) v = (double)c.refine_pixels;
     else if (!strcmp(name, "refine_passes")) v = (double)c.refine_passes;
     else if (!strcmp(name, "select_s")) v = c.select_s;
+    else if (!strcmp(name, "pilot_s")) v = c.pilot_s;
+    else if (!strcmp(name, "pilot_pixels") || !strcmp(name, "pilot_walk_cells")) {
+        clvr_render_pick pk;
+        const int ran = clvr_renderer_pick(tr->renderer, &pk);
+        v = !strcmp(name, "pilot_pixels") ? (ran ? (double)pk.pixels : 0.0) : ran ? (double)pk.walk_cells : -1.0;
+    }
     else if (!strcmp(name, "adjacency_bytes") || !strcmp(name, "adjacency_skipped")) {
         uint64_t bytes;
         double build_s;

@@ -398,6 +398,9 @@ int main(int argc, char **argv)
         TRY(clvr_tracer_stat(tracer, "image_s", &stats.image_s, &msg));
         TRY(clvr_tracer_stat(tracer, "refine_pixels", &stats.refine_pixels, &msg));
         TRY(clvr_tracer_stat(tracer, "select_s", &stats.select_s, &msg));
+        TRY(clvr_tracer_stat(tracer, "pilot_s", &stats.pilot_s, &msg));
+        TRY(clvr_tracer_stat(tracer, "pilot_pixels", &stats.pilot_pixels, &msg));
+        TRY(clvr_tracer_stat(tracer, "pilot_walk_cells", &stats.pilot_walk_cells, &msg));
         stats.adaptive = clvr_tracer_adaptive(tracer);
         double ab = 0.0, as = 0.0;
         TRY(clvr_tracer_stat(tracer, "adjacency_bytes", &ab, &msg));

@@ -121,6 +121,11 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                          "s/frame), chosen in %.4f s (host, once)\n",
                     s->adaptive, s->refine_pixels, 100.0 * s->refine_pixels / ((double)s->width * s->height),
                     s->select_s);
+        if (s->pilot_walk_cells >= 0.0)
+            fprintf(out, "auto's pilot: %s, from two samples of each way in %.0f pixels, %.4f s (host, once, not in "
+                         "s/frame)\n",
+                    s->pilot_walk_cells > 0.0 ? "the walk through every cell" : "urm at the cells other than tets",
+                    s->pilot_pixels, s->pilot_s);
         if (s->bytes_adjacency)
             fprintf(out, "face adjacency of the walk estimator (built at its first frame): %.3f MB, %.2f bytes/element\n",
                     s->bytes_adjacency / 1e6, per_element(s->bytes_adjacency, s->elements));
@@ -179,6 +184,9 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
         {"adaptive", s->adaptive},
         {"refine_pixels", s->refine_pixels},
         {"select_s", s->select_s},
+        {"pilot_s", s->pilot_s},
+        {"pilot_pixels", s->pilot_pixels},
+        {"pilot_walk_cells", s->pilot_walk_cells},
     };
     const size_t nb = sizeof b / sizeof b[0], nr = sizeof r / sizeof r[0];
     fprintf(f, "{\n");

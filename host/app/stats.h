@@ -52,6 +52,9 @@ typedef struct clvr_stats {
     double adaptive;      /* adaptive sampling's threshold (0: off) */
     double refine_pixels; /* pixels that get one more sample per frame (in frame_s; the frames count them once) */
     double select_s;      /* host seconds of choosing them (once) */
+    double pilot_s;       /* auto's pilot: host seconds (kernels included; not in frame_s), 0 without one */
+    double pilot_pixels;  /* its pixels */
+    double pilot_walk_cells; /* 1: it picked the walk through every cell, 0: urm at other cells, -1: no pilot */
 } clvr_stats;
 
 /* The figures of the input, of the preprocessing and of the frames, from

@@ -63,6 +63,17 @@ struct clvr_renderer {
     double kernel_s, last_frame_s, light_s;
     double image_s;            /* device time of the last clvr_renderer_read's image pass (clvr_pixel_cv_image) */
     size_t local[2];           /* work-group shape of the render kernel */
+    /* auto on a mesh with cells other than tets (pilot_pick): which of its
+     * two ways renders them, chosen by a pilot before the first frame after
+     * a change of settings or transfer function (not of the camera). */
+    int pick_on;               /* the settings ask for the pick (auto, a mesh with other cells, the adjacency) */
+    int pick_pending;          /* the next first frame runs the pilot */
+    uint32_t pick_base;        /* the estimator of the first way: walk (urm at other cells), urm without tets */
+    int pick_ran;              /* a pilot ran since the last settings */
+    clvr_render_pick pick;     /* its figures */
+    double pilot_s;            /* host seconds of this accumulation's pilot (kernels included; not in kernel_s) */
+    cl_mem pilot_list, pilot_out; /* its pixels and their two samples each */
+    uint32_t pilot_n;          /* pixels they have room for */
 };
 
 static const char *const method_names[CLVR_RENDER_COUNT] = {"march", "track", "bins", "dda"};
@@ -163,6 +174,7 @@ static void restart(clvr_renderer *r)
     r->list_n = 0;
     r->refine_passes = 0;
     r->select_s = 0.0;
+    r->pilot_s = 0.0;
 }
 
 static clvr_status alloc_image(clvr_renderer *r, clvr_error *err)
@@ -315,9 +327,17 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
          * urm on the notch's coarse hexes and later on finer CFD hexes:
          * bench/results/render-converge/2026-11-30-s44-cell-walk.md), so
          * a mesh without tets renders with urm then. */
+        int tets = 0, others = 0;
+        for (uint64_t i = 0; i < m->num_instances; ++i) {
+            tets |= m->host_instances[i].type == CLVR_CELL_TET;
+            others |= m->host_instances[i].type != CLVR_CELL_TET;
+        }
         f->walk_cells = set->estimator == CLVR_ESTIMATOR_WALK;
-        int walked = f->walk_cells;
-        for (uint64_t i = 0; i < m->num_instances && !walked; ++i) walked = m->host_instances[i].type == CLVR_CELL_TET;
+        /* auto on a mesh with other cells: a pilot before the first frame
+         * picks the walk through them or urm there (pilot_pick), so it needs
+         * the adjacency whatever the pick. */
+        const int pick = set->estimator == CLVR_ESTIMATOR_AUTO && others && set->method != CLVR_RENDER_MARCH;
+        const int walked = f->walk_cells || tets || pick;
         if (walked && !r->adj.adj && !r->adj_skipped[0]) {
             /* Like the hull, the adjacency only speeds convergence: where
              * its buffers do not fit (a mesh split into pieces below the
@@ -332,7 +352,13 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
             if (s != CLVR_OK) goto cleanup;
         }
         if (!walked || !r->adj.adj) f->estimator = CLVR_ESTIMATOR_URM;
+        r->pick_on = r->pick_pending = pick && r->adj.adj;
+        if (r->pick_on && !tets) f->estimator = CLVR_ESTIMATOR_URM;
+        r->pick_base = f->estimator;
+    } else {
+        r->pick_on = r->pick_pending = 0;
     }
+    r->pick_ran = 0;
     f->num_instances = (clvr_u32)m->num_instances;
     f->urm_steps = set->urm_steps;
     f->urm_kappa = set->urm_kappa;
@@ -445,7 +471,8 @@ void clvr_renderer_destroy(clvr_renderer *r)
     if (r->prog_mpi) clReleaseProgram(r->prog_mpi);
     clvr_majorants_destroy(r->maj);
     cl_mem *bufs[] = {&r->frame_buf, &r->cam_buf, &r->tf_buf, &r->accum,  &r->accum_sq, &r->counters, &r->guides,
-                      &r->ctl,       &r->image,   &r->tf_prefix, &r->nsamp, &r->refine, &r->list};
+                      &r->ctl,       &r->image,   &r->tf_prefix, &r->nsamp, &r->refine, &r->list,
+                      &r->pilot_list, &r->pilot_out};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) clvr_cl_release(r->cl, bufs[i]);
     free(r);
 }
@@ -505,6 +532,7 @@ clvr_status clvr_renderer_set_tf(clvr_renderer *r, const float *rgba, uint32_t n
     r->frame.density = density;
     CLVR_TRY(update_majorants(r, 1, err));
     r->light_valid = 0;
+    r->pick_pending = r->pick_on; /* new majorants, new costs */
     restart(r);
 cleanup:
     return s;
@@ -572,31 +600,42 @@ cleanup:
 
 uint64_t clvr_renderer_frames(const clvr_renderer *r) { return r->frames; }
 
+/* Binds kernels/render.cl's parameters (frame, camera, the arrays, the
+ * outputs; refine and list as given) and enqueues one pass: a frame over
+ * every pixel (pass_pixels 0) or one work item per list entry. Expects the
+ * frame on the device. */
+static clvr_status enqueue_pass(clvr_renderer *r, uint32_t pass_pixels, cl_mem refine, cl_mem list, cl_event *evt,
+                                clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    cl_kernel k = r->k_render;
+    volume_bufs vol = volume_of(r);
+    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
+                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->ctl), CLVR_ARG(r->counters),
+                          CLVR_ARG(r->guides), CLVR_ARG(r->nsamp), CLVR_ARG(refine), CLVR_ARG(list)));
+    if (pass_pixels) {
+        const size_t wg = r->local[0] * r->local[1];
+        const size_t global = (pass_pixels + wg - 1) / wg * wg;
+        CLVR_CL_CHECK(clEnqueueNDRangeKernel(r->cl->queue, k, 1, NULL, &global, &wg, 0, NULL, evt));
+    } else {
+        CLVR_TRY(clvr_cl_run2d(r->cl, k, r->set.width, r->set.height, r->local, evt, err));
+    }
+cleanup:
+    return s;
+}
+
 /* One pass of the render kernel: a frame over every pixel (pass_pixels 0)
  * or a refine pass over the list. */
 static clvr_status render_pass(clvr_renderer *r, uint32_t pass_pixels, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
-    clvr_cl *cl = r->cl;
     cl_event evt = NULL;
     if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "clvr_renderer_frame before a transfer function");
     r->frame.frame_index = (clvr_u32)r->frames;
     r->frame.pass_pixels = pass_pixels;
     CLVR_TRY(upload_frame(r, err));
-    cl_kernel k = r->k_render;
-    volume_bufs vol = volume_of(r);
     CLVR_TRY(ensure_light(r, err));
-    /* kernels/render.cl's parameters: frame, camera, the arrays, the outputs. */
-    CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf), CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG)
-                          CLVR_ARG(r->accum), CLVR_ARG(r->accum_sq), CLVR_ARG(r->ctl), CLVR_ARG(r->counters),
-                          CLVR_ARG(r->guides), CLVR_ARG(r->nsamp), CLVR_ARG(r->refine), CLVR_ARG(r->list)));
-    if (pass_pixels) {
-        const size_t wg = r->local[0] * r->local[1];
-        const size_t global = (pass_pixels + wg - 1) / wg * wg;
-        CLVR_CL_CHECK(clEnqueueNDRangeKernel(cl->queue, k, 1, NULL, &global, &wg, 0, NULL, &evt));
-    } else {
-        CLVR_TRY(clvr_cl_run2d(cl, k, r->set.width, r->set.height, r->local, &evt, err));
-    }
+    CLVR_TRY(enqueue_pass(r, pass_pixels, r->refine, r->list, &evt, err));
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
     r->last_frame_s = clvr_cl_event_seconds(evt);
     r->kernel_s += r->last_frame_s;
@@ -606,10 +645,190 @@ cleanup:
     return s;
 }
 
+double clvr_pilot_var(const float *pairs, uint32_t n, double *sumsq)
+{
+    double v = 0.0, v2 = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        double p = 0.0;
+        for (size_t k = 0; k < 3; ++k) {
+            const double d = (double)pairs[8 * i + k] - (double)pairs[8 * i + 4 + k];
+            p += isfinite(d) ? 0.5 * d * d : 0.0;
+        }
+        v += p;
+        v2 += p * p;
+    }
+    if (sumsq) *sumsq = v2;
+    return v;
+}
+
+/* The pilot's pixels: up to n whose centre's ray meets the frame's volume
+ * box (the others cost either way next to nothing and draw no variance),
+ * spread over the image: row-major positions of the golden-ratio sequence
+ * from *next on (advanced past the candidates used; 64 n candidates at
+ * most, so a volume on less than 1/64 of the image gets fewer), each
+ * listed twice in a row (its two samples). Returns how many pixels. */
+static uint32_t pilot_pixels(const clvr_camera *cam, const clvr_frame *f, uint32_t n, uint64_t *next, uint32_t *list)
+{
+    const uint64_t npix = (uint64_t)f->width * f->height, end = *next + 64u * (uint64_t)n;
+    const double phi = 0.6180339887498949;
+    uint32_t k = 0;
+    for (; *next < end && k < n; ++*next) {
+        uint64_t p = (uint64_t)(fmod(0.5 + phi * (double)*next, 1.0) * (double)npix);
+        if (p >= npix) p = npix - 1;
+        float o[3], d[3];
+        clvr_camera_ray(cam, (float)(p % f->width) + 0.5f, (float)(p / f->width) + 0.5f, o, d);
+        double t0 = 0.0, t1 = INFINITY;
+        for (int a = 0; a < 3; ++a) {
+            const double inv = 1.0 / d[a], lo = (f->vol_lo[a] - o[a]) * inv, hi = (f->vol_hi[a] - o[a]) * inv;
+            t0 = fmax(t0, fmin(lo, hi));
+            t1 = fmin(t1, fmax(lo, hi));
+        }
+        if (t0 <= t1) list[2 * k] = list[2 * k + 1] = (uint32_t)p, ++k;
+    }
+    return k;
+}
+
+/* One round of the pilot: two samples of each way in the n pixels of list
+ * (each listed twice), one launch per way, both queued before waiting (the
+ * in-order queue writes each way's frame after the previous launch has
+ * read its own). Adds to var[way] and var2[way] the sums of clvr_pilot_var and to
+ * work[way] the extinction lookups and cell steps of the way's samples
+ * (the kernel's sample counter, in each sample's w). */
+static clvr_status pilot_round(clvr_renderer *r, const uint32_t *list, uint32_t n, float *out, double var[2],
+                               double var2[2], double work[2], clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_frame fw[2];
+    if (n > r->pilot_n) {
+        clvr_cl_release(r->cl, &r->pilot_list);
+        clvr_cl_release(r->cl, &r->pilot_out);
+        r->pilot_n = 0;
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_ONLY, (size_t)n * 2 * sizeof(cl_uint), NULL,
+                                "estimator pilot pixels", &r->pilot_list, err));
+        CLVR_TRY(clvr_cl_buffer(r->cl, CL_MEM_READ_WRITE, (size_t)n * 16 * sizeof(float), NULL,
+                                "estimator pilot samples", &r->pilot_out, err));
+        r->pilot_n = n;
+    }
+    CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->pilot_list, CL_FALSE, 0, (size_t)n * 2 * sizeof(cl_uint), list,
+                                       0, NULL, NULL));
+    for (int c = 0; c < 2; ++c) {
+        fw[c] = r->frame;
+        fw[c].estimator = c ? CLVR_ESTIMATOR_WALK : r->pick_base;
+        fw[c].walk_cells = (clvr_u32)c;
+        fw[c].pass_pixels = 2 * n;
+        fw[c].pilot = (clvr_u32)c + 1u;
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->frame_buf, CL_FALSE, 0, sizeof fw[c], &fw[c], 0, NULL,
+                                           NULL));
+        CLVR_TRY(enqueue_pass(r, 2 * n, r->pilot_out, r->pilot_list, NULL, err));
+    }
+    CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->pilot_out, CL_TRUE, 0, (size_t)n * 16 * sizeof(float), out, 0,
+                                      NULL, NULL));
+    for (int c = 0; c < 2; ++c) {
+        const float *o = out + (size_t)c * n * 8;
+        double sq;
+        var[c] += clvr_pilot_var(o, n, &sq);
+        var2[c] += sq;
+        for (size_t i = 0; i < 2 * (size_t)n; ++i) work[c] += o[4 * i + 3];
+    }
+cleanup:
+    return s;
+}
+
+/* The two ways' efficiencies (lower is better) after n pilot pixels:
+ * the mean variance of a sample times the work of a sample (a walk step
+ * weighted CLVR_PILOT_WALK_STEP). A pixel's variance from two samples is
+ * heavy-tailed (one pixel in 64 held most of the walk's sum on the notch),
+ * so the two means count as one, their pooled mean, unless they differ by
+ * more than 2 standard errors of the difference: then work alone decides. */
+static void pilot_efficiency(const double var[2], const double var2[2], const double work[2], uint32_t n,
+                             double e[2])
+{
+    double m[2], se2 = 0.0;
+    for (int c = 0; c < 2; ++c) {
+        m[c] = var[c] / n;
+        const double s2 = n > 1 ? (var2[c] - n * m[c] * m[c]) / (n - 1) : 0.0;
+        se2 += (s2 > 0.0 ? s2 : 0.0) / n;
+    }
+    if ((m[0] - m[1]) * (m[0] - m[1]) <= 4.0 * se2) m[0] = m[1] = 0.5 * (m[0] + m[1]);
+    e[0] = m[0] * work[0];
+    e[1] = m[1] * work[1] * CLVR_PILOT_WALK_STEP;
+}
+
+/* auto on a mesh with cells other than tets: the walk through those cells
+ * (clvr_walk_cell) reached 2% relative RMSE sooner than urm on the notch's
+ * coarse hexes and later on finer CFD hexes, by up to 2x either way
+ * (bench/results/render-converge/2026-11-30-s44-cell-walk.md), and no rule
+ * by mesh size fitted both. So the frame itself is measured, before the
+ * first: two samples of each way (streams the frames never draw) in pixels
+ * that see the volume, and the way with the smaller variance x cost per
+ * sample renders the frames (efficiency, Veach 1997 section 2.5.2: after a
+ * time T the error is about sqrt(var x cost per sample / T);
+ * pilot_efficiency). The cost is counted, not timed, so that the same
+ * settings give the same image on every run: the samples' extinction
+ * lookups and cell steps, a walk's weighted by CLVR_PILOT_WALK_STEP.
+ * Rounds of 64, 64, 128, ... pixels
+ * until one way is 1.3x the other's efficiency or 1/256 of the image is
+ * spent (at least 256 pixels, at most 65536). Both ways are unbiased and
+ * the choice does not depend on the frames' samples, so the image's
+ * expected value does not depend on it either. Once per change of
+ * settings or transfer function. */
+static clvr_status pilot_pick(clvr_renderer *r, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    const double t0 = clvr_clock_monotonic_s();
+    const uint64_t npix = (uint64_t)r->set.width * r->set.height;
+    uint64_t most = npix / 256u, next = 0;
+    if (most < 256u) most = 256u;
+    if (most > 65536u) most = 65536u;
+    uint32_t *list = malloc((size_t)most * 2 * sizeof *list);
+    float *out = malloc((size_t)most * 16 * sizeof(float));
+    double var[2] = {0.0, 0.0}, var2[2] = {0.0, 0.0}, work[2] = {0.0, 0.0}, e[2] = {0.0, 0.0};
+    uint32_t done = 0, round = 64;
+    r->pick_pending = 0;
+    if (!list || !out) {
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of host memory for the estimator pilot (%u pixels)",
+                           (unsigned)most);
+        goto cleanup;
+    }
+    for (;;) {
+        const uint32_t n = pilot_pixels(&r->cam, &r->frame, round, &next, list);
+        if (n == 0) break; /* no more of the volume in view */
+        CLVR_TRY(pilot_round(r, list, n, out, var, var2, work, err));
+        done += n;
+        pilot_efficiency(var, var2, work, done, e);
+        if (done >= most || e[0] > 1.3 * e[1] || e[1] > 1.3 * e[0]) break;
+        round = done < most - done ? done : (uint32_t)(most - done);
+    }
+    if (done) {
+        const int c = e[1] < e[0];
+        r->pick = (clvr_render_pick){.pixels = done, .var = {var[0] / done, var[1] / done},
+                                     .work = {work[0] / (2.0 * done), work[1] / (2.0 * done)},
+                                     .walk_cells = (uint32_t)c};
+        r->frame.estimator = c ? CLVR_ESTIMATOR_WALK : r->pick_base;
+        r->frame.walk_cells = (clvr_u32)c;
+        r->pick_ran = 1;
+    }
+cleanup:
+    /* The host's frame goes back up with the next pass (upload_frame). */
+    free(list);
+    free(out);
+    r->pilot_s += clvr_clock_monotonic_s() - t0;
+    return s;
+}
+
 clvr_status clvr_renderer_full_frame(clvr_renderer *r, clvr_error *err)
 {
-    clvr_status s = render_pass(r, 0, err);
-    if (s == CLVR_OK) r->frames++;
+    clvr_status s = CLVR_OK;
+    if (r->frames == 0 && r->pick_pending) {
+        /* The light grid first: the frames need it whatever the pick, and
+         * kernel_s counts it. */
+        CLVR_TRY(upload_frame(r, err));
+        CLVR_TRY(ensure_light(r, err));
+        CLVR_TRY(pilot_pick(r, err));
+    }
+    CLVR_TRY(render_pass(r, 0, err));
+    r->frames++;
+cleanup:
     return s;
 }
 
@@ -808,6 +1027,7 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         counters->refine_pixels = r->list_n;
         counters->refine_samples = r->refine_passes * r->list_n;
         counters->select_s = r->select_s;
+        counters->pilot_s = r->pilot_s;
         if (r->frames) {
             cnt = malloc(npix * 3 * sizeof(cl_uint));
             if (!cnt) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading counters"); goto cleanup; }
@@ -835,6 +1055,12 @@ void clvr_renderer_adjacency(const clvr_renderer *r, uint64_t *bytes, double *bu
 }
 
 uint32_t clvr_renderer_estimator(const clvr_renderer *r) { return r->frame.estimator; }
+
+int clvr_renderer_pick(const clvr_renderer *r, clvr_render_pick *pick)
+{
+    if (pick) *pick = r->pick;
+    return r->pick_ran;
+}
 
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
                                          float *global_majorant, clvr_error *err)

@@ -99,9 +99,10 @@ uint32_t clvr_light_res_for(uint64_t elements);
 void clvr_light_space(const float lo[3], const float hi[3], const float ldir[3], uint32_t r, float out[4][4]);
 /* What --estimator auto renders with (CLVR_ESTIMATOR_AUTO's comment): walk,
  * whatever the shadows and the mesh's size (no rule by either fitted the
- * measurements). The renderer then falls back to urm where the walk cannot
- * run (no tets, no room for the adjacency); clvr_renderer_estimator says
- * what it renders with. */
+ * measurements); at cells other than tets, the way its pilot picks
+ * (clvr_render_pick). The renderer falls back to urm where the walk cannot
+ * run (no room for the adjacency); clvr_renderer_estimator says what it
+ * renders with. */
 uint32_t clvr_estimator_auto(void);
 
 /* Per-frame figures, summed over the frames accumulated so far. */
@@ -117,11 +118,38 @@ typedef struct clvr_render_counters {
     uint64_t refine_pixels;   /* pixels the refine list holds (0: none, or no list yet) */
     uint64_t refine_samples;  /* samples all refine passes rendered so far, all pixels together (passes x pixels) */
     double select_s;          /* host seconds of making the refine list (once per accumulation; not in kernel_s) */
+    double pilot_s;           /* host seconds of auto's pilot (clvr_renderer_pick), its kernels included, when this
+                               * accumulation ran one (not in kernel_s) */
     double image_s;           /* device time of the image pass of the last clvr_renderer_read that read the image
                                * (kernels/pixel_cv.h; not part of kernel_s; 0 without the control variates) */
 } clvr_render_counters;
 
 typedef struct clvr_renderer clvr_renderer;
+
+/* auto's pilot on a mesh with cells other than tets (host/pipeline/render.c,
+ * pilot_pick): way 0 walks tets and hands a ray to urm at its first other
+ * cell (urm from the start on a mesh without tets), way 1 walks through
+ * every cell (walk's clvr_frame.walk_cells). */
+/* What a step of the walk through every cell costs, in extinction lookups
+ * of urm: the median over seven hex meshes of the ratio of their device
+ * time per counted sample, 256x256, shadows off and on, this VM's PoCL
+ * (0.9-3.3; bench/results/render-converge/2026-11-30-s45-pilot.md). */
+#define CLVR_PILOT_WALK_STEP 1.25
+typedef struct clvr_render_pick {
+    uint32_t pixels;     /* pixels of the pilot, two samples of each way each */
+    double var[2];       /* per way: the variance of one sample (clvr_pilot_var), mean over those pixels */
+    double work[2];      /* per way: extinction lookups and cell steps per sample (the kernel's sample counter) */
+    uint32_t walk_cells; /* the way picked: 1 when var x work (way 1's x CLVR_PILOT_WALK_STEP) was smaller */
+} clvr_render_pick;
+/* The sum over n pixels of the variance of one sample estimated from two,
+ * (a - b)^2 / 2, summed over rgb (the channels the relative RMSE pools);
+ * *sumsq (may be NULL): the sum of the squares of those per-pixel values.
+ * pairs: 8 floats per pixel, rgba a then rgba b; a non-finite difference
+ * counts 0. */
+double clvr_pilot_var(const float *pairs, uint32_t n, double *sumsq);
+/* Whether a pilot ran since the last settings, and its figures (pick may be
+ * NULL). */
+int clvr_renderer_pick(const clvr_renderer *r, clvr_render_pick *pick);
 
 /* Creates a renderer over a preprocessed mesh and its trees (not owned: they
  * must outlive the renderer). Builds the render and majorant programs. */
