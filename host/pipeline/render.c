@@ -688,6 +688,14 @@ static uint32_t pilot_pixels(const clvr_camera *cam, const clvr_frame *f, uint32
     return k;
 }
 
+/* The frame of the pilot's way c (0: the tet walk and urm at other cells,
+ * or urm on a mesh without tets; 1: the walk through every cell). */
+static void pilot_way(const clvr_renderer *r, int c, clvr_frame *f)
+{
+    f->estimator = c ? CLVR_ESTIMATOR_WALK : r->pick_base;
+    f->walk_cells = (clvr_u32)c;
+}
+
 /* One round of the pilot: two samples of each way in the n pixels of list
  * (each listed twice), one launch per way, both queued before waiting (the
  * in-order queue writes each way's frame after the previous launch has
@@ -713,8 +721,7 @@ static clvr_status pilot_round(clvr_renderer *r, const uint32_t *list, uint32_t 
                                        0, NULL, NULL));
     for (int c = 0; c < 2; ++c) {
         fw[c] = r->frame;
-        fw[c].estimator = c ? CLVR_ESTIMATOR_WALK : r->pick_base;
-        fw[c].walk_cells = (clvr_u32)c;
+        pilot_way(r, c, &fw[c]);
         fw[c].pass_pixels = 2 * n;
         fw[c].pilot = (clvr_u32)c + 1u;
         CLVR_CL_CHECK(clEnqueueWriteBuffer(r->cl->queue, r->frame_buf, CL_FALSE, 0, sizeof fw[c], &fw[c], 0, NULL,
@@ -804,8 +811,7 @@ static clvr_status pilot_pick(clvr_renderer *r, clvr_error *err)
         r->pick = (clvr_render_pick){.pixels = done, .var = {var[0] / done, var[1] / done},
                                      .work = {work[0] / (2.0 * done), work[1] / (2.0 * done)},
                                      .walk_cells = (uint32_t)c};
-        r->frame.estimator = c ? CLVR_ESTIMATOR_WALK : r->pick_base;
-        r->frame.walk_cells = (clvr_u32)c;
+        pilot_way(r, c, &r->frame);
         r->pick_ran = 1;
     }
 cleanup:

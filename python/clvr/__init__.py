@@ -938,7 +938,8 @@ class Renderer(_Handle):
     _STATS = ("frames", "rays", "samples", "null_collisions", "kernel_s", "last_frame_s", "preprocess_s",
               "kernel_build_s", "elements", "points", "instances", "leaves", "sampling_clusters", "device_bytes",
               "density", "range_lo", "range_hi", "hull_faces", "hull_bytes", "hull_empty_fraction",
-              "hull_skipped", "light_s", "image_s", "adjacency_bytes", "adjacency_skipped")
+              "hull_skipped", "light_s", "image_s", "adjacency_bytes", "adjacency_skipped", "refine_pixels",
+              "refine_passes", "select_s", "pilot_s", "pilot_pixels", "pilot_walk_cells")
 
     def stat(self, name):
         v = ctypes.c_double()
