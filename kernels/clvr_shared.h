@@ -669,8 +669,9 @@ typedef struct clvr_frame {
      * every pixel; else a refine pass, one work item per pixel of its list,
      * whose sample goes to the refine sums (clvr_render_frame). */
     clvr_u32 pass_pixels;
-    /* The walk (CLVR_ESTIMATOR_WALK): nonzero, through every cell type;
-     * 0 (auto), through tets, handing the ray to urm at any other cell. */
+    /* The walk (CLVR_ESTIMATOR_WALK): nonzero (walk, or auto where its
+     * pilot picked it), through every cell type; 0 (auto otherwise),
+     * through tets, handing the ray to urm at any other cell. */
     clvr_u32 walk_cells;
     /* auto's pilot (host/pipeline/render.c, pilot_pick): 0 for frames and
      * refine passes; way + 1 for a pass over the pilot's list (each pixel

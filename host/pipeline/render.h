@@ -126,15 +126,15 @@ typedef struct clvr_render_counters {
 
 typedef struct clvr_renderer clvr_renderer;
 
-/* auto's pilot on a mesh with cells other than tets (host/pipeline/render.c,
- * pilot_pick): way 0 walks tets and hands a ray to urm at its first other
- * cell (urm from the start on a mesh without tets), way 1 walks through
- * every cell (walk's clvr_frame.walk_cells). */
 /* What a step of the walk through every cell costs, in extinction lookups
  * of urm: the median over seven hex meshes of the ratio of their device
  * time per counted sample, 256x256, shadows off and on, this VM's PoCL
  * (0.9-3.3; bench/results/render-converge/2026-11-30-s45-pilot.md). */
 #define CLVR_PILOT_WALK_STEP 1.25
+/* auto's pilot on a mesh with cells other than tets (host/pipeline/render.c,
+ * pilot_pick): way 0 walks tets and hands a ray to urm at its first other
+ * cell (urm from the start on a mesh without tets), way 1 walks through
+ * every cell (walk's clvr_frame.walk_cells). */
 typedef struct clvr_render_pick {
     uint32_t pixels;     /* pixels of the pilot, two samples of each way each */
     double var[2];       /* per way: the variance of one sample (clvr_pilot_var), mean over those pixels */
