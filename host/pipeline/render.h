@@ -127,9 +127,11 @@ typedef struct clvr_render_counters {
 typedef struct clvr_renderer clvr_renderer;
 
 /* What a step of the walk through every cell costs, in extinction lookups
- * of urm: the median over seven hex meshes of the ratio of their device
- * time per counted sample, 256x256, shadows off and on, this VM's PoCL
- * (0.9-3.3; bench/results/render-converge/2026-11-30-s45-pilot.md). */
+ * of urm: the median (1.26) of the ratio of their device time per counted
+ * sample on six meshes, shadows off and on, 256x256, this VM's PoCL (the
+ * notch, the hexes of fire_ug, the blunt fin and the combustor, the
+ * built-in scene, the AMR-like mesh; 0.9-3.3; with post's hexes, measured
+ * later, 1.19; bench/results/render-converge/2026-11-30-s45-pilot.md). */
 #define CLVR_PILOT_WALK_STEP 1.25
 /* auto's pilot on a mesh with cells other than tets (host/pipeline/render.c,
  * pilot_pick): way 0 walks tets and hands a ray to urm at its first other
