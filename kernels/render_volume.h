@@ -1632,7 +1632,8 @@ inline void clvr_walk_piece(const clvr_volume *v, const clvr_vec4 *vtx, uint typ
  * Measured (bench/results/render-converge/2026-11-30-s44-cell-walk.md):
  * 2% in half urm's time on the notch's coarse FE hexes, 1.1-1.9x urm's on
  * finer CFD hexes, the built-in scene and the AMR-like mesh, so auto
- * leaves other cells to urm. */
+ * measures which of the two to take per view (its pilot,
+ * host/pipeline/render.c pilot_pick). */
 inline void clvr_walk_cell(const clvr_volume *v, const clvr_vec4 *vtx, uint type, float3 org, float3 dir, float ta,
                            float sa, float sb, float len, float u, clvr_rng *rng, clvr_emit *acc, float *T,
                            clvr_walk_light *L, uint *samples, uint *nulls)
