@@ -436,19 +436,6 @@ typedef struct conv_result {
     double pilot_s;
 } conv_result;
 
-/* 1 when the ray from org along dir meets the box [lo, hi]. */
-static int ray_hits_box(const float *org, const float *dir, const float *lo, const float *hi)
-{
-    double t0 = 0.0, t1 = INFINITY;
-    for (int k = 0; k < 3; ++k) {
-        double inv = 1.0 / dir[k], a = (lo[k] - org[k]) * inv, b = (hi[k] - org[k]) * inv;
-        if (a > b) { double t = a; a = b; b = t; }
-        if (a > t0) t0 = a;
-        if (b < t1) t1 = b;
-    }
-    return t0 <= t1;
-}
-
 /* Mean squared error over the inside pixels' rgb of img against the reference. */
 static double inside_mse(const float *img, const conv_ref *ref, size_t npix)
 {
@@ -517,7 +504,7 @@ static clvr_status converge_reference(clvr_cl *cl, scene_gpu *g, const config *b
             const size_t p = (size_t)y * w + x;
             float o[3], d[3];
             clvr_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, o, d);
-            out->inside[p] = (uint8_t)ray_hits_box(o, d, g->lo, g->hi);
+            out->inside[p] = (uint8_t)clvr_ray_hits_box(o, d, g->lo, g->hi);
             if (!out->inside[p]) continue;
             out->ninside++;
             for (int k = 0; k < 3; ++k) {

@@ -254,3 +254,15 @@ clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err)
     }
     return CLVR_OK;
 }
+
+int clvr_ray_hits_box(const float org[3], const float dir[3], const float lo[3], const float hi[3])
+{
+    double t0 = 0.0, t1 = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+        double inv = 1.0 / dir[k], a = (lo[k] - org[k]) * inv, b = (hi[k] - org[k]) * inv;
+        if (a > b) { double t = a; a = b; b = t; }
+        if (a > t0) t0 = a;
+        if (b < t1) t1 = b;
+    }
+    return t0 <= t1;
+}

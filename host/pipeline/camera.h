@@ -87,4 +87,8 @@ clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err);
  * viewers. */
 float clvr_camera_project(const clvr_camera *cam, const float p[3], float *px, float *py);
 
+/* 1 when the ray from org along dir (t >= 0) meets the box [lo, hi]: which
+ * pixels see a volume (auto's pilot, bench_render's inside pixels). */
+int clvr_ray_hits_box(const float org[3], const float dir[3], const float lo[3], const float hi[3]);
+
 #endif /* CLVR_CAMERA_H */

@@ -1,5 +1,6 @@
 #include "render.h"
 
+#include "camera.h"
 #include "hull.h"
 #include "majorant.h"
 #include "clock.h"
@@ -677,13 +678,7 @@ static uint32_t pilot_pixels(const clvr_camera *cam, const clvr_frame *f, uint32
         if (p >= npix) p = npix - 1;
         float o[3], d[3];
         clvr_camera_ray(cam, (float)(p % f->width) + 0.5f, (float)(p / f->width) + 0.5f, o, d);
-        double t0 = 0.0, t1 = INFINITY;
-        for (int a = 0; a < 3; ++a) {
-            const double inv = 1.0 / d[a], lo = (f->vol_lo[a] - o[a]) * inv, hi = (f->vol_hi[a] - o[a]) * inv;
-            t0 = fmax(t0, fmin(lo, hi));
-            t1 = fmin(t1, fmax(lo, hi));
-        }
-        if (t0 <= t1) list[2 * k] = list[2 * k + 1] = (uint32_t)p, ++k;
+        if (clvr_ray_hits_box(o, d, f->vol_lo, f->vol_hi)) list[2 * k] = list[2 * k + 1] = (uint32_t)p, ++k;
     }
     return k;
 }
