@@ -1324,6 +1324,59 @@ static void test_seeds(clvr_cl *cl)
 }
 
 /* ---- 6. the low-discrepancy sequence (kernels/rng.h, run on the host) */
+
+/* clvr_ld_sample written plainly, as it was before it scrambled reversed
+ * fractions: point n of each Sobol' dimension as a fraction (the XOR of the
+ * plain direction numbers of n's set bits), reversed, Laine-Karras permuted,
+ * reversed back. */
+static void ld_sample_reference(uint32_t pixel, uint32_t frame, uint32_t lo, uint32_t hi, float *u)
+{
+    uint32_t v[4] = {pixel, lo, hi, 0x5bd1e995u};
+    clvr_pcg4d(v);
+    const uint32_t seed[5] = {v[0], v[1], v[2], v[3], clvr_pcg_hash(v[0] ^ v[3])};
+    for (uint32_t d = 0; d < CLVR_LD_DIMS; ++d) {
+        uint32_t x = 0;
+        if (d == 0) {
+            x = clvr_reverse_bits(frame);
+        } else {
+            for (uint32_t k = 0, n = frame; n; ++k, n >>= 1)
+                if (n & 1u) x ^= clvr_reverse_bits(clvr_sobol_dirs_rev[d - 1][k]);
+        }
+        x = clvr_reverse_bits(x) + seed[d];
+        x ^= x * 0x6c50b47cu;
+        x ^= x * 0xb82f1e52u;
+        x ^= x * 0xc7afe638u;
+        x ^= x * 0x8d22f6e6u;
+        u[d] = (float)(clvr_reverse_bits(x) >> 8) * (1.0f / 16777216.0f);
+    }
+}
+
+/* clvr_ld_sample bit for bit against the plain form, over awkward frame
+ * numbers (0, 1, primes, powers of two and their neighbours, 2^24 + 1,
+ * the largest) and random pixels and seeds. */
+static void test_ld_reference(void)
+{
+    static const uint32_t frames[] = {0u, 1u, 2u, 3u, 7u, 8u, 255u, 256u, 257u, 65521u, 16777217u, 0x7fffffffu,
+                                      0x80000000u, 0xfffffffeu, 0xffffffffu};
+    uint64_t st = 4242;
+    int bad = 0;
+    for (size_t i = 0; i < sizeof frames / sizeof frames[0]; ++i)
+        for (int r = 0; r < 500; ++r) {
+            const uint32_t pixel = (uint32_t)tu_rand(&st), lo = (uint32_t)tu_rand(&st), hi = r & 1 ? 0u : (uint32_t)tu_rand(&st);
+            float a[CLVR_LD_DIMS], b[CLVR_LD_DIMS];
+            clvr_ld_sample(pixel, frames[i], lo, hi, a);
+            ld_sample_reference(pixel, frames[i], lo, hi, b);
+            bad += memcmp(a, b, sizeof a) != 0;
+        }
+    for (uint32_t frame = 0; frame < 1024; ++frame) {
+        float a[CLVR_LD_DIMS], b[CLVR_LD_DIMS];
+        clvr_ld_sample(frame * 31u, frame, 7u, 0u, a);
+        ld_sample_reference(frame * 31u, frame, 7u, 0u, b);
+        bad += memcmp(a, b, sizeof a) != 0;
+    }
+    TU_CHECK_EQ_U64(bad, 0);
+}
+
 static void test_ld_sequence(void)
 {
     /* Over pixels at a fixed frame: each dimension uniform (mean 1/2,
@@ -1366,7 +1419,7 @@ static void test_ld_sequence(void)
                 for (uint32_t j = 1; j < sk[d]; ++j)
                     if ((ak[d] >> (sk[d] - 1 - j)) & 1u) v[k] ^= v[k - j];
             }
-            bad_dirs += v[k] != clvr_sobol_dirs[d][k];
+            bad_dirs += clvr_reverse_bits(v[k]) != clvr_sobol_dirs_rev[d][k];
         }
     }
     TU_CHECK_EQ_U64(bad_dirs, 0);
@@ -1632,6 +1685,7 @@ int main(void)
 {
     clvr_cl cl;
     clvr_error err = {0};
+    test_ld_reference();
     test_ld_sequence();
     test_adaptive_pick();
     test_pilot_var();
