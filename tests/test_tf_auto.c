@@ -9,8 +9,9 @@
  *   scene: the histogram's most common bin gets opacity <= 0.1 (<= 0.01 when
  *   it holds half the volume or more: notch_stress, the scene), and the
  *   opacity rises to >= 0.8 somewhere (rare values are shown).
- * - The automatic density puts the probe median optical depth at
- *   CLVR_TF_AUTO_DEPTH (within 2%), on every mesh above; the camera-ray
+ * - The probe's median optical depth on a homogeneous box matches the
+ *   median of exact chords through it (within 3%); the automatic density
+ *   is set from the probe on every mesh above (unclamped); the camera-ray
  *   figure is checked end to end by tests/test_tf_auto.py.
  * - A constant field keeps the ramp; a --tf file's opacity points are
  *   flagged (clvr's main then leaves them alone). */
@@ -42,9 +43,13 @@ static void check_density(const clvr_mesh *m, clvr_tf *tf, const char *what)
     clvr_error err;
     float d = 0.0f, med = 0.0f, med_ramp = 0.0f;
     TU_CHECK(clvr_tf_auto_density(m, tf, &d, &err) == CLVR_OK);
+    /* Not clamped: the probe saw the medium. (The probe at density d then
+     * reads CLVR_TF_AUTO_DEPTH by construction, the probe being linear in
+     * the density; the probe itself is checked against exact chords in
+     * test_probe_exact.) */
+    TU_CHECK(d > 1e-3f && d < 1e4f);
     tf->density = d;
     TU_CHECK(clvr_tf_auto_probe(m, tf, &med, &err) == CLVR_OK);
-    TU_CHECK_NEAR(med, CLVR_TF_AUTO_DEPTH, 0.02 * CLVR_TF_AUTO_DEPTH);
     clvr_tf ramp = {0};
     TU_CHECK(clvr_tf_from_options(&ramp, NULL, NULL, 0, 0, 0, 1.0f, m->scalar_min, m->scalar_max, &err) == CLVR_OK);
     clvr_tf_set_extent(&ramp, m->bounds_lo, m->bounds_hi);
@@ -173,6 +178,88 @@ static void test_constant(void)
     clvr_mesh_free(&m);
 }
 
+/* The probe (clvr_tf_auto_probe: extinction deposited on a grid, parallel
+ * rays marched through it) against exact chords: a homogeneous box of 2 x 1
+ * x 0.5 (hexes, the constant field's ramp: opacity 0.5 everywhere), the
+ * probe's own rays (48 x 48 across each of its 7 directions, the axes and
+ * the diagonals, spanning the box's extent across the ray), each ray's
+ * depth the extinction times its exact chord through the box; the median
+ * over the rays that meet the box, within 3%. */
+static void test_probe_exact(void)
+{
+    clvr_error err;
+    clvr_mesh m = {0};
+    clvr_scene_box_params p;
+    clvr_scene_box_params_init(&p);
+    p.nx = 20, p.ny = 10, p.nz = 5;
+    p.hi[0] = 2.0f, p.hi[1] = 1.0f, p.hi[2] = 0.5f;
+    TU_CHECK(clvr_scene_box(&p, &m, &err) == CLVR_OK);
+    clvr_tf tf = {0};
+    double hist[CLVR_TF_AUTO_BINS];
+    auto_tf(&m, &tf, hist);
+    tf.density = 1.0f;
+    const double sigma = clvr_tf_extinction_scale(&tf) * opacity_at(&tf, 1.0f);
+    float med = 0.0f;
+    TU_CHECK(clvr_tf_auto_probe(&m, &tf, &med, &err) == CLVR_OK);
+    enum { N = 48 };
+    static const double dirs[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {-1, 1, 1}, {1, -1, 1}, {1, 1, -1}};
+    double ext[3], ctr[3], depth[7 * N * N], dmax = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        ext[a] = (double)m.bounds_hi[a] - m.bounds_lo[a];
+        ctr[a] = m.bounds_lo[a] + 0.5 * ext[a];
+    }
+    int nd = 0;
+    for (int di = 0; di < 7; ++di) {
+        double d[3], u[3], v[3], e[3] = {0, 0, 0};
+        const double dl = sqrt(dirs[di][0] * dirs[di][0] + dirs[di][1] * dirs[di][1] + dirs[di][2] * dirs[di][2]);
+        for (int a = 0; a < 3; ++a) d[a] = dirs[di][a] / dl;
+        e[fabs(d[0]) <= fabs(d[1]) && fabs(d[0]) <= fabs(d[2]) ? 0 : fabs(d[1]) <= fabs(d[2]) ? 1 : 2] = 1.0;
+        u[0] = d[1] * e[2] - d[2] * e[1], u[1] = d[2] * e[0] - d[0] * e[2], u[2] = d[0] * e[1] - d[1] * e[0];
+        const double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int a = 0; a < 3; ++a) u[a] /= ul;
+        v[0] = d[1] * u[2] - d[2] * u[1], v[1] = d[2] * u[0] - d[0] * u[2], v[2] = d[0] * u[1] - d[1] * u[0];
+        double ur = 0.0, vr = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            ur += 0.5 * ext[a] * fabs(u[a]);
+            vr += 0.5 * ext[a] * fabs(v[a]);
+        }
+        for (int j = 0; j < N; ++j)
+            for (int i = 0; i < N; ++i) {
+                const double cu = ur * (2.0 * (i + 0.5) / N - 1.0), cv = vr * (2.0 * (j + 0.5) / N - 1.0);
+                double t0 = -INFINITY, t1 = INFINITY;
+                for (int a = 0; a < 3; ++a) {
+                    const double o = ctr[a] + cu * u[a] + cv * v[a];
+                    if (fabs(d[a]) < 1e-12) {
+                        if (o < m.bounds_lo[a] || o > m.bounds_hi[a]) t1 = -INFINITY;
+                        continue;
+                    }
+                    const double ta = (m.bounds_lo[a] - o) / d[a], tb = (m.bounds_hi[a] - o) / d[a];
+                    t0 = fmax(t0, fmin(ta, tb));
+                    t1 = fmin(t1, fmax(ta, tb));
+                }
+                depth[nd] = t1 > t0 ? sigma * (t1 - t0) : 0.0;
+                dmax = fmax(dmax, depth[nd++]);
+            }
+    }
+    int k = 0;
+    for (int i = 0; i < nd; ++i)
+        if (depth[i] > 1e-3 * dmax) depth[k++] = depth[i];
+    /* median by insertion sort: a few thousand values */
+    for (int i = 1; i < k; ++i)
+        for (int j = i; j > 0 && depth[j - 1] > depth[j]; --j) {
+            const double t = depth[j];
+            depth[j] = depth[j - 1];
+            depth[j - 1] = t;
+        }
+    const double want = k % 2 ? depth[k / 2] : 0.5 * (depth[k / 2 - 1] + depth[k / 2]);
+    printf("probe on a homogeneous 2 x 1 x 0.5 box: median optical depth %.4f, exact chords %.4f\n", (double)med,
+           want);
+    TU_CHECK(k > 7 * N * N / 2);
+    TU_CHECK_NEAR(med, want, 0.03 * want);
+    clvr_tf_free(&tf);
+    clvr_mesh_free(&m);
+}
+
 static void test_file_points_win(void)
 {
     /* A file with opacity points sets opacity_set (main then keeps them);
@@ -192,6 +279,7 @@ static void test_file_points_win(void)
 
 int main(void)
 {
+    test_probe_exact();
     test_synthetic();
     test_real("vtk/post.vtk");
     test_real("vtk/notch_stress.vtk");
