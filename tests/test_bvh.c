@@ -696,15 +696,15 @@ static void test_files(clvr_cl *cl, const clvr_bvh_kernels *k)
         closedir(d);
     }
     files[nf++] = "umesh/all_elements.umesh";
+    TU_CHECK(nf >= 4); /* notch_stress, post, uGridEx and the umesh at least */
     for (int i = 0; i < nf; ++i) {
         snprintf(path, sizeof path, "%s/%s", tu_data_dir(), files[i]);
         clvr_mesh m;
         clvr_error err = {0};
         memset(&m, 0, sizeof m);
-        if (clvr_mesh_load(path, NULL, &m, &err) != CLVR_OK) {
-            printf("note: %s not loaded (%s): skipped\n", files[i], err.msg);
-            continue;
-        }
+        const clvr_status st = clvr_mesh_load(path, NULL, &m, &err);
+        TU_CHECK_STATUS(st, CLVR_OK, &err); /* every .vtk and .umesh of tests/data loads */
+        if (st != CLVR_OK) continue;
         printf("%s: %llu elements\n", files[i], (unsigned long long)clvr_mesh_num_elements(&m));
         const uint32_t nq = clvr_mesh_num_elements(&m) > 20000 ? 400 : 1500;
         check_locate(cl, k, &m, files[i], 8, 2000, 0, nq);
