@@ -174,6 +174,15 @@ static void test_broken(const char *file, const clvr_mesh *src)
     clvr_mesh_free(&e);
 }
 
+/* Whether VmRSS after malloc_trim measures the live heap: not under ASan,
+ * which keeps freed blocks in quarantine and adds its shadow (the mapped
+ * load measured 28.7 MB there, 0.0 in the plain build). */
+#if defined(__SANITIZE_ADDRESS__)
+#define HEAP_MEASURED 0
+#else
+#define HEAP_MEASURED 1
+#endif
+
 /* Pages of files mapped into this process (RssFile of /proc/self/status), bytes. */
 static uint64_t rss_file(void)
 {
@@ -216,7 +225,7 @@ static void test_resident(const char *file)
                 map ? "RssFile" : "VmRSS", grew / 1e6, vm_grew / 1e6, (double)st.st_size / 1e6);
         /* Mapped: neither the file's pages nor the heap (a copy of the
          * arrays made while validating would show in VmRSS, not RssFile). */
-        if (map) TU_CHECK(grew < 0.25 * (double)st.st_size && vm_grew < 0.25 * (double)st.st_size);
+        if (map) TU_CHECK(grew < 0.25 * (double)st.st_size && (!HEAP_MEASURED || vm_grew < 0.25 * (double)st.st_size));
         else TU_CHECK(grew > 0.75 * (double)st.st_size);
         clvr_mesh_free(&m);
     }
