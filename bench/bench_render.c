@@ -650,9 +650,14 @@ static void json_point(FILE *f, const conv_point *p)
 /* Device seconds of a measured run at its last checkpoint. */
 static double conv_last_s(const conv_result *r) { return r->pts[r->npoints ? r->npoints - 1 : 0].dev_s; }
 
-/* Sort key of a measured run: its time to the target; a run that missed it
- * after every run that reached it, by its 1/n fit. */
-static double conv_rank(const conv_result *r) { return r->reached ? r->at.dev_s : 1e30 + r->fit_s; }
+/* Order of measured runs: by time to the target; a run that missed it after
+ * every run that reached it, by its 1/n fit. (1e30 + fit_s, the key before,
+ * is 1e30 in double: missed runs tied, in seed order.) */
+static int conv_before(const conv_result *a, const conv_result *b)
+{
+    if (a->reached != b->reached) return a->reached;
+    return a->reached ? a->at.dev_s < b->at.dev_s : a->fit_s < b->fit_s;
+}
 
 static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const est_variant *est, uint32_t nest,
                         int sh_lo, int sh_hi, uint32_t w, uint32_t h, uint32_t ref_spp, uint32_t max_spp,
@@ -701,7 +706,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                     nrun = 1;
                 /* insertion by rank: the median run is order[(nrun - 1) / 2] */
                 uint32_t j = k;
-                for (; j > 0 && conv_rank(&runs[order[j - 1]]) > conv_rank(&runs[k]); --j) order[j] = order[j - 1];
+                for (; j > 0 && conv_before(&runs[k], &runs[order[j - 1]]); --j) order[j] = order[j - 1];
                 order[j] = k;
             }
             res[sh][e] = runs[order[(nrun - 1) / 2]];

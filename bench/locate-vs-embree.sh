@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # bench/locate-vs-embree.sh: issue #4's comparison. Point location on a 1M-tet
 # mesh (56^3 jittered cubes cut into 6 Kuhn tets each) with 1M random points
-# in its bounds, 2 threads: clvr (OpenCL), Embree 3 and VTK's
+# in its bounds, every core (CLVR_BENCH_THREADS): clvr (OpenCL), Embree 3 and VTK's
 # vtkStaticCellLocator on the same mesh and the same points.
 #
 # Usage: bench/locate-vs-embree.sh [--build DIR] [--no-install] [-- ARGS for bench_locate_embree]
@@ -57,7 +57,9 @@ vtk_qps=
 if [ -x "$BUILD/vtk_locate" ]; then
   "$BUILD/bench_locate_embree" "${ARGS[@]}" --dump "$RAW" >/dev/null
   echo "# load before VTK: $(uptime | sed 's/.*load average: //')"
-  vtk_out=$("$BUILD/vtk_locate" "$RAW" --threads 2)
+  # The same thread count as clvr and Embree (bench_cpu_threads: every online
+  # core, or CLVR_BENCH_THREADS); it was 2 whatever the machine.
+  vtk_out=$("$BUILD/vtk_locate" "$RAW" --threads "${CLVR_BENCH_THREADS:-$(nproc)}")
   echo "$vtk_out"
   vtk_qps=$(awk '/^vtk_queries_per_s:/ { print $2 }' <<<"$vtk_out")
 else

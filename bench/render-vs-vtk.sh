@@ -128,6 +128,12 @@ for r in sorted(vtkr["rows"], key=lambda r: r["frame_s"]):
     p(f"| {r['mapper']} | no | {r['frame_s']:.2f} | median frame (first frame {r['first_frame_s']:.2f} s) | "
       f"{r['frame_s'] / fast['frame_s']:.2f}x | {r['load_after']:.2f} |")
 t = clvr["target"]
+def secs(a):
+    """clvr's seconds to the target against VTK's wall-clock frame: the larger
+    of its device seconds (kernels, image pass, pilot, refine list) and its
+    wall seconds (the same with the host's waits; until session 46 the device
+    seconds alone, which leave out the host's share)."""
+    return max(a["device_s"], a.get("wall_s", 0.0))
 for r in clvr["rows"]:
     sh = "yes" if r["shadows"] else "no"
     name = f"clvr {clvr['method']} {r['label']}"
@@ -138,8 +144,8 @@ for r in clvr["rows"]:
         cost += "; median of " + ", ".join("missed" if x is None else f"{x:.3f}" for x in reps) + " s"
     if r["reached"]:
         a = r["at"]
-        p(f"| {name} | {sh} | {a['device_s']:.2f} | to {t:.0%} relative RMSE: {a['spp']} spp ({cost}; 1/n fit "
-          f"{r['fit_spp']:.0f} spp) | **{a['device_s'] / fast['frame_s']:.2f}x** | {r['load_after']:.2f} |")
+        p(f"| {name} | {sh} | {secs(a):.3f} | to {t:.0%} relative RMSE: {a['spp']} spp ({cost}; 1/n fit "
+          f"{r['fit_spp']:.0f} spp) | **{secs(a) / fast['frame_s']:.2f}x** | {r['load_after']:.2f} |")
     else:
         last = r["points"][-1]
         p(f"| {name} | {sh} | > {last['device_s']:.2f} | {t:.0%} relative RMSE not reached in {last['spp']} spp "
@@ -148,7 +154,7 @@ for r in clvr["rows"]:
 p("")
 def verdict(r, limit):
     if not r["reached"]: return f"not reached (fit {r['fit_s'] / fast['frame_s']:.1f}x)"
-    x = r["at"]["device_s"] / fast["frame_s"]
+    x = secs(r["at"]) / fast["frame_s"]
     return f"{x:.2f}x ({'met' if x <= limit else 'missed'})"
 for lab in sorted({r["label"] for r in clvr["rows"]}):
     g = {r["shadows"]: r for r in clvr["rows"] if r["label"] == lab}

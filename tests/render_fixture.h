@@ -76,32 +76,39 @@ static inline clvr_status fx_render_moments(clvr_cl *cl, const clvr_mesh *m, clv
 }
 
 /* Two moment images of n frames each (fx_render_moments) compared in
- * distribution: pixels and 4x4 pixel blocks (per channel) whose difference
- * of means exceeds k_sigma standard errors, plus a float-rounding floor of
- * 1e-5 per pixel (a small bias spread over many pixels shows in the
- * blocks); the largest block |z|; and the summed opacity (alpha) of a's
- * means, for a test to check that the volume covers part of the image. */
+ * distribution: pixels, 4x4 pixel blocks and the whole image (per channel)
+ * whose difference of means exceeds k_sigma standard errors, plus a
+ * float-rounding floor of 1e-5 per pixel (a small bias spread over many
+ * pixels shows in the blocks, a smaller one spread over all of them in the
+ * whole image); the largest block |z|; and the summed opacity (alpha) of
+ * a's means, for a test to check that the volume covers part of the image. */
 typedef struct fx_moments_diff {
-    size_t pixels, blocks;
+    size_t pixels, blocks, channels; /* channels: of the 4, those whose whole-image sums differ */
     double worst_block_z, opacity;
 } fx_moments_diff;
 
 static inline fx_moments_diff fx_compare_moments(const float *ma, const float *va, const float *mb, const float *vb,
                                                  uint32_t W, uint32_t H, uint32_t n, double k_sigma)
 {
-    fx_moments_diff r = {0, 0, 0.0, 0.0};
+    fx_moments_diff r = {0, 0, 0, 0.0, 0.0};
     const size_t np = (size_t)W * H * 4;
+    double dsum[4] = {0}, vsum[4] = {0};
     for (size_t i = 0; i < np; ++i) {
         const double se = sqrt(va[i] / n + vb[i] / n), d = fabs((double)ma[i] - mb[i]);
         if (d > k_sigma * se + 1e-5) ++r.pixels;
         if (i % 4 == 3) r.opacity += ma[i];
+        dsum[i % 4] += (double)ma[i] - mb[i];
+        vsum[i % 4] += va[i] / n + vb[i] / n;
     }
+    /* The whole image per channel: a bias spread thin over many blocks. */
+    for (size_t c = 0; c < 4; ++c)
+        if (fabs(dsum[c]) > k_sigma * sqrt(vsum[c]) + 1e-5 * (double)(W * H)) ++r.channels;
     for (uint32_t by = 0; by < H; by += 4)
         for (uint32_t bx = 0; bx < W; bx += 4)
             for (size_t c = 0; c < 4; ++c) {
                 double d = 0, v = 0;
-                for (uint32_t y = by; y < by + 4; ++y)
-                    for (uint32_t x = bx; x < bx + 4; ++x) {
+                for (uint32_t y = by; y < by + 4 && y < H; ++y)
+                    for (uint32_t x = bx; x < bx + 4 && x < W; ++x) {
                         const size_t i = 4 * ((size_t)y * W + x) + c;
                         d += (double)ma[i] - mb[i];
                         v += va[i] / n + vb[i] / n;

@@ -642,6 +642,7 @@ static void renders_agree(clvr_cl *cl, fx_mesh *x, const char *name, const float
         TU_CHECK(r.opacity > 0.05 * W * H); /* the medium covers part of the image: the test can fail */
         TU_CHECK_EQ_U64(r.pixels, 0);
         TU_CHECK_EQ_U64(r.blocks, 0);
+        TU_CHECK_EQ_U64(r.channels, 0);
         for (int hull = 0; hull < 2; ++hull) {
             free(m[hull]);
             free(v[hull]);

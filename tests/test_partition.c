@@ -411,6 +411,7 @@ static void test_render_same(clvr_cl *cl)
         TU_CHECK_EQ_U64(r.pixels, 0);
         TU_CHECK(r.opacity > 0.05 * W * H); /* the volume covers part of the image: the test can fail */
         TU_CHECK_EQ_U64(r.blocks, 0);
+        TU_CHECK_EQ_U64(r.channels, 0);
     }
     free(m1);
     free(v1);

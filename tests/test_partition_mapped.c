@@ -400,6 +400,7 @@ static void test_boxes_off(clvr_cl *cl)
         TU_CHECK_EQ_U64(r.pixels, 0);
         TU_CHECK(r.opacity > 0.05 * W * H);
         TU_CHECK_EQ_U64(r.blocks, 0);
+        TU_CHECK_EQ_U64(r.channels, 0);
     }
     free(m1);
     free(v1);

@@ -176,6 +176,7 @@ static void compare_renders(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, 
                np);
         TU_CHECK_EQ_U64(r.pixels, 0);
         TU_CHECK_EQ_U64(r.blocks, 0);
+        TU_CHECK_EQ_U64(r.channels, 0);
         free(mk);
         free(vk);
     }
