@@ -370,7 +370,10 @@ int main(int argc, char **argv)
                 last_report = t;
             }
         }
-        stats.render_wall_s += now_s() - start;
+        /* The last image's, as the counters (a camera change resets them):
+         * under --orbit a sum over the images made wall seconds a frame N
+         * times too long. */
+        stats.render_wall_s = now_s() - start;
         if (frame == 0) { /* interrupted before the image's first frame finished */
             fprintf(stderr, "clvr: interrupted before the first frame of %s; not written\n", path);
             rc = 130;
