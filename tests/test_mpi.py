@@ -16,7 +16,10 @@ with about 770 and 1540 degrees of freedom where blocks are alike, far fewer
 because a few bright blocks dominate) and grows with any bias. Measured
 between four single-process renders (seeds 1-4, the three pairings): R =
 0.84, 1.03, 1.15 with 4x4 blocks (0.72, 0.95, 1.40 with 8x8 blocks, hence the
-smaller blocks). Pass: R < R_MAX = 2. The same test on
+smaller blocks). Pass: R < R_MAX = 2, and the summed block difference over
+its standard error within Z_MAX = 5 (R squares each block's difference, so a
+uniform bias of a few % passes it; the sum grows linearly with such a bias:
+measured |z| 0.05-2.65 on unbroken runs). The same test on
 compositings broken on purpose (test hook CLVR_MPI_TEST_BREAK: rank 0's
 record only; rank order instead of depth order) must give R > R_MAX, so the
 test can fail. With shadows, -n 2 and -n 3 also run with the light grid set
@@ -125,6 +128,21 @@ def ratio(a1, a2, m1, m2):
     return num / den if den > 0 else (0.0 if num == 0 else float("inf"))
 
 
+def signed_z(a1, a2, m1, m2):
+    """The summed block difference over its standard error: R squares each
+    block's difference, so a small bias spread evenly over the image grows R
+    only as the sum of squares, while it grows this sum linearly (a uniform
+    shift of a few % that R lets pass is many standard errors here)."""
+    num = den = 0.0
+    for x1, x2, y1, y2 in zip(a1, a2, m1, m2):
+        num += (y1 + y2) / 2 - (x1 + x2) / 2
+        den += ((x1 - x2) ** 2 + (y1 - y2) ** 2) / 4
+    return num / math.sqrt(den) if den > 0 else (0.0 if num == 0 else float("inf"))
+
+
+Z_MAX = 5.0
+
+
 def render_pair(tmp, tag, runner):
     """Two renders with seeds 11 and 12 (single: 1 and 2); None on failure."""
     means = []
@@ -201,9 +219,11 @@ def main():
                 if got is None:
                     continue
                 r = ratio(ref[0], ref[1], got[0], got[1])
-                print(f"-n {n}, {sh}: R = {r:.3f}")
+                z = signed_z(ref[0], ref[1], got[0], got[1])
+                print(f"-n {n}, {sh}: R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX, f"mpirun -n {n} ({sh}) matches one process: R = sum D^2 / sum Var(D)", r,
                       f"< {R_MAX}")
+                check(abs(z) < Z_MAX, f"mpirun -n {n} ({sh}): no bias over the whole image", z, f"|z| < {Z_MAX}")
             if not shadows:
                 continue
             # Every shadow through the correction rays (test hook: light grid
@@ -216,8 +236,11 @@ def main():
                 if got is None:
                     continue
                 r = ratio(ref[0], ref[1], got[0], got[1])
-                print(f"-n {n}, shadows, light grid G = 1: R = {r:.3f}")
+                z = signed_z(ref[0], ref[1], got[0], got[1])
+                print(f"-n {n}, shadows, light grid G = 1: R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX_G1, f"mpirun -n {n} with G = 1 matches one process", r, f"< {R_MAX_G1}")
+                check(abs(z) < Z_MAX, f"mpirun -n {n} with G = 1: no bias over the whole image", z,
+                      f"|z| < {Z_MAX}")
             # The test must be able to fail: compositings broken on purpose.
             for hook, n in () if BRIEF else (("rank0", 2), ("order", 2), ("order", 3)):
                 got = render_pair(tmp, f"broken-{hook}-{n}",
@@ -244,8 +267,11 @@ def main():
                               lambda out, seed: run_mpi(n, clvr_args(out, seed, shadows, margs))) if ref else None
             if ref and got:
                 r = ratio(ref[0], ref[1], got[0], got[1])
-                print(f"-n {n}, --method {method}, {sh}: R = {r:.3f}")
+                z = signed_z(ref[0], ref[1], got[0], got[1])
+                print(f"-n {n}, --method {method}, {sh}: R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX, f"mpirun -n {n} --method {method} ({sh}) matches one process", r, f"< {R_MAX}")
+                check(abs(z) < Z_MAX, f"mpirun -n {n} --method {method} ({sh}): no bias over the whole image", z,
+                      f"|z| < {Z_MAX}")
             if ref and n == 2 and not BRIEF:
                 bad = render_pair(tmp, f"broken-{method}", lambda out, seed: run_mpi(
                     n, clvr_args(out, seed, shadows, margs), {"CLVR_MPI_TEST_BREAK": "order"}))
@@ -271,8 +297,11 @@ def main():
                 if got is None:
                     continue
                 r = ratio(ref[0], ref[1], got[0], got[1])
-                print(f"-n {n}, .bin (distributed loading, automatic transfer function): R = {r:.3f}")
+                z = signed_z(ref[0], ref[1], got[0], got[1])
+                print(f"-n {n}, .bin (distributed loading, automatic transfer function): R = {r:.3f}, "
+                      f"summed difference {z:.2f} SE")
                 check(r < R_MAX, f"mpirun -n {n} on a .bin matches one process", r, f"< {R_MAX}")
+                check(abs(z) < Z_MAX, f"mpirun -n {n} on a .bin: no bias over the whole image", z, f"|z| < {Z_MAX}")
 
         # A .bin whose field is cell data (kiefer_tet10: von Mises stress per
         # element, averaged onto the vertices) cannot be split by the
@@ -289,8 +318,11 @@ def main():
             got = render_pair(tmp, "mpi2-cell", lambda out, seed: run_mpi(2, clvr_args(out, seed, True, cell_args)))
             if ref and got:
                 r = ratio(ref[0], ref[1], got[0], got[1])
-                print(f"-n 2, .bin with a cell field (read whole by every rank): R = {r:.3f}")
+                z = signed_z(ref[0], ref[1], got[0], got[1])
+                print(f"-n 2, .bin with a cell field (read whole by every rank): R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX, "mpirun -n 2 on a .bin with a cell field matches one process", r, f"< {R_MAX}")
+                check(abs(z) < Z_MAX, "mpirun -n 2 on a .bin with a cell field: no bias over the whole image", z,
+                      f"|z| < {Z_MAX}")
 
         # Ctrl-C: mpirun sends the ranks SIGTERM; they stop after a frame all
         # of them finished and rank 0 writes what was accumulated (the
