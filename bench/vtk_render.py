@@ -190,7 +190,8 @@ def main():
     cam_j = setup["camera"]
     bg = (0.05, 0.05, 0.07)
     print(f"# vtk_render: {os.path.basename(a.mesh)}, {cut_note}, "
-          f"{w}x{h}, VTK {vtk.vtkVersion.GetVTKVersion()}, grid built in {build_s:.2f} s", flush=True)
+          f"{w}x{h}, VTK {vtk.vtkVersion.GetVTKVersion()}, .bin read and grid built in {build_s:.2f} s", flush=True)
+    print("| mapper | first frame (s) | median frame (s) | frames | load |\n|---|---:|---:|---:|---:|", flush=True)
     rows = []
     for name in a.mappers.split(","):
         mapper = make_mapper(name)
