@@ -318,8 +318,8 @@ typedef struct clvr_tracer_settings clvr_tracer_settings; /* below */
 typedef struct clvr_load_settings {
     uint32_t size;
     /* The field to load first: "NAME", "point:NAME", "cell:NAME", a
-     * component "NAME:x" / "NAME:y" / "NAME:z" / "NAME:0".. or "NAME:mag"
-     * (the default for a vector); NULL: the file's first. Other fields load
+     * component "NAME:x" / "NAME:y" / "NAME:z" / "NAME:0"..; a vector named
+     * plainly gives its magnitude; NULL: the file's first. Other fields load
      * when a scene asks for them by name (clvr_scene_create). */
     const char *field;
     int cell_flat;    /* nonzero: a cell field is shown flat, each element its own value (its own copies
@@ -365,7 +365,7 @@ typedef struct clvr_dataset_field {
     uint32_t size;
     char name[64];
     int is_cell;          /* 0: point data, 1: cell data */
-    uint32_t components;  /* 1 (scalar) .. 9; a vector is picked as NAME:x, NAME:mag, ... */
+    uint32_t components;  /* 1 (scalar) .. 16; a component is picked as NAME:x or NAME:0.., the magnitude as NAME */
     int has_range;        /* 0: not decoded yet (clvr_load_settings.field_ranges) */
     float min, max;       /* range (the magnitude's for vectors) when has_range */
     int loaded;           /* its values are in memory now */

@@ -509,7 +509,7 @@ class Mesh(_Handle):
 
         scalar: the field rendered by default, as the program's --scalar:
         "NAME", "point:NAME", "cell:NAME" or a component "NAME:x" /
-        "NAME:mag" (None: the file's first). Every field of the file is
+        "NAME:0" (a vector named plainly: its magnitude; None: the file's first). Every field of the file is
         listed by `fields`, and Renderer(mesh, field=NAME) renders another
         one (read from the file then). cell_flat: show cell data flat (each
         element its own value) instead of averaged to the points.
