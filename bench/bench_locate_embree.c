@@ -110,8 +110,10 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
      * its own copy of a vertex shared across its border): the price of the
      * 16-bit indices, which Embree, indexing the mesh's own vertices, does
      * not pay (left out until session 46: 5-10% of clvr's figure). */
-    r->index_bytes = c.num_idx16 * 2 + c.num_idx32 * 4 +
-                     (c.bytes_vertices_after > c.bytes_vertices_before ? c.bytes_vertices_after - c.bytes_vertices_before : 0);
+    const uint64_t dup = c.bytes_vertices_after > c.bytes_vertices_before
+                             ? c.bytes_vertices_after - c.bytes_vertices_before
+                             : 0;
+    r->index_bytes = c.num_idx16 * 2 + c.num_idx32 * 4 + dup;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(nq ? nq : 1) * sizeof *pts, pts,
                             "points", &dpts, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, (size_t)(nq ? nq : 1) * 4, NULL, "scalars", &dsc, err));

@@ -10,8 +10,9 @@
  *
  * Timing: W warm-up frames, then N frames, each timed by the render
  * kernel's OpenCL events (the renderer's counters: last_frame_s, the
- * frame's full pass and its refine pass); the table gives the median. Rays, samples and null collisions are the counters'
- * totals over the N timed frames divided by N. The 1-minute load average is
+ * frame's full pass and its refine pass); the table gives the median.
+ * Rays, samples and null collisions are the counters' totals over the N
+ * timed frames divided by N. The 1-minute load average is
  * recorded with every row because the machine may be shared.
  *
  * --converge measures time to equal quality instead (bench/render-vs-vtk.sh):
@@ -866,7 +867,8 @@ static int usage(void)
             "                    [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]\n"
             "                    [--estimator auto|walk|urm|delta] [--urm-steps N] [--urm-kappa K] [--adaptive T]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
-            "                    [--max-spp M] [--sampler ld|independent] [--estimators auto,walk,urm,delta[:steps[:kappa[:light-res]]]]\n"
+            "                    [--max-spp M] [--sampler ld|independent]\n"
+            "                    [--estimators auto,walk,urm,delta[:steps[:kappa[:light-res]]]]\n"
             "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n"
             "                    [--denoise] [--no-pixel-cv] [--adaptive T] [--repeats K]\n");
     return 2;

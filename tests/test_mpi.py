@@ -121,23 +121,20 @@ def block_means(path):
 
 
 def ratio(a1, a2, m1, m2):
-    num = den = 0.0
-    for x1, x2, y1, y2 in zip(a1, a2, m1, m2):
-        num += ((y1 + y2) / 2 - (x1 + x2) / 2) ** 2
-        den += ((x1 - x2) ** 2 + (y1 - y2) ** 2) / 4
-    return num / den if den > 0 else (0.0 if num == 0 else float("inf"))
-
-
-def signed_z(a1, a2, m1, m2):
-    """The summed block difference over its standard error: R squares each
+    """R = sum D_b^2 / sum v_b over the blocks (the module docstring), and z,
+    the summed block difference over its standard error: R squares each
     block's difference, so a small bias spread evenly over the image grows R
-    only as the sum of squares, while it grows this sum linearly (a uniform
-    shift of a few % that R lets pass is many standard errors here)."""
-    num = den = 0.0
+    only as the sum of squares, while it grows z linearly (a uniform shift of
+    a few % that R lets pass is many standard errors in z)."""
+    num = den = dsum = 0.0
     for x1, x2, y1, y2 in zip(a1, a2, m1, m2):
-        num += (y1 + y2) / 2 - (x1 + x2) / 2
+        d = (y1 + y2) / 2 - (x1 + x2) / 2
+        num += d * d
+        dsum += d
         den += ((x1 - x2) ** 2 + (y1 - y2) ** 2) / 4
-    return num / math.sqrt(den) if den > 0 else (0.0 if num == 0 else float("inf"))
+    if den > 0:
+        return num / den, dsum / math.sqrt(den)
+    return (0.0, 0.0) if num == 0 else (float("inf"), float("inf"))
 
 
 Z_MAX = 5.0
@@ -218,8 +215,7 @@ def main():
                                   lambda out, seed: run_mpi(n, clvr_args(out, seed, shadows)))
                 if got is None:
                     continue
-                r = ratio(ref[0], ref[1], got[0], got[1])
-                z = signed_z(ref[0], ref[1], got[0], got[1])
+                r, z = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"-n {n}, {sh}: R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX, f"mpirun -n {n} ({sh}) matches one process: R = sum D^2 / sum Var(D)", r,
                       f"< {R_MAX}")
@@ -235,8 +231,7 @@ def main():
                                                             {"CLVR_MPI_TEST_LIGHT_GRID": "one"}))
                 if got is None:
                     continue
-                r = ratio(ref[0], ref[1], got[0], got[1])
-                z = signed_z(ref[0], ref[1], got[0], got[1])
+                r, z = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"-n {n}, shadows, light grid G = 1: R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX_G1, f"mpirun -n {n} with G = 1 matches one process", r, f"< {R_MAX_G1}")
                 check(abs(z) < Z_MAX, f"mpirun -n {n} with G = 1: no bias over the whole image", z,
@@ -248,7 +243,7 @@ def main():
                                                             {"CLVR_MPI_TEST_BREAK": hook}))
                 if got is None:
                     continue
-                r = ratio(ref[0], ref[1], got[0], got[1])
+                r, _ = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"broken compositing ({hook}, -n {n}): R = {r:.3f}")
                 check(r > R_MAX, f"a compositing broken on purpose ({hook}, -n {n}) is caught", r, f"> {R_MAX}")
 
@@ -266,8 +261,7 @@ def main():
             got = render_pair(tmp, f"mpi{n}-{method}-{int(shadows)}",
                               lambda out, seed: run_mpi(n, clvr_args(out, seed, shadows, margs))) if ref else None
             if ref and got:
-                r = ratio(ref[0], ref[1], got[0], got[1])
-                z = signed_z(ref[0], ref[1], got[0], got[1])
+                r, z = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"-n {n}, --method {method}, {sh}: R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX, f"mpirun -n {n} --method {method} ({sh}) matches one process", r, f"< {R_MAX}")
                 check(abs(z) < Z_MAX, f"mpirun -n {n} --method {method} ({sh}): no bias over the whole image", z,
@@ -276,7 +270,7 @@ def main():
                 bad = render_pair(tmp, f"broken-{method}", lambda out, seed: run_mpi(
                     n, clvr_args(out, seed, shadows, margs), {"CLVR_MPI_TEST_BREAK": "order"}))
                 if bad:
-                    r = ratio(ref[0], ref[1], bad[0], bad[1])
+                    r, _ = ratio(ref[0], ref[1], bad[0], bad[1])
                     print(f"broken compositing (order, -n {n}, --method {method}): R = {r:.3f}")
                     check(r > R_MAX, f"a broken compositing is caught with --method {method}", r, f"> {R_MAX}")
 
@@ -296,8 +290,7 @@ def main():
                 got = render_pair(tmp, f"mpi{n}-bin", lambda out, seed: run_mpi(n, clvr_args(out, seed, True, mesh_args)))
                 if got is None:
                     continue
-                r = ratio(ref[0], ref[1], got[0], got[1])
-                z = signed_z(ref[0], ref[1], got[0], got[1])
+                r, z = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"-n {n}, .bin (distributed loading, automatic transfer function): R = {r:.3f}, "
                       f"summed difference {z:.2f} SE")
                 check(r < R_MAX, f"mpirun -n {n} on a .bin matches one process", r, f"< {R_MAX}")
@@ -317,8 +310,7 @@ def main():
                 clvr_args(out, seed, True, cell_args), capture_output=True, text=True, timeout=TIMEOUT, env=mpi_env()))
             got = render_pair(tmp, "mpi2-cell", lambda out, seed: run_mpi(2, clvr_args(out, seed, True, cell_args)))
             if ref and got:
-                r = ratio(ref[0], ref[1], got[0], got[1])
-                z = signed_z(ref[0], ref[1], got[0], got[1])
+                r, z = ratio(ref[0], ref[1], got[0], got[1])
                 print(f"-n 2, .bin with a cell field (read whole by every rank): R = {r:.3f}, summed difference {z:.2f} SE")
                 check(r < R_MAX, "mpirun -n 2 on a .bin with a cell field matches one process", r, f"< {R_MAX}")
                 check(abs(z) < Z_MAX, "mpirun -n 2 on a .bin with a cell field: no bias over the whole image", z,

@@ -1155,15 +1155,16 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
              * the bounds are valid. Per block, not per pixel: a pixel where
              * delta tracking met no collision in N frames has a sample
              * variance of 0, which no bound can use; a block pools pixels. */
-            /* And over the whole image (blocks of W): a bias spread evenly,
+            /* And over the whole image (one block): a bias spread evenly,
              * 5-9% that a 4x4 block's bound lets through, is some 7 times
              * its standard error there. */
+            const uint32_t whole = W > H ? W : H;
             snprintf(what, sizeof what, "%s shadows %s: %s vs delta (track)", name, shadows ? "on" : "off", en);
             TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, 4), 0);
-            TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, W > H ? W : H), 0);
+            TU_CHECK_EQ_U64(compare_blocks(what, mt, vt, N, delta_m, delta_v, N, W, H, whole), 0);
             snprintf(what, sizeof what, "%s shadows %s: %s dda vs delta track", name, shadows ? "on" : "off", en);
             TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, 4), 0);
-            TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, W > H ? W : H), 0);
+            TU_CHECK_EQ_U64(compare_blocks(what, md, vd, N, delta_m, delta_v, N, W, H, whole), 0);
             if (shadows) {
                 /* A light grid of one node: G is 1, flat
                  * everywhere, and wrong nearly everywhere, so every
@@ -1177,7 +1178,7 @@ static void methods_agree(clvr_cl *cl, clvr_mesh *m, const char *name, uint32_t 
                 fx.set.light_res = 0; /* the default: clvr_light_res_for the mesh */
                 snprintf(what, sizeof what, "%s shadows on: %s dda, 1-node light grid, vs delta track", name, en);
                 TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, 4), 0);
-                TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, W > H ? W : H), 0);
+                TU_CHECK_EQ_U64(compare_blocks(what, m1, v1, N, delta_m, delta_v, N, W, H, whole), 0);
                 free(m1);
                 free(v1);
             }
@@ -1341,8 +1342,9 @@ static void test_seeds(clvr_cl *cl)
 
 /* clvr_ld_sample written plainly, as it was before it scrambled reversed
  * fractions: point n of each Sobol' dimension as a fraction (the XOR of the
- * plain direction numbers of n's set bits), reversed, Laine-Karras permuted,
- * reversed back. */
+ * plain direction numbers of n's set bits), then reversed for the scramble
+ * (clvr_owen_scramble_rev: the Laine-Karras hash, unchanged, and the
+ * reversal back). */
 static void ld_sample_reference(uint32_t pixel, uint32_t frame, uint32_t lo, uint32_t hi, float *u)
 {
     uint32_t v[4] = {pixel, lo, hi, 0x5bd1e995u};
@@ -1356,12 +1358,7 @@ static void ld_sample_reference(uint32_t pixel, uint32_t frame, uint32_t lo, uin
             for (uint32_t k = 0, n = frame; n; ++k, n >>= 1)
                 if (n & 1u) x ^= clvr_reverse_bits(clvr_sobol_dirs_rev[d - 1][k]);
         }
-        x = clvr_reverse_bits(x) + seed[d];
-        x ^= x * 0x6c50b47cu;
-        x ^= x * 0xb82f1e52u;
-        x ^= x * 0xc7afe638u;
-        x ^= x * 0x8d22f6e6u;
-        u[d] = (float)(clvr_reverse_bits(x) >> 8) * (1.0f / 16777216.0f);
+        u[d] = (float)(clvr_owen_scramble_rev(clvr_reverse_bits(x), seed[d]) >> 8) * (1.0f / 16777216.0f);
     }
 }
 
@@ -1376,7 +1373,8 @@ static void test_ld_reference(void)
     int bad = 0;
     for (size_t i = 0; i < sizeof frames / sizeof frames[0]; ++i)
         for (int r = 0; r < 500; ++r) {
-            const uint32_t pixel = (uint32_t)tu_rand(&st), lo = (uint32_t)tu_rand(&st), hi = r & 1 ? 0u : (uint32_t)tu_rand(&st);
+            const uint32_t pixel = (uint32_t)tu_rand(&st), lo = (uint32_t)tu_rand(&st);
+            const uint32_t hi = r & 1 ? 0u : (uint32_t)tu_rand(&st);
             float a[CLVR_LD_DIMS], b[CLVR_LD_DIMS];
             clvr_ld_sample(pixel, frames[i], lo, hi, a);
             ld_sample_reference(pixel, frames[i], lo, hi, b);

@@ -1107,7 +1107,8 @@ static clvr_status settings_to_render(const char *fn, const clvr_tracer_settings
         return clvr_error_set(e, CLVR_ERR_USAGE, "%s: method '%.16s'; use march, track, bins or dda", fn, s->method);
     r.estimator = clvr_render_estimator_from_name(s->estimator);
     if (r.estimator >= CLVR_ESTIMATOR_COUNT)
-        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: estimator '%.16s'; use auto, walk, urm or delta", fn, s->estimator);
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: estimator '%.16s'; use auto, walk, urm or delta", fn,
+                              s->estimator);
     if (!strcmp(s->sampler, "ld")) r.sampler = CLVR_SAMPLER_LD;
     else if (!strcmp(s->sampler, "independent")) r.sampler = CLVR_SAMPLER_INDEPENDENT;
     else return clvr_error_set(e, CLVR_ERR_USAGE, "%s: sampler '%.16s'; use ld or independent", fn, s->sampler);
@@ -1441,8 +1442,8 @@ clvr_result clvr_tracer_set_method(clvr_tracer *tr, const char *method, const ch
     if (estimator) {
         uint32_t x = clvr_render_estimator_from_name(estimator);
         if (x >= CLVR_ESTIMATOR_COUNT)
-            return finish(clvr_error_set(&e, CLVR_ERR_USAGE, "%s: unknown estimator '%.64s'; use auto, walk, urm or delta", fn,
-                                         estimator),
+            return finish(clvr_error_set(&e, CLVR_ERR_USAGE,
+                                         "%s: unknown estimator '%.64s'; use auto, walk, urm or delta", fn, estimator),
                           &e, msg);
         tr->rs.estimator = x;
     }
