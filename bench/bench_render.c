@@ -751,7 +751,9 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     if (dn) {
         /* Apart from the table above, which is the unbiased estimate's. */
         printf("\n--denoise (biased, not the convergence figure): the same frames after the edge-avoiding filter "
-               "(kernels/denoise.h). bias: rel RMSE of the denoised reference against the reference.\n\n");
+               "(kernels/denoise.h). bias: rel RMSE of the denoised reference against the reference. spp: samples per "
+               "pixel, as above; \">\": not reached by the run's last checkpoint (a run stops once the raw image "
+               "reached the target).\n\n");
         printf("| estimator | shadows | bias (rel) | rel RMSE after 1 / 2 / 4 frames | denoised | spp to %.0f%% "
                "denoised | s to %.0f%% denoised (frames + one filter) | filter s (wall) |\n",
                target * 100, target * 100);
@@ -767,9 +769,14 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                     snprintf(raw + lr, sizeof raw - lr, "%s%.2f%%", lr ? " / " : "", p->rmse_rel * 100);
                     snprintf(den + ld, sizeof den - ld, "%s%.2f%%", ld ? " / " : "", p->rmse_rel_dn * 100);
                 }
-                printf("| %s | %s | %.2f%% | %s | %s | %s%u | %s%.3f | %.3f |\n", r->label, sh ? "on" : "off",
+                /* Samples per pixel, as the raw table's column. Missed: ">"
+                 * the last checkpoint's, which is max_spp only when the run
+                 * went that far (it stops once the raw image reached the
+                 * target, and the denoised image was measured no further). */
+                const double last_spp = r->npoints ? r->pts[r->npoints - 1].spp_mean : (double)max_spp;
+                printf("| %s | %s | %.2f%% | %s | %s | %s%.2f | %s%.3f | %.3f |\n", r->label, sh ? "on" : "off",
                        refs[sh].bias_rel * 100, raw, den, r->reached_dn ? "" : ">",
-                       r->reached_dn ? r->at_dn.spp : max_spp, r->reached_dn ? "" : ">",
+                       r->reached_dn ? r->at_dn.spp_mean : last_spp, r->reached_dn ? "" : ">",
                        (r->reached_dn ? r->at_dn.dev_s : conv_last_s(r)) + r->dn_s,
                        r->dn_s);
             }
@@ -816,10 +823,15 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                         r->light_s, r->samples_per_ray, r->rays_per_pixel, r->adaptive, r->refine_fraction,
                         refs[sh].ref_s, refs[sh].ref_mean,
                         sqrt(refs[sh].ref_var), r->reached, r->fit_spp, r->fit_s, r->load_before, r->load_after);
-                if (dn)
-                    fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, "
-                               "\"spp_denoised\": %u, ",
-                            refs[sh].bias_rel, r->dn_s, r->reached_dn, r->reached_dn ? r->at_dn.spp : 0u);
+                if (dn) {
+                    fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, ",
+                            refs[sh].bias_rel, r->dn_s, r->reached_dn);
+                    /* samples per pixel and frames, as "at"; null where it was missed */
+                    if (r->reached_dn)
+                        fprintf(f, "\"spp_denoised\": %.4g, \"frames_denoised\": %u, ", r->at_dn.spp_mean,
+                                r->at_dn.spp);
+                    else fprintf(f, "\"spp_denoised\": null, \"frames_denoised\": null, ");
+                }
                 if (r->picked)
                     fprintf(f, "\"pick\": {\"walk_cells\": %u, \"pixels\": %u, \"var\": [%.6g, %.6g], "
                                "\"work\": [%.6g, %.6g], \"pilot_s\": %.6g}, ",
