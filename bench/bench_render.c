@@ -428,7 +428,7 @@ typedef struct conv_result {
     int reached_dn;                 /* --denoise: the same for the denoised image */
     conv_point at_dn;
     double dn_s;                    /* --denoise: wall seconds of one denoiser run (the last) */
-    double fit_spp, fit_s;          /* 1/n fit */
+    double fit_spp, fit_s;          /* 1/n fit; NaN where there was nothing to fit */
     double load_before, load_after;
     uint32_t nrep;                  /* --repeats: runs behind the row (the median's) */
     double rep_s[MAX_REPEATS];      /* each run's device seconds to the target, NaN where missed */
@@ -617,9 +617,16 @@ static clvr_status converge_one(clvr_cl *cl, scene_gpu *g, const config *c, cons
         out->spp_per_frame = rc.frames ? samples / ((double)rc.frames * (double)npix) : 1.0;
         out->refine_fraction = rc.refine_passes ? (double)rc.refine_pixels / (double)npix : 0.0;
     }
-    if (fit_n) {
+    /* No error above the reference's own noise at any of the fit's
+     * checkpoints (the target met from the first): nothing to fit, NaN (not
+     * 0 spp). The fit's seconds count what the measured time to the target
+     * counts (conv_point.dev_s): the frames, and once each the light grid,
+     * auto's pilot, the refine list and the image pass. */
+    out->fit_spp = out->fit_s = NAN;
+    if (fit_n && fit_acc > 0.0) {
         out->fit_spp = fit_acc / fit_n / (target * target);
-        out->fit_s = out->fit_spp / out->spp_per_frame * out->frame_s;
+        out->fit_s = out->light_s + rc.pilot_s + rc.select_s + rc.image_s +
+                     out->fit_spp / out->spp_per_frame * out->frame_s;
     }
     out->load_after = bench_load1();
 done:
@@ -646,6 +653,13 @@ static void json_point(FILE *f, const conv_point *p)
             p->spp_mean, p->spp, p->refined, p->dev_s, p->wall_s, p->rmse_raw, p->rmse, p->rmse_rel);
     if (isfinite(p->rmse_rel_dn)) fprintf(f, ", \"rmse_rel_denoised\": %.6g", p->rmse_rel_dn);
     fprintf(f, "}");
+}
+
+/* A number, or null where it is NaN (no value, not 0). */
+static void json_num(FILE *f, const char *key, double v)
+{
+    if (isnan(v)) fprintf(f, "\"%s\": null, ", key);
+    else fprintf(f, "\"%s\": %.6g, ", key, v);
 }
 
 /* Device seconds of a measured run at its last checkpoint. */
@@ -719,25 +733,34 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     }
     printf("| estimator | shadows | elements | frame ms | light grid ms | samples/ray | lookups/pixel to %.0f%% | "
            "ref mean rgb (inside) | ref own rel RMSE | refined pixels | spp to %.0f%% rel | s to %.0f%% rel (device) | "
-           "s (wall) | 1/n fit spp | fit s | load |\n",
+           "s (wall) | 1/n fit spp | fit s (device) | load |\n",
            target * 100, target * 100, target * 100);
     printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int sh = sh_lo; sh <= sh_hi; ++sh)
         for (uint32_t e = 0; e < nest; ++e) {
             const conv_result *r = &res[sh][e];
             const double last_spp = r->npoints ? r->pts[r->npoints - 1].spp_mean : (double)max_spp;
+            char fit_spp[32] = "-", fit_s[32] = "-";
+            if (!isnan(r->fit_spp)) {
+                /* under one frame: below every checkpoint, the target met at the first */
+                snprintf(fit_spp, sizeof fit_spp, r->fit_spp < 1.0 ? "<1" : "%.1f", r->fit_spp);
+                snprintf(fit_s, sizeof fit_s, "%.3f", r->fit_s);
+            }
             printf("| %s | %s | %" PRIu64 " | %.1f | %.1f | %.2f | %s%.0f | %.4f | %.4f | %.1f%% | %s%.2f | %s%.3f | %.3f | "
-                   "%.1f | %.3f | %.2f |\n",
+                   "%s | %s | %.2f |\n",
                    r->label, sh ? "on" : "off", g.elements, r->frame_s * 1e3, r->light_s * 1e3, r->samples_per_ray,
                    r->reached ? "" : ">", r->samples_per_ray * r->rays_per_pixel * (r->reached ? r->at.spp_mean : last_spp),
                    refs[sh].ref_mean,
                    refs[sh].ref_mean > 0 ? sqrt(refs[sh].ref_var) / refs[sh].ref_mean : 0.0, 100.0 * r->refine_fraction,
                    r->reached ? "" : ">", r->reached ? r->at.spp_mean : last_spp, r->reached ? "" : ">",
                    r->reached ? r->at.dev_s : conv_last_s(r),
-                   r->reached ? r->at.wall_s : NAN, r->fit_spp, r->fit_s, r->load_after);
+                   r->reached ? r->at.wall_s : NAN, fit_spp, fit_s, r->load_after);
         }
     printf("\nrel RMSE: linear rgb, unclamped, over pixels whose camera ray enters the bounding box (%zu of %u), "
-           "reference noise subtracted, divided by the reference's mean rgb over the same pixels.\n",
+           "reference noise subtracted, divided by the reference's mean rgb over the same pixels. 1/n fit: over "
+           "the checkpoints from 4 frames on; its seconds count the light grid, pilot, refine list and image pass "
+           "once, as the measured seconds do; \"<1\": under one spp, the target met from the first checkpoint; "
+           "\"-\": no error above the reference's own noise there, nothing to fit.\n",
            refs[sh_lo].ninside, w * h);
     printf("Each row is the median of up to %u measured runs (seeds 1 .. %u; one where the first took over %.0f s) by "
            "time to %.0f%%; every run's seconds:", repeats, repeats, CONV_REPEAT_MAX_S, target * 100);
@@ -817,12 +840,13 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                 fprintf(f, "%s\n  {\"estimator\": \"%s\", \"label\": \"%s\", \"shadows\": %d, \"frame_s\": %.6g, \"light_s\": %.6g, \"samples_per_ray\": %.6g, "
                            "\"rays_per_pixel\": %.6g, \"adaptive\": %.6g, \"refine_fraction\": %.6g, "
                            "\"reference_device_s\": %.6g, \"ref_mean\": %.6g, "
-                           "\"ref_own_rmse\": %.6g, \"reached\": %d, \"fit_spp\": %.6g, \"fit_s\": %.6g, "
-                           "\"load_before\": %.2f, \"load_after\": %.2f, ",
+                           "\"ref_own_rmse\": %.6g, \"reached\": %d, \"load_before\": %.2f, \"load_after\": %.2f, ",
                         first ? "" : ",", clvr_render_estimator_name(r->estimator), r->label, sh, r->frame_s,
                         r->light_s, r->samples_per_ray, r->rays_per_pixel, r->adaptive, r->refine_fraction,
                         refs[sh].ref_s, refs[sh].ref_mean,
-                        sqrt(refs[sh].ref_var), r->reached, r->fit_spp, r->fit_s, r->load_before, r->load_after);
+                        sqrt(refs[sh].ref_var), r->reached, r->load_before, r->load_after);
+                json_num(f, "fit_spp", r->fit_spp);
+                json_num(f, "fit_s", r->fit_s);
                 if (dn) {
                     fprintf(f, "\"denoise_bias_rel\": %.6g, \"denoise_s\": %.6g, \"reached_denoised\": %d, ",
                             refs[sh].bias_rel, r->dn_s, r->reached_dn);

@@ -153,7 +153,8 @@ def main():
                 def t(z):
                     if z.get("reached"):
                         return z["at"]["device_s"], "%.2f" % z["at"]["device_s"]
-                    return z.get("fit_s"), "> (fit %.1f)" % z.get("fit_s", float("nan"))
+                    f = z.get("fit_s")  # null: nothing to fit
+                    return f, "> (fit %s)" % ("-" if f is None else "%.1f" % f)
                 (tg, sg), (tu, su) = t(x), t(y)
                 o.append("| %s / %s | %s | %s | %s | %s | %s | %.3g / %.3g | %.1f |" % (
                     g, u, x["estimator"], "on" if x["shadows"] else "off", sg, su,

@@ -134,6 +134,11 @@ def secs(a):
     wall seconds (the same with the host's waits; until session 46 the device
     seconds alone, which leave out the host's share)."""
     return max(a["device_s"], a.get("wall_s", 0.0))
+def fit_secs(r):
+    """The 1/n fit's seconds; null where there was nothing to fit."""
+    return "" if r["fit_s"] is None else f" = {r['fit_s']:.1f} s"
+def fit_x(r):
+    return "n/a" if r["fit_s"] is None else f"{r['fit_s'] / fast['frame_s']:.1f}x"
 for r in clvr["rows"]:
     sh = "yes" if r["shadows"] else "no"
     name = f"clvr {clvr['method']} {r['label']}"
@@ -142,18 +147,20 @@ for r in clvr["rows"]:
     reps = r.get("repeats_s") or []
     if len(reps) > 1:  # bench_render --repeats: the row is the median run
         cost += "; median of " + ", ".join("missed" if x is None else f"{x:.3f}" for x in reps) + " s"
+    # the 1/n fit is null where there was nothing to fit (no error above the reference's noise)
+    fit = "none" if r["fit_spp"] is None else f"{r['fit_spp']:.0f} spp"
     if r["reached"]:
         a = r["at"]
         p(f"| {name} | {sh} | {secs(a):.3f} | to {t:.0%} relative RMSE: {a['spp']} spp ({cost}; 1/n fit "
-          f"{r['fit_spp']:.0f} spp) | **{secs(a) / fast['frame_s']:.2f}x** | {r['load_after']:.2f} |")
+          f"{fit}) | **{secs(a) / fast['frame_s']:.2f}x** | {r['load_after']:.2f} |")
     else:
         last = r["points"][-1]
         p(f"| {name} | {sh} | > {last['device_s']:.2f} | {t:.0%} relative RMSE not reached in {last['spp']} spp "
-          f"({cost}; 1/n fit {r['fit_spp']:.0f} spp = {r['fit_s']:.1f} s) | {r['fit_s'] / fast['frame_s']:.1f}x (fit) | "
+          f"({cost}; 1/n fit {fit}{fit_secs(r)}) | {fit_x(r)} (fit) | "
           f"{r['load_after']:.2f} |")
 p("")
 def verdict(r, limit):
-    if not r["reached"]: return f"not reached (fit {r['fit_s'] / fast['frame_s']:.1f}x)"
+    if not r["reached"]: return f"not reached (fit {fit_x(r)})"
     x = secs(r["at"]) / fast["frame_s"]
     return f"{x:.2f}x ({'met' if x <= limit else 'missed'})"
 for lab in sorted({r["label"] for r in clvr["rows"]}):
