@@ -226,6 +226,14 @@ static double embree_build(RTCDevice dev, const struct RTCBuildPrimitive *src, s
 }
 #endif
 
+/* Seconds, or null where there are none (< 0: a failed or impossible build,
+ * or Embree absent), never the -1 that stands for it here. */
+static void json_secs(FILE *f, const char *key, double s, const char *sep)
+{
+    if (s < 0) fprintf(f, "\"%s\": null%s", key, sep);
+    else fprintf(f, "\"%s\": %.6f%s", key, s, sep);
+}
+
 /* The mesh's index lists concatenated in type order (the layout of clvr_pp_ref_keys). */
 static uint32_t *concat_indices(const clvr_mesh *m, const clvr_pp_layout *L)
 {
@@ -435,8 +443,12 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
 #endif
     printf("\nTable 3 (paper): cluster/BVH build over %" PRIu64 " elements, seconds (Melements/s)\n\n"
            "| method | 16 elements per cluster | 100k elements per cluster |\n|---|---:|---:|\n", N);
-    printf("| Hilbert clustering (keys+sort+gather+cluster boxes), OpenCL | %.4f (%.1f) | %.4f (%.1f) |\n", hil[0],
-           N / hil[0] / 1e6, hil[1], N / hil[1] / 1e6);
+    char hcol[2][64];
+    for (int c = 0; c < 2; ++c) {
+        if (hil[c] < 0) snprintf(hcol[c], sizeof hcol[c], "failed");
+        else snprintf(hcol[c], sizeof hcol[c], "%.4f (%.1f)", hil[c], N / hil[c] / 1e6);
+    }
+    printf("| Hilbert clustering (keys+sort+gather+cluster boxes), OpenCL | %s | %s |\n", hcol[0], hcol[1]);
     const char *qn[2] = {"LOW", "MEDIUM"};
     for (int q = 0; q < 2; ++q) {
 #ifdef CLVR_HAVE_EMBREE
@@ -445,7 +457,8 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
                    "| n/a: leaves hold at most %d primitives |\n",
                    qn[q], bench_cpu_threads(), t_boxes, emb[0][q], N / emb[0][q] / 1e6, (int)RTC_BUILD_MAX_PRIMITIVES_PER_LEAF);
         else
-            printf("| Embree 3 rtcBuildBVH %s | embree: build failed | embree: build failed |\n", qn[q]);
+            printf("| Embree 3 rtcBuildBVH %s | embree: %s | n/a |\n", qn[q],
+                   bc->embree ? "build failed" : "rtcNewDevice failed");
 #else
         printf("| Embree 3 rtcBuildBVH %s | embree: not installed | embree: not installed |\n", qn[q]);
 #endif
@@ -456,11 +469,15 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
                 bc->first_run ? "" : ",\n", name, N, m->num_vertices, load0);
         for (int s = 0; s < CLVR_PP_STAGE_COUNT; ++s) fprintf(jf, "%s\"%s\": %.6f", s ? ", " : "", clvr_pp_stage_name(s), stage[s]);
         fprintf(jf, "}, \"device_total_s\": %.6f, \"wall_s\": %.6f, \"hilbert_clustering_s\": %.6f, \"c_radix2_s\": %.6f, "
-                    "\"memcpy_s\": %.6f, \"hilbert_clustering_cold_s\": %.6f, \"c_radix2_cold_s\": %.6f, \"table3\": {\"hilbert16_s\": %.6f, \"hilbert100k_s\": %.6f, "
-                    "\"embree_low16_s\": %.6f, \"embree_medium16_s\": %.6f, \"embree_low100k_s\": %.6f, "
-                    "\"embree_medium100k_s\": %.6f, \"embree_boxes_s\": %.6f}}",
-                dev_total, best_wall, hilbert, t_radix, t_memcpy, hilbert_cold, t_radix_cold, hil[0], hil[1], emb[0][0], emb[0][1], emb[1][0],
-                emb[1][1], t_boxes);
+                    "\"memcpy_s\": %.6f, \"hilbert_clustering_cold_s\": %.6f, \"c_radix2_cold_s\": %.6f, \"table3\": {",
+                dev_total, best_wall, hilbert, t_radix, t_memcpy, hilbert_cold, t_radix_cold);
+        json_secs(jf, "hilbert16_s", hil[0], ", ");
+        json_secs(jf, "hilbert100k_s", hil[1], ", ");
+        json_secs(jf, "embree_low16_s", emb[0][0], ", ");
+        json_secs(jf, "embree_medium16_s", emb[0][1], ", ");
+        json_secs(jf, "embree_low100k_s", emb[1][0], ", ");
+        json_secs(jf, "embree_medium100k_s", emb[1][1], ", ");
+        json_secs(jf, "embree_boxes_s", t_boxes, "}}");
         bc->first_run = 0;
     }
     free(idx); free(keys); free(k2); free(kt); free(vals); free(v2); free(vt);
