@@ -342,12 +342,13 @@ static void test_rays(clvr_cl *cl)
             const int inside = i < NR && i % 4 == 3;
             float lo, hi;
             brute(df, x.a.hull.num_faces, o, d, &lo, &hi);
-            /* Crossings ahead of the origin only decide a hit. */
+            /* Crossings ahead of the origin only decide a hit, from outside
+             * the box and from inside it alike. */
             const int want_hit = hi >= 0.0f;
             const int hit = r[2] != 0.0f;
             hits += hit;
             if (i >= NR) slipped += !hit;
-            if (hit != want_hit && !inside) {
+            if (hit != want_hit) {
                 ++bad_hit;
                 if (getenv("HULL_DEBUG"))
                     fprintf(stderr, "ray %u o %g %g %g d %g %g %g: device %g %g %g, brute %g %g\n", i, o[0], o[1], o[2],
@@ -525,6 +526,7 @@ static void test_gaps(clvr_cl *cl)
         uint32_t in_ball = 0; /* holed lattice: gaps through the removed ball, which the renderer must skip */
         for (uint32_t i = 0; i < NR && err.status == CLVR_OK; ++i) {
             const float *o = org + 4 * i, *d = dir + 4 * i, *r = res + (size_t)i * CLVR_HULL_GAP_STRIDE;
+            const int inside = i % 4 == 3; /* the origin inside the box, as made above */
             const clvr_hull_ray ray = clvr_hull_ray_make(o[0], o[1], o[2], d[0], d[1], d[2]);
             uint32_t nh = 0, all = 0;
             for (uint32_t f = 0; f < x.a.hull.num_faces; ++f) {
@@ -549,7 +551,7 @@ static void test_gaps(clvr_cl *cl)
             for (int e = 0; e < 2 && !off && ng >= 0; ++e)
                 off = !(r[e] == clip[4 * i + e] || fabsf(r[e] - clip[4 * i + e]) <= tol); /* == : both infinite */
             if (off && getenv("HULL_DEBUG"))
-                fprintf(stderr, "gap ray %u (%s): gaps %d [%g, %g], clip %g [%g, %g]\n", i, i % 4 == 3 ? "inside" : "outside",
+                fprintf(stderr, "gap ray %u (%s): gaps %d [%g, %g], clip %g [%g, %g]\n", i, inside ? "inside" : "outside",
                         ng, r[0], r[1], clip[4 * i + 2], clip[4 * i], clip[4 * i + 1]);
             bad_clip += (uint32_t)off;
             if (ng <= 0) continue;
@@ -571,7 +573,10 @@ static void test_gaps(clvr_cl *cl)
                     near_a |= fabsf(hhi[h] - a) <= tol;
                     near_b |= fabsf(hlo[h] - b) <= tol;
                 }
-                const int from_inside = which >= 0 && g == 0 && fabsf(a - r[0]) <= tol; /* before the first crossing */
+                /* Only a ray from inside the box may start in a gap (its
+                 * origin outside the mesh): the first gap then begins at the
+                 * ray's start, before the first crossing. */
+                const int from_inside = inside && g == 0 && fabsf(a - r[0]) <= tol;
                 missed += !(near_a || from_inside) || !near_b;
                 if (!(a < b) || (g > 0 && !(a > r[3 + 2 * g]))) ++missed; /* empty, or out of order */
             }
