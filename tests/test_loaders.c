@@ -1125,6 +1125,16 @@ static void test_fields_bin(void)
     TU_CHECK_NEAR(m.scalars[1], 1.0, 1e-6);
     TU_CHECK(strcmp(m.scalar_name, "vel:y") == 0);
     clvr_mesh_free(&m);
+    /* Mapped (clvr_dataset_load's way): the positions point into the file's
+     * mapping, the scalars, made from a field, are the loader's own. */
+    opt.map_indices = opt.map_vertices = 1;
+    TU_CHECK_STATUS(clvr_mesh_load(tmp_path("v2.bin"), &opt, &m, &err), CLVR_OK, &err);
+    TU_CHECK(m.map_base && (const uint8_t *)m.positions == (const uint8_t *)m.map_base + 256);
+    TU_CHECK(m.num_vertices == 5 && m.positions[3 * 4 + 2] == 1.0f);
+    TU_CHECK_NEAR(m.scalars[0], 4.0, 1e-6);
+    TU_CHECK_NEAR(m.scalars[1], 1.0, 1e-6);
+    clvr_mesh_free(&m);
+    opt.map_indices = opt.map_vertices = 0;
     opt.scalar_name = "pressure";
     TU_CHECK_STATUS(clvr_mesh_load(tmp_path("v2.bin"), &opt, &m, &err), CLVR_ERR_BAD_FIELD, &err);
     CHECK_MSG(err, "v2.bin", "point:s, cell:s, point:vel (vector)");

@@ -447,7 +447,10 @@ static clvr_status bin_finish(clvr_mesh *m, const char *name, const clvr_load_op
 /* Maps the file's arrays up to the end of the last index list (one
  * read-only private mapping from the file's start) and points m->indices,
  * and with map_vertices m->positions (and a version 1 file's m->scalars),
- * into it (m->map_base). The header has been checked against the file's
+ * into it (m->map_base). With map_vertices, m comes without vertex arrays
+ * (clvr_mesh_alloc of 0 vertices): the counts are set here, and the
+ * scalars of a version 2 file, which are read from its fields, allocated.
+ * The header has been checked against the file's
  * size, so every array lies inside the file. A file truncated by someone
  * else while mapped would fault (SIGBUS) on access: clvr's own files are
  * written under a temporary name and renamed when complete, so they are
@@ -472,12 +475,14 @@ static clvr_status bin_map_arrays(const bin_src *src, const bin_header *hd, int 
     m->map_bytes = end;
     uint64_t off = BIN_HEADER_SIZE;
     if (map_vertices) {
-        free(m->positions);
+        m->num_vertices = hd->num_vertices;
         m->positions = hd->num_vertices ? (float *)((uint8_t *)p + off) : NULL;
-        if (hd->array_bytes[BIN_ARRAY_SCALARS]) {
-            free(m->scalars);
+        if (hd->array_bytes[BIN_ARRAY_SCALARS])
             m->scalars = (float *)((uint8_t *)p + off + hd->array_bytes[BIN_ARRAY_POSITIONS]);
-        }
+        else if (hd->num_vertices && !(m->scalars = malloc((size_t)hd->num_vertices * sizeof(float))))
+            /* (no overflow: the positions, 3 floats a vertex, fit in the mapping) */
+            return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "%s: cannot allocate %.3f GB of scalars", src->name,
+                                  (double)hd->num_vertices * sizeof(float) / 1e9);
     }
     off += hd->array_bytes[BIN_ARRAY_POSITIONS] + hd->array_bytes[BIN_ARRAY_SCALARS];
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
@@ -531,8 +536,11 @@ static clvr_status bin_load(const bin_src *src, const clvr_load_options *opt, cl
                            hd.fields[fi].association == CLVR_FIELD_CELL;
     const int map = opt && opt->map_indices && src->fd >= 0 && !flat_cells;
     if (map) {
+        /* Mapped vertices are not allocated (bin_map_arrays sets them):
+         * allocating them to free them at once cost a transient copy of
+         * their size. */
         const uint64_t none[CLVR_CELL_TYPE_COUNT] = {0};
-        s = clvr_mesh_alloc(out, hd.num_vertices, none, err);
+        s = clvr_mesh_alloc(out, opt->map_vertices ? 0 : hd.num_vertices, none, err);
         if (s == CLVR_OK) s = bin_map_arrays(src, &hd, opt->map_vertices, out, err);
     } else {
         s = clvr_mesh_alloc(out, hd.num_vertices, hd.num_cells, err);
