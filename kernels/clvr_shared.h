@@ -610,7 +610,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 392 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 408 bytes. */
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -677,8 +677,14 @@ typedef struct clvr_frame {
      * refine passes; way + 1 for a pass over the pilot's list (each pixel
      * twice: two samples), written to refine[way x pass_pixels + i] alone. */
     clvr_u32 pilot;
+    /* Pixels [live[0], live[2]) x [live[1], live[3]) of a frame are traced;
+     * the camera rays of the others cannot meet the clip box
+     * (host/pipeline/camera.c clvr_camera_live_rect), and the frame writes
+     * them as a ray that misses it, without drawing their streams
+     * (kernels/render.cl). live[2] == 0: every pixel is traced. */
+    clvr_u32 live[4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 392, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 408, "clvr_frame layout");
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

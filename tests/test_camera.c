@@ -2,7 +2,8 @@
  * the look-at point, top-left is up-left, unit directions, field of view),
  * projection as its inverse, automatic framing that keeps every box corner
  * inside the image, the view options (up axis, azimuth, elevation, zoom) and
- * turntable rotation, and the --camera parser's errors. */
+ * turntable rotation, the rectangle of pixels a frame traces, and the
+ * --camera parser's errors. */
 #include "camera.h"
 #include "test_util.h"
 
@@ -326,10 +327,121 @@ static void test_parse(void)
     }
 }
 
+/* clvr_camera_live_rect: no ray through a pixel outside the rectangle
+ * meets the box (rays sampled on an 8 x 8 grid in every pixel, as the
+ * kernel makes them, in float), and the rectangle is tight (within one
+ * pixel of the hits' bounding rectangle) when the whole box is in view;
+ * the whole image with the eye inside the box, none with the box behind
+ * it, every pixel that sees it with the box beside the eye (partly
+ * behind). A wrong rectangle would blank pixels that see the medium. */
+static void test_live_rect(void)
+{
+    uint64_t rng = 11;
+    clvr_error err = {0};
+    int cases = 0, tight_cases = 0, escaped = 0, loose = 0, partial = 0;
+    for (int t = 0; t < 400; ++t) {
+        float lo[3], hi[3], eye[3], at[3], up[3] = {0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = (tu_randf(&rng) - 0.5f) * 10.0f;
+            hi[k] = lo[k] + 0.01f + 5.0f * tu_randf(&rng);
+            eye[k] = (tu_randf(&rng) - 0.5f) * (t % 4 == 0 ? 12.0f : 60.0f);
+            at[k] = 0.5f * (lo[k] + hi[k]) + (tu_randf(&rng) - 0.5f) * (t % 3 == 0 ? 30.0f : 3.0f);
+        }
+        up[t % 3] = 1.0f;
+        const uint32_t w = 1 + (uint32_t)(tu_rand(&rng) % 48), h = 1 + (uint32_t)(tu_rand(&rng) % 40);
+        clvr_camera cam;
+        if (clvr_camera_look_at(&cam, eye, at, up, 5.0f + 150.0f * tu_randf(&rng), w, h, &err) != CLVR_OK) continue;
+        uint32_t live[4];
+        clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+        /* Tight where every corner is in front and inside the image: the
+         * rectangle is that of the box's whole projection (the corners'
+         * convex hull), which elsewhere may reach past the image. */
+        int in_view = 1;
+        for (int c = 0; c < 8; ++c) {
+            const float q[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+            float px, py;
+            in_view &= clvr_camera_project(&cam, q, &px, &py) > 1e-3f && px >= 0.0f && py >= 0.0f &&
+                       px <= (float)w && py <= (float)h;
+        }
+        int64_t hx0 = w, hy0 = h, hx1 = -1, hy1 = -1;
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x) {
+                const int live_px = x >= live[0] && x < live[2] && y >= live[1] && y < live[3];
+                for (int j = 0; j < 64; ++j) {
+                    float o[3], d[3];
+                    clvr_camera_ray(&cam, (float)x + ((float)(j % 8) + 0.5f) / 8.0f,
+                                    (float)y + ((float)(j / 8) + 0.5f) / 8.0f, o, d);
+                    if (!clvr_ray_hits_box(o, d, lo, hi)) continue;
+                    escaped += !live_px;
+                    if (x < hx0) hx0 = x;
+                    if (y < hy0) hy0 = y;
+                    if ((int64_t)x > hx1) hx1 = x;
+                    if ((int64_t)y > hy1) hy1 = y;
+                }
+            }
+        ++cases;
+        const int whole = live[0] == 0 && live[1] == 0 && live[2] == w && live[3] == h;
+        partial += !whole;
+        if (in_view && hx1 >= 0) {
+            ++tight_cases;
+            loose += hx0 - (int64_t)live[0] > 1 || hy0 - (int64_t)live[1] > 1 || (int64_t)live[2] - (hx1 + 1) > 1 ||
+                     (int64_t)live[3] - (hy1 + 1) > 1;
+        }
+    }
+    printf("live rectangle: %d cameras (%d not the whole image, %d with the whole box in view): %d sampled rays "
+           "outside it met the box, %d rectangles more than a pixel wider than the hits\n", cases, partial,
+           tight_cases, escaped, loose);
+    TU_CHECK(cases > 300 && tight_cases > 50 && partial > 50);
+    TU_CHECK_EQ_U64(escaped, 0);
+    TU_CHECK_EQ_U64(loose, 0);
+
+    /* The eye inside the box: every pixel; the box behind the eye: none;
+     * the margin widens the rectangle, cut to the image. */
+    const float lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1}, up[3] = {0, 1, 0};
+    const float eye_in[3] = {0.2f, 0.1f, 0.3f}, at_in[3] = {0, 0, -5};
+    clvr_camera cam;
+    uint32_t live[4];
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_in, at_in, up, 40.0f, 64, 48, &err), CLVR_OK, &err);
+    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+    TU_CHECK(live[0] == 0 && live[1] == 0 && live[2] == 64 && live[3] == 48);
+    /* Beside: the box below the eye and half behind it, seen at a wide
+     * angle (rays toward its near part run far out of the projection of
+     * the corners in front). */
+    const float eye_side[3] = {0.0f, 0.0f, 1.5f}, at_side[3] = {5.0f, 0.0f, 1.5f}, up_z[3] = {0, 0, 1};
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_side, at_side, up_z, 150.0f, 64, 64, &err), CLVR_OK, &err);
+    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+    int side_hits = 0, side_escaped = 0;
+    for (uint32_t y = 0; y < 64; ++y)
+        for (uint32_t x = 0; x < 64; ++x)
+            for (int j = 0; j < 16; ++j) {
+                float o[3], d[3];
+                clvr_camera_ray(&cam, (float)x + ((float)(j % 4) + 0.5f) / 4.0f, (float)y + ((float)(j / 4) + 0.5f) / 4.0f,
+                                o, d);
+                if (!clvr_ray_hits_box(o, d, lo, hi)) continue;
+                ++side_hits;
+                side_escaped += !(x >= live[0] && x < live[2] && y >= live[1] && y < live[3]);
+            }
+    TU_CHECK(side_hits > 1000);
+    TU_CHECK_EQ_U64(side_escaped, 0);
+    const float eye_out[3] = {0, 0, 10}, at_away[3] = {0, 0, 20}, at_box[3] = {0, 0, 0};
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_out, at_away, up, 40.0f, 64, 48, &err), CLVR_OK, &err);
+    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+    TU_CHECK(live[2] <= live[0] || live[3] <= live[1]);
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_out, at_box, up, 40.0f, 64, 48, &err), CLVR_OK, &err);
+    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+    uint32_t wide[4];
+    clvr_camera_live_rect(&cam, lo, hi, 3u, wide);
+    printf("live rectangle of a box seen from 10 box half-widths: [%u, %u) x [%u, %u) of 64 x 48, with a margin of 3 "
+           "[%u, %u) x [%u, %u)\n", live[0], live[2], live[1], live[3], wide[0], wide[2], wide[1], wide[3]);
+    TU_CHECK(live[0] > 10 && live[2] < 54 && live[1] > 5 && live[3] < 43);
+    TU_CHECK(wide[0] == live[0] - 3 && wide[2] == live[2] + 3 && wide[1] == live[1] - 3 && wide[3] == live[3] + 3);
+}
+
 int main(void)
 {
     test_look_at_axes();
     test_random_cameras();
+    test_live_rect();
     test_frame_box();
     test_views();
     test_errors();

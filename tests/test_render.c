@@ -1338,6 +1338,81 @@ static void test_seeds(clvr_cl *cl)
     fixture_close(&fx);
 }
 
+/* ---- 5b. the live rectangle (clvr_frame.live): a frame that writes the
+ * pixels whose rays cannot meet the clip box as background, untraced,
+ * gives the image, denoiser guides and counters of one that traces them
+ * all, bit for bit, with the pixel control variates and adaptive sampling
+ * on (the defaults), for every estimator and method, with and without
+ * shadows; and the view leaves pixels outside the rectangle (else this
+ * compares nothing). */
+static void test_live_pixels(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    clvr_mesh m;
+    if (blob_box(&m)) return;
+    const uint32_t W = 40, H = 32, np = W * H;
+    fixture fx;
+    if (fixture_open(&fx, cl, &m, W, H)) return;
+    float table[8] = {1, 0.5f, 0, 0, 0, 0.5f, 1, 20};
+    set_table(&fx, table, 2, 0.0f, 1.0f);
+    const float *lo = fx.mesh.bounds_lo, *hi = fx.mesh.bounds_hi;
+    float eye[3], at[3], up[3] = {0, 1, 0};
+    for (int k = 0; k < 3; ++k) {
+        at[k] = 0.5f * (lo[k] + hi[k]);
+        eye[k] = at[k] + (hi[k] - lo[k]) * (k == 2 ? 2.5f : 0.6f);
+    }
+    clvr_camera cam;
+    TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 40.0f, W, H, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
+    uint32_t live[4];
+    clvr_camera_live_rect(&cam, lo, hi, 3u, live);
+    const uint32_t outside = np - (live[2] - live[0]) * (live[3] - live[1]);
+    printf("live pixels: [%u, %u) x [%u, %u) of %u x %u, %u pixels outside\n", live[0], live[2], live[1], live[3], W, H,
+           outside);
+    TU_CHECK(outside > np / 4 && live[2] > live[0] && live[3] > live[1]);
+    fx.set.sampler = CLVR_SAMPLER_LD;
+    fx.set.adaptive = CLVR_ADAPTIVE_DEFAULT;
+    fx.set.guides = 1;
+    const uint32_t methods[] = {CLVR_RENDER_DDA, CLVR_RENDER_TRACK, CLVR_RENDER_MARCH};
+    float *img[2], *gd[2];
+    for (int i = 0; i < 2; ++i) {
+        img[i] = malloc((size_t)np * 4 * sizeof(float));
+        gd[i] = malloc((size_t)np * 4 * sizeof(float));
+    }
+    int differ = 0, runs = 0;
+    for (uint32_t mi = 0; mi < 3 && img[0] && img[1] && gd[0] && gd[1]; ++mi)
+        for (uint32_t est = 0; est < CLVR_ESTIMATOR_COUNT; ++est)
+            for (int sh = 0; sh < 2; ++sh) {
+                if (methods[mi] == CLVR_RENDER_MARCH && (est || sh)) continue; /* march: one way */
+                clvr_render_counters rc[2];
+                for (int all = 0; all < 2; ++all) {
+                    fx.set.method = methods[mi];
+                    fx.set.estimator = est;
+                    fx.set.shadows = sh;
+                    fx.set.trace_all = all;
+                    clvr_status s = clvr_renderer_set_settings(fx.r, &fx.set, &err);
+                    for (int f = 0; f < 3 && s == CLVR_OK; ++f) s = clvr_renderer_frame(fx.r, &err);
+                    if (s == CLVR_OK) s = clvr_renderer_read(fx.r, img[all], &rc[all], &err);
+                    if (s == CLVR_OK) s = clvr_renderer_read_guides(fx.r, gd[all], &err);
+                    TU_CHECK_STATUS(s, CLVR_OK, &err);
+                }
+                ++runs;
+                const int d = memcmp(img[0], img[1], (size_t)np * 4 * sizeof(float)) != 0 ||
+                              memcmp(gd[0], gd[1], (size_t)np * 4 * sizeof(float)) != 0 ||
+                              rc[0].rays != rc[1].rays || rc[0].samples != rc[1].samples ||
+                              rc[0].null_collisions != rc[1].null_collisions;
+                if (d) printf("live pixels: method %u estimator %u shadows %d: the images differ\n", methods[mi], est, sh);
+                differ += d;
+            }
+    TU_CHECK(runs >= 7);
+    TU_CHECK_EQ_U64(differ, 0);
+    for (int i = 0; i < 2; ++i) {
+        free(img[i]);
+        free(gd[i]);
+    }
+    fixture_close(&fx);
+}
+
 /* ---- 6. the low-discrepancy sequence (kernels/rng.h, run on the host) */
 
 /* clvr_ld_sample written plainly, as it was before it scrambled reversed
@@ -1723,6 +1798,7 @@ int main(void)
     test_clip(&cl);
     test_majorants(&cl);
     test_seeds(&cl);
+    test_live_pixels(&cl);
     {
         clvr_mesh m;
         if (!blob_box(&m)) methods_agree(&cl, &m, "mixed box", 256);

@@ -255,6 +255,64 @@ clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err)
     return CLVR_OK;
 }
 
+void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin,
+                           uint32_t live[4])
+{
+    const uint32_t w = cam->width, h = cam->height;
+    live[0] = live[1] = 0;
+    live[2] = w;
+    live[3] = h;
+    /* The ray through pixel coordinates (px, py) is along corner + px du +
+     * py dv: a corner q of the box lies on it where q - eye = a corner + b du
+     * + c dv with a > 0, at px = b / a, py = c / a (Cramer's rule). */
+    const double C[3] = {cam->corner[0], cam->corner[1], cam->corner[2]}, U[3] = {cam->du[0], cam->du[1], cam->du[2]},
+                 V[3] = {cam->dv[0], cam->dv[1], cam->dv[2]};
+    const double UxV[3] = {U[1] * V[2] - U[2] * V[1], U[2] * V[0] - U[0] * V[2], U[0] * V[1] - U[1] * V[0]};
+    const double det = C[0] * UxV[0] + C[1] * UxV[1] + C[2] * UxV[2];
+    if (!(fabs(det) > 0.0) || !isfinite(det)) return;
+    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
+    int behind = 0;
+    for (int k = 0; k < 8; ++k) {
+        const double q[3] = {((k & 1) ? hi[0] : lo[0]) - cam->origin[0], ((k & 2) ? hi[1] : lo[1]) - cam->origin[1],
+                             ((k & 4) ? hi[2] : lo[2]) - cam->origin[2]};
+        const double a = (q[0] * UxV[0] + q[1] * UxV[1] + q[2] * UxV[2]) / det;
+        /* det(C, q, V) and det(C, U, q), over det(C, U, V) */
+        const double b = (C[0] * (q[1] * V[2] - q[2] * V[1]) + C[1] * (q[2] * V[0] - q[0] * V[2]) +
+                          C[2] * (q[0] * V[1] - q[1] * V[0])) / det;
+        const double c = (C[0] * (U[1] * q[2] - U[2] * q[1]) + C[1] * (U[2] * q[0] - U[0] * q[2]) +
+                          C[2] * (U[0] * q[1] - U[1] * q[0])) / det;
+        /* A corner at or behind the eye's plane: rays at any angle may meet
+         * the box. Also a corner nearly in that plane (its projection far
+         * outside any image). */
+        const double qn = fabs(q[0]) + fabs(q[1]) + fabs(q[2]);
+        if (a < -1e-6 * qn) {
+            ++behind;
+            continue;
+        }
+        if (!(a > 1e-6 * qn) || !isfinite(b) || !isfinite(c)) return;
+        xmin = fmin(xmin, b / a);
+        xmax = fmax(xmax, b / a);
+        ymin = fmin(ymin, c / a);
+        ymax = fmax(ymax, c / a);
+    }
+    /* Every ray point has a > 0: a box wholly behind the eye is seen by
+     * no pixel; one partly behind, by any. */
+    if (behind == 8) {
+        live[0] = live[2] = w;
+        return;
+    }
+    if (behind) return;
+    /* The box's projection lies in the corners' (it is their convex hull);
+     * pixel x covers [x, x + 1). Cut to the image before converting. */
+    const double m = (double)margin;
+    const double x0 = fmax(floor(xmin) - m, 0.0), x1 = fmin(floor(xmax) + 1.0 + m, (double)w);
+    const double y0 = fmax(floor(ymin) - m, 0.0), y1 = fmin(floor(ymax) + 1.0 + m, (double)h);
+    live[0] = x0 < (double)w ? (uint32_t)x0 : w;
+    live[1] = y0 < (double)h ? (uint32_t)y0 : h;
+    live[2] = x1 > 0.0 ? (uint32_t)x1 : 0u;
+    live[3] = y1 > 0.0 ? (uint32_t)y1 : 0u;
+}
+
 int clvr_ray_hits_box(const float org[3], const float dir[3], const float lo[3], const float hi[3])
 {
     double t0 = 0.0, t1 = INFINITY;

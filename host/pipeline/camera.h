@@ -91,4 +91,16 @@ float clvr_camera_project(const clvr_camera *cam, const float p[3], float *px, f
  * pixels see a volume (auto's pilot, bench_render's inside pixels). */
 int clvr_ray_hits_box(const float org[3], const float dir[3], const float lo[3], const float hi[3]);
 
+/* The pixels whose camera rays (clvr_camera_ray through any point of the
+ * pixel) can meet the box [lo, hi], widened by `margin` pixels on every
+ * side and cut to the image: live = {x0, y0, x1, y1}, the pixels [x0, x1) x
+ * [y0, y1) (x1 <= x0 or y1 <= y0: none). Found from the box's corners
+ * projected through the camera's own ray vectors (in double); the whole
+ * image when a corner is not in front of the eye (the eye in or beside the
+ * box, where the box's projection is unbounded) or the vectors are
+ * degenerate. The render kernel writes pixels outside as background
+ * without tracing them (clvr_frame.live). */
+void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin,
+                           uint32_t live[4]);
+
 #endif /* CLVR_CAMERA_H */

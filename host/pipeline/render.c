@@ -634,6 +634,13 @@ static clvr_status render_pass(clvr_renderer *r, uint32_t pass_pixels, clvr_erro
     if (!r->tf_n) return clvr_error_set(err, CLVR_ERR_INTERNAL, "clvr_renderer_frame before a transfer function");
     r->frame.frame_index = (clvr_u32)r->frames;
     r->frame.pass_pixels = pass_pixels;
+    /* The pixels the frame traces: a margin of 3 around those whose rays
+     * can meet the clip box, 2 for the pixel control variates' neighbours
+     * (kernels/render.cl) and 1 for rounding, so that the image is the one
+     * every pixel traced would give, bit for bit. */
+    clvr_camera_live_rect(&r->cam, r->frame.vol_lo, r->frame.vol_hi, 3u, r->frame.live);
+    if (r->frame.live[2] == 0u) r->frame.live[0] = r->frame.live[2] = r->set.width; /* none live; 0 means all */
+    if (r->set.trace_all) r->frame.live[2] = 0u;
     CLVR_TRY(upload_frame(r, err));
     CLVR_TRY(ensure_light(r, err));
     CLVR_TRY(enqueue_pass(r, pass_pixels, r->refine, r->list, &evt, err));

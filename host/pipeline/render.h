@@ -79,6 +79,11 @@ typedef struct clvr_render_settings {
      * normalised with d); a zero n is a usage error. Default none. */
     uint32_t num_clip_planes;  /* 0..CLVR_MAX_CLIP_PLANES */
     float clip_planes[CLVR_MAX_CLIP_PLANES][4];
+    /* Nonzero: a frame traces every pixel, also those whose camera rays
+     * cannot meet the clip box (which it otherwise writes as background
+     * without tracing, clvr_frame.live). The image is the same bit for bit
+     * (test_render checks it); default 0. */
+    int trace_all;
 } clvr_render_settings;
 
 /* Sensible defaults (dda, 512x512, shadows on, ...). */
