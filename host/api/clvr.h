@@ -260,7 +260,8 @@ CLVR_API clvr_result clvr_tracer_size(const clvr_tracer *tr, uint32_t *width, ui
  * frame: ERR_USAGE. */
 CLVR_API clvr_result clvr_tracer_read_image(clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg);
 /* One figure by name: "frames", "rays", "samples", "null_collisions",
- * "kernel_s" (device seconds of all frames), "last_frame_s",
+ * "kernel_s" (device seconds of all frames), "last_frame_s" (of the last
+ * frame: its full pass and, with adaptive sampling, its refine pass),
  * "preprocess_s" (wall, kernel compilation excluded), "kernel_build_s",
  * "elements", "points", "instances", "leaves", "sampling_clusters",
  * "device_bytes" (clustered mesh + trees), "density" (the density in use),
@@ -522,7 +523,7 @@ CLVR_API clvr_result clvr_tracer_set_size(clvr_tracer *tr, uint32_t width, uint3
 typedef struct clvr_render_stats {
     uint32_t size;
     uint64_t frames, rays, samples, null_collisions;
-    double kernel_s, last_frame_s; /* device seconds: all frames, the last one */
+    double kernel_s, last_frame_s; /* device seconds: all frames, the last one (its full and refine pass) */
     uint32_t width, height;
     char method[16];
     char estimator[16]; /* since 1.6: what the frames render with ("delta", "urm", "walk"): "auto" resolved,

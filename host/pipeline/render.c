@@ -1119,15 +1119,20 @@ cleanup:
     return s;
 }
 
-static clvr_status mpi_run(clvr_renderer *r, cl_kernel k, uint64_t *samples, clvr_error *err)
+/* first: the call starts a frame (phase 1). An MPI frame is its record
+ * and its shadow pass, as a frame is its full and its refine pass: the
+ * shadow pass adds to last_frame_s (it replaced it, so the figure was the
+ * last kernel's alone). */
+static clvr_status mpi_run(clvr_renderer *r, cl_kernel k, int first, uint64_t *samples, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_event evt = NULL;
     cl_uint *cnt = NULL;
     CLVR_TRY(clvr_cl_run2d(r->cl, k, r->set.width, r->set.height, r->local, &evt, err));
     CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-    r->last_frame_s = clvr_cl_event_seconds(evt);
-    r->kernel_s += r->last_frame_s;
+    const double t = clvr_cl_event_seconds(evt);
+    r->last_frame_s = first ? t : r->last_frame_s + t;
+    r->kernel_s += t;
     if (samples) {
         cnt = malloc(r->mpi_npix * 2 * sizeof(cl_uint));
         if (!cnt) { s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "out of memory reading counters"); goto cleanup; }
@@ -1152,7 +1157,7 @@ clvr_status clvr_renderer_mpi_record(clvr_renderer *r, uint32_t frame, uint32_t 
     volume_bufs vol = volume_of(r);
     CLVR_TRY(CLVR_CL_ARGS(r->k_mpi_record, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
                           CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->mpi_rec), CLVR_ARG(r->mpi_counters)));
-    CLVR_TRY(mpi_run(r, r->k_mpi_record, samples, err));
+    CLVR_TRY(mpi_run(r, r->k_mpi_record, 1, samples, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_rec, CL_TRUE, 0, r->mpi_npix * sizeof(clvr_mpi_record), rec,
                                       0, NULL, NULL));
 cleanup:
@@ -1170,7 +1175,7 @@ clvr_status clvr_renderer_mpi_shadow(clvr_renderer *r, uint32_t frame, uint32_t 
     CLVR_TRY(CLVR_CL_ARGS(r->k_mpi_shadow, err, CLVR_ARG(r->frame_buf), CLVR_ARG(r->cam_buf),
                           CLVR_VOLUME_ARRAYS(CLVR_VOLUME_ARG) CLVR_ARG(r->mpi_pick), CLVR_ARG(r->mpi_tau),
                           CLVR_ARG(r->mpi_counters)));
-    CLVR_TRY(mpi_run(r, r->k_mpi_shadow, samples, err));
+    CLVR_TRY(mpi_run(r, r->k_mpi_shadow, 0, samples, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->mpi_tau, CL_TRUE, 0, r->mpi_npix * sizeof(float), tau, 0, NULL,
                                       NULL));
 cleanup:

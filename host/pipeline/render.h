@@ -117,7 +117,8 @@ typedef struct clvr_render_counters {
     uint64_t samples;         /* extinction lookups (point locations) */
     uint64_t null_collisions; /* rejected samples of delta tracking */
     double kernel_s;          /* device time of the render kernel, all frames (the light grid's included) */
-    double last_frame_s;      /* device time of the last frame: its full pass and its refine pass */
+    double last_frame_s;      /* device time of the last frame: its full pass and its refine pass (MPI mode:
+                               * its record and its shadow pass) */
     double light_s;           /* device time of the light grid's last build (urm with shadows; part of kernel_s) */
     uint64_t refine_passes;   /* adaptive sampling: refine passes so far (clvr_renderer_refine) */
     uint64_t refine_pixels;   /* pixels the refine list holds (0: none, or no list yet) */
