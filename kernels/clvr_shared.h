@@ -610,7 +610,10 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_MAX_CLIP_PLANES 6u
 
 /* Everything one frame of the render kernel needs besides the buffers.
- * Vectors are float[4] with w unused, loaded with vload3. 408 bytes. */
+ * Vectors are float[4] with w unused, loaded with vload3. 504 bytes. */
+/* Edges of the box's projection a frame keeps (clvr_frame.live_edges): a
+ * box's silhouette has at most 6. */
+#define CLVR_LIVE_EDGES 6
 typedef struct clvr_frame {
     float vol_lo[4];          /* clip box of the rays (the mesh bounds by default) */
     float vol_hi[4];
@@ -677,14 +680,28 @@ typedef struct clvr_frame {
      * refine passes; way + 1 for a pass over the pilot's list (each pixel
      * twice: two samples), written to refine[way x pass_pixels + i] alone. */
     clvr_u32 pilot;
-    /* Pixels [live[0], live[2]) x [live[1], live[3]) of a frame are traced;
-     * the camera rays of the others cannot meet the clip box
-     * (host/pipeline/camera.c clvr_camera_live_rect), and the frame writes
-     * them as a ray that misses it, without drawing their streams
+    /* The pixels a frame traces (clvr_frame_traces): those in the
+     * rectangle [live[0], live[2]) x [live[1], live[3]) and on the inner
+     * side of every edge (nx, ny, c): nx (x + 1/2) + ny (y + 1/2) <= c.
+     * The camera rays of the others cannot meet the clip box
+     * (host/pipeline/camera.c clvr_camera_live), and the frame writes them
+     * as a ray that misses it, without drawing their streams
      * (kernels/render.cl). live[2] == 0: every pixel is traced. */
     clvr_u32 live[4];
+    float live_edges[CLVR_LIVE_EDGES][4];
 } clvr_frame;
-CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 408, "clvr_frame layout");
+CLVR_STATIC_ASSERT(sizeof(clvr_frame) == 504, "clvr_frame layout");
+
+/* Whether frame f traces pixel (x, y) (clvr_frame.live). */
+CLVR_INLINE int clvr_frame_traces(CLVR_GLOBAL const clvr_frame *f, clvr_u32 x, clvr_u32 y)
+{
+    if (f->live[2] == 0u) return 1;
+    if (x < f->live[0] || x >= f->live[2] || y < f->live[1] || y >= f->live[3]) return 0;
+    const float px = (float)x + 0.5f, py = (float)y + 0.5f;
+    for (int k = 0; k < CLVR_LIVE_EDGES; ++k)
+        if (f->live_edges[k][0] * px + f->live_edges[k][1] * py > f->live_edges[k][2]) return 0;
+    return 1;
+}
 
 /* MPI mode, phase 1 (kernels/render.cl clvr_render_mpi_record): what one
  * rank's urm estimate along a camera ray inside its region is, for rank 0 to

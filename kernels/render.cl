@@ -55,18 +55,19 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
                                 __global float4 *guides, __global uint *nsamp, __global float4 *refine,
                                 __global const uint *list)
 {
-    /* A pixel of a frame outside its live rectangle (clvr_frame.live): its
-     * camera rays miss the clip box, so it is written as clvr_render_track
-     * and clvr_render_march return a miss (the background, no depth)
-     * without its streams, its camera ray or the frame's copy below. Its
-     * controls are 0, the centre: its value does not depend on them, and
-     * the pixels whose fit reads them (kernels/pixel_cv.h) are those next
-     * to a traced pixel, which the rectangle's margin keeps traced. A third
-     * of a frame's time went to such pixels on the notch at 256x256. */
-    if (fp->pass_pixels == 0u && fp->pilot == 0u && fp->live[2] != 0u) {
+    /* A pixel the frame does not trace (clvr_frame.live): its camera rays
+     * miss the clip box, so it is written as clvr_render_track and
+     * clvr_render_march return a miss (the background, no depth) without
+     * its streams, its camera ray or the frame's copy below. Its controls
+     * are 0, the centre: its value does not depend on them, and the pixels
+     * whose fit reads them (kernels/pixel_cv.h) are those next to a pixel
+     * that sees the box, which the live region's margin keeps traced. A
+     * third of a frame's time went to such pixels on the notch at
+     * 256x256. */
+    if (fp->pass_pixels == 0u && fp->pilot == 0u) {
         const uint x = get_global_id(0), y = get_global_id(1), w = fp->width;
         if (x >= w || y >= fp->height) return;
-        if (x < fp->live[0] || x >= fp->live[2] || y < fp->live[1] || y >= fp->live[3]) {
+        if (!clvr_frame_traces(fp, x, y)) {
             const uint pixel = y * w + x;
             const int first = fp->frame_index == 0u;
             nsamp[pixel] = first ? 1u : nsamp[pixel] + 1u;

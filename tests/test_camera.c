@@ -327,18 +327,32 @@ static void test_parse(void)
     }
 }
 
-/* clvr_camera_live_rect: no ray through a pixel outside the rectangle
- * meets the box (rays sampled on an 8 x 8 grid in every pixel, as the
- * kernel makes them, in float), and the rectangle is tight (within one
- * pixel of the hits' bounding rectangle) when the whole box is in view;
- * the whole image with the eye inside the box, none with the box behind
- * it, every pixel that sees it with the box beside the eye (partly
- * behind). A wrong rectangle would blank pixels that see the medium. */
-static void test_live_rect(void)
+/* The region frame f traces for the box seen by cam (clvr_camera_live),
+ * read with the kernel's own test (clvr_frame_traces). */
+static void live_of(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin, clvr_frame *f)
+{
+    memset(f, 0, sizeof *f);
+    clvr_camera_live(cam, lo, hi, margin, f->live, f->live_edges);
+}
+
+/* The pixels a frame traces (clvr_camera_live, clvr_frame_traces): no ray
+ * through a pixel left out meets the box (rays sampled on an 8 x 8 grid in
+ * every pixel, as the kernel makes them, in float); with a margin of 3,
+ * every pixel within 3 of one whose rays meet the box is traced (what the
+ * pixel control variates need to stay bit for bit, kernels/render.cl); the
+ * rectangle is tight to a pixel and every traced pixel is next to one
+ * whose rays meet the box when the whole box is in view, and the edges
+ * leave out pixels the rectangle keeps; every pixel with the eye inside the
+ * box, none with the box behind it, every pixel that sees it with the box
+ * beside the eye (partly behind). A wrong region would blank pixels that
+ * see the medium. */
+static void test_live_region(void)
 {
     uint64_t rng = 11;
     clvr_error err = {0};
-    int cases = 0, tight_cases = 0, escaped = 0, loose = 0, partial = 0;
+    int cases = 0, tight_cases = 0, escaped = 0, loose = 0, partial = 0, far = 0, near_missed = 0;
+    long rect_px = 0, traced_px = 0;
+    static unsigned char hit[48 * 40];
     for (int t = 0; t < 400; ++t) {
         float lo[3], hi[3], eye[3], at[3], up[3] = {0.0f, 0.0f, 0.0f};
         for (int k = 0; k < 3; ++k) {
@@ -351,8 +365,9 @@ static void test_live_rect(void)
         const uint32_t w = 1 + (uint32_t)(tu_rand(&rng) % 48), h = 1 + (uint32_t)(tu_rand(&rng) % 40);
         clvr_camera cam;
         if (clvr_camera_look_at(&cam, eye, at, up, 5.0f + 150.0f * tu_randf(&rng), w, h, &err) != CLVR_OK) continue;
-        uint32_t live[4];
-        clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+        clvr_frame f, f3;
+        live_of(&cam, lo, hi, 0u, &f);
+        live_of(&cam, lo, hi, 3u, &f3);
         /* Tight where every corner is in front and inside the image: the
          * rectangle is that of the box's whole projection (the corners'
          * convex hull), which elsewhere may reach past the image. */
@@ -366,50 +381,76 @@ static void test_live_rect(void)
         int64_t hx0 = w, hy0 = h, hx1 = -1, hy1 = -1;
         for (uint32_t y = 0; y < h; ++y)
             for (uint32_t x = 0; x < w; ++x) {
-                const int live_px = x >= live[0] && x < live[2] && y >= live[1] && y < live[3];
+                hit[y * w + x] = 0;
                 for (int j = 0; j < 64; ++j) {
                     float o[3], d[3];
                     clvr_camera_ray(&cam, (float)x + ((float)(j % 8) + 0.5f) / 8.0f,
                                     (float)y + ((float)(j / 8) + 0.5f) / 8.0f, o, d);
                     if (!clvr_ray_hits_box(o, d, lo, hi)) continue;
-                    escaped += !live_px;
+                    hit[y * w + x] = 1;
+                    escaped += !clvr_frame_traces(&f, x, y);
                     if (x < hx0) hx0 = x;
                     if (y < hy0) hy0 = y;
                     if ((int64_t)x > hx1) hx1 = x;
                     if ((int64_t)y > hy1) hy1 = y;
                 }
             }
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x) {
+                int hit_near1 = 0, hit_near3 = 0;
+                for (int dy = -3; dy <= 3; ++dy)
+                    for (int dx = -3; dx <= 3; ++dx) {
+                        const int64_t xx = (int64_t)x + dx, yy = (int64_t)y + dy;
+                        if (xx < 0 || yy < 0 || xx >= w || yy >= h || !hit[yy * w + xx]) continue;
+                        hit_near3 = 1;
+                        hit_near1 |= dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1;
+                    }
+                near_missed += hit_near3 && !clvr_frame_traces(&f3, x, y);
+                if (in_view && hx1 >= 0) {
+                    far += clvr_frame_traces(&f, x, y) && !hit_near1;
+                    rect_px += x >= f.live[0] && x < f.live[2] && y >= f.live[1] && y < f.live[3];
+                    traced_px += clvr_frame_traces(&f, x, y);
+                }
+            }
         ++cases;
-        const int whole = live[0] == 0 && live[1] == 0 && live[2] == w && live[3] == h;
+        const int whole = f.live[0] == 0 && f.live[1] == 0 && f.live[2] == w && f.live[3] == h;
         partial += !whole;
         if (in_view && hx1 >= 0) {
             ++tight_cases;
-            loose += hx0 - (int64_t)live[0] > 1 || hy0 - (int64_t)live[1] > 1 || (int64_t)live[2] - (hx1 + 1) > 1 ||
-                     (int64_t)live[3] - (hy1 + 1) > 1;
+            loose += hx0 - (int64_t)f.live[0] > 1 || hy0 - (int64_t)f.live[1] > 1 ||
+                     (int64_t)f.live[2] - (hx1 + 1) > 1 || (int64_t)f.live[3] - (hy1 + 1) > 1;
         }
     }
-    printf("live rectangle: %d cameras (%d not the whole image, %d with the whole box in view): %d sampled rays "
-           "outside it met the box, %d rectangles more than a pixel wider than the hits\n", cases, partial,
-           tight_cases, escaped, loose);
+    printf("live region: %d cameras (%d not the whole image, %d with the whole box in view): %d sampled rays outside "
+           "it met the box, %d pixels within 3 of a hit left out with a margin of 3, %d rectangles more than a pixel "
+           "wider than the hits, %d traced pixels with no hit next to them; the edges leave out %.0f%% of the "
+           "rectangles' pixels\n", cases, partial, tight_cases, escaped, near_missed, loose, far,
+           rect_px ? 100.0 * (double)(rect_px - traced_px) / (double)rect_px : 0.0);
     TU_CHECK(cases > 300 && tight_cases > 50 && partial > 50);
     TU_CHECK_EQ_U64(escaped, 0);
+    TU_CHECK_EQ_U64(near_missed, 0);
     TU_CHECK_EQ_U64(loose, 0);
+    TU_CHECK_EQ_U64(far, 0);
+    TU_CHECK(traced_px < rect_px * 9 / 10);
 
     /* The eye inside the box: every pixel; the box behind the eye: none;
      * the margin widens the rectangle, cut to the image. */
     const float lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1}, up[3] = {0, 1, 0};
     const float eye_in[3] = {0.2f, 0.1f, 0.3f}, at_in[3] = {0, 0, -5};
     clvr_camera cam;
-    uint32_t live[4];
+    clvr_frame f, wide;
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_in, at_in, up, 40.0f, 64, 48, &err), CLVR_OK, &err);
-    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
-    TU_CHECK(live[0] == 0 && live[1] == 0 && live[2] == 64 && live[3] == 48);
+    live_of(&cam, lo, hi, 0u, &f);
+    int all = 1;
+    for (uint32_t y = 0; y < 48; ++y)
+        for (uint32_t x = 0; x < 64; ++x) all &= clvr_frame_traces(&f, x, y);
+    TU_CHECK(all);
     /* Beside: the box below the eye and half behind it, seen at a wide
      * angle (rays toward its near part run far out of the projection of
      * the corners in front). */
     const float eye_side[3] = {0.0f, 0.0f, 1.5f}, at_side[3] = {5.0f, 0.0f, 1.5f}, up_z[3] = {0, 0, 1};
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_side, at_side, up_z, 150.0f, 64, 64, &err), CLVR_OK, &err);
-    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
+    live_of(&cam, lo, hi, 0u, &f);
     int side_hits = 0, side_escaped = 0;
     for (uint32_t y = 0; y < 64; ++y)
         for (uint32_t x = 0; x < 64; ++x)
@@ -419,29 +460,33 @@ static void test_live_rect(void)
                                 o, d);
                 if (!clvr_ray_hits_box(o, d, lo, hi)) continue;
                 ++side_hits;
-                side_escaped += !(x >= live[0] && x < live[2] && y >= live[1] && y < live[3]);
+                side_escaped += !clvr_frame_traces(&f, x, y);
             }
     TU_CHECK(side_hits > 1000);
     TU_CHECK_EQ_U64(side_escaped, 0);
     const float eye_out[3] = {0, 0, 10}, at_away[3] = {0, 0, 20}, at_box[3] = {0, 0, 0};
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_out, at_away, up, 40.0f, 64, 48, &err), CLVR_OK, &err);
-    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
-    TU_CHECK(live[2] <= live[0] || live[3] <= live[1]);
+    live_of(&cam, lo, hi, 0u, &f);
+    int none = 1;
+    for (uint32_t y = 0; y < 48; ++y)
+        for (uint32_t x = 0; x < 64; ++x) none &= !clvr_frame_traces(&f, x, y);
+    TU_CHECK(none && f.live[2] != 0u);
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye_out, at_box, up, 40.0f, 64, 48, &err), CLVR_OK, &err);
-    clvr_camera_live_rect(&cam, lo, hi, 0u, live);
-    uint32_t wide[4];
-    clvr_camera_live_rect(&cam, lo, hi, 3u, wide);
+    live_of(&cam, lo, hi, 0u, &f);
+    live_of(&cam, lo, hi, 3u, &wide);
     printf("live rectangle of a box seen from 10 box half-widths: [%u, %u) x [%u, %u) of 64 x 48, with a margin of 3 "
-           "[%u, %u) x [%u, %u)\n", live[0], live[2], live[1], live[3], wide[0], wide[2], wide[1], wide[3]);
-    TU_CHECK(live[0] > 10 && live[2] < 54 && live[1] > 5 && live[3] < 43);
-    TU_CHECK(wide[0] == live[0] - 3 && wide[2] == live[2] + 3 && wide[1] == live[1] - 3 && wide[3] == live[3] + 3);
+           "[%u, %u) x [%u, %u)\n", f.live[0], f.live[2], f.live[1], f.live[3], wide.live[0], wide.live[2],
+           wide.live[1], wide.live[3]);
+    TU_CHECK(f.live[0] > 10 && f.live[2] < 54 && f.live[1] > 5 && f.live[3] < 43);
+    TU_CHECK(wide.live[0] == f.live[0] - 3 && wide.live[2] == f.live[2] + 3 && wide.live[1] == f.live[1] - 3 &&
+             wide.live[3] == f.live[3] + 3);
 }
 
 int main(void)
 {
     test_look_at_axes();
     test_random_cameras();
-    test_live_rect();
+    test_live_region();
     test_frame_box();
     test_views();
     test_errors();

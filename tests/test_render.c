@@ -1364,12 +1364,19 @@ static void test_live_pixels(clvr_cl *cl)
     clvr_camera cam;
     TU_CHECK_STATUS(clvr_camera_look_at(&cam, eye, at, up, 40.0f, W, H, &err), CLVR_OK, &err);
     TU_CHECK_STATUS(clvr_renderer_set_camera(fx.r, &cam, &err), CLVR_OK, &err);
-    uint32_t live[4];
-    clvr_camera_live_rect(&cam, lo, hi, 3u, live);
-    const uint32_t outside = np - (live[2] - live[0]) * (live[3] - live[1]);
-    printf("live pixels: [%u, %u) x [%u, %u) of %u x %u, %u pixels outside\n", live[0], live[2], live[1], live[3], W, H,
-           outside);
-    TU_CHECK(outside > np / 4 && live[2] > live[0] && live[3] > live[1]);
+    clvr_frame live;
+    memset(&live, 0, sizeof live);
+    clvr_camera_live(&cam, lo, hi, 3u, live.live, live.live_edges);
+    uint32_t outside = 0, edge_cut = 0;
+    for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+            outside += !clvr_frame_traces(&live, x, y);
+            edge_cut += !clvr_frame_traces(&live, x, y) && x >= live.live[0] && x < live.live[2] &&
+                        y >= live.live[1] && y < live.live[3];
+        }
+    printf("live pixels: %u of %u x %u not traced, %u of them inside the rectangle [%u, %u) x [%u, %u)\n", outside, W,
+           H, edge_cut, live.live[0], live.live[2], live.live[1], live.live[3]);
+    TU_CHECK(outside > np / 4 && edge_cut > 0);
     fx.set.sampler = CLVR_SAMPLER_LD;
     fx.set.adaptive = CLVR_ADAPTIVE_DEFAULT;
     fx.set.guides = 1;

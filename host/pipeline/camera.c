@@ -255,13 +255,11 @@ clvr_status clvr_camera_parse(const char *text, float out[9], clvr_error *err)
     return CLVR_OK;
 }
 
-void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin,
-                           uint32_t live[4])
+/* The box's corners in pixel coordinates: 0, or 1 when some pixel ray may
+ * meet it at any angle (a corner beside or behind the eye, degenerate ray
+ * vectors), 2 when none can (the box wholly behind the eye). */
+static int project_box(const clvr_camera *cam, const float lo[3], const float hi[3], double xy[8][2])
 {
-    const uint32_t w = cam->width, h = cam->height;
-    live[0] = live[1] = 0;
-    live[2] = w;
-    live[3] = h;
     /* The ray through pixel coordinates (px, py) is along corner + px du +
      * py dv: a corner q of the box lies on it where q - eye = a corner + b du
      * + c dv with a > 0, at px = b / a, py = c / a (Cramer's rule). */
@@ -269,8 +267,7 @@ void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const floa
                  V[3] = {cam->dv[0], cam->dv[1], cam->dv[2]};
     const double UxV[3] = {U[1] * V[2] - U[2] * V[1], U[2] * V[0] - U[0] * V[2], U[0] * V[1] - U[1] * V[0]};
     const double det = C[0] * UxV[0] + C[1] * UxV[1] + C[2] * UxV[2];
-    if (!(fabs(det) > 0.0) || !isfinite(det)) return;
-    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
+    if (!(fabs(det) > 0.0) || !isfinite(det)) return 1;
     int behind = 0;
     for (int k = 0; k < 8; ++k) {
         const double q[3] = {((k & 1) ? hi[0] : lo[0]) - cam->origin[0], ((k & 2) ? hi[1] : lo[1]) - cam->origin[1],
@@ -281,29 +278,54 @@ void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const floa
                           C[2] * (q[0] * V[1] - q[1] * V[0])) / det;
         const double c = (C[0] * (U[1] * q[2] - U[2] * q[1]) + C[1] * (U[2] * q[0] - U[0] * q[2]) +
                           C[2] * (U[0] * q[1] - U[1] * q[0])) / det;
-        /* A corner at or behind the eye's plane: rays at any angle may meet
-         * the box. Also a corner nearly in that plane (its projection far
-         * outside any image). */
+        /* A corner at or behind the eye's plane (or nearly in it: its
+         * projection far outside any image). */
         const double qn = fabs(q[0]) + fabs(q[1]) + fabs(q[2]);
         if (a < -1e-6 * qn) {
             ++behind;
             continue;
         }
-        if (!(a > 1e-6 * qn) || !isfinite(b) || !isfinite(c)) return;
-        xmin = fmin(xmin, b / a);
-        xmax = fmax(xmax, b / a);
-        ymin = fmin(ymin, c / a);
-        ymax = fmax(ymax, c / a);
+        if (!(a > 1e-6 * qn) || !isfinite(b) || !isfinite(c)) return 1;
+        xy[k][0] = b / a;
+        xy[k][1] = c / a;
     }
     /* Every ray point has a > 0: a box wholly behind the eye is seen by
      * no pixel; one partly behind, by any. */
-    if (behind == 8) {
-        live[0] = live[2] = w;
+    return behind == 8 ? 2 : behind ? 1 : 0;
+}
+
+static double cross2(const double o[2], const double a[2], const double b[2])
+{
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+void clvr_camera_live(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin, clvr_u32 live[4],
+                      float edges[CLVR_LIVE_EDGES][4])
+{
+    const uint32_t w = cam->width, h = cam->height;
+    for (int k = 0; k < CLVR_LIVE_EDGES; ++k) {
+        edges[k][0] = edges[k][1] = edges[k][3] = 0.0f;
+        edges[k][2] = 1.0f; /* 0 > 1: cuts nothing */
+    }
+    live[0] = live[1] = 0;
+    live[2] = w;
+    live[3] = h;
+    double xy[8][2];
+    const int seen = project_box(cam, lo, hi, xy);
+    if (seen == 1) return;
+    if (seen == 2) {
+        live[0] = w; /* [w, w): none (live[2] == 0 would mean every pixel) */
         return;
     }
-    if (behind) return;
-    /* The box's projection lies in the corners' (it is their convex hull);
-     * pixel x covers [x, x + 1). Cut to the image before converting. */
+    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+        xmin = fmin(xmin, xy[k][0]);
+        xmax = fmax(xmax, xy[k][0]);
+        ymin = fmin(ymin, xy[k][1]);
+        ymax = fmax(ymax, xy[k][1]);
+    }
+    /* The box's projection is the corners' convex hull; pixel x covers
+     * [x, x + 1). Cut to the image before converting. */
     const double m = (double)margin;
     const double x0 = fmax(floor(xmin) - m, 0.0), x1 = fmin(floor(xmax) + 1.0 + m, (double)w);
     const double y0 = fmax(floor(ymin) - m, 0.0), y1 = fmin(floor(ymax) + 1.0 + m, (double)h);
@@ -311,6 +333,54 @@ void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const floa
     live[1] = y0 < (double)h ? (uint32_t)y0 : h;
     live[2] = x1 > 0.0 ? (uint32_t)x1 : 0u;
     live[3] = y1 > 0.0 ? (uint32_t)y1 : 0u;
+    if (live[2] == 0u) { /* the box left of the image: none */
+        live[0] = live[2] = w;
+        return;
+    }
+    /* The hull's edges (Andrew's monotone chain over the 8 points sorted
+     * by x then y), each the half-plane n.p <= c with n outward: a pixel
+     * whose square, widened by the margin, lies beyond one edge sees
+     * nothing of the box. Keeping fewer edges only widens the region. */
+    double pts[8][2], hull[17][2];
+    memcpy(pts, xy, sizeof pts);
+    for (int i = 1; i < 8; ++i)
+        for (int j = i; j > 0 && (pts[j][0] < pts[j - 1][0] || (pts[j][0] == pts[j - 1][0] && pts[j][1] < pts[j - 1][1]));
+             --j) {
+            double t0 = pts[j][0], t1 = pts[j][1];
+            pts[j][0] = pts[j - 1][0];
+            pts[j][1] = pts[j - 1][1];
+            pts[j - 1][0] = t0;
+            pts[j - 1][1] = t1;
+        }
+    int n = 0;
+    for (int i = 0; i < 8; ++i) {
+        while (n >= 2 && cross2(hull[n - 2], hull[n - 1], pts[i]) <= 0.0) --n;
+        hull[n][0] = pts[i][0];
+        hull[n++][1] = pts[i][1];
+    }
+    for (int i = 6, lower = n + 1; i >= 0; --i) {
+        while (n >= lower && cross2(hull[n - 2], hull[n - 1], pts[i]) <= 0.0) --n;
+        hull[n][0] = pts[i][0];
+        hull[n++][1] = pts[i][1];
+    }
+    --n; /* the last point is the first */
+    const double half = 0.5 + m;
+    int e = 0;
+    for (int i = 0; i < n && e < CLVR_LIVE_EDGES; ++i) {
+        const double *p = hull[i], *q = hull[i + 1 < n ? i + 1 : 0];
+        /* The chain runs counter-clockwise (x right, y up; cross2 > 0 turns
+         * left): the outward normal is the edge turned clockwise. */
+        const double len = sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]));
+        if (!(len > 1e-9 * (1.0 + fabs(p[0]) + fabs(p[1])))) continue;
+        const double nx = (q[1] - p[1]) / len, ny = (p[0] - q[0]) / len, c = nx * p[0] + ny * p[1];
+        /* The pixel's widened square: centre (x + 1/2, y + 1/2), half
+         * width `half`; beyond the edge when its nearest corner is. A
+         * hundredth of a pixel for the float test in the kernel. */
+        edges[e][0] = (float)nx;
+        edges[e][1] = (float)ny;
+        edges[e][2] = (float)(c + half * (fabs(nx) + fabs(ny)) + 0.01 + 1e-6 * fabs(c));
+        ++e;
+    }
 }
 
 int clvr_ray_hits_box(const float org[3], const float dir[3], const float lo[3], const float hi[3])

@@ -93,14 +93,15 @@ int clvr_ray_hits_box(const float org[3], const float dir[3], const float lo[3],
 
 /* The pixels whose camera rays (clvr_camera_ray through any point of the
  * pixel) can meet the box [lo, hi], widened by `margin` pixels on every
- * side and cut to the image: live = {x0, y0, x1, y1}, the pixels [x0, x1) x
- * [y0, y1) (x1 <= x0 or y1 <= y0: none). Found from the box's corners
- * projected through the camera's own ray vectors (in double); the whole
- * image when a corner is not in front of the eye (the eye in or beside the
- * box, where the box's projection is unbounded) or the vectors are
- * degenerate. The render kernel writes pixels outside as background
- * without tracing them (clvr_frame.live). */
-void clvr_camera_live_rect(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin,
-                           uint32_t live[4]);
+ * side, as clvr_frame.live and .live_edges (clvr_frame_traces tells a
+ * pixel): the rectangle of the box's projection cut to the image, and the
+ * edges of that projection (the convex hull of the box's corners projected
+ * through the camera's own ray vectors, in double). Every pixel when a
+ * corner is beside or behind the eye (the eye in or next to the box:
+ * the projection is unbounded) or the ray vectors are degenerate; none
+ * when the box is wholly behind the eye. The render kernel writes pixels
+ * it does not trace as background (kernels/render.cl). */
+void clvr_camera_live(const clvr_camera *cam, const float lo[3], const float hi[3], uint32_t margin, clvr_u32 live[4],
+                      float edges[CLVR_LIVE_EDGES][4]);
 
 #endif /* CLVR_CAMERA_H */

@@ -638,8 +638,7 @@ static clvr_status render_pass(clvr_renderer *r, uint32_t pass_pixels, clvr_erro
      * can meet the clip box, 2 for the pixel control variates' neighbours
      * (kernels/render.cl) and 1 for rounding, so that the image is the one
      * every pixel traced would give, bit for bit. */
-    clvr_camera_live_rect(&r->cam, r->frame.vol_lo, r->frame.vol_hi, 3u, r->frame.live);
-    if (r->frame.live[2] == 0u) r->frame.live[0] = r->frame.live[2] = r->set.width; /* none live; 0 means all */
+    clvr_camera_live(&r->cam, r->frame.vol_lo, r->frame.vol_hi, 3u, r->frame.live, r->frame.live_edges);
     if (r->set.trace_all) r->frame.live[2] = 0u;
     CLVR_TRY(upload_frame(r, err));
     CLVR_TRY(ensure_light(r, err));
