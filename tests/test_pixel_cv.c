@@ -46,10 +46,11 @@ static int run_device(clvr_cl *cl, cl_kernel k, const float *sum, const float *c
                            refine ? (void *)nsamp : (void *)&one, "sample counts", &bn, &err);
     if (s == CLVR_OK) s = clvr_cl_buffer(cl, CL_MEM_WRITE_ONLY, bytes, NULL, "image", &bo, &err);
     const cl_uint cw = w, ch = h, refine_frames = refine ? frames : 0u;
+    const cl_uint4 live = {{0u, 0u, w, h}}; /* every pixel fitted, as the reference */
     const cl_float cn = inv_n;
     if (s == CLVR_OK)
         s = CLVR_CL_ARGS(k, &err, CLVR_ARG(bs), CLVR_ARG(bc), CLVR_ARG(cn), CLVR_ARG(cw), CLVR_ARG(ch), CLVR_ARG(br),
-                         CLVR_ARG(bn), CLVR_ARG(refine_frames), CLVR_ARG(bo));
+                         CLVR_ARG(bn), CLVR_ARG(refine_frames), CLVR_ARG(live), CLVR_ARG(bo));
     if (s == CLVR_OK) s = clvr_cl_run2d(cl, k, w, h, local, NULL, &err);
     if (s == CLVR_OK && clEnqueueReadBuffer(cl->queue, bo, CL_TRUE, 0, bytes, out, 0, NULL, NULL) != CL_SUCCESS)
         s = clvr_error_set(&err, CLVR_ERR_OPENCL, "clEnqueueReadBuffer(image) failed");

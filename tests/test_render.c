@@ -1338,10 +1338,12 @@ static void test_seeds(clvr_cl *cl)
     fixture_close(&fx);
 }
 
-/* ---- 5b. the live rectangle (clvr_frame.live): a frame that writes the
- * pixels whose rays cannot meet the clip box as background, untraced,
- * gives the image, denoiser guides and counters of one that traces them
- * all, bit for bit, with the pixel control variates and adaptive sampling
+/* ---- 5b. the live region (clvr_frame.live): frames that write the
+ * pixels whose rays cannot meet the clip box as background, untraced, and
+ * an image pass that takes those outside the rectangle as flat without
+ * reading their neighbours give the image, denoiser guides and counters
+ * of frames that trace every pixel and a pass that fits them all, bit for
+ * bit (a margin of 0 for either fails), with the pixel control variates and adaptive sampling
  * on (the defaults), for every estimator and method, with and without
  * shadows; and the view leaves pixels outside the rectangle (else this
  * compares nothing). */

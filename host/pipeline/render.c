@@ -985,6 +985,21 @@ cleanup:
     return s;
 }
 
+/* The rectangle of the pixels the frames since the last change traced
+ * (clvr_frame.live, as render_pass sets it: the camera and clip box are
+ * those of the frames, a change of either restarts them), or the whole
+ * image where they traced every pixel (settings.trace_all). */
+static cl_uint4 reads_live(const clvr_renderer *r)
+{
+    cl_uint4 v = {{0u, 0u, r->set.width, r->set.height}};
+    clvr_u32 live[4];
+    float edges[CLVR_LIVE_EDGES][4];
+    clvr_camera_live(&r->cam, r->frame.vol_lo, r->frame.vol_hi, 3u, live, edges);
+    if (!r->set.trace_all)
+        for (int k = 0; k < 4; ++k) v.s[k] = live[k];
+    return v;
+}
+
 clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counters *counters, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
@@ -1000,9 +1015,10 @@ clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counte
         /* refine_frames: 0, no refine sums; else the frames, below which a
          * pixel's count means no refine sample of its own. */
         const cl_uint w = r->set.width, h = r->set.height, refine_frames = r->list_made ? (cl_uint)r->frames : 0u;
+        const cl_uint4 live = reads_live(r);
         CLVR_TRY(CLVR_CL_ARGS(r->k_cv, err, CLVR_ARG(r->accum), CLVR_ARG(r->ctl), CLVR_ARG(inv_n), CLVR_ARG(w),
                               CLVR_ARG(h), CLVR_ARG(r->refine), CLVR_ARG(r->nsamp), CLVR_ARG(refine_frames),
-                              CLVR_ARG(r->image)));
+                              CLVR_ARG(live), CLVR_ARG(r->image)));
         CLVR_TRY(clvr_cl_run2d(r->cl, r->k_cv, w, h, r->local, &evt, err));
         CLVR_CL_CHECK(clEnqueueReadBuffer(r->cl->queue, r->image, CL_TRUE, 0, npix * 4 * sizeof(float), rgba, 0,
                                           NULL, NULL));
