@@ -1423,9 +1423,14 @@ typedef struct clvr_walk_ctl {
     int one_bin;       /* one bin of the table (or both ends beyond the same end): linear in x */
 } clvr_walk_ctl;
 
-/* k: ds/dt (sb = sa + k len); sig_a: the extinction at sa. */
-inline void clvr_walk_ctl_make(const clvr_volume *v, float sa, float sb, float k, float len, float sig_a,
-                               clvr_walk_ctl *c)
+/* k: ds/dt (sb = sa + k len); sig_a: the extinction at sa. This, its
+ * inverse and clvr_walk_draw are forced inline: PoCL's compiler called them
+ * out of line with the control in memory (a quarter of post-tets' walk
+ * frame in the two; the tet walk was 10-15% slower since session 44's
+ * refactoring into them than before it), and inlined the frame is 5-10%
+ * shorter, the same bits. */
+CLVR_FORCE_INLINE void clvr_walk_ctl_make(const clvr_volume *v, float sa, float sb, float k, float len, float sig_a,
+                                          clvr_walk_ctl *c)
 {
     const clvr_frame *f = v->f;
     const float tf_scale = (float)(f->tf_size - 1u) / (f->tf_hi - f->tf_lo), last = (float)(f->tf_size - 1u);
@@ -1450,7 +1455,7 @@ inline void clvr_walk_ctl_make(const clvr_volume *v, float sa, float sb, float k
 
 /* x in [0, len] where the control's depth from 0 reaches want (0 <= want
  * <= tau). */
-inline float clvr_walk_ctl_inverse(const clvr_volume *v, const clvr_walk_ctl *c, float want)
+CLVR_FORCE_INLINE float clvr_walk_ctl_inverse(const clvr_volume *v, const clvr_walk_ctl *c, float want)
 {
     float xs;
     if (c->one_bin) {
@@ -1489,7 +1494,7 @@ inline float clvr_walk_ctl_depth(const clvr_volume *v, const clvr_walk_ctl *c, f
  * (T sigma c / pdf = wt c where the control is exact): drawn in proportion
  * to the extinction and weighted by the transmittance there (thin
  * stretches), or in proportion to both (tau > 1/4). */
-inline float clvr_walk_draw(float tau, float u, float *want)
+CLVR_FORCE_INLINE float clvr_walk_draw(float tau, float u, float *want)
 {
     if (tau <= 0.25f) {
         *want = u * tau;

@@ -113,7 +113,8 @@ uint32_t clvr_estimator_auto(void);
 /* Per-frame figures, summed over the frames accumulated so far. */
 typedef struct clvr_render_counters {
     uint64_t frames;
-    uint64_t rays;            /* primary + shadow rays */
+    uint64_t rays;            /* primary + shadow rays; a camera ray a frame knows misses the clip box without
+                               * tracing it (clvr_frame.live) counts, as a traced one that misses did */
     uint64_t samples;         /* extinction lookups (point locations) */
     uint64_t null_collisions; /* rejected samples of delta tracking */
     double kernel_s;          /* device time of the render kernel, all frames (the light grid's included) */
