@@ -738,8 +738,8 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
             fprintf(stderr, "bench_render: %s shadows=%d done\n", res[sh][e].label, sh);
         }
     }
-    printf("| estimator | shadows | elements | frame ms | light grid ms | samples/ray | lookups/pixel to %.0f%% | "
-           "ref mean rgb (inside) | ref own rel RMSE | refined pixels | spp to %.0f%% rel | s to %.0f%% rel (device) | "
+    printf("| estimator | shadows | elements | frame ms | light grid ms | samples/ray | lookups/pixel to %g%% | "
+           "ref mean rgb (inside) | ref own rel RMSE | refined pixels | spp to %g%% rel | s to %g%% rel (device) | "
            "s (wall) | 1/n fit spp | fit s (device) | load |\n",
            target * 100, target * 100, target * 100);
     printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -770,7 +770,7 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
            "\"-\": no error above the reference's own noise there, nothing to fit.\n",
            refs[sh_lo].ninside, w * h);
     printf("Each row is the median of up to %u measured runs (seeds 1 .. %u; one where the first took over %.0f s) by "
-           "time to %.0f%%; every run's seconds:", repeats, repeats, CONV_REPEAT_MAX_S, target * 100);
+           "time to %g%%; every run's seconds:", repeats, repeats, CONV_REPEAT_MAX_S, target * 100);
     for (int sh = sh_lo; sh <= sh_hi; ++sh)
         for (uint32_t e = 0; e < nest; ++e) {
             const conv_result *r = &res[sh][e];
@@ -784,8 +784,8 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
                "(kernels/denoise.h). bias: rel RMSE of the denoised reference against the reference. spp: samples per "
                "pixel, as above; \">\": not reached by the run's last checkpoint (a run stops once the raw image "
                "reached the target).\n\n");
-        printf("| estimator | shadows | bias (rel) | rel RMSE after 1 / 2 / 4 frames | denoised | spp to %.0f%% "
-               "denoised | s to %.0f%% denoised (frames + one filter) | filter s (wall) |\n",
+        printf("| estimator | shadows | bias (rel) | rel RMSE after 1 / 2 / 4 frames | denoised | spp to %g%% "
+               "denoised | s to %g%% denoised (frames + one filter) | filter s (wall) |\n",
                target * 100, target * 100);
         printf("|---|---|---:|---|---|---:|---:|---:|\n");
         for (int sh = sh_lo; sh <= sh_hi; ++sh)

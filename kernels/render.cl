@@ -162,9 +162,10 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
  * refine pass), a pixel with more samples than that (nsamp) also takes its
  * refine sums (clvr_render_frame) into its own mean and controls, while the
  * fit still reads the neighbours' frames alone. live: (x0, y0, x1, y1), the
- * pixels the frames traced, or the whole image (render.c reads_live). clvr_pixel_cv's
- * arithmetic in the same order, the four channels as one float4 (a third of
- * the time of the scalar loops on PoCL; test_pixel_cv compares the two). */
+ * rectangle outside which the frames traced no pixel (clvr_frame.live), or
+ * the whole image (render.c reads_live). clvr_pixel_cv's arithmetic in the
+ * same order, the four channels as one float4 (a third of the time of the
+ * scalar loops on PoCL; test_pixel_cv compares the two). */
 __kernel void clvr_pixel_cv_image(__global const float4 *sum, __global const float4 *ctl, float inv_n, uint w, uint h,
                                   __global const float4 *refine, __global const uint *nsamp, uint refine_frames,
                                   uint4 live, __global float4 *out)
