@@ -36,6 +36,35 @@ __kernel void clvr_light_grid(__global const clvr_frame *fp, __global const clvr
     clvr_light_column(&v, a, b, out);
     (void)cam;
 }
+
+/* A frame's sample of pixel into its sums (first: the accumulation's first
+ * frame writes them): the sample, its square and its controls c4, and with
+ * guides its denoiser guides from guide (colour and depth, w < 0: none),
+ * two float4 per pixel: albedo rgb and the frames with a depth, then the
+ * sum of those depths (kernels/denoise.h reads their means). */
+inline void clvr_frame_add(uint pixel, int first, float4 result, float4 c4, uint with_guides, float4 guide,
+                           __global float4 *accum, __global float4 *accum_sq, __global float4 *ctl,
+                           __global float4 *guides)
+{
+    if (with_guides) {
+        const int hit = guide.w >= 0.0f;
+        const float4 g0 = (float4)(guide.xyz, hit ? 1.0f : 0.0f), g1 = (float4)(hit ? guide.w : 0.0f, 0.0f, 0.0f, 0.0f);
+        if (first) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = g1; }
+        else { guides[2u * pixel] += g0; guides[2u * pixel + 1u] += g1; }
+    }
+    if (first) { accum[pixel] = result; accum_sq[pixel] = result * result; ctl[pixel] = c4; }
+    else { accum[pixel] += result; accum_sq[pixel] += result * result; ctl[pixel] += c4; }
+}
+
+/* The pixel's counters: rays, samples (extinction lookups), null
+ * collisions, summed over frames and refine passes. */
+inline void clvr_counters_add(__global uint *counters, uint pixel, int first, uint rays, uint samples, uint nulls)
+{
+    __global uint *c = counters + 3u * pixel;
+    if (first) { c[0] = rays; c[1] = samples; c[2] = nulls; }
+    else { c[0] += rays; c[1] += samples; c[2] += nulls; }
+}
+
 /* One frame: adds each pixel's sample to accum (and its square to
  * accum_sq), its controls to ctl (the camera ray's offset from the pixel
  * centre and its first uniform minus 1/2, kernels/pixel_cv.h), its counters
@@ -72,16 +101,9 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
             const int first = fp->frame_index == 0u;
             nsamp[pixel] = first ? 1u : nsamp[pixel] + 1u;
             const float4 bg = (float4)(fp->background[0], fp->background[1], fp->background[2], 0.0f);
-            if (first) { accum[pixel] = bg; accum_sq[pixel] = bg * bg; ctl[pixel] = (float4)(0.0f); }
-            else { accum[pixel] += bg; accum_sq[pixel] += bg * bg; }
-            if (fp->guides) {
-                const float4 g0 = (float4)(bg.xyz, 0.0f);
-                if (first) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = (float4)(0.0f); }
-                else guides[2u * pixel] += g0;
-            }
-            __global uint *c = counters + 3u * pixel;
-            if (first) { c[0] = 1u; c[1] = 0u; c[2] = 0u; }
-            else c[0] += 1u;
+            clvr_frame_add(pixel, first, bg, (float4)(0.0f), fp->guides, (float4)(bg.xyz, -1.0f), accum, accum_sq, ctl,
+                           guides);
+            clvr_counters_add(counters, pixel, first, 1u, 0u, 0u);
             return;
         }
     }
@@ -134,26 +156,15 @@ __kernel void clvr_render_frame(__global const clvr_frame *fp, __global const cl
         refine[(f.pilot - 1u) * f.pass_pixels + get_global_id(0)] = (float4)(result.xyz, (float)samples);
         return;
     }
-    if (f.guides && !pass) {
-        /* Two float4 per pixel: albedo rgb and the frames with a depth, then
-         * the sum of those depths (kernels/denoise.h reads their means). */
-        const int hit = guide.w >= 0.0f;
-        const float4 g0 = (float4)(guide.xyz, hit ? 1.0f : 0.0f), g1 = (float4)(hit ? guide.w : 0.0f, 0.0f, 0.0f, 0.0f);
-        if (first) { guides[2u * pixel] = g0; guides[2u * pixel + 1u] = g1; }
-        else { guides[2u * pixel] += g0; guides[2u * pixel + 1u] += g1; }
-    }
     const float4 c4 = (float4)(d, u - 0.5f, 0.0f);
     if (pass && index == f.frame_index) { refine[2u * pixel] = result; refine[2u * pixel + 1u] = c4; }
     else if (pass) {
         refine[2u * pixel] += result;
         refine[2u * pixel + 1u] += c4;
-    } else if (first) { accum[pixel] = result; accum_sq[pixel] = result * result; ctl[pixel] = c4; }
-    else { accum[pixel] += result; accum_sq[pixel] += result * result; ctl[pixel] += c4; }
-    /* Counters: rays, samples (extinction lookups), null collisions, per
-     * pixel, summed over frames and refine passes. */
-    __global uint *c = counters + 3u * pixel;
-    if (first) { c[0] = rays; c[1] = samples; c[2] = nulls; }
-    else { c[0] += rays; c[1] += samples; c[2] += nulls; }
+    } else {
+        clvr_frame_add(pixel, first, result, c4, f.guides, guide, accum, accum_sq, ctl, guides);
+    }
+    clvr_counters_add(counters, pixel, first, rays, samples, nulls);
 }
 
 /* The image so far, its means minus their control variates

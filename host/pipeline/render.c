@@ -985,19 +985,15 @@ cleanup:
     return s;
 }
 
-/* The rectangle of the pixels the frames since the last change traced
- * (clvr_frame.live, as render_pass sets it: the camera and clip box are
- * those of the frames, a change of either restarts them), or the whole
- * image where they traced every pixel (settings.trace_all). */
+/* The rectangle outside which the frames since the last change traced no
+ * pixel: the one render_pass gave them (a change of camera or clip box
+ * restarts them, and a read needs a frame), or the whole image where they
+ * traced every pixel (clvr_frame.live[2] == 0, settings.trace_all). */
 static cl_uint4 reads_live(const clvr_renderer *r)
 {
-    cl_uint4 v = {{0u, 0u, r->set.width, r->set.height}};
-    clvr_u32 live[4];
-    float edges[CLVR_LIVE_EDGES][4];
-    clvr_camera_live(&r->cam, r->frame.vol_lo, r->frame.vol_hi, 3u, live, edges);
-    if (!r->set.trace_all)
-        for (int k = 0; k < 4; ++k) v.s[k] = live[k];
-    return v;
+    const clvr_u32 *l = r->frame.live;
+    const cl_uint4 all = {{0u, 0u, r->set.width, r->set.height}}, rect = {{l[0], l[1], l[2], l[3]}};
+    return l[2] == 0u ? all : rect;
 }
 
 clvr_status clvr_renderer_read(clvr_renderer *r, float *rgba, clvr_render_counters *counters, clvr_error *err)
