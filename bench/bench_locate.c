@@ -13,10 +13,13 @@
  *
  *   bench_locate [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
  *                [--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent]
- *                [--ebox on|off]
+ *                [--ebox on|off] [--entry on|off]
  *
  * --ebox: quantized element boxes (kernels/locate.h), on by default as in
  * the renderer; off measures the leaf scan without them.
+ * --entry: entry grids (kernels/locate.h), on by default as in the
+ * renderer; off starts every walk at its instance's root. Their bytes count
+ * in the BVH's bytes per element.
  * --hint: the query hint passed to the kernel (CLVR_LOCATE_*, clvr_shared.h);
  * default coherent (the faster on every order, clvr_shared.h).
  */
@@ -43,6 +46,7 @@ typedef struct row {
 static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
+static int g_entry = 1;    /* entry grids (--entry on|off, kernels/locate.h) */
 static cl_uint g_hints = CLVR_LOCATE_INCOHERENT; /* query hint of the kernel (--order, --hint) */
 static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples) */
 #define NRUNS 5
@@ -76,7 +80,11 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     if (g_ebox)
         CLVR_TRY(clvr_bvh_element_boxes_device(cl, k, &db, c.instances, (uint32_t)c.num_instances, c.vertices, c.idx16,
                                                c.idx32, c.leaf_size, (uint32_t)c.num_leaves, c.num_elements, err));
-    out->bytes_per_elem = (double)clvr_bvh_bytes(db.tlas_nodes, db.blas_nodes) / (double)c.num_elements;
+    if (g_entry)
+        CLVR_TRY(clvr_bvh_entry_grids_device(cl, k, &db, c.host_instances, c.instances, (uint32_t)c.num_instances,
+                                             c.vertices, c.idx16, c.idx32, c.leaf_size, (uint32_t)c.num_leaves, err));
+    out->bytes_per_elem =
+        (double)(clvr_bvh_bytes(db.tlas_nodes, db.blas_nodes) + (g_entry ? db.entry_bytes : 0)) / (double)c.num_elements;
     out->ebox_bytes_per_elem = (double)db.ebox_bytes / (double)c.num_elements;
     out->index_bytes_per_elem = (double)(c.num_idx16 * 2 + c.num_idx32 * 4) / (double)c.num_elements;
     cl_uint n = nq, ls = leaf, root = db.tlas_root;
@@ -96,6 +104,9 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 13, sizeof(cl_mem), g_ebox ? &db.ebox : &c.vertices));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 14, sizeof(cl_uint), &g_ebox));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 15, sizeof(cl_uint), &g_chain));
+    /* --entry off: NULL grids, every walk from its instance's root */
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 16, sizeof(cl_mem), g_entry ? &db.entry_grids : NULL));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 17, sizeof(cl_mem), g_entry ? &db.entry_cells : NULL));
     const size_t items = (nq + g_chain - 1) / g_chain;
     /* warm-up, then the median of NRUNS timed runs */
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, items, g_local, NULL, err));
@@ -146,10 +157,13 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--hint") && i + 1 < argc) hint = argv[++i];
         else if (!strcmp(argv[i], "--ebox") && i + 1 < argc && (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             g_ebox = !strcmp(argv[++i], "on");
+        else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
+                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_entry = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off] [--entry on|off]\n",
                     argv[0]);
             return 2;
         }

@@ -21,6 +21,8 @@
  *                       coherent, the faster on every order: clvr_shared.h)
  *                       [--ebox on|off]  (quantized element boxes, kernels/locate.h; default on as
  *                       in bench_locate; their bytes count in clvr's tree bytes)
+ *                       [--entry on|off]  (entry grids, kernels/locate.h; default on as in the
+ *                       renderer; their bytes count in clvr's tree bytes)
  *
  * Last line: `point_queries_vs_embree: RATIO` (clvr queries/s over Embree's;
  * "n/a" without Embree). Built without Embree (CLVR_HAVE_EMBREE unset) it
@@ -52,6 +54,7 @@
 /* ------------------------------------------------------------ clvr */
 
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
+static int g_entry = 1;    /* entry grids (--entry on|off, kernels/locate.h) */
 static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples, bench_points.h) */
 
 typedef struct result {
@@ -98,14 +101,18 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     if (g_ebox)
         CLVR_TRY(clvr_bvh_element_boxes_device(cl, &k, &db, c.instances, (uint32_t)c.num_instances, c.vertices, c.idx16,
                                                c.idx32, c.leaf_size, (uint32_t)c.num_leaves, c.num_elements, err));
+    if (g_entry)
+        CLVR_TRY(clvr_bvh_entry_grids_device(cl, &k, &db, c.host_instances, c.instances, (uint32_t)c.num_instances,
+                                             c.vertices, c.idx16, c.idx32, c.leaf_size, (uint32_t)c.num_leaves, err));
     CLVR_CL_CHECK(clFinish(cl->queue));
     r->build_s = clvr_clock_monotonic_s() - t_build;
     /* The BVH's sort, for the record: bounds, curve keys, radix sort, leaf boxes (device seconds). */
     r->sort_s = c.stage_s[CLVR_PP_STAGE_BOUNDS] + c.stage_s[CLVR_PP_STAGE_KEYS] + c.stage_s[CLVR_PP_STAGE_SORT] +
                 c.stage_s[CLVR_PP_STAGE_LEAVES];
-    /* Tree bytes include the quantized element boxes: they are part of clvr's acceleration structure. */
+    /* Tree bytes include the quantized element boxes and the entry grids: they are part of clvr's acceleration
+     * structure. */
     r->tree_bytes = clvr_bvh_bytes(db.tlas_nodes, db.blas_nodes) + c.num_instances * sizeof(clvr_instance) +
-                    (g_ebox ? db.ebox_bytes : 0);
+                    (g_ebox ? db.ebox_bytes : 0) + (g_entry ? db.entry_bytes : 0);
     /* Indices, and the vertices the clusters duplicate (each instance keeps
      * its own copy of a vertex shared across its border): the price of the
      * 16-bit indices, which Embree, indexing the mesh's own vertices, does
@@ -136,6 +143,9 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 13, sizeof(cl_mem), g_ebox ? &db.ebox : &args[4]));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 14, sizeof(cl_uint), &g_ebox));
     CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 15, sizeof(cl_uint), &g_chain));
+    /* --entry off: NULL grids, every walk from its instance's root */
+    CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 16, sizeof(cl_mem), g_entry ? &db.entry_grids : NULL));
+    CLVR_CL_CHECK(clSetKernelArg(k.locate_points, 17, sizeof(cl_mem), g_entry ? &db.entry_cells : NULL));
     const size_t items = (nq + g_chain - 1) / g_chain;
     CLVR_TRY(clvr_cl_run1d(cl, k.locate_points, items, local, NULL, err)); /* warm-up */
     CLVR_CL_CHECK(clFinish(cl->queue));
@@ -478,11 +488,14 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--hint") && i + 1 < argc) hint = argv[++i];
         else if (!strcmp(argv[i], "--ebox") && i + 1 < argc && (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             g_ebox = !strcmp(argv[++i], "on");
+        else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
+                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_entry = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
                     "[--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L] [--dump FILE] "
-                    "[--hint coherent|incoherent] [--ebox on|off]\n",
+                    "[--hint coherent|incoherent] [--ebox on|off] [--entry on|off]\n",
                     argv[0]);
             return 2;
         }

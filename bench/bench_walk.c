@@ -3,13 +3,14 @@
  * and bottom trees visited, instances entered, leaf clusters scanned,
  * elements that pass their quantized box, elements given the exact
  * containment test (barycentric or Newton), and how often
- * a ray's hint (clvr_locate_hinted) held the next sample. Issue #19 asks
+ * a ray's hint (clvr_locate_hinted) held the next sample, and how often an
+ * entry grid's hint held the point (--entry off: walks from the roots). Issue #19 asks
  * where the walk's time goes on graded meshes; counts answer that without
  * hardware counters, which the benchmark VMs do not have. The mesh is
  * clustered by the real preprocessing (on the OpenCL device), then read back
  * with clvr_clustered_download.
  *
- *   bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] [--queries Q]
+ *   bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] [--queries Q] [--entry on|off]
  *   bench_walk --mesh FILE --per-instance [--order ...] [--queries Q]
  *
  * Prints one markdown row per run; queries/s is one host thread, a relative
@@ -34,7 +35,7 @@
  * kernels/locate.h, which are empty everywhere else. One thread, so a
  * plain static struct; this program's only mutable global. */
 typedef struct walk_counts {
-    unsigned long long tnodes, bnodes, inst, leaves, ecand, etest, hint_try, hint_hit;
+    unsigned long long tnodes, bnodes, inst, leaves, ecand, etest, hint_try, hint_hit, entry_try, entry_hit;
 } walk_counts;
 static walk_counts g_walk;
 #define CLVR_WALK_STAT(field) (g_walk.field++)
@@ -56,12 +57,18 @@ typedef struct walk_build {
     clvr_clustered_host arrays;
     clvr_bvh_host hb;
     uint8_t *ebox;
+    clvr_entry_grid *grids; /* entry grids (kernels/locate.h), NULL with --entry off */
+    uint32_t *cells;
     clvr_mesh_view mv;
 } walk_build;
+
+static int g_entry = 1; /* --entry on|off; set once by main before any build */
 
 static void walk_build_free(clvr_cl *cl, walk_build *b)
 {
     free(b->ebox);
+    free(b->grids);
+    free(b->cells);
     clvr_bvh_host_free(&b->hb);
     clvr_clustered_host_free(&b->arrays);
     clvr_clustered_release(cl, &b->c);
@@ -80,7 +87,8 @@ static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t lea
         s = clvr_bvh_build_host(b->arrays.instances, (uint32_t)b->c.num_instances, b->arrays.leaf_boxes,
                                 (uint32_t)b->c.num_leaves, &b->hb, err);
     const clvr_mesh_view mv = {b->hb.tlas, b->hb.blas, b->arrays.instances, (const clvr_vec4 *)b->arrays.vertices,
-                               b->arrays.idx16, b->arrays.idx32, b->hb.tlas_root, leaf, NULL, CLVR_VIEW_ONE_PIECE};
+                               b->arrays.idx16, b->arrays.idx32, b->hb.tlas_root, leaf, NULL, CLVR_VIEW_ONE_PIECE,
+                               NULL, NULL};
     b->mv = mv;
     if (s == CLVR_OK && !(b->ebox = malloc((size_t)b->c.num_elements * CLVR_EBOX_BYTES + 1)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for element boxes");
@@ -88,6 +96,16 @@ static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t lea
         s = clvr_bvh_element_boxes_host(&b->mv, (uint32_t)b->c.num_instances, (uint32_t)b->c.num_leaves, b->ebox,
                                         err);
     b->mv.ebox = b->ebox;
+    const uint32_t ninst = (uint32_t)b->c.num_instances;
+    uint32_t ncells = 0;
+    if (s == CLVR_OK && g_entry && !(b->grids = malloc((ninst ? ninst : 1u) * sizeof *b->grids)))
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for entry grids");
+    if (s == CLVR_OK && g_entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, b->grids, &ncells, err);
+    if (s == CLVR_OK && g_entry && !(b->cells = malloc(((size_t)ncells + 1u) * 2u * sizeof *b->cells)))
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u entry cells", ncells);
+    if (s == CLVR_OK && g_entry) s = clvr_entry_cells_host(&b->mv, ninst, b->grids, ncells, b->cells, err);
+    b->mv.entry_grids = b->grids;
+    b->mv.entry_cells = b->cells;
     if (s != CLVR_OK) walk_build_free(cl, b);
     return s;
 }
@@ -211,9 +229,12 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--order") && i + 1 < argc) order_name = argv[++i];
         else if (!strcmp(argv[i], "--queries") && i + 1 < argc) nq = (uint32_t)strtoul(argv[++i], NULL, 10);
         else if (!strcmp(argv[i], "--per-instance")) per_inst = 1;
+        else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
+                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_entry = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr, "usage: bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] "
-                            "[--queries Q] [--per-instance]\n");
+                            "[--queries Q] [--per-instance] [--entry on|off]\n");
             return 2;
         }
     }
@@ -268,13 +289,14 @@ int main(int argc, char **argv)
                    "reference walk, 1 thread\n",
                    mesh_path, (unsigned long long)b.c.num_elements, leaf, nq, order_name, chain);
             printf("| mesh | order | leaf | found | top nodes | bottom nodes | instances | leaves | box-pass elements | "
-                   "exact tests | hint held | q/s (host, 1 thread) | load |\n");
-            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+                   "exact tests | hint held | entry hint held | q/s (host, 1 thread) | load |\n");
+            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
             const char *base = strrchr(mesh_path, '/');
-            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3g | %.2f |\n",
+            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3f | %.3g | %.2f |\n",
                    base ? base + 1 : mesh_path, order_name, leaf, found / q, g_walk.tnodes / q, g_walk.bnodes / q,
                    g_walk.inst / q, g_walk.leaves / q, g_walk.ecand / q, g_walk.etest / q,
-                   g_walk.hint_try ? (double)g_walk.hint_hit / (double)g_walk.hint_try : 0.0, q / t, load);
+                   g_walk.hint_try ? (double)g_walk.hint_hit / (double)g_walk.hint_try : 0.0,
+                   g_walk.entry_try ? (double)g_walk.entry_hit / (double)g_walk.entry_try : 0.0, q / t, load);
             walk_build_free(&cl, &b);
         }
     }

@@ -3,6 +3,7 @@
  * kernels/bvh_build.h). Both run the same per-node code, level by level. */
 #include "bvh.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -113,6 +114,97 @@ static clvr_status build_tlas_host(const clvr_instance *inst, uint32_t ninst, cl
     return CLVR_OK;
 }
 
+clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
+                                    uint32_t *num_cells, clvr_error *err)
+{
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < num_instances; ++i) {
+        const clvr_instance *in = &instances[i];
+        clvr_entry_grid g;
+        memset(&g, 0, sizeof g);
+        double ext[3], vol = 1.0;
+        int axes = 0;
+        for (int k = 0; k < 3; ++k) {
+            g.lo[k] = in->bounds.lo[k];
+            g.res[k] = 1;
+            ext[k] = (double)in->bounds.hi[k] - (double)in->bounds.lo[k];
+            if (!isfinite(ext[k]) || !(ext[k] > 0.0)) ext[k] = 0.0; /* flat, empty or NaN: one cell */
+            if (ext[k] > 0.0) {
+                vol *= ext[k];
+                ++axes;
+            }
+        }
+        /* About CLVR_ENTRY_CELLS_PER_LEAF cells per leaf, cells about cubic
+         * over the axes that have an extent. */
+        const double want = (double)CLVR_ENTRY_CELLS_PER_LEAF * (in->num_leaves ? in->num_leaves : 1u);
+        const double h = axes ? pow(vol / want, 1.0 / axes) : 0.0;
+        for (int k = 0; k < 3; ++k) {
+            if (!(ext[k] > 0.0) || !(h > 0.0)) continue;
+            const double r = fmin(fmax(ceil(ext[k] / h), 1.0), (double)CLVR_ENTRY_MAX_RES);
+            g.res[k] = (uint32_t)r;
+            if (g.res[k] > 1u) g.scale[k] = (float)(r / ext[k]);
+        }
+        g.res[3] = (uint32_t)total;
+        total += (uint64_t)g.res[0] * g.res[1] * g.res[2];
+        if (total > 0xffffffffull)
+            return clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                                  "bvh: the entry grids of %u instances pass 2^32 - 1 cells; use a larger --leaf-size",
+                                  num_instances);
+        grids[i] = g;
+    }
+    *num_cells = (uint32_t)total;
+    return CLVR_OK;
+}
+
+/* Leaf cluster `leaf` of inst (whose parent node in blas is where
+ * clvr_leaf_parent puts it) into the cells its box meets: first_last holds
+ * (first, last) leaf per cell of inst's grid g. */
+static void entry_rasterize_host(const clvr_bvh_node *blas, const clvr_instance *inst, const clvr_entry_grid *g,
+                                 uint32_t leaf, uint32_t *first_last)
+{
+    uint32_t node, slot, a[3], b[3];
+    clvr_leaf_parent(inst, leaf, &node, &slot);
+    const clvr_bvh_node *n = &blas[node];
+    const float lo[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
+    const float hi[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])) return; /* an empty box meets no cell */
+    clvr_entry_box_cells(g, lo, hi, a, b);
+    for (uint32_t z = a[2]; z <= b[2]; ++z)
+        for (uint32_t y = a[1]; y <= b[1]; ++y)
+            for (uint32_t x = a[0]; x <= b[0]; ++x) {
+                uint32_t *c = first_last + 2u * ((size_t)g->res[3] + ((size_t)z * g->res[1] + y) * g->res[0] + x);
+                if (leaf < c[0]) c[0] = leaf;
+                if (leaf > c[1]) c[1] = leaf;
+            }
+}
+
+clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
+                                  uint32_t num_cells, uint32_t *cells, clvr_error *err)
+{
+    for (uint32_t c = 0; c < num_cells; ++c) {
+        cells[2u * (size_t)c] = CLVR_BVH_NOT_FOUND;
+        cells[2u * (size_t)c + 1u] = 0;
+    }
+    for (uint32_t i = 0; i < num_instances; ++i) {
+        const clvr_instance *inst = &m->instances[i];
+        const clvr_entry_grid *g = &grids[i];
+        const uint64_t n = (uint64_t)g->res[0] * g->res[1] * g->res[2];
+        if (g->res[3] > num_cells || n > num_cells - g->res[3])
+            return clvr_error_set(err, CLVR_ERR_INTERNAL, "bvh: instance %u's entry grid passes the %u cells", i,
+                                  num_cells);
+        for (uint32_t leaf = inst->first_leaf; leaf < inst->first_leaf + inst->num_leaves; ++leaf)
+            entry_rasterize_host(m->blas, inst, g, leaf, cells);
+        for (uint32_t c = 0; c < (uint32_t)n; ++c) {
+            uint32_t *cell = cells + 2u * ((size_t)g->res[3] + c);
+            const uint32_t start = cell[0] == CLVR_BVH_NOT_FOUND ? CLVR_BVH_NOT_FOUND : clvr_entry_lca(inst, cell[0], cell[1]);
+            cell[0] = start;
+            cell[1] = clvr_entry_hint(m, inst, g, start, c % g->res[0], c / g->res[0] % g->res[1],
+                                      c / g->res[0] / g->res[1]);
+        }
+    }
+    return CLVR_OK;
+}
+
 clvr_status clvr_bvh_build_host(clvr_instance *instances, uint32_t num_instances, const clvr_box *leaf_boxes,
                                 uint32_t num_leaves, clvr_bvh_host *out, clvr_error *err)
 {
@@ -158,6 +250,8 @@ clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_err
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_hits", &out->ray_hits, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_bvh_ray_span", &out->ray_span, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_element_boxes", &out->element_boxes, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_entry_rasterize", &out->entry_rasterize, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_entry_finish", &out->entry_finish, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_keys", &out->hull_keys, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_flags", &out->hull_flags, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_adjacency", &out->hull_adjacency, err));
@@ -179,6 +273,8 @@ void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
     if (k->ray_hits) clReleaseKernel(k->ray_hits);
     if (k->ray_span) clReleaseKernel(k->ray_span);
     if (k->element_boxes) clReleaseKernel(k->element_boxes);
+    if (k->entry_rasterize) clReleaseKernel(k->entry_rasterize);
+    if (k->entry_finish) clReleaseKernel(k->entry_finish);
     cl_kernel hk[6] = {k->hull_keys, k->hull_flags, k->hull_faces, k->hull_rays, k->hull_gap_rays, k->hull_adjacency};
     for (int i = 0; i < 6; ++i)
         if (hk[i]) clReleaseKernel(hk[i]);
@@ -262,6 +358,8 @@ void clvr_bvh_device_release(clvr_cl *cl, clvr_bvh_device *b)
     clvr_cl_release(cl, &b->blas);
     clvr_cl_release(cl, &b->ebox);
     for (uint32_t p = 0; p + 1 < CLVR_MAX_SPLITS; ++p) clvr_cl_release(cl, &b->ebox_more[p]);
+    clvr_cl_release(cl, &b->entry_grids);
+    clvr_cl_release(cl, &b->entry_cells);
     memset(b, 0, sizeof *b);
 }
 
@@ -378,4 +476,83 @@ clvr_status clvr_bvh_element_boxes_device(clvr_cl *cl, const clvr_bvh_kernels *k
     const uint64_t pe[2] = {0, num_elements};
     return clvr_bvh_element_boxes_pieces(cl, k, b, instances, num_instances, v, i16, i32, pe, 1, instances,
                                          leaf_size, num_leaves, err);
+}
+
+static void entry_release(clvr_cl *cl, clvr_bvh_device *b)
+{
+    clvr_cl_release(cl, &b->entry_grids);
+    clvr_cl_release(cl, &b->entry_cells);
+    b->entry_bytes = 0;
+}
+
+clvr_status clvr_bvh_entry_grids_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                        const clvr_instance *host_instances, cl_mem instances, uint32_t num_instances,
+                                        const cl_mem *vertices, const cl_mem *idx16, const cl_mem *idx32,
+                                        uint32_t leaf_size, uint32_t num_leaves, clvr_error *err)
+{
+    clvr_status s = CLVR_OK;
+    clvr_entry_grid *grids = NULL;
+    cl_event evt = NULL;
+    uint32_t ncells = 0;
+    entry_release(cl, b);
+    /* The element boxes speed up the centres' point location; the
+     * placeholders of absent pieces are never read. */
+    cl_mem eb[CLVR_MAX_SPLITS];
+    for (uint32_t p = 0; p < CLVR_MAX_SPLITS; ++p)
+        eb[p] = p == 0 ? b->ebox : b->ebox_more[p - 1] ? b->ebox_more[p - 1] : vertices[p];
+    const cl_uint use_ebox = b->ebox != NULL, ni = num_instances, nl = num_leaves, ls = leaf_size;
+    if (!eb[0]) eb[0] = vertices[0];
+    if (!(grids = malloc((num_instances ? num_instances : 1u) * sizeof *grids)))
+        CLVR_TRY(clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for %u entry grids", num_instances));
+    CLVR_TRY(clvr_entry_grids_layout(host_instances, num_instances, grids, &ncells, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (num_instances ? num_instances : 1u) * sizeof *grids,
+                            grids, "entry grids", &b->entry_grids, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (ncells ? ncells : 1u) * 2u * sizeof(cl_uint), NULL,
+                            "entry grid cells", &b->entry_cells, err));
+    b->entry_bytes = (uint64_t)num_instances * sizeof *grids + (uint64_t)ncells * 2u * sizeof(cl_uint);
+    if (ncells && num_instances) {
+        const cl_uint nc = ncells, fill[2] = {CLVR_BVH_NOT_FOUND, 0u}; /* (first, last) leaf per cell */
+        CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, b->entry_cells, fill, sizeof fill, 0,
+                                          (size_t)ncells * sizeof fill, 0, NULL, NULL));
+        if (num_leaves) {
+            CLVR_TRY(CLVR_CL_ARGS(k->entry_rasterize, err, CLVR_ARG(b->blas), CLVR_ARG(instances),
+                                  CLVR_ARG(b->entry_grids), CLVR_ARG(ni), CLVR_ARG(nl), CLVR_ARG(b->entry_cells)));
+            CLVR_TRY(clvr_cl_run1d(cl, k->entry_rasterize, num_leaves, 64, &evt, err));
+            if (evt) {
+                CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+                b->build_seconds += clvr_cl_event_seconds(evt);
+                clReleaseEvent(evt);
+                evt = NULL;
+            }
+        }
+        CLVR_TRY(CLVR_CL_ARGS(k->entry_finish, err, CLVR_ARG(b->blas), CLVR_ARG(instances), CLVR_ARG(b->entry_grids),
+                              CLVR_ARG(ni), CLVR_ARG(nc), CLVR_ARG(b->entry_cells), CLVR_ARG(ls), CLVR_ARG(use_ebox),
+                              CLVR_ARG(vertices[0]), CLVR_ARG(idx16[0]), CLVR_ARG(idx32[0]), CLVR_ARG(eb[0]),
+                              CLVR_ARG(vertices[1]), CLVR_ARG(idx16[1]), CLVR_ARG(idx32[1]), CLVR_ARG(eb[1]),
+                              CLVR_ARG(vertices[2]), CLVR_ARG(idx16[2]), CLVR_ARG(idx32[2]), CLVR_ARG(eb[2]),
+                              CLVR_ARG(vertices[3]), CLVR_ARG(idx16[3]), CLVR_ARG(idx32[3]), CLVR_ARG(eb[3])));
+        CLVR_TRY(clvr_cl_run1d(cl, k->entry_finish, ncells, 64, &evt, err));
+        if (evt) {
+            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+            b->build_seconds += clvr_cl_event_seconds(evt);
+        }
+    }
+cleanup:
+    if (evt) clReleaseEvent(evt);
+    free(grids);
+    if (s != CLVR_OK) entry_release(cl, b);
+    return s;
+}
+
+clvr_status clvr_bvh_entry_grids_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                        const clvr_instance *host_instances, cl_mem instances, uint32_t num_instances,
+                                        cl_mem vertices, cl_mem idx16, cl_mem idx32, uint32_t leaf_size,
+                                        uint32_t num_leaves, clvr_error *err)
+{
+    /* One piece; the instance table stands in for the pieces it lacks (never read). */
+    const cl_mem v[CLVR_MAX_SPLITS] = {vertices, instances, instances, instances};
+    const cl_mem i16[CLVR_MAX_SPLITS] = {idx16, instances, instances, instances};
+    const cl_mem i32[CLVR_MAX_SPLITS] = {idx32, instances, instances, instances};
+    return clvr_bvh_entry_grids_pieces(cl, k, b, host_instances, instances, num_instances, v, i16, i32, leaf_size,
+                                       num_leaves, err);
 }

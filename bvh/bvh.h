@@ -35,6 +35,20 @@ typedef struct clvr_bvh_host {
     uint32_t blas_nodes;
 } clvr_bvh_host;
 
+/* Entry grids (kernels/locate.h) of num_instances instances from their
+ * bounds and leaf counts: grids[i] gets its box, cells per unit length,
+ * cells per axis and first cell; *num_cells the total. Fails with
+ * CLVR_ERR_OVERFLOW past 2^32 - 1 cells. */
+clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
+                                    uint32_t *num_cells, clvr_error *err);
+/* Host reference of the cells (kernels/locate.h): for cell c of instance
+ * i's grid, cells[2 (grids[i].res[3] + c)] its start node and the next
+ * entry its hint; num_cells cells in all, as the layout counted them. m
+ * holds host arrays (blas with bvh_root set, instances, vertices, idx16,
+ * idx32, leaf_size, ebox or NULL; tlas is not read). */
+clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
+                                  uint32_t num_cells, uint32_t *cells, clvr_error *err);
+
 /* Host build: instances[i].bvh_root is filled; leaf_boxes has num_leaves
  * boxes (global leaf ids, as instances[].first_leaf count them). Caller frees
  * with clvr_bvh_host_free. Fails with CLVR_ERR_BAD_FIELD when an instance's
@@ -52,6 +66,7 @@ typedef struct clvr_bvh_kernels {
     cl_kernel ray_hits;
     cl_kernel ray_span; /* first entry and last exit of a tree's boxes per ray (the hull's first probe) */
     cl_kernel element_boxes;
+    cl_kernel entry_rasterize, entry_finish; /* entry grids (clvr_bvh_entry_grids_pieces) */
     cl_kernel hull_keys, hull_flags, hull_faces, hull_rays, hull_gap_rays, hull_adjacency; /* host/pipeline/hull.h */
 } clvr_bvh_kernels;
 clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_error *err);
@@ -67,6 +82,9 @@ typedef struct clvr_bvh_device {
                              a split mesh's (clvr_bvh_element_boxes_pieces) */
     cl_mem ebox_more[CLVR_MAX_SPLITS - 1]; /* pieces 1 .. of a split mesh's element boxes, else NULL */
     uint64_t ebox_bytes;  /* all pieces */
+    cl_mem entry_grids;   /* clvr_entry_grid per instance (kernels/locate.h), or NULL */
+    cl_mem entry_cells;   /* their cells: start node and hint per cell */
+    uint64_t entry_bytes; /* both */
 } clvr_bvh_device;
 
 /* Device build. host_instances (the host copy of the instances buffer) gets
@@ -114,6 +132,22 @@ clvr_status clvr_bvh_element_boxes_pieces(clvr_cl *cl, const clvr_bvh_kernels *k
                                           const cl_mem *idx16, const cl_mem *idx32, const uint64_t *piece_elements,
                                           uint32_t num_pieces, cl_mem dummy, uint32_t leaf_size, uint32_t num_leaves,
                                           clvr_error *err);
+
+/* Entry grids (kernels/locate.h) into b->entry_grids and b->entry_cells
+ * (new buffers; b->entry_bytes set): their layout from host_instances
+ * (bvh_root set) on the host, their cells on the device from b's trees and
+ * the mesh's arrays, piece by piece as clvr_bvh_element_boxes_pieces takes
+ * them (CLVR_MAX_SPLITS each; b's element boxes, when built, speed it up).
+ * Build them after the element boxes. */
+clvr_status clvr_bvh_entry_grids_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                        const clvr_instance *host_instances, cl_mem instances, uint32_t num_instances,
+                                        const cl_mem *vertices, const cl_mem *idx16, const cl_mem *idx32,
+                                        uint32_t leaf_size, uint32_t num_leaves, clvr_error *err);
+/* The same for a mesh whose arrays are one piece. */
+clvr_status clvr_bvh_entry_grids_device(clvr_cl *cl, const clvr_bvh_kernels *k, clvr_bvh_device *b,
+                                        const clvr_instance *host_instances, cl_mem instances, uint32_t num_instances,
+                                        cl_mem vertices, cl_mem idx16, cl_mem idx32, uint32_t leaf_size,
+                                        uint32_t num_leaves, clvr_error *err);
 
 /* Bytes of both levels. */
 uint64_t clvr_bvh_bytes(uint32_t tlas_nodes, uint32_t blas_nodes);

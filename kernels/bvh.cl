@@ -69,16 +69,18 @@ __kernel void clvr_locate_points(__global const float4 *points, uint n, __global
                                  __global const clvr_instance *instances, __global const float4 *vertices,
                                  __global const ushort *idx16, __global const uint *idx32, uint leaf_size,
                                  __global float *scalars, __global uint *element_ids, uint hints,
-                                 __global const uchar *ebox, uint use_ebox, uint chain)
+                                 __global const uchar *ebox, uint use_ebox, uint chain,
+                                 __global const clvr_entry_grid *entry_grids, __global const uint *entry_cells)
 {
     const clvr_mesh_view m = {tlas,      blas,      instances, vertices, idx16, idx32, tlas_root,
-                              leaf_size, use_ebox ? ebox : NULL, CLVR_VIEW_ONE_PIECE};
+                              leaf_size, use_ebox ? ebox : NULL, CLVR_VIEW_ONE_PIECE, entry_grids, entry_cells};
     clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
 }
 
 /* clvr_locate_points over all CLVR_MAX_SPLITS pieces of the split arrays
  * (vertices, idx16, idx32, ebox: piece 0; then pieces 1 .. 3 of each;
- * unused pieces a small dummy buffer). */
+ * unused pieces a small dummy buffer). entry_grids, entry_cells: the
+ * tree's entry grids (locate.h), or NULL (walks from the roots). */
 __kernel void clvr_locate_points_split(__global const float4 *points, uint n, __global const clvr_bvh_node *tlas,
                                        uint tlas_root, __global const clvr_bvh_node *blas,
                                        __global const clvr_instance *instances, uint leaf_size,
@@ -91,7 +93,8 @@ __kernel void clvr_locate_points_split(__global const float4 *points, uint n, __
                                        __global const ushort *idx16_2, __global const uint *idx32_2,
                                        __global const uchar *ebox2, __global const float4 *vertices3,
                                        __global const ushort *idx16_3, __global const uint *idx32_3,
-                                       __global const uchar *ebox3)
+                                       __global const uchar *ebox3, __global const clvr_entry_grid *entry_grids,
+                                       __global const uint *entry_cells)
 {
     const clvr_mesh_view m = {tlas,
                               blas,
@@ -104,7 +107,9 @@ __kernel void clvr_locate_points_split(__global const float4 *points, uint n, __
                               use_ebox ? ebox : NULL,
                               {{vertices1, idx16_1, idx32_1, ebox1},
                                {vertices2, idx16_2, idx32_2, ebox2},
-                               {vertices3, idx16_3, idx32_3, ebox3}}};
+                               {vertices3, idx16_3, idx32_3, ebox3}},
+                              entry_grids,
+                              entry_cells};
     clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
 }
 
@@ -152,9 +157,91 @@ __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global co
                               NULL,
                               {{vertices1, idx16_1, idx32_1, NULL},
                                {vertices2, idx16_2, idx32_2, NULL},
-                               {vertices3, idx16_3, idx32_3, NULL}}};
+                               {vertices3, idx16_3, idx32_3, NULL}},
+                              NULL,
+                              NULL};
     __global uchar *out = inst.piece == 1u ? ebox1 : inst.piece == 2u ? ebox2 : inst.piece == 3u ? ebox3 : ebox;
     clvr_ebox_build_leaf(&m, &inst, leaf, L, H, out);
+}
+
+/* Entry grids (locate.h), first pass: one work item per leaf cluster
+ * marks the cells its box meets with atomic min / max of its id (cells
+ * hold (first, last) leaf pairs, filled with (NOT_FOUND, 0) before). */
+__kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
+                                   __global const clvr_entry_grid *grids, uint num_instances, uint num_leaves,
+                                   __global uint *cells)
+{
+    const uint leaf = get_global_id(0);
+    if (leaf >= num_leaves || num_instances == 0) return;
+    uint lo = 0, hi = num_instances; /* last instance with first_leaf <= leaf */
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (instances[mid].first_leaf <= leaf) lo = mid;
+        else hi = mid;
+    }
+    const clvr_instance inst = instances[lo];
+    if (leaf - inst.first_leaf >= inst.num_leaves) return;
+    const clvr_entry_grid g = grids[lo];
+    uint node, slot, a[3], b[3];
+    clvr_leaf_parent(&inst, leaf, &node, &slot);
+    __global const clvr_bvh_node *n = blas + node;
+    const float L[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
+    const float H[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
+    if (!(L[0] <= H[0] && L[1] <= H[1] && L[2] <= H[2])) return; /* an empty box meets no cell */
+    clvr_entry_box_cells(&g, L, H, a, b);
+    for (uint z = a[2]; z <= b[2]; ++z)
+        for (uint y = a[1]; y <= b[1]; ++y)
+            for (uint x = a[0]; x <= b[0]; ++x) {
+                __global uint *c = cells + 2ul * (g.res[3] + (z * g.res[1] + y) * g.res[0] + x);
+                atomic_min(c, leaf);
+                atomic_max(c + 1, leaf);
+            }
+}
+
+/* Entry grids, second pass: one work item per cell of all instances' grids
+ * (grids[i].res[3]: instance i's first cell, increasing; every grid has a
+ * cell) turns its (first, last) leaf pair into (start, hint) nodes. The
+ * arrays come piece by piece as clvr_locate_points_split takes them. */
+__kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
+                                __global const clvr_entry_grid *grids, uint num_instances, uint num_cells,
+                                __global uint *cells, uint leaf_size, uint use_ebox, __global const float4 *vertices,
+                                __global const ushort *idx16, __global const uint *idx32, __global const uchar *ebox,
+                                __global const float4 *vertices1, __global const ushort *idx16_1,
+                                __global const uint *idx32_1, __global const uchar *ebox1,
+                                __global const float4 *vertices2, __global const ushort *idx16_2,
+                                __global const uint *idx32_2, __global const uchar *ebox2,
+                                __global const float4 *vertices3, __global const ushort *idx16_3,
+                                __global const uint *idx32_3, __global const uchar *ebox3)
+{
+    const uint i = get_global_id(0);
+    if (i >= num_cells || num_instances == 0) return;
+    uint lo = 0, hi = num_instances; /* last instance whose first cell is <= i */
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (grids[mid].res[3] <= i) lo = mid;
+        else hi = mid;
+    }
+    const clvr_entry_grid g = grids[lo];
+    const clvr_instance inst = instances[lo];
+    const clvr_mesh_view m = {NULL,
+                              blas,
+                              instances,
+                              vertices,
+                              idx16,
+                              idx32,
+                              0u,
+                              leaf_size,
+                              use_ebox ? ebox : NULL,
+                              {{vertices1, idx16_1, idx32_1, ebox1},
+                               {vertices2, idx16_2, idx32_2, ebox2},
+                               {vertices3, idx16_3, idx32_3, ebox3}},
+                              NULL,
+                              NULL};
+    const uint c = i - g.res[3]; /* the cell within its grid */
+    __global uint *cell = cells + 2ul * i;
+    const uint start = cell[0] == CLVR_BVH_NOT_FOUND ? CLVR_BVH_NOT_FOUND : clvr_entry_lca(&inst, cell[0], cell[1]);
+    cell[0] = start;
+    cell[1] = clvr_entry_hint(&m, &inst, &g, start, c % g.res[0], c / g.res[0] % g.res[1], c / g.res[0] / g.res[1]);
 }
 
 /* Ray queries over a single-level tree (root 0): rays as origin (w = tmin)
@@ -226,7 +313,9 @@ __kernel void clvr_bvh_ray_span(__global const float4 *org, __global const float
      0u,                                                                                                               \
      0u,                                                                                                               \
      NULL,                                                                                                             \
-     {{vertices1, idx16_1, idx32_1, NULL}, {vertices2, idx16_2, idx32_2, NULL}, {vertices3, idx16_3, idx32_3, NULL}}}
+     {{vertices1, idx16_1, idx32_1, NULL}, {vertices2, idx16_2, idx32_2, NULL}, {vertices3, idx16_3, idx32_3, NULL}}, \
+     NULL,                                                                                                             \
+     NULL}
 
 /* keys[slot] = clvr_hull_face_key of the face in that slot. */
 __kernel void clvr_hull_keys(__global const clvr_instance *instances, uint num_instances,

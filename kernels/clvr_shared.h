@@ -174,6 +174,17 @@ typedef struct clvr_instance {
 } clvr_instance;
 CLVR_STATIC_ASSERT(sizeof(clvr_instance) == 80, "clvr_instance layout");
 
+/* Entry grid of one instance cluster (kernels/locate.h, "entry grids"): a
+ * uniform grid over the instance's element bounds whose cells name the node
+ * of its bottom-level tree where a point's walk starts. A point's cell on
+ * axis k is clvr_entry_coord(p_k, lo[k], scale[k], res[k]). */
+typedef struct clvr_entry_grid {
+    float lo[4];      /* xyz: low corner; w unused (0) */
+    float scale[4];   /* xyz: cells per unit length, 0 on an axis of one cell; w unused (0) */
+    clvr_u32 res[4];  /* xyz: cells per axis (>= 1); w: the instance's first cell in the cell array */
+} clvr_entry_grid;
+CLVR_STATIC_ASSERT(sizeof(clvr_entry_grid) == 48, "clvr_entry_grid layout");
+
 /* A sampling cluster (paper 3.4.1): box with the scalar range in the w lanes:
  * lo[3] = minimum scalar, hi[3] = maximum scalar of its elements' vertices. */
 typedef struct clvr_sampling_cluster {
@@ -558,6 +569,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
     X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
     X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
     X(uchar, ebox)                          /* quantized element boxes (locate.h) */                    \
+    X(clvr_entry_grid, entry_grids)         /* entry grids, one per instance (locate.h), or NULL */    \
+    X(uint, entry_cells)                    /* their cells: start node per cell */                     \
     X(clvr_bvh_node, hull_bvh)              /* tree over the boundary faces (kernels/hull.h) */        \
     X(clvr_hull_face, hull)                 /* the boundary faces, in the tree's primitive order */    \
     X(uint, face_first)                     /* walk: first face slot per instance (kernels/hull.h) */  \

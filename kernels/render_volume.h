@@ -46,7 +46,9 @@ inline clvr_mesh_view clvr_volume_view(const clvr_volume *v)
                             v->ebox,
                             {{v->vertices1, v->idx16_1, v->idx32_1, v->ebox1},
                              {v->vertices2, v->idx16_2, v->idx32_2, v->ebox2},
-                             {v->vertices3, v->idx16_3, v->idx32_3, v->ebox3}}};
+                             {v->vertices3, v->idx16_3, v->idx32_3, v->ebox3}},
+                            v->entry_grids,
+                            v->entry_cells};
 }
 
 /* Point location + interpolation + transfer function. */

@@ -297,7 +297,7 @@ static inline int fx_cluster(const clvr_mesh *m, uint32_t leaf_size, uint32_t in
 static inline uint32_t fx_element(const fx_clustered *c, uint32_t e, clvr_vec4 *v)
 {
     const clvr_instance *in = &c->instances[c->elem_instance[e]];
-    const clvr_mesh_view mv = {NULL, NULL, c->instances, c->vertices, c->idx16, c->idx32, 0, 0, NULL, CLVR_VIEW_ONE_PIECE};
+    const clvr_mesh_view mv = {NULL, NULL, c->instances, c->vertices, c->idx16, c->idx32, 0, 0, NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
     clvr_load_element(&mv, in, e, v);
     return in->type;
 }

@@ -53,6 +53,61 @@ static void test_arithmetic(void)
     }
 }
 
+/* Entry grid layouts (locate.h): about CLVR_ENTRY_CELLS_PER_LEAF cells per
+ * leaf, cells about cubic, one cell on flat, empty or NaN axes, at most
+ * CLVR_ENTRY_MAX_RES per axis, first cells as a running sum, overflow past
+ * 2^32 - 1 cells reported; none for no instances. */
+static void test_entry_layout(void)
+{
+    clvr_error err = {0};
+    clvr_instance in[5];
+    clvr_entry_grid g[5];
+    memset(in, 0, sizeof in);
+    const float box[5][6] = {{0, 0, 0, 1, 1, 1},       /* cube */
+                             {0, 0, 0, 8, 1, 1},       /* long in x */
+                             {0, 0, 2, 1, 1, 2},       /* flat in z */
+                             {0, 0, 0, NAN, 1, 1},     /* NaN */
+                             {-1, -1, -1, 1, 1, 1}};   /* huge leaf count */
+    const uint32_t leaves[5] = {500, 64, 50, 10, 2000000000u};
+    for (int i = 0; i < 5; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            in[i].bounds.lo[a] = box[i][a];
+            in[i].bounds.hi[a] = box[i][3 + a];
+        }
+        in[i].num_leaves = leaves[i];
+    }
+    uint32_t n = 12345;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 0, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK_EQ_U64(n, 0);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, g, &n, &err), CLVR_OK, &err);
+    /* 1000 cells for a cube: 10 a side */
+    TU_CHECK(g[0].res[0] == 10 && g[0].res[1] == 10 && g[0].res[2] == 10);
+    TU_CHECK(fabsf(g[0].scale[0] - 10.0f) < 1e-5f && g[0].res[3] == 0);
+    /* 128 cells over 8 x 1 x 1: cubic cells of side about 0.4 */
+    TU_CHECK(g[1].res[0] >= 16 && g[1].res[0] <= 24 && g[1].res[1] >= 2 && g[1].res[1] <= 3);
+    TU_CHECK(g[1].res[0] * g[1].res[1] * g[1].res[2] >= 128 && g[1].res[3] == 1000);
+    /* flat in z: one cell there, scale 0; 100 cells on the square */
+    TU_CHECK(g[2].res[2] == 1 && g[2].scale[2] == 0.0f && g[2].res[0] == 10 && g[2].res[1] == 10);
+    /* NaN extent: one cell on that axis */
+    TU_CHECK(g[3].res[0] == 1 && g[3].scale[0] == 0.0f && g[3].res[1] >= 1);
+    uint64_t total = 0;
+    for (int i = 0; i < 4; ++i) {
+        TU_CHECK_EQ_U64(g[i].res[3], total);
+        total += (uint64_t)g[i].res[0] * g[i].res[1] * g[i].res[2];
+        /* a point anywhere maps into the grid, NaN too */
+        const float pts[3] = {-1e30f, 0.5f, NAN};
+        for (int j = 0; j < 3; ++j)
+            for (int a = 0; a < 3; ++a) TU_CHECK(clvr_entry_coord(pts[j], g[i].lo[a], g[i].scale[a], g[i].res[a]) < g[i].res[a]);
+    }
+    TU_CHECK_EQ_U64(n, total);
+    /* 4e9 cells wanted: every axis capped at 1024, and the sum overflows */
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in + 4, 1, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[0].res[0] == CLVR_ENTRY_MAX_RES && g[0].res[1] == CLVR_ENTRY_MAX_RES && g[0].res[2] == CLVR_ENTRY_MAX_RES);
+    clvr_instance many[5];
+    for (int i = 0; i < 5; ++i) many[i] = in[4];
+    TU_CHECK_STATUS(clvr_entry_grids_layout(many, 5, g, &n, &err), CLVR_ERR_OVERFLOW, &err);
+}
+
 static void test_device_sizes(clvr_cl *cl, const clvr_bvh_kernels *k)
 {
     clvr_error err = {0};
@@ -349,7 +404,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         float s = 0.0f;
         uint32_t e = 0;
         const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
-                                   leaf_size, NULL, CLVR_VIEW_ONE_PIECE};
+                                   leaf_size, NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
         const int ok = clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s, &e);
         found += ok;
         host_e[i] = e;
@@ -375,7 +430,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     uint8_t *ebox = malloc((size_t)c.num_elements * CLVR_EBOX_BYTES + 1);
     {
         const clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
-                                   leaf_size, NULL, CLVR_VIEW_ONE_PIECE};
+                                   leaf_size, NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
         TU_CHECK_STATUS(clvr_bvh_element_boxes_host(&mv, c.num_instances, c.num_leaves, ebox, err), CLVR_OK, err);
         clvr_mesh_view mve = mv;
         mve.ebox = ebox;
@@ -451,6 +506,97 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         TU_CHECK(skip_gone > 0 || walked == 0);
     }
 
+    /* Entry grids (locate.h): every leaf cluster whose box holds a point
+     * lies under its cell's start node (checked for the leaf each query's
+     * full walk ends in, by climbing the implicit levels), a hint is a
+     * lowest-level node under its start, and a walk through the grid finds
+     * what the full walk finds (the same found flag; an element that holds
+     * the point, with its value). Live: starts moved to a wrong node change
+     * answers. */
+    clvr_entry_grid *grids = malloc((c.num_instances + 1) * sizeof *grids);
+    uint32_t ncells = 0, *cells = NULL;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &ncells, err), CLVR_OK, err);
+    cells = malloc(((size_t)ncells + 1) * 2 * sizeof *cells);
+    clvr_mesh_view mvg = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
+                          leaf_size, ebox, CLVR_VIEW_ONE_PIECE, NULL, NULL};
+    TU_CHECK_STATUS(clvr_entry_cells_host(&mvg, c.num_instances, grids, ncells, cells, err), CLVR_OK, err);
+    uint32_t *grid_e = malloc(nq * sizeof *grid_e);
+    {
+        int under_bad = 0, hint_bad = 0, entry_bad = 0, same = 0, wrong = 0;
+        for (uint32_t i = 0; i < c.num_instances; ++i) {
+            const clvr_entry_grid *g = &grids[i];
+            const uint64_t nc = (uint64_t)g->res[0] * g->res[1] * g->res[2];
+            TU_CHECK(g->res[0] >= 1 && g->res[1] >= 1 && g->res[2] >= 1 && g->res[3] + nc <= ncells);
+            TU_CHECK(i + 1 == c.num_instances ? g->res[3] + nc == ncells : grids[i + 1].res[3] == g->res[3] + nc);
+            const uint32_t level0 = clvr_locate_level0(&c.instances[i]);
+            const uint32_t end0 = level0 + (c.instances[i].num_leaves + 3u) / 4u;
+            for (uint64_t k2 = 0; k2 < nc; ++k2) {
+                const uint32_t st = cells[2 * (g->res[3] + k2)], hn = cells[2 * (g->res[3] + k2) + 1];
+                if (hn != CLVR_BVH_NOT_FOUND && (st == CLVR_BVH_NOT_FOUND || hn < level0 || hn >= end0)) ++hint_bad;
+            }
+        }
+        for (uint32_t i = 0; i < nq; ++i) {
+            const float *p = q.p[i];
+            float s1 = 0.0f, s2 = 0.0f;
+            uint32_t e1 = 0, e2 = 0, inst = 0, leaf = 0;
+            const int ok1 = clvr_locate_ex(&mvg, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, CLVR_BVH_NOT_FOUND,
+                                           CLVR_BVH_NOT_FOUND, &s1, &e1, &inst, &leaf);
+            mvg.entry_grids = grids;
+            mvg.entry_cells = cells;
+            const int ok2 = clvr_locate(&mvg, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s2, &e2);
+            mvg.entry_grids = NULL;
+            mvg.entry_cells = NULL;
+            grid_e[i] = e2;
+            if (ok1 != ok2 || (ok1 && !judge(&c, p, e2, s2, e1, s1))) ++entry_bad;
+            same += ok1 && e1 == e2;
+            if (!ok1) continue;
+            /* climb from the leaf's lowest-level node to the cell's start */
+            const clvr_instance *in = &c.instances[inst];
+            const clvr_entry_grid *g = &grids[inst];
+            uint32_t cc[3];
+            for (int a = 0; a < 3; ++a) cc[a] = clvr_entry_coord(p[a], g->lo[a], g->scale[a], g->res[a]);
+            const uint32_t st = cells[2 * (g->res[3] + (cc[2] * g->res[1] + cc[1]) * g->res[0] + cc[0])];
+            uint32_t node = (leaf - in->first_leaf) / 4u, size = (in->num_leaves + 3u) / 4u;
+            uint32_t first = clvr_locate_level0(in);
+            while (first + node != st && size > 1u) {
+                size = (size + 3u) / 4u;
+                first -= size;
+                node /= 4u;
+            }
+            under_bad += first + node != st;
+        }
+        TU_CHECK_EQ_U64(under_bad, 0);
+        TU_CHECK_EQ_U64(hint_bad, 0);
+        TU_CHECK_EQ_U64(entry_bad, 0);
+        TU_CHECK(same > 0 || found == 0);
+        /* each instance's start moved to its last lowest-level node: a
+         * node of its own tree, wrong for most points where it has more
+         * than 4 leaf clusters */
+        uint32_t *bad = malloc(((size_t)ncells + 1) * 2 * sizeof *bad);
+        for (uint32_t i = 0; i < c.num_instances; ++i) {
+            const clvr_instance *in = &c.instances[i];
+            const uint64_t nc = (uint64_t)grids[i].res[0] * grids[i].res[1] * grids[i].res[2];
+            for (uint64_t k2 = grids[i].res[3]; k2 < grids[i].res[3] + nc; ++k2) {
+                bad[2 * k2] = cells[2 * k2] == CLVR_BVH_NOT_FOUND ? CLVR_BVH_NOT_FOUND
+                                                                  : clvr_locate_level0(in) + (in->num_leaves + 3u) / 4u - 1u;
+                bad[2 * k2 + 1] = CLVR_BVH_NOT_FOUND;
+            }
+        }
+        mvg.entry_grids = grids;
+        mvg.entry_cells = bad;
+        for (uint32_t i = 0; i < nq; ++i) {
+            float s2 = 0.0f;
+            uint32_t e2 = 0;
+            wrong += clvr_locate(&mvg, q.p[i][0], q.p[i][1], q.p[i][2], CLVR_LOCATE_COHERENT, &s2, &e2) !=
+                     (host_e[i] != CLVR_BVH_NOT_FOUND);
+        }
+        mvg.entry_cells = cells;
+        int big = 0; /* an instance with more than one lowest-level node */
+        for (uint32_t i = 0; i < c.num_instances; ++i) big |= c.instances[i].num_leaves > 4u;
+        TU_CHECK(wrong > 0 || !big || found == 0);
+        free(bad);
+    }
+
     /* device build and device point location */
     clvr_status s = CLVR_OK;
     cl_mem dv = NULL, d16 = NULL, d32 = NULL, dinst = NULL, dleaf = NULL, dpts = NULL, dsc = NULL, deid = NULL;
@@ -496,6 +642,18 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         TU_CHECK(memcmp(tmp, ebox, (size_t)db.ebox_bytes) == 0);
         free(tmp);
     }
+    {
+        /* device entry grids: the host reference's cells */
+        CLVR_TRY(clvr_bvh_entry_grids_device(cl, k, &db, dev_inst, dinst, c.num_instances, dv, d16, d32, leaf_size,
+                                             c.num_leaves, err));
+        TU_CHECK_EQ_U64(db.entry_bytes, (uint64_t)c.num_instances * sizeof *grids + (uint64_t)ncells * 8u);
+        uint32_t *tmp = malloc(((size_t)ncells + 1) * 8u);
+        if (ncells)
+            CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, db.entry_cells, CL_TRUE, 0, (size_t)ncells * 8u, tmp, 0, NULL,
+                                              NULL));
+        TU_CHECK(memcmp(tmp, cells, (size_t)ncells * 8u) == 0);
+        free(tmp);
+    }
     cl_uint n = nq, ls = leaf_size, root = db.tlas_root, hints = CLVR_LOCATE_INCOHERENT, use_ebox = 1;
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 0, sizeof(cl_mem), &dpts));
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 1, sizeof(cl_uint), &n));
@@ -516,6 +674,10 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 14, sizeof(cl_uint), &use_ebox));
     cl_uint chain = 1;
     CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 15, sizeof(cl_uint), &chain));
+    /* without entry grids (NULL), then with them (the chains below too) */
+    for (int with_grids = 0; with_grids < 2; ++with_grids) {
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 16, sizeof(cl_mem), with_grids ? &db.entry_grids : NULL));
+    CLVR_CL_CHECK(clSetKernelArg(k->locate_points, 17, sizeof(cl_mem), with_grids ? &db.entry_cells : NULL));
     CLVR_TRY(clvr_cl_run1d(cl, k->locate_points, nq, 64, NULL, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, dsc, CL_TRUE, 0, nq * sizeof(float), dscal, 0, NULL, NULL));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, deid, CL_TRUE, 0, nq * sizeof(uint32_t), delem, 0, NULL, NULL));
@@ -531,8 +693,9 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
             }
         TU_CHECK_EQ_U64(dev_bad, 0);
         int host_dev_diff = 0;
-        for (uint32_t i = 0; i < nq; ++i) host_dev_diff += delem[i] != host_e[i];
+        for (uint32_t i = 0; i < nq; ++i) host_dev_diff += delem[i] != (with_grids ? grid_e : host_e)[i];
         TU_CHECK_EQ_U64(host_dev_diff, 0);
+    }
     }
     /* Chains (a ray's hint carried from point to point inside a work item)
      * against the same kernel without hints (chain 1, checked against brute
@@ -632,6 +795,9 @@ cleanup:
     free(want_s);
     free(host_e);
     free(ebox);
+    free(grids);
+    free(cells);
+    free(grid_e);
     free(q.p);
     clvr_bvh_host_free(&hb);
     fx_clustered_free(&c);
@@ -715,6 +881,7 @@ static void test_files(clvr_cl *cl, const clvr_bvh_kernels *k)
 int main(void)
 {
     test_arithmetic();
+    test_entry_layout();
     test_bad_input();
     clvr_cl cl;
     tu_open_device(&cl);

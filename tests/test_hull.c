@@ -205,7 +205,7 @@ static void test_collisions(clvr_cl *cl)
         uint64_t *keys = NULL;
         TU_CHECK_STATUS(clvr_hull_sorted_slots_ref(&h, ni, K_BITS, ff, &keys, &slots, &n, &err), CLVR_OK, &err);
         const clvr_mesh_view m = {NULL, NULL, h.instances, (const clvr_vec4 *)h.vertices, h.idx16, h.idx32, 0, 0,
-                                  NULL, CLVR_VIEW_ONE_PIECE};
+                                  NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
         uint32_t *hf = malloc(n * sizeof *hf + 1), *df = malloc(n * sizeof *df + 1);
         uint32_t longest = 0, run = 0, boundary = 0;
         for (uint32_t i = 0; i < n; ++i) {

@@ -220,7 +220,7 @@ static int located_open(clvr_cl *cl, const clvr_clustered *c, located *L)
                             &err) != CLVR_OK)
         goto fail;
     clvr_mesh_view mv = {L->b.tlas, L->b.blas, L->inst, (const clvr_vec4 *)L->h.vertices, L->h.idx16, L->h.idx32,
-                         L->b.tlas_root, c->leaf_size, NULL, CLVR_VIEW_ONE_PIECE};
+                         L->b.tlas_root, c->leaf_size, NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
     L->mv = mv;
     return 0;
 fail:

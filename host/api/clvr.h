@@ -48,7 +48,7 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 8
+#define CLVR_API_VERSION_MINOR 9
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
@@ -58,7 +58,8 @@ extern "C" {
  * estimator names), 1006 is 1.6 (clvr_render_stats.estimator: what auto
  * resolved to), 1007 is 1.7 (adaptive sampling: clvr_tracer_set_adaptive), 1008
  * is 1.8 (auto's pilot on meshes with cells other than tets, and its
- * statistics "pilot_s", "pilot_pixels", "pilot_walk_cells"). */
+ * statistics "pilot_s", "pilot_pixels", "pilot_walk_cells"), 1009 is 1.9
+ * (clvr_scene_stats.bytes_entry_grids). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -483,6 +484,7 @@ typedef struct clvr_scene_stats {
     double stage_s[CLVR_STATS_MAX_STAGES]; /* device seconds per stage, then the trees ("bvh") and the
                                               boundary faces ("hull", 0 when none were built) */
     float scalar_min, scalar_max;   /* range of the scene's field */
+    uint64_t bytes_entry_grids;     /* (1.9) point location's entry grids (where a query's walk starts) */
 } clvr_scene_stats;
 CLVR_API clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg);
 /* The scene a tracer renders (borrowed: valid while the tracer lives). */

@@ -1807,6 +1807,7 @@ clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, cl
     d.bytes_indices_after = c->bytes_indices_after;
     d.bytes_bvh = clvr_accel_bvh_bytes(a);
     d.bytes_element_boxes = a->two_level.ebox_bytes;
+    d.bytes_entry_grids = a->two_level.entry_bytes;
     /* Table 1's "pre" column: the same packed 4-wide tree with one element
      * per leaf, i.e. over num_elements primitives. */
     d.bytes_bvh_one_per_leaf =

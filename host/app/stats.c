@@ -39,6 +39,7 @@ void clvr_stats_from_scene(clvr_stats *s, const clvr_scene_stats *c)
     if (c->bytes_indices_before) s->bytes_indices_before = c->bytes_indices_before;
     s->bytes_bvh = c->bytes_bvh;
     s->bytes_element_boxes = c->bytes_element_boxes;
+    s->bytes_entry_grids = c->bytes_entry_grids;
     s->bytes_bvh_one_per_leaf = c->bytes_bvh_one_per_leaf;
     s->bytes_sampling = c->bytes_sampling;
     s->num_instances = c->instances;
@@ -82,6 +83,8 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 per_element(s->bytes_bvh_one_per_leaf, s->elements), per_element(s->bytes_bvh, s->elements));
         fprintf(out, "| element boxes (not in the paper) | | %.3f MB | | %.2f |\n", s->bytes_element_boxes / 1e6,
                 per_element(s->bytes_element_boxes, s->elements));
+        fprintf(out, "| entry grids (not in the paper) | | %.3f MB | | %.2f |\n", s->bytes_entry_grids / 1e6,
+                per_element(s->bytes_entry_grids, s->elements));
         fprintf(out, "| sampling clusters | | %.3f MB | | %.2f |\n", s->bytes_sampling / 1e6,
                 per_element(s->bytes_sampling, s->elements));
         fprintf(out, "| boundary faces rays are cut to (%llu; 0: none kept) | | %.3f MB | | %.2f |\n",
@@ -164,6 +167,7 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
         {"bvh_one_per_leaf", (double)s->bytes_bvh_one_per_leaf},
         {"sampling", (double)s->bytes_sampling},
         {"element_boxes", (double)s->bytes_element_boxes},
+        {"entry_grids", (double)s->bytes_entry_grids},
         {"hull", (double)s->bytes_hull},
         {"adjacency", (double)s->bytes_adjacency},
         {"peak_rss", (double)s->bytes_peak_rss},

@@ -24,6 +24,7 @@ typedef struct clvr_stats {
     uint64_t bytes_bvh_one_per_leaf;/* estimate for one element per leaf (Table 1 "pre") */
     uint64_t bytes_sampling;        /* sampling clusters */
     uint64_t bytes_element_boxes;   /* quantized element boxes of point location (kernels/locate.h) */
+    uint64_t bytes_entry_grids;     /* point location's entry grids (kernels/locate.h) */
     uint64_t bytes_hull;            /* boundary faces and their tree that camera rays are cut to (0: none kept) */
     uint64_t hull_faces;
     uint64_t bytes_adjacency;       /* the walk's face adjacency, built at its first frame (0: not built) */

@@ -33,6 +33,13 @@ clvr_status clvr_accel_build_hull(clvr_cl *cl, clvr_clustered *c, int hull_mode,
                                                pc.vertices[CLVR_MAX_SPLITS - 1], c->leaf_size,
                                                (uint32_t)c->num_leaves, err));
     }
+    { /* after the element boxes, which speed up its cells' point location */
+        clvr_clustered_pieces pc;
+        clvr_clustered_get_pieces(c, &pc);
+        CLVR_TRY(clvr_bvh_entry_grids_pieces(cl, &out->kernels, &out->two_level, c->host_instances, c->instances,
+                                             (uint32_t)c->num_instances, pc.vertices, pc.idx16, pc.idx32,
+                                             c->leaf_size, (uint32_t)c->num_leaves, err));
+    }
     CLVR_TRY(clvr_bvh_build_boxes_device(cl, &out->kernels, c->sampling, (uint32_t)c->num_sampling,
                                          &out->sampling_nodes, err));
     out->sampling_node_count = clvr_bvh_nodes_bound((uint32_t)c->num_sampling);
@@ -102,7 +109,8 @@ clvr_status clvr_accel_locate(clvr_cl *cl, const clvr_clustered *c, const clvr_a
                           CLVR_ARG(pc.idx16[0]), CLVR_ARG(pc.idx32[0]), CLVR_ARG(eb[0]), CLVR_ARG(pc.vertices[1]),
                           CLVR_ARG(pc.idx16[1]), CLVR_ARG(pc.idx32[1]), CLVR_ARG(eb[1]), CLVR_ARG(pc.vertices[2]),
                           CLVR_ARG(pc.idx16[2]), CLVR_ARG(pc.idx32[2]), CLVR_ARG(eb[2]), CLVR_ARG(pc.vertices[3]),
-                          CLVR_ARG(pc.idx16[3]), CLVR_ARG(pc.idx32[3]), CLVR_ARG(eb[3])));
+                          CLVR_ARG(pc.idx16[3]), CLVR_ARG(pc.idx32[3]), CLVR_ARG(eb[3]),
+                          CLVR_ARG(a->two_level.entry_grids), CLVR_ARG(a->two_level.entry_cells)));
     CLVR_TRY(clvr_cl_run1d(cl, k, (n + ch - 1) / ch, 64, NULL, err));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, sc, CL_TRUE, 0, (size_t)n * 4, scalars, 0, NULL, NULL));
     CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, ids, CL_TRUE, 0, (size_t)n * 4, element_ids, 0, NULL, NULL));

@@ -399,7 +399,7 @@ clvr_status clvr_hull_sorted_slots_ref(const clvr_clustered_host *h, uint64_t nu
     CLVR_TRY(clvr_hull_face_first(h->instances, num_instances, face_first, err));
     const uint32_t ns = face_first[num_instances];
     const clvr_mesh_view m = {NULL, NULL, h->instances, (const clvr_vec4 *)h->vertices, h->idx16, h->idx32, 0, 0,
-                              NULL, CLVR_VIEW_ONE_PIECE};
+                              NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
     ks = malloc((size_t)ns * sizeof *ks + 1);
     *keys = malloc((size_t)ns * sizeof **keys + 1);
     *slots = malloc((size_t)ns * sizeof **slots + 1);
@@ -442,7 +442,7 @@ clvr_status clvr_hull_build_ref(const clvr_clustered_host *h, uint64_t num_insta
     if (!ff) return clvr_error_set(err, CLVR_ERR_NO_MEMORY, "hull: out of host memory");
     CLVR_TRY(clvr_hull_sorted_slots_ref(h, num_instances, 32u, ff, &keys, &slots, &n, err));
     const clvr_mesh_view m = {NULL, NULL, h->instances, (const clvr_vec4 *)h->vertices, h->idx16, h->idx32, 0, 0,
-                              NULL, CLVR_VIEW_ONE_PIECE};
+                              NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
     flags = malloc((size_t)n * sizeof *flags + 1);
     if (!flags) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "hull: out of host memory for %u faces", n);

@@ -120,7 +120,7 @@ class _SceneStats(ctypes.Structure):
                 ("bytes_bvh", _U64), ("bytes_bvh_one_per_leaf", _U64), ("bytes_sampling", _U64),
                 ("bytes_element_boxes", _U64), ("device_bytes", _U64), ("preprocess_s", ctypes.c_double),
                 ("num_stages", _U32), ("stage_name", (ctypes.c_char * 16) * 16), ("stage_s", ctypes.c_double * 16),
-                ("scalar_min", _F), ("scalar_max", _F)]
+                ("scalar_min", _F), ("scalar_max", _F), ("bytes_entry_grids", _U64)]
 
 
 class _TracerSettings(ctypes.Structure):
