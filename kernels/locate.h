@@ -480,18 +480,22 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  *    Every leaf box that holds a point meets the point's cell (a
  *    coordinate's cell is one monotonic map, for points and box corners
  *    alike), so a walk from start finds what a walk from the root finds.
- *  - hint: the lowest-level node (4 leaf clusters) over the leaf where the
- *    cell's centre lies (CLVR_BVH_NOT_FOUND when it lies in no element).
- *    A query searches it first, then the rest of start's subtree.
+ *  - hint: the leaf cluster holding the element where the cell's centre
+ *    lies (CLVR_BVH_NOT_FOUND when it lies in no element). A query
+ *    searches it first, then the other leaves of its lowest-level node
+ *    (4 leaf clusters) whose boxes hold the point, then the rest of
+ *    start's subtree.
  * Host reference walk, random points, leaves of 16, 2 cells per leaf:
  * bottom-level nodes per query 9.45 -> 2.79 (blunt fin), 12.04 -> 4.73
- * (post-tets), leaves 1.71 -> 1.57 and 2.67 -> 2.42; the hint holds the
- * point 77% and 66% of the time (start alone: 4.83 and 7.27 nodes, and
- * almost no gain on PoCL: the levels it skips are the cached ones; 8
- * cells per leaf: more leaves per query). As with a ray's hint, the
- * element found may differ from a walk from the root only where two
- * elements share the point, with the same value. Memory: 8 bytes per
- * cell, 1 byte per element at leaves of 16. */
+ * (post-tets), leaves 1.71 -> 1.57 and 2.67 -> 2.42 with the hint's node
+ * searched in slot order; its node holds the point 77% and 66% of the
+ * time. PoCL, bench_locate_embree: the blunt fin 0.92-0.96x -> 1.38-1.40x
+ * Embree 3's queries/s. The start alone (no hint) halved the host walk's
+ * nodes and gained about nothing on PoCL: the levels it skips are the
+ * cached ones; 4 or 8 cells per leaf were no faster (more leaves per
+ * query). As with a ray's hint, the element found may differ from a walk
+ * from the root only where two elements share the point, with the same
+ * value. Memory: 8 bytes per cell, 1 byte per element at leaves of 16. */
 #define CLVR_ENTRY_CELLS_PER_LEAF 2u
 /* At most this many cells per axis. */
 #define CLVR_ENTRY_MAX_RES 1024u
@@ -535,8 +539,8 @@ CLVR_INLINE clvr_u32 clvr_entry_lca(const clvr_instance *inst, clvr_u32 first_hi
 }
 
 /* The hint of cell (cx, cy, cz) of inst's grid g, whose start node is
- * start: the lowest-level node over the leaf cluster holding the element
- * where the cell's centre lies, or CLVR_BVH_NOT_FOUND. */
+ * start: the leaf cluster holding the element where the cell's centre
+ * lies, or CLVR_BVH_NOT_FOUND. */
 CLVR_INLINE clvr_u32 clvr_entry_hint(const clvr_mesh_view *m, const clvr_instance *inst, const clvr_entry_grid *g,
                                      clvr_u32 start, clvr_u32 cx, clvr_u32 cy, clvr_u32 cz)
 {
@@ -551,7 +555,7 @@ CLVR_INLINE clvr_u32 clvr_entry_hint(const clvr_mesh_view *m, const clvr_instanc
     if (!clvr_locate_in_instance(m, inst, start, CLVR_BVH_NOT_FOUND, p[0], p[1], p[2], CLVR_LOCATE_COHERENT,
                                  CLVR_BVH_NOT_FOUND, &s, &e, &leaf))
         return CLVR_BVH_NOT_FOUND;
-    return clvr_locate_level0(inst) + (leaf - inst->first_leaf) / 4u;
+    return leaf;
 }
 
 /* Searches instance inst_id (inst) for p the way its entry grid says:
@@ -572,16 +576,32 @@ CLVR_INLINE int clvr_locate_entered(const clvr_mesh_view *m, clvr_u32 inst_id, c
     CLVR_GLOBAL const clvr_u32 *cell = m->entry_cells + 2u * ((clvr_u64)g.res[3] + (cz * g.res[1] + cy) * g.res[0] + cx);
     const clvr_u32 start = cell[0], hint = cell[1];
     if (start == CLVR_BVH_NOT_FOUND) return 0;
+    clvr_u32 skip = CLVR_BVH_NOT_FOUND;
     if (hint != CLVR_BVH_NOT_FOUND) {
+        /* The hinted leaf, then its siblings (the lowest level's children
+         * are all leaves; empty slots fail the box test), from its slot on. */
+        clvr_u32 node, slot;
+        clvr_leaf_parent(inst, hint, &node, &slot);
+        CLVR_GLOBAL const clvr_bvh_node *n = m->blas + node;
+        const clvr_piece_arrays a = clvr_view_piece(m, inst);
+        const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
         CLVR_WALK_STAT(entry_try);
-        if (clvr_locate_in_instance(m, inst, hint, CLVR_BVH_NOT_FOUND, px, py, pz, hints, skip_elem, scalar,
-                                    element_id, leaf_found)) {
-            CLVR_WALK_STAT(entry_hit);
-            return 1;
+        CLVR_WALK_STAT(bnodes);
+        for (clvr_u32 k = 0; k < 4u; ++k) {
+            const clvr_u32 c = (slot + k) & 3u;
+            if (!((mask >> c) & 1u)) continue;
+            const clvr_u32 leaf = n->child[c] & CLVR_BVH_MAX_PRIMS;
+            CLVR_WALK_STAT(leaves);
+            if (clvr_locate_in_leaf(m, &a, inst, leaf, n, c, px, py, pz, skip_elem, scalar, element_id)) {
+                CLVR_WALK_STAT(entry_hit);
+                *leaf_found = leaf;
+                return 1;
+            }
         }
-        if (hint == start) return 0; /* the hint was the whole of start's subtree */
+        if (node == start) return 0; /* the hint's node was the whole of start's subtree */
+        skip = node;
     }
-    return clvr_locate_in_instance(m, inst, start, hint, px, py, pz, hints, skip_elem, scalar, element_id,
+    return clvr_locate_in_instance(m, inst, start, skip, px, py, pz, hints, skip_elem, scalar, element_id,
                                    leaf_found);
 }
 

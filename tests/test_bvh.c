@@ -508,8 +508,8 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
 
     /* Entry grids (locate.h): every leaf cluster whose box holds a point
      * lies under its cell's start node (checked for the leaf each query's
-     * full walk ends in, by climbing the implicit levels), a hint is a
-     * lowest-level node under its start, and a walk through the grid finds
+     * full walk ends in, by climbing the implicit levels), a hint is a leaf
+     * cluster of its instance under its start, and a walk through the grid finds
      * what the full walk finds (the same found flag; an element that holds
      * the point, with its value). Live: starts moved to a wrong node change
      * answers. */
@@ -528,11 +528,23 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
             const uint64_t nc = (uint64_t)g->res[0] * g->res[1] * g->res[2];
             TU_CHECK(g->res[0] >= 1 && g->res[1] >= 1 && g->res[2] >= 1 && g->res[3] + nc <= ncells);
             TU_CHECK(i + 1 == c.num_instances ? g->res[3] + nc == ncells : grids[i + 1].res[3] == g->res[3] + nc);
-            const uint32_t level0 = clvr_locate_level0(&c.instances[i]);
-            const uint32_t end0 = level0 + (c.instances[i].num_leaves + 3u) / 4u;
+            const clvr_instance *in = &c.instances[i];
             for (uint64_t k2 = 0; k2 < nc; ++k2) {
                 const uint32_t st = cells[2 * (g->res[3] + k2)], hn = cells[2 * (g->res[3] + k2) + 1];
-                if (hn != CLVR_BVH_NOT_FOUND && (st == CLVR_BVH_NOT_FOUND || hn < level0 || hn >= end0)) ++hint_bad;
+                if (hn == CLVR_BVH_NOT_FOUND) continue;
+                if (st == CLVR_BVH_NOT_FOUND || hn < in->first_leaf || hn - in->first_leaf >= in->num_leaves) {
+                    ++hint_bad;
+                    continue;
+                }
+                /* the hint leaf lies under the start node */
+                uint32_t node = (hn - in->first_leaf) / 4u, size = (in->num_leaves + 3u) / 4u;
+                uint32_t first = clvr_locate_level0(in);
+                while (first + node != st && size > 1u) {
+                    size = (size + 3u) / 4u;
+                    first -= size;
+                    node /= 4u;
+                }
+                hint_bad += first + node != st;
             }
         }
         for (uint32_t i = 0; i < nq; ++i) {
