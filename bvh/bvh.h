@@ -43,7 +43,7 @@ clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num
                                     uint32_t *num_cells, clvr_error *err);
 /* Host reference of the cells (kernels/locate.h): for cell c of instance
  * i's grid, cells[2 (grids[i].res[3] + c)] its start node and the next
- * entry its hint; num_cells cells in all, as the layout counted them. m
+ * entry its hint leaf; num_cells cells in all, as the layout counted them. m
  * holds host arrays (blas with bvh_root set, instances, vertices, idx16,
  * idx32, leaf_size, ebox or NULL; tlas is not read). */
 clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
@@ -83,7 +83,7 @@ typedef struct clvr_bvh_device {
     cl_mem ebox_more[CLVR_MAX_SPLITS - 1]; /* pieces 1 .. of a split mesh's element boxes, else NULL */
     uint64_t ebox_bytes;  /* all pieces */
     cl_mem entry_grids;   /* clvr_entry_grid per instance (kernels/locate.h), or NULL */
-    cl_mem entry_cells;   /* their cells: start node and hint per cell */
+    cl_mem entry_cells;   /* their cells: start node and hint leaf per cell */
     uint64_t entry_bytes; /* both */
 } clvr_bvh_device;
 

@@ -570,7 +570,7 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
     X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
     X(uchar, ebox)                          /* quantized element boxes (locate.h) */                    \
     X(clvr_entry_grid, entry_grids)         /* entry grids, one per instance (locate.h), or NULL */    \
-    X(uint, entry_cells)                    /* their cells: start node per cell */                     \
+    X(uint, entry_cells)                    /* their cells: start node and hint leaf per cell */        \
     X(clvr_bvh_node, hull_bvh)              /* tree over the boundary faces (kernels/hull.h) */        \
     X(clvr_hull_face, hull)                 /* the boundary faces, in the tree's primitive order */    \
     X(uint, face_first)                     /* walk: first face slot per instance (kernels/hull.h) */  \

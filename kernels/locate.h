@@ -558,6 +558,47 @@ CLVR_INLINE clvr_u32 clvr_entry_hint(const clvr_mesh_view *m, const clvr_instanc
     return leaf;
 }
 
+/* Start node and hint leaf of p's cell in instance inst_id's entry grid. */
+CLVR_INLINE void clvr_entry_cell(const clvr_mesh_view *m, clvr_u32 inst_id, float px, float py, float pz,
+                                 clvr_u32 *start, clvr_u32 *hint)
+{
+    const clvr_entry_grid g = m->entry_grids[inst_id];
+    const clvr_u32 cx = clvr_entry_coord(px, g.lo[0], g.scale[0], g.res[0]);
+    const clvr_u32 cy = clvr_entry_coord(py, g.lo[1], g.scale[1], g.res[1]);
+    const clvr_u32 cz = clvr_entry_coord(pz, g.lo[2], g.scale[2], g.res[2]);
+    CLVR_GLOBAL const clvr_u32 *cell = m->entry_cells + 2u * ((clvr_u64)g.res[3] + (cz * g.res[1] + cy) * g.res[0] + cx);
+    *start = cell[0];
+    *hint = cell[1];
+}
+
+/* Searches hint leaf `hint` of inst, then its siblings (the lowest level's
+ * children are all leaves; empty slots fail the box test) from its slot
+ * on; *node: their node. Arguments and result as clvr_locate_in_instance's. */
+CLVR_INLINE int clvr_locate_hint_leaf(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 hint, float px,
+                                      float py, float pz, clvr_u32 skip_elem, float *scalar, clvr_u32 *element_id,
+                                      clvr_u32 *leaf_found, clvr_u32 *node)
+{
+    clvr_u32 slot;
+    clvr_leaf_parent(inst, hint, node, &slot);
+    CLVR_GLOBAL const clvr_bvh_node *n = m->blas + *node;
+    const clvr_piece_arrays a = clvr_view_piece(m, inst);
+    const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
+    CLVR_WALK_STAT(entry_try);
+    CLVR_WALK_STAT(bnodes);
+    for (clvr_u32 k = 0; k < 4u; ++k) {
+        const clvr_u32 c = (slot + k) & 3u;
+        if (!((mask >> c) & 1u)) continue;
+        const clvr_u32 leaf = n->child[c] & CLVR_BVH_MAX_PRIMS;
+        CLVR_WALK_STAT(leaves);
+        if (clvr_locate_in_leaf(m, &a, inst, leaf, n, c, px, py, pz, skip_elem, scalar, element_id)) {
+            CLVR_WALK_STAT(entry_hit);
+            *leaf_found = leaf;
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* Searches instance inst_id (inst) for p the way its entry grid says:
  * the cell's hint, then the rest of its start node's subtree (the whole
  * tree from the root without entry grids). Arguments and result as
@@ -569,40 +610,85 @@ CLVR_INLINE int clvr_locate_entered(const clvr_mesh_view *m, clvr_u32 inst_id, c
     if (!m->entry_grids)
         return clvr_locate_in_instance(m, inst, inst->bvh_root, CLVR_BVH_NOT_FOUND, px, py, pz, hints, skip_elem,
                                        scalar, element_id, leaf_found);
-    const clvr_entry_grid g = m->entry_grids[inst_id];
-    const clvr_u32 cx = clvr_entry_coord(px, g.lo[0], g.scale[0], g.res[0]);
-    const clvr_u32 cy = clvr_entry_coord(py, g.lo[1], g.scale[1], g.res[1]);
-    const clvr_u32 cz = clvr_entry_coord(pz, g.lo[2], g.scale[2], g.res[2]);
-    CLVR_GLOBAL const clvr_u32 *cell = m->entry_cells + 2u * ((clvr_u64)g.res[3] + (cz * g.res[1] + cy) * g.res[0] + cx);
-    const clvr_u32 start = cell[0], hint = cell[1];
+    clvr_u32 start, hint, skip = CLVR_BVH_NOT_FOUND;
+    clvr_entry_cell(m, inst_id, px, py, pz, &start, &hint);
     if (start == CLVR_BVH_NOT_FOUND) return 0;
-    clvr_u32 skip = CLVR_BVH_NOT_FOUND;
     if (hint != CLVR_BVH_NOT_FOUND) {
-        /* The hinted leaf, then its siblings (the lowest level's children
-         * are all leaves; empty slots fail the box test), from its slot on. */
-        clvr_u32 node, slot;
-        clvr_leaf_parent(inst, hint, &node, &slot);
-        CLVR_GLOBAL const clvr_bvh_node *n = m->blas + node;
-        const clvr_piece_arrays a = clvr_view_piece(m, inst);
-        const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
-        CLVR_WALK_STAT(entry_try);
-        CLVR_WALK_STAT(bnodes);
-        for (clvr_u32 k = 0; k < 4u; ++k) {
-            const clvr_u32 c = (slot + k) & 3u;
-            if (!((mask >> c) & 1u)) continue;
-            const clvr_u32 leaf = n->child[c] & CLVR_BVH_MAX_PRIMS;
-            CLVR_WALK_STAT(leaves);
-            if (clvr_locate_in_leaf(m, &a, inst, leaf, n, c, px, py, pz, skip_elem, scalar, element_id)) {
-                CLVR_WALK_STAT(entry_hit);
-                *leaf_found = leaf;
-                return 1;
-            }
-        }
-        if (node == start) return 0; /* the hint's node was the whole of start's subtree */
-        skip = node;
+        if (clvr_locate_hint_leaf(m, inst, hint, px, py, pz, skip_elem, scalar, element_id, leaf_found, &skip))
+            return 1;
+        if (skip == start) return 0; /* the hint's node was the whole of start's subtree */
     }
     return clvr_locate_in_instance(m, inst, start, skip, px, py, pz, hints, skip_elem, scalar, element_id,
                                    leaf_found);
+}
+
+/* Instances whose boxes hold a point that clvr_locate_ex searches hints
+ * first across (more: one instance after another). */
+#define CLVR_ENTRY_MAX_CANDIDATES 8u
+
+/* clvr_locate_ex with entry grids: the instances whose boxes hold p (at
+ * most CLVR_ENTRY_MAX_CANDIDATES; 0 when there are more, so that the caller
+ * searches them one by one), every one's hint first, then the rest of
+ * every one's start subtree. Each element type has its own instance
+ * clusters (one curve per type), and they overlap: on the OpenFOAM igloo
+ * (328k mixed cells) a random point's box test passes 2 instances, and
+ * searching them one after another searched the whole start subtree of
+ * the wrong types before the right one's hint. *done: 1 when the search
+ * was made (its result returned), 0 when there were too many candidates. */
+CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints,
+                                       clvr_u32 skip_inst, clvr_u32 skip_elem, float *scalar, clvr_u32 *element_id,
+                                       clvr_u32 *inst_found, clvr_u32 *leaf_found, int *done)
+{
+    clvr_u32 cand[CLVR_ENTRY_MAX_CANDIDATES], start[CLVR_ENTRY_MAX_CANDIDATES], skip[CLVR_ENTRY_MAX_CANDIDATES];
+    clvr_u32 nc = 0;
+    *done = 0;
+    {
+        clvr_u32 stack[CLVR_BVH_STACK_SIZE];
+        clvr_u32 sp = 0, ref = m->tlas_root;
+        for (;;) {
+            CLVR_GLOBAL const clvr_bvh_node *n = m->tlas + ref;
+            CLVR_WALK_STAT(tnodes);
+            const clvr_u32 mask = clvr_bvh_node_point_mask(n, px, py, pz);
+            for (clvr_u32 c = 0; c < 4; ++c) {
+                if (!((mask >> c) & 1u)) continue;
+                const clvr_u32 ch = n->child[c];
+                if (ch & CLVR_BVH_LEAF_BIT) {
+                    if ((ch & CLVR_BVH_MAX_PRIMS) == skip_inst) continue;
+                    if (nc == CLVR_ENTRY_MAX_CANDIDATES) return 0;
+                    cand[nc++] = ch & CLVR_BVH_MAX_PRIMS;
+                } else if (sp < CLVR_BVH_STACK_SIZE) {
+                    stack[sp++] = ch;
+                }
+            }
+            if (sp == 0) break;
+            ref = stack[--sp];
+        }
+    }
+    *done = 1;
+    for (clvr_u32 i = 0; i < nc; ++i) {
+        clvr_u32 hint;
+        clvr_entry_cell(m, cand[i], px, py, pz, &start[i], &hint);
+        skip[i] = CLVR_BVH_NOT_FOUND;
+        if (start[i] == CLVR_BVH_NOT_FOUND || hint == CLVR_BVH_NOT_FOUND) continue;
+        const clvr_instance inst = m->instances[cand[i]];
+        if (clvr_locate_hint_leaf(m, &inst, hint, px, py, pz, skip_elem, scalar, element_id, leaf_found, &skip[i])) {
+            *inst_found = cand[i];
+            return 1;
+        }
+        if (skip[i] == start[i]) start[i] = CLVR_BVH_NOT_FOUND; /* its node was the whole start subtree */
+    }
+    for (clvr_u32 i = 0; i < nc; ++i) {
+        if (start[i] == CLVR_BVH_NOT_FOUND) continue;
+        const clvr_instance inst = m->instances[cand[i]];
+        CLVR_WALK_STAT(inst);
+        if (clvr_locate_in_instance(m, &inst, start[i], skip[i], px, py, pz, hints, skip_elem, scalar, element_id,
+                                    leaf_found)) {
+            *inst_found = cand[i];
+            return 1;
+        }
+    }
+    *element_id = CLVR_BVH_NOT_FOUND;
+    return 0;
 }
 
 /* Point location in mesh m: returns 1 when an element contains
@@ -618,6 +704,12 @@ CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, floa
                                clvr_u32 *inst_found, clvr_u32 *leaf_found)
 {
     *element_id = CLVR_BVH_NOT_FOUND;
+    if (m->entry_grids) {
+        int done;
+        const int found = clvr_locate_entry_pass(m, px, py, pz, hints, skip_inst, skip_elem, scalar, element_id,
+                                                 inst_found, leaf_found, &done);
+        if (done) return found;
+    }
     clvr_u32 stack[CLVR_BVH_STACK_SIZE];
     clvr_u32 sp = 0, ref = m->tlas_root;
     for (;;) {
