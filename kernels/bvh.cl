@@ -113,6 +113,19 @@ __kernel void clvr_locate_points_split(__global const float4 *points, uint n, __
     clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
 }
 
+/* The instance that holds leaf cluster `leaf`: the last one whose first
+ * leaf is <= leaf (num_instances >= 1). */
+inline uint clvr_instance_of_leaf(__global const clvr_instance *instances, uint num_instances, uint leaf)
+{
+    uint lo = 0, hi = num_instances;
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (instances[mid].first_leaf <= leaf) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
 /* Quantized element boxes (locate.h), one work item per leaf cluster, into
  * the element boxes of the leaf's piece (ebox0 .. ebox3; pieces the mesh
  * does not have are never written). status[0] becomes nonzero when a leaf
@@ -130,12 +143,7 @@ __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global co
 {
     const uint leaf = get_global_id(0);
     if (leaf >= num_leaves || num_instances == 0) return;
-    uint lo = 0, hi = num_instances; /* last instance with first_leaf <= leaf */
-    while (hi - lo > 1) {
-        const uint mid = (lo + hi) / 2;
-        if (instances[mid].first_leaf <= leaf) lo = mid;
-        else hi = mid;
-    }
+    const uint lo = clvr_instance_of_leaf(instances, num_instances, leaf);
     const clvr_instance inst = instances[lo];
     uint node, slot;
     clvr_leaf_parent(&inst, leaf, &node, &slot);
@@ -173,12 +181,7 @@ __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global 
 {
     const uint leaf = get_global_id(0);
     if (leaf >= num_leaves || num_instances == 0) return;
-    uint lo = 0, hi = num_instances; /* last instance with first_leaf <= leaf */
-    while (hi - lo > 1) {
-        const uint mid = (lo + hi) / 2;
-        if (instances[mid].first_leaf <= leaf) lo = mid;
-        else hi = mid;
-    }
+    const uint lo = clvr_instance_of_leaf(instances, num_instances, leaf);
     const clvr_instance inst = instances[lo];
     if (leaf - inst.first_leaf >= inst.num_leaves) return;
     const clvr_entry_grid g = grids[lo];

@@ -643,6 +643,9 @@ CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float 
     clvr_u32 cand[CLVR_ENTRY_MAX_CANDIDATES], start[CLVR_ENTRY_MAX_CANDIDATES], skip[CLVR_ENTRY_MAX_CANDIDATES];
     clvr_u32 nc = 0;
     *done = 0;
+    /* Its own top-level walk, like clvr_locate_ex's: one walk for both that
+     * collects candidates and searches those past the array as it meets them
+     * measured 2-10% slower on post-tets and the igloo (3 pairs each). */
     {
         clvr_u32 stack[CLVR_BVH_STACK_SIZE];
         clvr_u32 sp = 0, ref = m->tlas_root;

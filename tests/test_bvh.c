@@ -53,6 +53,21 @@ static void test_arithmetic(void)
     }
 }
 
+/* 1 when leaf cluster `leaf` of inst lies under node `node` of its tree
+ * (climbing the implicit levels of bvh_build.h from the leaf's
+ * lowest-level node). */
+static int leaf_under(const clvr_instance *inst, uint32_t leaf, uint32_t node)
+{
+    uint32_t m = (leaf - inst->first_leaf) / 4u, size = (inst->num_leaves + 3u) / 4u;
+    uint32_t first = clvr_locate_level0(inst);
+    while (first + m != node && size > 1u) {
+        size = (size + 3u) / 4u;
+        first -= size;
+        m /= 4u;
+    }
+    return first + m == node;
+}
+
 /* Entry grid layouts (locate.h): about CLVR_ENTRY_CELLS_PER_LEAF cells per
  * leaf, cells about cubic, one cell on flat, empty or NaN axes, at most
  * CLVR_ENTRY_MAX_RES per axis, first cells as a running sum, overflow past
@@ -536,15 +551,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
                     ++hint_bad;
                     continue;
                 }
-                /* the hint leaf lies under the start node */
-                uint32_t node = (hn - in->first_leaf) / 4u, size = (in->num_leaves + 3u) / 4u;
-                uint32_t first = clvr_locate_level0(in);
-                while (first + node != st && size > 1u) {
-                    size = (size + 3u) / 4u;
-                    first -= size;
-                    node /= 4u;
-                }
-                hint_bad += first + node != st;
+                hint_bad += !leaf_under(in, hn, st); /* the hint leaf lies under the start node */
             }
         }
         for (uint32_t i = 0; i < nq; ++i) {
@@ -562,20 +569,12 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
             if (ok1 != ok2 || (ok1 && !judge(&c, p, e2, s2, e1, s1))) ++entry_bad;
             same += ok1 && e1 == e2;
             if (!ok1) continue;
-            /* climb from the leaf's lowest-level node to the cell's start */
             const clvr_instance *in = &c.instances[inst];
             const clvr_entry_grid *g = &grids[inst];
             uint32_t cc[3];
             for (int a = 0; a < 3; ++a) cc[a] = clvr_entry_coord(p[a], g->lo[a], g->scale[a], g->res[a]);
             const uint32_t st = cells[2 * (g->res[3] + (cc[2] * g->res[1] + cc[1]) * g->res[0] + cc[0])];
-            uint32_t node = (leaf - in->first_leaf) / 4u, size = (in->num_leaves + 3u) / 4u;
-            uint32_t first = clvr_locate_level0(in);
-            while (first + node != st && size > 1u) {
-                size = (size + 3u) / 4u;
-                first -= size;
-                node /= 4u;
-            }
-            under_bad += first + node != st;
+            under_bad += !leaf_under(in, leaf, st);
         }
         TU_CHECK_EQ_U64(under_bad, 0);
         TU_CHECK_EQ_U64(hint_bad, 0);
