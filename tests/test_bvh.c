@@ -814,6 +814,79 @@ cleanup:
     fx_clustered_free(&c);
 }
 
+/* More instances hold a point than clvr_locate_ex collects
+ * (CLVR_LOCATE_MAX_CANDIDATES): 300 random tets around the origin, each
+ * holding a small ball about it, in instance clusters of 10, so that every
+ * instance box holds the centre; the lookups there go one instance after
+ * another past the array. Answers through the entry grids: an element that
+ * holds the point, with its value, or none where brute force finds none. */
+static void test_many_candidates(void)
+{
+    clvr_error err = {0};
+    clvr_mesh m;
+    memset(&m, 0, sizeof m);
+    const uint32_t nt = 300;
+    uint64_t counts[CLVR_CELL_TYPE_COUNT] = {0};
+    counts[CLVR_CELL_TET] = nt;
+    TU_CHECK_STATUS(clvr_mesh_alloc(&m, 4u * nt, counts, &err), CLVR_OK, &err);
+    if (!m.positions) return;
+    uint64_t rs = 4242;
+    for (uint32_t t = 0; t < nt; ++t) {
+        /* a regular tet's corners (which hold the origin), scaled and turned a little at random */
+        static const float c[4][3] = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+        const float sc = 0.5f + tu_randf(&rs);
+        for (int v = 0; v < 4; ++v) {
+            for (int a = 0; a < 3; ++a)
+                m.positions[3u * (4u * t + v) + a] = sc * c[v][a] + 0.2f * (tu_randf(&rs) - 0.5f);
+            m.scalars[4u * t + v] = fx_field(m.positions[3u * (4u * t + v)], m.positions[3u * (4u * t + v) + 1],
+                                             m.positions[3u * (4u * t + v) + 2]);
+            m.indices[CLVR_CELL_TET][4u * t + v] = 4u * t + v;
+        }
+    }
+    clvr_mesh_update_ranges(&m);
+    fx_clustered c;
+    if (fx_cluster(&m, 1, 10, 0, &c) != 0) {
+        TU_CHECK(!"fx_cluster out of memory");
+        clvr_mesh_free(&m);
+        return;
+    }
+    clvr_bvh_host hb;
+    TU_CHECK_STATUS(clvr_bvh_build_host(c.instances, c.num_instances, c.leaf_boxes, c.num_leaves, &hb, &err), CLVR_OK,
+                    &err);
+    clvr_entry_grid *grids = malloc((c.num_instances + 1) * sizeof *grids);
+    uint32_t ncells = 0;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &ncells, &err), CLVR_OK, &err);
+    uint32_t *cells = malloc(((size_t)ncells + 1) * 2 * sizeof *cells);
+    clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root, 1, NULL,
+                         CLVR_VIEW_ONE_PIECE, NULL, NULL};
+    TU_CHECK_STATUS(clvr_entry_cells_host(&mv, c.num_instances, grids, ncells, cells, &err), CLVR_OK, &err);
+    mv.entry_grids = grids;
+    mv.entry_cells = cells;
+    int bad = 0, crowded = 0, found = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const float p[3] = {0.3f * (tu_randf(&rs) - 0.5f), 0.3f * (tu_randf(&rs) - 0.5f), 0.3f * (tu_randf(&rs) - 0.5f)};
+        uint32_t inside = 0; /* instance boxes that hold p */
+        for (uint32_t j = 0; j < c.num_instances; ++j) {
+            const clvr_box *b = &c.instances[j].bounds;
+            inside += p[0] >= b->lo[0] && p[0] <= b->hi[0] && p[1] >= b->lo[1] && p[1] <= b->hi[1] &&
+                      p[2] >= b->lo[2] && p[2] <= b->hi[2];
+        }
+        crowded += inside > CLVR_ENTRY_MAX_CANDIDATES;
+        float want_s = 0.0f, s = 0.0f;
+        uint32_t e = 0;
+        const uint32_t want_e = fx_brute_locate(&c, p[0], p[1], p[2], &want_s);
+        found += clvr_locate(&mv, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, &s, &e);
+        bad += !judge(&c, p, e, s, want_e, want_s);
+    }
+    TU_CHECK_EQ_U64(bad, 0);
+    TU_CHECK(crowded > 1000 && found > 1000); /* the path under test is taken, and finds elements */
+    free(grids);
+    free(cells);
+    clvr_bvh_host_free(&hb);
+    fx_clustered_free(&c);
+    clvr_mesh_free(&m);
+}
+
 static void test_generated(clvr_cl *cl, const clvr_bvh_kernels *k)
 {
     static const char *names[5] = {"tets", "pyramids", "wedges", "hexes", "mixed"};
@@ -893,6 +966,7 @@ int main(void)
 {
     test_arithmetic();
     test_entry_layout();
+    test_many_candidates();
     test_bad_input();
     clvr_cl cl;
     tu_open_device(&cl);
