@@ -62,7 +62,6 @@ typedef struct walk_build {
     clvr_mesh_view mv;
 } walk_build;
 
-static int g_entry = 1; /* --entry on|off; set once by main before any build */
 
 static void walk_build_free(clvr_cl *cl, walk_build *b)
 {
@@ -75,7 +74,8 @@ static void walk_build_free(clvr_cl *cl, walk_build *b)
     memset(b, 0, sizeof *b);
 }
 
-static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, walk_build *b, clvr_error *err)
+static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, int entry, walk_build *b,
+                                   clvr_error *err)
 {
     memset(b, 0, sizeof *b);
     clvr_preprocess_options o;
@@ -98,12 +98,12 @@ static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t lea
     b->mv.ebox = b->ebox;
     const uint32_t ninst = (uint32_t)b->c.num_instances;
     uint32_t ncells = 0;
-    if (s == CLVR_OK && g_entry && !(b->grids = malloc((ninst ? ninst : 1u) * sizeof *b->grids)))
+    if (s == CLVR_OK && entry && !(b->grids = malloc((ninst ? ninst : 1u) * sizeof *b->grids)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for entry grids");
-    if (s == CLVR_OK && g_entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, b->grids, &ncells, err);
-    if (s == CLVR_OK && g_entry && !(b->cells = malloc(((size_t)ncells + 1u) * 2u * sizeof *b->cells)))
+    if (s == CLVR_OK && entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, b->grids, &ncells, err);
+    if (s == CLVR_OK && entry && !(b->cells = malloc(((size_t)ncells + 1u) * 2u * sizeof *b->cells)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u entry cells", ncells);
-    if (s == CLVR_OK && g_entry) s = clvr_entry_cells_host(&b->mv, ninst, b->grids, ncells, b->cells, err);
+    if (s == CLVR_OK && entry) s = clvr_entry_cells_host(&b->mv, ninst, b->grids, ncells, b->cells, err);
     b->mv.entry_grids = b->grids;
     b->mv.entry_cells = b->cells;
     if (s != CLVR_OK) walk_build_free(cl, b);
@@ -118,7 +118,7 @@ static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t lea
 /* --per-instance: per-chunk times of the same queries on builds with leaf
  * clusters of 8, 16 and 32 (see the file's comment). */
 static int per_instance(clvr_cl *cl, const clvr_mesh *m, const char *mesh_path, float (*pts)[4], uint32_t nq,
-                        const char *order_name, unsigned chain)
+                        const char *order_name, unsigned chain, int entry)
 {
     static const uint32_t sizes[WALK_SIZES] = {8u, 16u, 32u};
     const uint32_t nchunk = (uint32_t)((clvr_mesh_num_elements(m) + CLVR_WALK_CHUNK - 1) / CLVR_WALK_CHUNK) + 1u; /* last: not found */
@@ -134,7 +134,7 @@ static int per_instance(clvr_cl *cl, const clvr_mesh *m, const char *mesh_path, 
     for (int k = 0; k < WALK_SIZES; ++k) {
         walk_build b;
         clvr_error err = {0};
-        if (walk_build_make(cl, m, sizes[k], &b, &err) != CLVR_OK) {
+        if (walk_build_make(cl, m, sizes[k], entry, &b, &err) != CLVR_OK) {
             fprintf(stderr, "bench_walk: %s\n", err.msg);
             free(t);
             free(hits);
@@ -221,7 +221,7 @@ int main(int argc, char **argv)
 {
     const char *mesh_path = NULL, *device = NULL, *order_name = "rays";
     uint32_t leaf = 8, nq = 480000;
-    int per_inst = 0;
+    int per_inst = 0, entry = 1;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--mesh") && i + 1 < argc) mesh_path = argv[++i];
         else if (!strcmp(argv[i], "--device") && i + 1 < argc) device = argv[++i];
@@ -231,7 +231,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--per-instance")) per_inst = 1;
         else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
                  (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
-            g_entry = !strcmp(argv[++i], "on");
+            entry = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr, "usage: bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] "
                             "[--queries Q] [--per-instance] [--entry on|off]\n");
@@ -266,10 +266,10 @@ int main(int argc, char **argv)
     }
     int rc = 0;
     if (per_inst) {
-        rc = per_instance(&cl, &m, mesh_path, pts, nq, order_name, chain);
+        rc = per_instance(&cl, &m, mesh_path, pts, nq, order_name, chain, entry);
     } else {
         walk_build b;
-        if (walk_build_make(&cl, &m, leaf, &b, &err) != CLVR_OK) {
+        if (walk_build_make(&cl, &m, leaf, entry, &b, &err) != CLVR_OK) {
             fprintf(stderr, "bench_walk: %s\n", err.msg);
             rc = 1;
         } else {

@@ -486,11 +486,11 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  *    (4 leaf clusters) whose boxes hold the point, then the rest of
  *    start's subtree.
  * Host reference walk, random points, leaves of 16, 2 cells per leaf:
- * bottom-level nodes per query 9.45 -> 2.79 (blunt fin), 12.04 -> 4.73
- * (post-tets), leaves 1.71 -> 1.57 and 2.67 -> 2.42 with the hint's node
- * searched in slot order; its node holds the point 77% and 66% of the
- * time. PoCL, bench_locate_embree: the blunt fin 0.92-0.96x -> 1.38-1.40x
- * Embree 3's queries/s. The start alone (no hint) halved the host walk's
+ * bottom-level nodes per query 9.45 -> 2.50 (blunt fin), 12.04 -> 3.61
+ * (post-tets), leaves 1.71 -> 1.32 and 2.67 -> 1.85; the hint's node holds
+ * the point 77% and 66% of the time. PoCL, bench_locate_embree: the blunt
+ * fin 0.92-0.96x -> about 1.47x Embree 3's queries/s (the hint leaf
+ * searched before its siblings: +5% of that). The start alone (no hint) halved the host walk's
  * nodes and gained about nothing on PoCL: the levels it skips are the
  * cached ones; 4 or 8 cells per leaf were no faster (more leaves per
  * query). As with a ray's hint, the element found may differ from a walk
@@ -812,15 +812,13 @@ CLVR_INLINE int clvr_locate_hinted_skip(const clvr_mesh_view *m, float px, float
      * 4.4M, combustor 5.6-6.3 -> 6.2-6.5M, 1M tets the same; host walk:
      * bottom nodes per lookup 4.09 -> 2.48 (blunt fin), 5.03 -> 3.62 (post),
      * the cell's hint holding 78% and 66% against the ray's 70% and 60%.
-     * The ray's hint is then not searched, only kept up to date (callers
-     * read its instance). */
+     * The ray's hint is then not searched; its instance is kept up to date
+     * (callers read it), its node is not read. */
     if (m->entry_grids) {
         if (!clvr_locate_ex(m, px, py, pz, CLVR_LOCATE_COHERENT, CLVR_BVH_NOT_FOUND, skip_elem, scalar, element_id,
                             &inst_id, &leaf))
             return 0;
-        const clvr_instance inst = m->instances[inst_id];
         h->inst = inst_id;
-        h->node = clvr_locate_hint_node(&inst, leaf);
         return 1;
     }
     if (h->inst != CLVR_BVH_NOT_FOUND) {

@@ -22,9 +22,9 @@ clvr_status clvr_accel_build_hull(clvr_cl *cl, clvr_clustered *c, int hull_mode,
     CLVR_TRY(clvr_bvh_kernels_create(cl, &out->kernels, err));
     CLVR_TRY(clvr_bvh_build_device(cl, &out->kernels, c->host_instances, (uint32_t)c->num_instances, c->instances,
                                    c->leaf_boxes, (uint32_t)c->num_leaves, &out->two_level, err));
+    clvr_clustered_pieces pc;
+    clvr_clustered_get_pieces(c, &pc);
     if (!c->no_element_boxes) { /* --element-boxes off: the kernels get a NULL ebox and skip the test */
-        clvr_clustered_pieces pc;
-        clvr_clustered_get_pieces(c, &pc);
         const uint64_t one[2] = {0, c->num_elements};
         const int split = c->num_pieces > 1;
         CLVR_TRY(clvr_bvh_element_boxes_pieces(cl, &out->kernels, &out->two_level, c->instances,
@@ -33,13 +33,10 @@ clvr_status clvr_accel_build_hull(clvr_cl *cl, clvr_clustered *c, int hull_mode,
                                                pc.vertices[CLVR_MAX_SPLITS - 1], c->leaf_size,
                                                (uint32_t)c->num_leaves, err));
     }
-    { /* after the element boxes, which speed up its cells' point location */
-        clvr_clustered_pieces pc;
-        clvr_clustered_get_pieces(c, &pc);
-        CLVR_TRY(clvr_bvh_entry_grids_pieces(cl, &out->kernels, &out->two_level, c->host_instances, c->instances,
-                                             (uint32_t)c->num_instances, pc.vertices, pc.idx16, pc.idx32,
-                                             c->leaf_size, (uint32_t)c->num_leaves, err));
-    }
+    /* after the element boxes, which speed up its cells' point location */
+    CLVR_TRY(clvr_bvh_entry_grids_pieces(cl, &out->kernels, &out->two_level, c->host_instances, c->instances,
+                                         (uint32_t)c->num_instances, pc.vertices, pc.idx16, pc.idx32, c->leaf_size,
+                                         (uint32_t)c->num_leaves, err));
     CLVR_TRY(clvr_bvh_build_boxes_device(cl, &out->kernels, c->sampling, (uint32_t)c->num_sampling,
                                          &out->sampling_nodes, err));
     out->sampling_node_count = clvr_bvh_nodes_bound((uint32_t)c->num_sampling);
