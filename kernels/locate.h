@@ -672,7 +672,9 @@ CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float 
     /* Candidates of one type (a tet mesh's neighbouring clusters) are
      * searched one after another, each hint then its start subtree: there
      * the next instance's hint is the worse bet (hints first across them
-     * cost post-tets and the igloo cut into tets 2-11%). */
+     * cost post-tets and the igloo cut into tets 2-11%). This is
+     * clvr_locate_entered's search written out: calling it measured 3-4%
+     * slower (4 pairs each on post-tets, the igloo and its tets). */
     int mixed = 0;
     for (clvr_u32 i = 1; i < nc; ++i) mixed |= m->instances[cand[i]].type != m->instances[cand[0]].type;
     for (clvr_u32 i = 0; i < nc; ++i) {
