@@ -3,8 +3,9 @@
  * and bottom trees visited, instances entered, leaf clusters scanned,
  * elements that pass their quantized box, elements given the exact
  * containment test (barycentric or Newton), and how often
- * a ray's hint (clvr_locate_hinted) held the next sample, and how often an
- * entry grid's hint held the point (--entry off: walks from the roots). Issue #19 asks
+ * a ray's hint (clvr_locate_hinted) held the next sample, how often an
+ * entry grid's hint held the point (--entry off: walks from the roots), and
+ * the share of queries that the occupancy grid answered (no element there). Issue #19 asks
  * where the walk's time goes on graded meshes; counts answer that without
  * hardware counters, which the benchmark VMs do not have. The mesh is
  * clustered by the real preprocessing (on the OpenCL device), then read back
@@ -35,7 +36,7 @@
  * kernels/locate.h, which are empty everywhere else. One thread, so a
  * plain static struct; this program's only mutable global. */
 typedef struct walk_counts {
-    unsigned long long tnodes, bnodes, inst, leaves, ecand, etest, hint_try, hint_hit, entry_try, entry_hit;
+    unsigned long long tnodes, bnodes, inst, leaves, ecand, etest, hint_try, hint_hit, entry_try, entry_hit, occ_clear;
 } walk_counts;
 static walk_counts g_walk;
 #define CLVR_WALK_STAT(field) (g_walk.field++)
@@ -97,13 +98,13 @@ static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t lea
                                         err);
     b->mv.ebox = b->ebox;
     const uint32_t ninst = (uint32_t)b->c.num_instances;
-    uint32_t ncells = 0;
-    if (s == CLVR_OK && entry && !(b->grids = malloc((ninst ? ninst : 1u) * sizeof *b->grids)))
+    uint32_t nwords = 0;
+    if (s == CLVR_OK && entry && !(b->grids = malloc(((size_t)ninst + 1u) * sizeof *b->grids)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for entry grids");
-    if (s == CLVR_OK && entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, b->grids, &ncells, err);
-    if (s == CLVR_OK && entry && !(b->cells = malloc(((size_t)ncells + 1u) * 2u * sizeof *b->cells)))
-        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u entry cells", ncells);
-    if (s == CLVR_OK && entry) s = clvr_entry_cells_host(&b->mv, ninst, b->grids, ncells, b->cells, err);
+    if (s == CLVR_OK && entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, b->grids, &nwords, err);
+    if (s == CLVR_OK && entry && !(b->cells = malloc((size_t)nwords * sizeof *b->cells)))
+        s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u entry grid words", nwords);
+    if (s == CLVR_OK && entry) s = clvr_entry_cells_host(&b->mv, ninst, b->grids, nwords, b->cells, err);
     b->mv.entry_grids = b->grids;
     b->mv.entry_cells = b->cells;
     if (s != CLVR_OK) walk_build_free(cl, b);
@@ -289,14 +290,15 @@ int main(int argc, char **argv)
                    "reference walk, 1 thread\n",
                    mesh_path, (unsigned long long)b.c.num_elements, leaf, nq, order_name, chain);
             printf("| mesh | order | leaf | found | top nodes | bottom nodes | instances | leaves | box-pass elements | "
-                   "exact tests | hint held | entry hint held | q/s (host, 1 thread) | load |\n");
-            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+                   "exact tests | hint held | entry hint held | occupancy clear | q/s (host, 1 thread) | load |\n");
+            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
             const char *base = strrchr(mesh_path, '/');
-            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3f | %.3g | %.2f |\n",
+            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3f | %.3f | %.3g | %.2f |\n",
                    base ? base + 1 : mesh_path, order_name, leaf, found / q, g_walk.tnodes / q, g_walk.bnodes / q,
                    g_walk.inst / q, g_walk.leaves / q, g_walk.ecand / q, g_walk.etest / q,
                    g_walk.hint_try ? (double)g_walk.hint_hit / (double)g_walk.hint_try : 0.0,
-                   g_walk.entry_try ? (double)g_walk.entry_hit / (double)g_walk.entry_try : 0.0, q / t, load);
+                   g_walk.entry_try ? (double)g_walk.entry_hit / (double)g_walk.entry_try : 0.0, g_walk.occ_clear / q,
+                   q / t, load);
             walk_build_free(&cl, &b);
         }
     }

@@ -114,86 +114,118 @@ static clvr_status build_tlas_host(const clvr_instance *inst, uint32_t ninst, cl
     return CLVR_OK;
 }
 
-clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
-                                    uint32_t *num_cells, clvr_error *err)
+/* Grid g over box (lo, hi) with about `want` cells, cells about cubic over
+ * the axes that have an extent (flat, empty or NaN axes get one cell), at
+ * most max_res per axis; g->res[3] left 0. */
+static void entry_grid_fit(const float *lo, const float *hi, double want, uint32_t max_res, clvr_entry_grid *g)
 {
-    uint64_t total = 0;
+    memset(g, 0, sizeof *g);
+    double ext[3], vol = 1.0;
+    int axes = 0;
+    for (int k = 0; k < 3; ++k) {
+        g->lo[k] = lo[k];
+        g->res[k] = 1;
+        ext[k] = (double)hi[k] - (double)lo[k];
+        if (!isfinite(ext[k]) || !(ext[k] > 0.0)) ext[k] = 0.0;
+        if (ext[k] > 0.0) {
+            vol *= ext[k];
+            ++axes;
+        }
+    }
+    const double h = axes ? pow(vol / want, 1.0 / axes) : 0.0;
+    for (int k = 0; k < 3; ++k) {
+        if (!(ext[k] > 0.0) || !(h > 0.0)) continue;
+        const double r = fmin(fmax(ceil(ext[k] / h), 1.0), (double)max_res);
+        g->res[k] = (uint32_t)r;
+        if (g->res[k] > 1u) g->scale[k] = (float)(r / ext[k]);
+    }
+}
+
+clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
+                                    uint32_t *num_words, clvr_error *err)
+{
+    uint64_t total = 0, elements = 0;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = 0; i < num_instances; ++i) {
         const clvr_instance *in = &instances[i];
-        clvr_entry_grid g;
-        memset(&g, 0, sizeof g);
-        double ext[3], vol = 1.0;
-        int axes = 0;
+        /* About CLVR_ENTRY_CELLS_PER_LEAF cells per leaf. */
+        entry_grid_fit(in->bounds.lo, in->bounds.hi,
+                       (double)CLVR_ENTRY_CELLS_PER_LEAF * (in->num_leaves ? in->num_leaves : 1u), CLVR_ENTRY_MAX_RES,
+                       &grids[1u + i]);
+        grids[1u + i].res[3] = (uint32_t)fmin((double)total, 4294967295.0);
+        total += (uint64_t)grids[1u + i].res[0] * grids[1u + i].res[1] * grids[1u + i].res[2];
+        elements += in->num_elements;
         for (int k = 0; k < 3; ++k) {
-            g.lo[k] = in->bounds.lo[k];
-            g.res[k] = 1;
-            ext[k] = (double)in->bounds.hi[k] - (double)in->bounds.lo[k];
-            if (!isfinite(ext[k]) || !(ext[k] > 0.0)) ext[k] = 0.0; /* flat, empty or NaN: one cell */
-            if (ext[k] > 0.0) {
-                vol *= ext[k];
-                ++axes;
-            }
+            lo[k] = fminf(lo[k], in->bounds.lo[k]);
+            hi[k] = fmaxf(hi[k], in->bounds.hi[k]);
         }
-        /* About CLVR_ENTRY_CELLS_PER_LEAF cells per leaf, cells about cubic
-         * over the axes that have an extent. */
-        const double want = (double)CLVR_ENTRY_CELLS_PER_LEAF * (in->num_leaves ? in->num_leaves : 1u);
-        const double h = axes ? pow(vol / want, 1.0 / axes) : 0.0;
-        for (int k = 0; k < 3; ++k) {
-            if (!(ext[k] > 0.0) || !(h > 0.0)) continue;
-            const double r = fmin(fmax(ceil(ext[k] / h), 1.0), (double)CLVR_ENTRY_MAX_RES);
-            g.res[k] = (uint32_t)r;
-            if (g.res[k] > 1u) g.scale[k] = (float)(r / ext[k]);
-        }
-        g.res[3] = (uint32_t)total;
-        total += (uint64_t)g.res[0] * g.res[1] * g.res[2];
-        if (total > 0xffffffffull)
-            return clvr_error_set(err, CLVR_ERR_OVERFLOW,
-                                  "bvh: the entry grids of %u instances pass 2^32 - 1 cells; use a larger --leaf-size",
-                                  num_instances);
-        grids[i] = g;
     }
-    *num_cells = (uint32_t)total;
+    if (!num_instances)
+        for (int k = 0; k < 3; ++k) lo[k] = hi[k] = 0.0f; /* no element: one clear bit */
+    entry_grid_fit(lo, hi, (double)CLVR_OCCUPANCY_CELLS_PER_ELEMENT * (double)(elements ? elements : 1u),
+                   CLVR_OCCUPANCY_MAX_RES, &grids[0]);
+    const uint64_t words = 2u * total + clvr_occupancy_words(&grids[0]);
+    if (words > 0xffffffffull)
+        return clvr_error_set(err, CLVR_ERR_OVERFLOW,
+                              "bvh: the entry grids of %u instances pass 2^32 - 1 words; use a larger --leaf-size",
+                              num_instances);
+    grids[0].res[3] = (uint32_t)(2u * total);
+    *num_words = (uint32_t)words;
     return CLVR_OK;
 }
 
-/* Leaf cluster `leaf` of inst (whose parent node in blas is where
- * clvr_leaf_parent puts it) into the cells its box meets: first_last holds
- * (first, last) leaf per cell of inst's grid g. */
-static void entry_rasterize_host(const clvr_bvh_node *blas, const clvr_instance *inst, const clvr_entry_grid *g,
-                                 uint32_t leaf, uint32_t *first_last)
+/* The elements of leaf cluster `leaf` of inst into the cells their boxes
+ * meet (clvr_entry_element_box): cells holds (first, last) leaf per cell
+ * of inst's grid g and the bits of the occupancy grid occ. */
+static void entry_rasterize_host(const clvr_mesh_view *m, const clvr_instance *inst, const clvr_entry_grid *g,
+                                 const clvr_entry_grid *occ, uint32_t leaf, uint32_t *cells)
 {
-    uint32_t node, slot, a[3], b[3];
-    clvr_leaf_parent(inst, leaf, &node, &slot);
-    const clvr_bvh_node *n = &blas[node];
-    const float lo[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
-    const float hi[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
-    if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])) return; /* an empty box meets no cell */
-    clvr_entry_box_cells(g, lo, hi, a, b);
-    for (uint32_t z = a[2]; z <= b[2]; ++z)
-        for (uint32_t y = a[1]; y <= b[1]; ++y)
-            for (uint32_t x = a[0]; x <= b[0]; ++x) {
-                uint32_t *c = first_last + 2u * ((size_t)g->res[3] + ((size_t)z * g->res[1] + y) * g->res[0] + x);
-                if (leaf < c[0]) c[0] = leaf;
-                if (leaf > c[1]) c[1] = leaf;
+    const clvr_piece_arrays pa = clvr_view_piece(m, inst);
+    uint32_t end;
+    for (uint32_t e = clvr_leaf_elements(m, inst, leaf, &end); e < end; ++e) {
+        float lo[3], hi[3];
+        uint32_t a[3], b[3];
+        clvr_entry_element_box(&pa, inst, e, lo, hi);
+        clvr_entry_box_cells(g, lo, hi, a, b);
+        for (uint32_t z = a[2]; z <= b[2]; ++z)
+            for (uint32_t y = a[1]; y <= b[1]; ++y)
+                for (uint32_t x = a[0]; x <= b[0]; ++x) {
+                    uint32_t *c = cells + 2u * ((size_t)g->res[3] + ((size_t)z * g->res[1] + y) * g->res[0] + x);
+                    if (leaf < c[0]) c[0] = leaf;
+                    if (leaf > c[1]) c[1] = leaf;
+                }
+        clvr_entry_box_cells(occ, lo, hi, a, b);
+        for (uint32_t z = a[2]; z <= b[2]; ++z)
+            for (uint32_t y = a[1]; y <= b[1]; ++y) {
+                const uint32_t c0 = (z * occ->res[1] + y) * occ->res[0] + a[0], c1 = c0 + (b[0] - a[0]);
+                for (uint32_t w = c0 / 32u; w <= c1 / 32u; ++w)
+                    cells[occ->res[3] + w] |= clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u,
+                                                                  w == c1 / 32u ? c1 % 32u : 31u);
             }
+    }
 }
 
 clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
-                                  uint32_t num_cells, uint32_t *cells, clvr_error *err)
+                                  uint32_t num_words, uint32_t *cells, clvr_error *err)
 {
+    const clvr_entry_grid *occ = &grids[0];
+    if (occ->res[3] % 2u || occ->res[3] > num_words || clvr_occupancy_words(occ) > num_words - occ->res[3])
+        return clvr_error_set(err, CLVR_ERR_INTERNAL, "bvh: the occupancy grid passes the %u words", num_words);
+    const uint32_t num_cells = occ->res[3] / 2u;
     for (uint32_t c = 0; c < num_cells; ++c) {
         cells[2u * (size_t)c] = CLVR_BVH_NOT_FOUND;
         cells[2u * (size_t)c + 1u] = 0;
     }
+    for (uint32_t w = occ->res[3]; w < num_words; ++w) cells[w] = 0;
     for (uint32_t i = 0; i < num_instances; ++i) {
         const clvr_instance *inst = &m->instances[i];
-        const clvr_entry_grid *g = &grids[i];
+        const clvr_entry_grid *g = &grids[1u + i];
         const uint64_t n = (uint64_t)g->res[0] * g->res[1] * g->res[2];
         if (g->res[3] > num_cells || n > num_cells - g->res[3])
             return clvr_error_set(err, CLVR_ERR_INTERNAL, "bvh: instance %u's entry grid passes the %u cells", i,
                                   num_cells);
         for (uint32_t leaf = inst->first_leaf; leaf < inst->first_leaf + inst->num_leaves; ++leaf)
-            entry_rasterize_host(m->blas, inst, g, leaf, cells);
+            entry_rasterize_host(m, inst, g, occ, leaf, cells);
         for (uint32_t c = 0; c < (uint32_t)n; ++c) {
             uint32_t *cell = cells + 2u * ((size_t)g->res[3] + c);
             const uint32_t start = cell[0] == CLVR_BVH_NOT_FOUND ? CLVR_BVH_NOT_FOUND : clvr_entry_lca(inst, cell[0], cell[1]);
@@ -493,7 +525,7 @@ clvr_status clvr_bvh_entry_grids_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, 
     clvr_status s = CLVR_OK;
     clvr_entry_grid *grids = NULL;
     cl_event evt = NULL;
-    uint32_t ncells = 0;
+    uint32_t nwords = 0;
     entry_release(cl, b);
     /* The element boxes speed up the centres' point location; the
      * placeholders of absent pieces are never read. */
@@ -502,36 +534,43 @@ clvr_status clvr_bvh_entry_grids_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, 
         eb[p] = p == 0 ? b->ebox : b->ebox_more[p - 1] ? b->ebox_more[p - 1] : vertices[p];
     const cl_uint use_ebox = b->ebox != NULL, ni = num_instances, nl = num_leaves, ls = leaf_size;
     if (!eb[0]) eb[0] = vertices[0];
-    if (!(grids = malloc((num_instances ? num_instances : 1u) * sizeof *grids)))
+    if (!(grids = malloc(((size_t)num_instances + 1u) * sizeof *grids)))
         CLVR_TRY(clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for %u entry grids", num_instances));
-    CLVR_TRY(clvr_entry_grids_layout(host_instances, num_instances, grids, &ncells, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (num_instances ? num_instances : 1u) * sizeof *grids,
+    CLVR_TRY(clvr_entry_grids_layout(host_instances, num_instances, grids, &nwords, err));
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ((size_t)num_instances + 1u) * sizeof *grids,
                             grids, "entry grids", &b->entry_grids, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (ncells ? ncells : 1u) * 2u * sizeof(cl_uint), NULL,
-                            "entry grid cells", &b->entry_cells, err));
-    b->entry_bytes = (uint64_t)num_instances * sizeof *grids + (uint64_t)ncells * 2u * sizeof(cl_uint);
-    if (ncells && num_instances) {
-        const cl_uint nc = ncells, fill[2] = {CLVR_BVH_NOT_FOUND, 0u}; /* (first, last) leaf per cell */
-        CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, b->entry_cells, fill, sizeof fill, 0,
-                                          (size_t)ncells * sizeof fill, 0, NULL, NULL));
-        if (num_leaves) {
-            CLVR_TRY(CLVR_CL_ARGS(k->entry_rasterize, err, CLVR_ARG(b->blas), CLVR_ARG(instances),
-                                  CLVR_ARG(b->entry_grids), CLVR_ARG(ni), CLVR_ARG(nl), CLVR_ARG(b->entry_cells)));
-            CLVR_TRY(clvr_cl_run1d(cl, k->entry_rasterize, num_leaves, 64, &evt, err));
-            if (evt) {
-                CLVR_CL_CHECK(clWaitForEvents(1, &evt));
-                b->build_seconds += clvr_cl_event_seconds(evt);
-                clReleaseEvent(evt);
-                evt = NULL;
-            }
+    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nwords * sizeof(cl_uint), NULL, "entry grid cells",
+                            &b->entry_cells, err));
+    b->entry_bytes = ((uint64_t)num_instances + 1u) * sizeof *grids + (uint64_t)nwords * sizeof(cl_uint);
+    const cl_uint nc = grids[0].res[3] / 2u, zero = 0u, fill[2] = {CLVR_BVH_NOT_FOUND, 0u}; /* (first, last) leaf */
+    if (nc)
+        CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, b->entry_cells, fill, sizeof fill, 0, (size_t)nc * sizeof fill,
+                                          0, NULL, NULL));
+    CLVR_CL_CHECK(clEnqueueFillBuffer(cl->queue, b->entry_cells, &zero, sizeof zero, (size_t)nc * sizeof fill,
+                                      (size_t)(nwords - 2u * nc) * sizeof zero, 0, NULL, NULL));
+    if (num_leaves && num_instances) {
+        CLVR_TRY(CLVR_CL_ARGS(k->entry_rasterize, err, CLVR_ARG(b->blas), CLVR_ARG(instances),
+                              CLVR_ARG(b->entry_grids), CLVR_ARG(ni), CLVR_ARG(nl), CLVR_ARG(b->entry_cells),
+                              CLVR_ARG(ls), CLVR_ARG(vertices[0]), CLVR_ARG(idx16[0]), CLVR_ARG(idx32[0]),
+                              CLVR_ARG(vertices[1]), CLVR_ARG(idx16[1]), CLVR_ARG(idx32[1]), CLVR_ARG(vertices[2]),
+                              CLVR_ARG(idx16[2]), CLVR_ARG(idx32[2]), CLVR_ARG(vertices[3]), CLVR_ARG(idx16[3]),
+                              CLVR_ARG(idx32[3])));
+        CLVR_TRY(clvr_cl_run1d(cl, k->entry_rasterize, num_leaves, 64, &evt, err));
+        if (evt) {
+            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+            b->build_seconds += clvr_cl_event_seconds(evt);
+            clReleaseEvent(evt);
+            evt = NULL;
         }
+    }
+    if (nc && num_instances) {
         CLVR_TRY(CLVR_CL_ARGS(k->entry_finish, err, CLVR_ARG(b->blas), CLVR_ARG(instances), CLVR_ARG(b->entry_grids),
                               CLVR_ARG(ni), CLVR_ARG(nc), CLVR_ARG(b->entry_cells), CLVR_ARG(ls), CLVR_ARG(use_ebox),
                               CLVR_ARG(vertices[0]), CLVR_ARG(idx16[0]), CLVR_ARG(idx32[0]), CLVR_ARG(eb[0]),
                               CLVR_ARG(vertices[1]), CLVR_ARG(idx16[1]), CLVR_ARG(idx32[1]), CLVR_ARG(eb[1]),
                               CLVR_ARG(vertices[2]), CLVR_ARG(idx16[2]), CLVR_ARG(idx32[2]), CLVR_ARG(eb[2]),
                               CLVR_ARG(vertices[3]), CLVR_ARG(idx16[3]), CLVR_ARG(idx32[3]), CLVR_ARG(eb[3])));
-        CLVR_TRY(clvr_cl_run1d(cl, k->entry_finish, ncells, 64, &evt, err));
+        CLVR_TRY(clvr_cl_run1d(cl, k->entry_finish, nc, 64, &evt, err));
         if (evt) {
             CLVR_CL_CHECK(clWaitForEvents(1, &evt));
             b->build_seconds += clvr_cl_event_seconds(evt);

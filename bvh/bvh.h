@@ -36,18 +36,23 @@ typedef struct clvr_bvh_host {
 } clvr_bvh_host;
 
 /* Entry grids (kernels/locate.h) of num_instances instances from their
- * bounds and leaf counts: grids[i] gets its box, cells per unit length,
- * cells per axis and first cell; *num_cells the total. Fails with
- * CLVR_ERR_OVERFLOW past 2^32 - 1 cells. */
+ * bounds and leaf and element counts: grids[0] gets the occupancy grid
+ * over all instances, grids[1 + i] instance i's grid (num_instances + 1 in
+ * all); each its box, cells per unit length, cells per axis and first cell
+ * (instance grids: first cell, 2 words each, in instance order from 0;
+ * occupancy grid: first word, after every instance's cells). *num_words:
+ * u32 words of the cell array. Fails with CLVR_ERR_OVERFLOW past 2^32 - 1
+ * words. */
 clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
-                                    uint32_t *num_cells, clvr_error *err);
+                                    uint32_t *num_words, clvr_error *err);
 /* Host reference of the cells (kernels/locate.h): for cell c of instance
- * i's grid, cells[2 (grids[i].res[3] + c)] its start node and the next
- * entry its hint leaf; num_cells cells in all, as the layout counted them. m
- * holds host arrays (blas with bvh_root set, instances, vertices, idx16,
- * idx32, leaf_size, ebox or NULL; tlas is not read). */
+ * i's grid, cells[2 (grids[1 + i].res[3] + c)] its start node and the next
+ * word its hint leaf; from word grids[0].res[3] on the occupancy grid's
+ * bits; num_words words in all, as the layout counted them. m holds host
+ * arrays (blas with bvh_root set, instances, vertices, idx16, idx32,
+ * leaf_size, ebox or NULL; tlas is not read). */
 clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
-                                  uint32_t num_cells, uint32_t *cells, clvr_error *err);
+                                  uint32_t num_words, uint32_t *cells, clvr_error *err);
 
 /* Host build: instances[i].bvh_root is filled; leaf_boxes has num_leaves
  * boxes (global leaf ids, as instances[].first_leaf count them). Caller frees

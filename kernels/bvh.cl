@@ -173,37 +173,75 @@ __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global co
 }
 
 /* Entry grids (locate.h), first pass: one work item per leaf cluster
- * marks the cells its box meets with atomic min / max of its id (cells
- * hold (first, last) leaf pairs, filled with (NOT_FOUND, 0) before). */
+ * marks the cells its elements' boxes meet (clvr_entry_element_box):
+ * atomic min / max of its id in its instance's grid (cells hold (first,
+ * last) leaf pairs, filled with (NOT_FOUND, 0) before), atomic or of the
+ * cells' bits in the occupancy grid (cleared before). The arrays come piece by piece as
+ * clvr_locate_points_split takes them. */
 __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
                                    __global const clvr_entry_grid *grids, uint num_instances, uint num_leaves,
-                                   __global uint *cells)
+                                   __global uint *cells, uint leaf_size, __global const float4 *vertices,
+                                   __global const ushort *idx16, __global const uint *idx32,
+                                   __global const float4 *vertices1, __global const ushort *idx16_1,
+                                   __global const uint *idx32_1, __global const float4 *vertices2,
+                                   __global const ushort *idx16_2, __global const uint *idx32_2,
+                                   __global const float4 *vertices3, __global const ushort *idx16_3,
+                                   __global const uint *idx32_3)
 {
     const uint leaf = get_global_id(0);
     if (leaf >= num_leaves || num_instances == 0) return;
     const uint lo = clvr_instance_of_leaf(instances, num_instances, leaf);
     const clvr_instance inst = instances[lo];
     if (leaf - inst.first_leaf >= inst.num_leaves) return;
-    const clvr_entry_grid g = grids[lo];
-    uint node, slot, a[3], b[3];
-    clvr_leaf_parent(&inst, leaf, &node, &slot);
-    __global const clvr_bvh_node *n = blas + node;
-    const float L[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
-    const float H[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
-    if (!(L[0] <= H[0] && L[1] <= H[1] && L[2] <= H[2])) return; /* an empty box meets no cell */
-    clvr_entry_box_cells(&g, L, H, a, b);
-    for (uint z = a[2]; z <= b[2]; ++z)
-        for (uint y = a[1]; y <= b[1]; ++y)
-            for (uint x = a[0]; x <= b[0]; ++x) {
-                __global uint *c = cells + 2ul * (g.res[3] + (z * g.res[1] + y) * g.res[0] + x);
-                atomic_min(c, leaf);
-                atomic_max(c + 1, leaf);
+    const clvr_entry_grid g = grids[1u + lo], occ = grids[0]; /* [0]: the occupancy grid */
+    const clvr_mesh_view m = {NULL,
+                              blas,
+                              instances,
+                              vertices,
+                              idx16,
+                              idx32,
+                              0u,
+                              leaf_size,
+                              NULL,
+                              {{vertices1, idx16_1, idx32_1, NULL},
+                               {vertices2, idx16_2, idx32_2, NULL},
+                               {vertices3, idx16_3, idx32_3, NULL}},
+                              NULL,
+                              NULL};
+    const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
+    uint end;
+    for (uint e = clvr_leaf_elements(&m, &inst, leaf, &end); e < end; ++e) {
+        float L[3], H[3];
+        uint a[3], b[3];
+        clvr_entry_element_box(&pa, &inst, e, L, H);
+        clvr_entry_box_cells(&g, L, H, a, b);
+        for (uint z = a[2]; z <= b[2]; ++z)
+            for (uint y = a[1]; y <= b[1]; ++y)
+                for (uint x = a[0]; x <= b[0]; ++x) {
+                    __global uint *c = cells + 2ul * (g.res[3] + (z * g.res[1] + y) * g.res[0] + x);
+                    if (c[0] > leaf) atomic_min(c, leaf);
+                    if (c[1] < leaf) atomic_max(c + 1, leaf);
+                }
+        /* A word's bits only go from 0 to 1 (a cell's first leaf only
+         * down, its last only up), so a read that finds the change made
+         * skips the atomic: the elements of a leaf share most cells, and
+         * the atomics were most of this pass's time. */
+        clvr_entry_box_cells(&occ, L, H, a, b);
+        for (uint z = a[2]; z <= b[2]; ++z)
+            for (uint y = a[1]; y <= b[1]; ++y) {
+                const uint c0 = (z * occ.res[1] + y) * occ.res[0] + a[0], c1 = c0 + (b[0] - a[0]);
+                for (uint w = c0 / 32u; w <= c1 / 32u; ++w) {
+                    const uint mask = clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u, w == c1 / 32u ? c1 % 32u : 31u);
+                    __global uint *word = cells + occ.res[3] + w;
+                    if ((*word & mask) != mask) atomic_or(word, mask);
+                }
             }
+    }
 }
 
 /* Entry grids, second pass: one work item per cell of all instances' grids
- * (grids[i].res[3]: instance i's first cell, increasing; every grid has a
- * cell) turns its (first, last) leaf pair into (start, hint) nodes. The
+ * (grids[1 + i].res[3]: instance i's first cell, increasing; every grid
+ * has a cell) turns its (first, last) leaf pair into (start, hint) nodes. The
  * arrays come piece by piece as clvr_locate_points_split takes them. */
 __kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
                                 __global const clvr_entry_grid *grids, uint num_instances, uint num_cells,
@@ -221,10 +259,10 @@ __kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global con
     uint lo = 0, hi = num_instances; /* last instance whose first cell is <= i */
     while (hi - lo > 1) {
         const uint mid = (lo + hi) / 2;
-        if (grids[mid].res[3] <= i) lo = mid;
+        if (grids[1u + mid].res[3] <= i) lo = mid;
         else hi = mid;
     }
-    const clvr_entry_grid g = grids[lo];
+    const clvr_entry_grid g = grids[1u + lo]; /* [0]: the occupancy grid */
     const clvr_instance inst = instances[lo];
     const clvr_mesh_view m = {NULL,
                               blas,

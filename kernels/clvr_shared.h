@@ -181,7 +181,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_instance) == 80, "clvr_instance layout");
 typedef struct clvr_entry_grid {
     float lo[4];      /* xyz: low corner; w unused (0) */
     float scale[4];   /* xyz: cells per unit length, 0 on an axis of one cell; w unused (0) */
-    clvr_u32 res[4];  /* xyz: cells per axis (>= 1); w: the instance's first cell in the cell array */
+    clvr_u32 res[4];  /* xyz: cells per axis (>= 1); w: the instance's first cell in the cell array (the
+                       * occupancy grid: its first u32 word there, locate.h) */
 } clvr_entry_grid;
 CLVR_STATIC_ASSERT(sizeof(clvr_entry_grid) == 48, "clvr_entry_grid layout");
 
@@ -569,8 +570,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
     X(float, cluster_majorants)             /* bins, track: per sampling cluster */                                    \
     X(float, light)                         /* urm: transmittance toward the light, light_res^3 cell centres */ \
     X(uchar, ebox)                          /* quantized element boxes (locate.h) */                    \
-    X(clvr_entry_grid, entry_grids)         /* entry grids, one per instance (locate.h), or NULL */    \
-    X(uint, entry_cells)                    /* their cells: start node and hint leaf per cell */        \
+    X(clvr_entry_grid, entry_grids)         /* occupancy grid, then one entry grid per instance (locate.h), or NULL */ \
+    X(uint, entry_cells)                    /* their cells (start node, hint leaf), then occupancy bits */ \
     X(clvr_bvh_node, hull_bvh)              /* tree over the boundary faces (kernels/hull.h) */        \
     X(clvr_hull_face, hull)                 /* the boundary faces, in the tree's primitive order */    \
     X(uint, face_first)                     /* walk: first face slot per instance (kernels/hull.h) */  \

@@ -70,19 +70,22 @@ static int leaf_under(const clvr_instance *inst, uint32_t leaf, uint32_t node)
 
 /* Entry grid layouts (locate.h): about CLVR_ENTRY_CELLS_PER_LEAF cells per
  * leaf, cells about cubic, one cell on flat, empty or NaN axes, at most
- * CLVR_ENTRY_MAX_RES per axis, first cells as a running sum, overflow past
- * 2^32 - 1 cells reported; none for no instances. */
+ * CLVR_ENTRY_MAX_RES per axis, first cells as a running sum; the occupancy
+ * grid first, over the instances' union, about
+ * CLVR_OCCUPANCY_CELLS_PER_ELEMENT cells per element, at most
+ * CLVR_OCCUPANCY_MAX_RES per axis, its bits after every instance's cells;
+ * overflow past 2^32 - 1 words reported; one clear word for no instances. */
 static void test_entry_layout(void)
 {
     clvr_error err = {0};
     clvr_instance in[5];
-    clvr_entry_grid g[5];
+    clvr_entry_grid g[6];
     memset(in, 0, sizeof in);
     const float box[5][6] = {{0, 0, 0, 1, 1, 1},       /* cube */
                              {0, 0, 0, 8, 1, 1},       /* long in x */
                              {0, 0, 2, 1, 1, 2},       /* flat in z */
                              {0, 0, 0, NAN, 1, 1},     /* NaN */
-                             {-1, -1, -1, 1, 1, 1}};   /* huge leaf count */
+                             {-1, -1, -1, 1, 1, 1}};   /* huge leaf and element counts */
     const uint32_t leaves[5] = {500, 64, 50, 10, 2000000000u};
     for (int i = 0; i < 5; ++i) {
         for (int a = 0; a < 3; ++a) {
@@ -90,34 +93,50 @@ static void test_entry_layout(void)
             in[i].bounds.hi[a] = box[i][3 + a];
         }
         in[i].num_leaves = leaves[i];
+        in[i].num_elements = i == 4 ? 4000000000u : 16u * leaves[i];
     }
     uint32_t n = 12345;
     TU_CHECK_STATUS(clvr_entry_grids_layout(in, 0, g, &n, &err), CLVR_OK, &err);
-    TU_CHECK_EQ_U64(n, 0);
+    TU_CHECK(n == 1 && g[0].res[0] * g[0].res[1] * g[0].res[2] == 1 && g[0].res[3] == 0);
     TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, g, &n, &err), CLVR_OK, &err);
     /* 1000 cells for a cube: 10 a side */
-    TU_CHECK(g[0].res[0] == 10 && g[0].res[1] == 10 && g[0].res[2] == 10);
-    TU_CHECK(fabsf(g[0].scale[0] - 10.0f) < 1e-5f && g[0].res[3] == 0);
+    TU_CHECK(g[1].res[0] == 10 && g[1].res[1] == 10 && g[1].res[2] == 10);
+    TU_CHECK(fabsf(g[1].scale[0] - 10.0f) < 1e-5f && g[1].res[3] == 0);
     /* 128 cells over 8 x 1 x 1: cubic cells of side about 0.4 */
-    TU_CHECK(g[1].res[0] >= 16 && g[1].res[0] <= 24 && g[1].res[1] >= 2 && g[1].res[1] <= 3);
-    TU_CHECK(g[1].res[0] * g[1].res[1] * g[1].res[2] >= 128 && g[1].res[3] == 1000);
+    TU_CHECK(g[2].res[0] >= 16 && g[2].res[0] <= 24 && g[2].res[1] >= 2 && g[2].res[1] <= 3);
+    TU_CHECK(g[2].res[0] * g[2].res[1] * g[2].res[2] >= 128 && g[2].res[3] == 1000);
     /* flat in z: one cell there, scale 0; 100 cells on the square */
-    TU_CHECK(g[2].res[2] == 1 && g[2].scale[2] == 0.0f && g[2].res[0] == 10 && g[2].res[1] == 10);
+    TU_CHECK(g[3].res[2] == 1 && g[3].scale[2] == 0.0f && g[3].res[0] == 10 && g[3].res[1] == 10);
     /* NaN extent: one cell on that axis */
-    TU_CHECK(g[3].res[0] == 1 && g[3].scale[0] == 0.0f && g[3].res[1] >= 1);
+    TU_CHECK(g[4].res[0] == 1 && g[4].scale[0] == 0.0f && g[4].res[1] >= 1);
     uint64_t total = 0;
-    for (int i = 0; i < 4; ++i) {
-        TU_CHECK_EQ_U64(g[i].res[3], total);
-        total += (uint64_t)g[i].res[0] * g[i].res[1] * g[i].res[2];
+    for (int i = 0; i < 5; ++i) {
+        if (i > 0) {
+            TU_CHECK_EQ_U64(g[i].res[3], total);
+            total += (uint64_t)g[i].res[0] * g[i].res[1] * g[i].res[2];
+        }
         /* a point anywhere maps into the grid, NaN too */
         const float pts[3] = {-1e30f, 0.5f, NAN};
         for (int j = 0; j < 3; ++j)
             for (int a = 0; a < 3; ++a) TU_CHECK(clvr_entry_coord(pts[j], g[i].lo[a], g[i].scale[a], g[i].res[a]) < g[i].res[a]);
     }
-    TU_CHECK_EQ_U64(n, total);
-    /* 4e9 cells wanted: every axis capped at 1024, and the sum overflows */
+    /* occupancy: over (0, 0, 0) - (8, 1, 2) (the NaN bound left out), one
+     * cell per element of 16 * 624, cubic cells of side about 0.117 */
+    const uint64_t occ = (uint64_t)g[0].res[0] * g[0].res[1] * g[0].res[2];
+    TU_CHECK(CLVR_OCCUPANCY_CELLS_PER_ELEMENT == 1u);
+    TU_CHECK(g[0].lo[0] == 0.0f && g[0].lo[2] == 0.0f && fabsf(g[0].res[0] / g[0].scale[0] - 8.0f) < 1e-4f &&
+             fabsf(g[0].res[2] / g[0].scale[2] - 2.0f) < 1e-4f);
+    TU_CHECK(g[0].res[0] == 69 && g[0].res[1] == 9 && g[0].res[2] == 18 && occ >= 16u * 624u);
+    /* its bits after the instances' cells */
+    TU_CHECK_EQ_U64(g[0].res[3], 2u * total);
+    TU_CHECK_EQ_U64(n, 2u * total + (occ + 31u) / 32u);
+    /* 4e9 cells wanted: every axis capped at 1024 (occupancy too), and the
+     * sum overflows */
     TU_CHECK_STATUS(clvr_entry_grids_layout(in + 4, 1, g, &n, &err), CLVR_OK, &err);
-    TU_CHECK(g[0].res[0] == CLVR_ENTRY_MAX_RES && g[0].res[1] == CLVR_ENTRY_MAX_RES && g[0].res[2] == CLVR_ENTRY_MAX_RES);
+    TU_CHECK(g[1].res[0] == CLVR_ENTRY_MAX_RES && g[1].res[1] == CLVR_ENTRY_MAX_RES && g[1].res[2] == CLVR_ENTRY_MAX_RES);
+    TU_CHECK(g[0].res[0] == CLVR_OCCUPANCY_MAX_RES && g[0].res[1] == CLVR_OCCUPANCY_MAX_RES &&
+             g[0].res[2] == CLVR_OCCUPANCY_MAX_RES);
+    TU_CHECK_EQ_U64(n, (2ull << 30) + (1ull << 25));
     clvr_instance many[5];
     for (int i = 0; i < 5; ++i) many[i] = in[4];
     TU_CHECK_STATUS(clvr_entry_grids_layout(many, 5, g, &n, &err), CLVR_ERR_OVERFLOW, &err);
@@ -529,20 +548,21 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
      * the point, with its value). Live: starts moved to a wrong node change
      * answers. */
     clvr_entry_grid *grids = malloc((c.num_instances + 1) * sizeof *grids);
-    uint32_t ncells = 0, *cells = NULL;
-    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &ncells, err), CLVR_OK, err);
-    cells = malloc(((size_t)ncells + 1) * 2 * sizeof *cells);
+    uint32_t nwords = 0, *cells = NULL;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &nwords, err), CLVR_OK, err);
+    const uint32_t ncells = grids[0].res[3] / 2u; /* the instances' cells; the occupancy bits follow */
+    cells = malloc(((size_t)nwords + 1) * sizeof *cells);
     clvr_mesh_view mvg = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
                           leaf_size, ebox, CLVR_VIEW_ONE_PIECE, NULL, NULL};
-    TU_CHECK_STATUS(clvr_entry_cells_host(&mvg, c.num_instances, grids, ncells, cells, err), CLVR_OK, err);
+    TU_CHECK_STATUS(clvr_entry_cells_host(&mvg, c.num_instances, grids, nwords, cells, err), CLVR_OK, err);
     uint32_t *grid_e = malloc(nq * sizeof *grid_e);
     {
         int under_bad = 0, hint_bad = 0, entry_bad = 0, same = 0, wrong = 0;
         for (uint32_t i = 0; i < c.num_instances; ++i) {
-            const clvr_entry_grid *g = &grids[i];
+            const clvr_entry_grid *g = &grids[1 + i];
             const uint64_t nc = (uint64_t)g->res[0] * g->res[1] * g->res[2];
             TU_CHECK(g->res[0] >= 1 && g->res[1] >= 1 && g->res[2] >= 1 && g->res[3] + nc <= ncells);
-            TU_CHECK(i + 1 == c.num_instances ? g->res[3] + nc == ncells : grids[i + 1].res[3] == g->res[3] + nc);
+            TU_CHECK(i + 1 == c.num_instances ? g->res[3] + nc == ncells : grids[2 + i].res[3] == g->res[3] + nc);
             const clvr_instance *in = &c.instances[i];
             for (uint64_t k2 = 0; k2 < nc; ++k2) {
                 const uint32_t st = cells[2 * (g->res[3] + k2)], hn = cells[2 * (g->res[3] + k2) + 1];
@@ -570,12 +590,30 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
             same += ok1 && e1 == e2;
             if (!ok1) continue;
             const clvr_instance *in = &c.instances[inst];
-            const clvr_entry_grid *g = &grids[inst];
+            const clvr_entry_grid *g = &grids[1 + inst];
             uint32_t cc[3];
             for (int a = 0; a < 3; ++a) cc[a] = clvr_entry_coord(p[a], g->lo[a], g->scale[a], g->res[a]);
             const uint32_t st = cells[2 * (g->res[3] + (cc[2] * g->res[1] + cc[1]) * g->res[0] + cc[0])];
             under_bad += !leaf_under(in, leaf, st);
         }
+        /* occupancy: every element's vertices (on its boundary, where
+         * rounding is closest) have their cell's bit set */
+        int occ_bad = 0;
+        mvg.entry_grids = grids;
+        mvg.entry_cells = cells;
+        for (uint32_t i = 0; i < c.num_instances; ++i) {
+            const clvr_instance *in = &c.instances[i];
+            const clvr_piece_arrays pa = clvr_view_piece(&mvg, in);
+            for (uint32_t e = in->first_element; e < in->first_element + in->num_elements; ++e) {
+                clvr_vec4 v[CLVR_CELL_MAX_VERTS];
+                clvr_load_element_in(&pa, in, e, v);
+                for (uint32_t j = 0; j < clvr_cell_vertex_count(in->type); ++j)
+                    occ_bad += !clvr_occupied(&mvg, v[j].x, v[j].y, v[j].z);
+            }
+        }
+        mvg.entry_grids = NULL;
+        mvg.entry_cells = NULL;
+        TU_CHECK_EQ_U64(occ_bad, 0);
         TU_CHECK_EQ_U64(under_bad, 0);
         TU_CHECK_EQ_U64(hint_bad, 0);
         TU_CHECK_EQ_U64(entry_bad, 0);
@@ -583,11 +621,12 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         /* each instance's start moved to its last lowest-level node: a
          * node of its own tree, wrong for most points where it has more
          * than 4 leaf clusters */
-        uint32_t *bad = malloc(((size_t)ncells + 1) * 2 * sizeof *bad);
+        uint32_t *bad = malloc(((size_t)nwords + 1) * sizeof *bad);
+        memcpy(bad, cells, (size_t)nwords * sizeof *bad); /* the occupancy bits kept */
         for (uint32_t i = 0; i < c.num_instances; ++i) {
             const clvr_instance *in = &c.instances[i];
-            const uint64_t nc = (uint64_t)grids[i].res[0] * grids[i].res[1] * grids[i].res[2];
-            for (uint64_t k2 = grids[i].res[3]; k2 < grids[i].res[3] + nc; ++k2) {
+            const uint64_t nc = (uint64_t)grids[1 + i].res[0] * grids[1 + i].res[1] * grids[1 + i].res[2];
+            for (uint64_t k2 = grids[1 + i].res[3]; k2 < grids[1 + i].res[3] + nc; ++k2) {
                 bad[2 * k2] = cells[2 * k2] == CLVR_BVH_NOT_FOUND ? CLVR_BVH_NOT_FOUND
                                                                   : clvr_locate_level0(in) + (in->num_leaves + 3u) / 4u - 1u;
                 bad[2 * k2 + 1] = CLVR_BVH_NOT_FOUND;
@@ -601,10 +640,20 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
             wrong += clvr_locate(&mvg, q.p[i][0], q.p[i][1], q.p[i][2], CLVR_LOCATE_COHERENT, &s2, &e2) !=
                      (host_e[i] != CLVR_BVH_NOT_FOUND);
         }
-        mvg.entry_cells = cells;
         int big = 0; /* an instance with more than one lowest-level node */
         for (uint32_t i = 0; i < c.num_instances; ++i) big |= c.instances[i].num_leaves > 4u;
         TU_CHECK(wrong > 0 || !big || found == 0);
+        /* the right cells, every occupancy bit cleared: nothing is found */
+        memcpy(bad, cells, (size_t)nwords * sizeof *bad);
+        memset(bad + grids[0].res[3], 0, (size_t)(nwords - grids[0].res[3]) * sizeof *bad);
+        int cleared_found = 0;
+        for (uint32_t i = 0; i < nq; ++i) {
+            float s2 = 0.0f;
+            uint32_t e2 = 0;
+            cleared_found += clvr_locate(&mvg, q.p[i][0], q.p[i][1], q.p[i][2], CLVR_LOCATE_COHERENT, &s2, &e2);
+        }
+        TU_CHECK_EQ_U64(cleared_found, 0);
+        mvg.entry_cells = cells;
         free(bad);
     }
 
@@ -657,12 +706,12 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         /* device entry grids: the host reference's cells */
         CLVR_TRY(clvr_bvh_entry_grids_device(cl, k, &db, dev_inst, dinst, c.num_instances, dv, d16, d32, leaf_size,
                                              c.num_leaves, err));
-        TU_CHECK_EQ_U64(db.entry_bytes, (uint64_t)c.num_instances * sizeof *grids + (uint64_t)ncells * 8u);
-        uint32_t *tmp = malloc(((size_t)ncells + 1) * 8u);
-        if (ncells)
-            CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, db.entry_cells, CL_TRUE, 0, (size_t)ncells * 8u, tmp, 0, NULL,
+        TU_CHECK_EQ_U64(db.entry_bytes, ((uint64_t)c.num_instances + 1) * sizeof *grids + (uint64_t)nwords * 4u);
+        uint32_t *tmp = malloc(((size_t)nwords + 1) * 4u);
+        if (nwords)
+            CLVR_CL_CHECK(clEnqueueReadBuffer(cl->queue, db.entry_cells, CL_TRUE, 0, (size_t)nwords * 4u, tmp, 0, NULL,
                                               NULL));
-        TU_CHECK(memcmp(tmp, cells, (size_t)ncells * 8u) == 0);
+        TU_CHECK(memcmp(tmp, cells, (size_t)nwords * 4u) == 0);
         free(tmp);
     }
     cl_uint n = nq, ls = leaf_size, root = db.tlas_root, hints = CLVR_LOCATE_INCOHERENT, use_ebox = 1;
@@ -854,12 +903,12 @@ static void test_many_candidates(void)
     TU_CHECK_STATUS(clvr_bvh_build_host(c.instances, c.num_instances, c.leaf_boxes, c.num_leaves, &hb, &err), CLVR_OK,
                     &err);
     clvr_entry_grid *grids = malloc((c.num_instances + 1) * sizeof *grids);
-    uint32_t ncells = 0;
-    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &ncells, &err), CLVR_OK, &err);
-    uint32_t *cells = malloc(((size_t)ncells + 1) * 2 * sizeof *cells);
+    uint32_t nwords = 0;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &nwords, &err), CLVR_OK, &err);
+    uint32_t *cells = malloc(((size_t)nwords + 1) * sizeof *cells);
     clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root, 1, NULL,
                          CLVR_VIEW_ONE_PIECE, NULL, NULL};
-    TU_CHECK_STATUS(clvr_entry_cells_host(&mv, c.num_instances, grids, ncells, cells, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_entry_cells_host(&mv, c.num_instances, grids, nwords, cells, &err), CLVR_OK, &err);
     mv.entry_grids = grids;
     mv.entry_cells = cells;
     int bad = 0, crowded = 0, found = 0;

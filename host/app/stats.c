@@ -83,7 +83,7 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 per_element(s->bytes_bvh_one_per_leaf, s->elements), per_element(s->bytes_bvh, s->elements));
         fprintf(out, "| element boxes (not in the paper) | | %.3f MB | | %.2f |\n", s->bytes_element_boxes / 1e6,
                 per_element(s->bytes_element_boxes, s->elements));
-        fprintf(out, "| entry grids (not in the paper) | | %.3f MB | | %.2f |\n", s->bytes_entry_grids / 1e6,
+        fprintf(out, "| entry and occupancy grids (not in the paper) | | %.3f MB | | %.2f |\n", s->bytes_entry_grids / 1e6,
                 per_element(s->bytes_entry_grids, s->elements));
         fprintf(out, "| sampling clusters | | %.3f MB | | %.2f |\n", s->bytes_sampling / 1e6,
                 per_element(s->bytes_sampling, s->elements));

@@ -74,8 +74,9 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     resident = sat_add(resident, sat_mul(leaves / 3, LIMITS_BVH_NODE_BYTES));
     const uint64_t ebox = o && o->no_element_boxes ? 0 : sat_mul(N, 6); /* element boxes (kernels/locate.h) */
     resident = sat_add(resident, ebox);
-    /* entry grids (kernels/locate.h): about 2 cells of 8 bytes per leaf (up to 3 with rounding) */
-    resident = sat_add(resident, sat_mul(leaves, 24));
+    /* entry grids (kernels/locate.h): about 2 cells of 8 bytes per leaf (up to 3 with rounding); the
+     * occupancy grid about a bit per element (a byte counted for rounding) */
+    resident = sat_add(resident, sat_add(sat_mul(leaves, 24), N));
     uint64_t pixels = (uint64_t)width * height;
     out->image_bytes = sat_mul(pixels, LIMITS_PIXEL_BYTES);
     out->render_bytes = sat_add(resident, out->image_bytes);
