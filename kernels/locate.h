@@ -607,22 +607,31 @@ CLVR_INLINE clvr_u32 clvr_entry_lca(const clvr_instance *inst, clvr_u32 first_hi
 
 /* The hint of cell (cx, cy, cz) of inst's grid g, whose start node is
  * start: the leaf cluster holding the element where the cell's centre
- * lies, or CLVR_BVH_NOT_FOUND. */
+ * lies; where no element of inst holds the centre, the one where the first
+ * of the centres of the cell's eight octants lies that one holds (a cell
+ * on the mesh's boundary, or, in a mesh of mixed cells, one whose centre
+ * is in another type's element); else CLVR_BVH_NOT_FOUND. The octants:
+ * host walk on the OpenFOAM igloo, random points, bottom-level nodes per
+ * query 3.62 -> 3.07; PoCL bench_locate, alternating runs: igloo +1-9%
+ * (4 pairs), post-tets +12% and +22%, blunt fin +6%, +11%, -10%. */
 CLVR_INLINE clvr_u32 clvr_entry_hint(const clvr_mesh_view *m, const clvr_instance *inst, const clvr_entry_grid *g,
                                      clvr_u32 start, clvr_u32 cx, clvr_u32 cy, clvr_u32 cz)
 {
     if (start == CLVR_BVH_NOT_FOUND) return CLVR_BVH_NOT_FOUND;
     const clvr_u32 c[3] = {cx, cy, cz};
-    float p[3];
-    for (int k = 0; k < 3; ++k) /* an axis of one cell has scale 0: its centre is the box's */
-        p[k] = g->scale[k] > 0.0f ? g->lo[k] + ((float)c[k] + 0.5f) / g->scale[k]
-                                  : 0.5f * (inst->bounds.lo[k] + inst->bounds.hi[k]);
-    float s;
-    clvr_u32 e, leaf;
-    if (!clvr_locate_in_instance(m, inst, start, CLVR_BVH_NOT_FOUND, p[0], p[1], p[2], CLVR_LOCATE_COHERENT,
-                                 CLVR_BVH_NOT_FOUND, &s, &e, &leaf))
-        return CLVR_BVH_NOT_FOUND;
-    return leaf;
+    for (clvr_u32 o = 0; o < 9u; ++o) {
+        float p[3];
+        for (int k = 0; k < 3; ++k) /* an axis of one cell has scale 0: its centre is the box's */
+            p[k] = g->scale[k] > 0.0f
+                       ? g->lo[k] + ((float)c[k] + (o == 0u ? 0.5f : ((o - 1u) >> k) & 1u ? 0.75f : 0.25f)) / g->scale[k]
+                       : 0.5f * (inst->bounds.lo[k] + inst->bounds.hi[k]);
+        float s;
+        clvr_u32 e, leaf;
+        if (clvr_locate_in_instance(m, inst, start, CLVR_BVH_NOT_FOUND, p[0], p[1], p[2], CLVR_LOCATE_COHERENT,
+                                    CLVR_BVH_NOT_FOUND, &s, &e, &leaf))
+            return leaf;
+    }
+    return CLVR_BVH_NOT_FOUND;
 }
 
 /* Start node and hint leaf of p's cell in instance inst_id's entry grid. */
