@@ -475,13 +475,15 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  * uniform grid over its box, about CLVR_ENTRY_CELLS_PER_LEAF cells per
  * leaf cluster (cells about cubic), and each cell two nodes of the
  * instance's tree:
- *  - start: the lowest common ancestor of every leaf cluster whose box
- *    meets the cell (CLVR_BVH_NOT_FOUND when none does: no element there).
- *    Every leaf box that holds a point meets the point's cell (a
- *    coordinate's cell is one monotonic map, for points and box corners
- *    alike), so a walk from start finds what a walk from the root finds.
+ *  - start: the lowest common ancestor of every leaf cluster with an
+ *    element whose (padded) box meets the cell (CLVR_BVH_NOT_FOUND when
+ *    none does: no element there; clvr_entry_element_box). The box of an
+ *    element that holds a point meets the point's cell (a coordinate's
+ *    cell is one monotonic map, for points and box corners alike), so a
+ *    walk from start finds what a walk from the root finds.
  *  - hint: the leaf cluster holding the element where the cell's centre
- *    lies (CLVR_BVH_NOT_FOUND when it lies in no element). A query
+ *    lies (or an octant's centre, clvr_entry_hint; CLVR_BVH_NOT_FOUND when
+ *    none lies in an element). A query
  *    searches it first, then the other leaves of its lowest-level node
  *    (4 leaf clusters) whose boxes hold the point, then the rest of
  *    start's subtree.
@@ -548,13 +550,18 @@ CLVR_INLINE void clvr_entry_element_box(const clvr_piece_arrays *pa, const clvr_
  * subtrees (the igloo: a quarter of all queries). With entry grids a view
  * also has one occupancy grid over the whole mesh (entry_grids[0]; the
  * instances' grids follow it), one bit per cell, about
- * CLVR_OCCUPANCY_CELLS_PER_ELEMENT cells per element (1 byte per element),
- * the bit set where some element's box (clvr_entry_element_box) meets the
- * cell. A point whose bit is clear is in no element, for the same reason
- * as for an entry grid's start: clvr_locate_ex returns at once. Host walk,
- * random points: the bit answers 46% of all queries on the igloo (the
- * entry grids alone let 25% miss without a tree), 10.5% on the blunt fin,
- * 19% on post-tets. */
+ * CLVR_OCCUPANCY_CELLS_PER_ELEMENT cells per element (0.125 bytes per
+ * element), the bit set where some element's box (clvr_entry_element_box)
+ * meets the cell. A point whose bit is clear is in no element, for the
+ * same reason as for an entry grid's start: clvr_locate_ex returns at
+ * once. Host walk, random points: the bit answers 44.5% of all queries on
+ * the igloo (the entry grids alone let 25% miss without a tree), 9.7% on
+ * the blunt fin, 18.4% on post-tets. 8 cells per element answered 46%,
+ * 10.5% and 19%, and made the 1M tets' whole preprocessing 0.88 s instead
+ * of 0.52 s on PoCL (before the rasterization's one OR per word; with it,
+ * one cell per element: 0.29-0.33 s against 0.27-0.30 s without the
+ * grid). PoCL bench_locate on the igloo, alternating runs with the commit
+ * before: +10-24% (element boxes included). */
 #define CLVR_OCCUPANCY_CELLS_PER_ELEMENT 1u
 /* At most this many cells per axis (a 128 MB grid). */
 #define CLVR_OCCUPANCY_MAX_RES 1024u
