@@ -557,7 +557,8 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
     TU_CHECK_STATUS(clvr_entry_cells_host(&mvg, c.num_instances, grids, nwords, cells, err), CLVR_OK, err);
     uint32_t *grid_e = malloc(nq * sizeof *grid_e);
     {
-        int under_bad = 0, hint_bad = 0, entry_bad = 0, same = 0, wrong = 0;
+        int under_bad = 0, hint_bad = 0, entry_bad = 0, same = 0, wrong = 0, centre_bad = 0;
+        uint32_t octants = 0;
         for (uint32_t i = 0; i < c.num_instances; ++i) {
             const clvr_entry_grid *g = &grids[1 + i];
             const uint64_t nc = (uint64_t)g->res[0] * g->res[1] * g->res[2];
@@ -565,13 +566,29 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
             TU_CHECK(i + 1 == c.num_instances ? g->res[3] + nc == ncells : grids[2 + i].res[3] == g->res[3] + nc);
             const clvr_instance *in = &c.instances[i];
             for (uint64_t k2 = 0; k2 < nc; ++k2) {
-                const uint32_t st = cells[2 * (g->res[3] + k2)], hn = cells[2 * (g->res[3] + k2) + 1];
+                const uint32_t st = cells[2 * (g->res[3] + k2)], hn = clvr_entry_hint_leaf(cells[2 * (g->res[3] + k2) + 1]);
                 if (hn == CLVR_BVH_NOT_FOUND) continue;
                 if (st == CLVR_BVH_NOT_FOUND || hn < in->first_leaf || hn - in->first_leaf >= in->num_leaves) {
                     ++hint_bad;
                     continue;
                 }
                 hint_bad += !leaf_under(in, hn, st); /* the hint leaf lies under the start node */
+                /* without CLVR_ENTRY_HINT_OCTANT an element of the hint leaf
+                 * holds the cell's centre; with it (a few cells checked per
+                 * instance) none of the instance's elements does */
+                const int oct = (cells[2 * (g->res[3] + k2) + 1] & CLVR_ENTRY_HINT_OCTANT) != 0;
+                if (oct && ++octants > 200u * (i + 1)) continue;
+                const uint32_t cc[3] = {(uint32_t)(k2 % g->res[0]), (uint32_t)(k2 / g->res[0] % g->res[1]),
+                                        (uint32_t)(k2 / g->res[0] / g->res[1])};
+                float ctr[3], sv;
+                for (int a = 0; a < 3; ++a)
+                    ctr[a] = g->scale[a] > 0.0f ? g->lo[a] + ((float)cc[a] + 0.5f) / g->scale[a]
+                                                : 0.5f * (in->bounds.lo[a] + in->bounds.hi[a]);
+                uint32_t end, held = 0;
+                const uint32_t first = oct ? in->first_element : clvr_leaf_elements(&mvg, in, hn, &end);
+                if (oct) end = in->first_element + in->num_elements;
+                for (uint32_t e = first; e < end && !held; ++e) held = fx_element_sample(&c, e, ctr[0], ctr[1], ctr[2], &sv);
+                centre_bad += oct ? held != 0 : held == 0;
             }
         }
         for (uint32_t i = 0; i < nq; ++i) {
@@ -614,6 +631,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         mvg.entry_grids = NULL;
         mvg.entry_cells = NULL;
         TU_CHECK_EQ_U64(occ_bad, 0);
+        TU_CHECK_EQ_U64(centre_bad, 0);
         TU_CHECK_EQ_U64(under_bad, 0);
         TU_CHECK_EQ_U64(hint_bad, 0);
         TU_CHECK_EQ_U64(entry_bad, 0);
