@@ -148,10 +148,12 @@ clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = 0; i < num_instances; ++i) {
         const clvr_instance *in = &instances[i];
-        /* About CLVR_ENTRY_CELLS_PER_LEAF cells per leaf. */
-        entry_grid_fit(in->bounds.lo, in->bounds.hi,
-                       (double)CLVR_ENTRY_CELLS_PER_LEAF * (in->num_leaves ? in->num_leaves : 1u), CLVR_ENTRY_MAX_RES,
-                       &grids[1u + i]);
+        /* About CLVR_ENTRY_CELLS_PER_LEAF cells per leaf of tets,
+         * CLVR_ENTRY_CELLS_PER_LEAF_NEWTON for the other types. */
+        const double per_leaf =
+            in->type == CLVR_CELL_TET ? CLVR_ENTRY_CELLS_PER_LEAF : CLVR_ENTRY_CELLS_PER_LEAF_NEWTON;
+        entry_grid_fit(in->bounds.lo, in->bounds.hi, per_leaf * (in->num_leaves ? in->num_leaves : 1u),
+                       CLVR_ENTRY_MAX_RES, &grids[1u + i]);
         grids[1u + i].res[3] = (uint32_t)fmin((double)total, 4294967295.0);
         total += (uint64_t)grids[1u + i].res[0] * grids[1u + i].res[1] * grids[1u + i].res[2];
         elements += in->num_elements;

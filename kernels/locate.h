@@ -499,6 +499,20 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  * from the root only where two elements share the point, with the same
  * value. Memory: 8 bytes per cell, 1 byte per element at leaves of 16. */
 #define CLVR_ENTRY_CELLS_PER_LEAF 2u
+/* Cells per leaf cluster of the types that take Newton's test (hexes,
+ * wedges, pyramids): a search of a leaf that does not hold the point costs
+ * them Newton solves where tets take a four-lane barycentric test, so a
+ * hint that holds more often pays for the larger grid there. Host walk,
+ * the OpenFOAM igloo (328k mixed), random points found, 2 / 4 / 8 / 16
+ * cells per leaf: bottom nodes 4.70 / 4.12 / 3.27 / 2.93, leaves 2.11 /
+ * 1.99 / 1.82 / 1.71. PoCL bench_locate, random points, alternating runs,
+ * 8 against 2: the igloo median +8% (10 pairs, 0.93x-1.31x), clvr-gen amr
+ * (523k graded hexes) +1% and +6% (8 pairs, twice), while the blunt fin
+ * (tets only, so the same grids: this VM's noise) read +2%; clvr-gen mixed
+ * (the default scene) unchanged. For tets 8 gained nothing (blunt fin
+ * -9%, -3%, 0; post, the igloo cut into tets and gmsh-point within
+ * noise). 4 bytes per element at leaves of 16. */
+#define CLVR_ENTRY_CELLS_PER_LEAF_NEWTON 8u
 /* At most this many cells per axis. */
 #define CLVR_ENTRY_MAX_RES 1024u
 

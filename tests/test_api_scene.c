@@ -197,10 +197,11 @@ static void test_scene(clvr_context *ctx, const grid *g)
     CHECK(st.preprocess_s > 0 && st.num_stages >= 2 && !strcmp(st.stage_name[st.num_stages - 2], "bvh") &&
           !strcmp(st.stage_name[st.num_stages - 1], "hull"));
     CHECK(st.bytes_points_after > 0 && st.bytes_bvh > 0 && st.device_bytes > 0);
-    /* entry grids: at least a cell per instance, 8 bytes each, and about 2 cells per leaf (at most 3); the
-     * occupancy grid: a header and a word at least, about a bit per element (at most 8, rounding cells up) */
+    /* entry grids: at least a cell per instance, 8 bytes each, and about 2 cells per leaf of tets, 8 per
+     * leaf of other types (at most 9); the occupancy grid: a header and a word at least, about a bit per
+     * element (at most 8, rounding cells up) */
     CHECK(st.bytes_entry_grids >= (st.instances + 1) * 48 + st.instances * 8 + 4 &&
-          st.bytes_entry_grids <= (st.instances + 1) * 48 + st.leaves * 24 + st.instances * 8 * 64 + st.elements + 4);
+          st.bytes_entry_grids <= (st.instances + 1) * 48 + st.leaves * 72 + st.instances * 8 * 64 + st.elements + 4);
 
     /* Two tracers on one scene. */
     clvr_tracer *t1 = NULL, *t2 = NULL;

@@ -137,6 +137,17 @@ static void test_entry_layout(void)
     TU_CHECK(g[0].res[0] == CLVR_OCCUPANCY_MAX_RES && g[0].res[1] == CLVR_OCCUPANCY_MAX_RES &&
              g[0].res[2] == CLVR_OCCUPANCY_MAX_RES);
     TU_CHECK_EQ_U64(n, (2ull << 30) + (1ull << 25));
+    /* a hex instance: CLVR_ENTRY_CELLS_PER_LEAF_NEWTON cells per leaf (125
+     * leaves over the unit cube: 1000 cells, 10 a side); tets keep 2 */
+    clvr_instance hx = in[0];
+    hx.type = CLVR_CELL_HEX;
+    hx.num_leaves = 125;
+    TU_CHECK(CLVR_ENTRY_CELLS_PER_LEAF_NEWTON == 8u);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(&hx, 1, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[1].res[0] == 10 && g[1].res[1] == 10 && g[1].res[2] == 10);
+    hx.type = CLVR_CELL_TET;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(&hx, 1, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[1].res[0] == 7 && g[1].res[1] == 7 && g[1].res[2] == 7);
     clvr_instance many[5];
     for (int i = 0; i < 5; ++i) many[i] = in[4];
     TU_CHECK_STATUS(clvr_entry_grids_layout(many, 5, g, &n, &err), CLVR_ERR_OVERFLOW, &err);

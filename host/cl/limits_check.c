@@ -74,9 +74,12 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     resident = sat_add(resident, sat_mul(leaves / 3, LIMITS_BVH_NODE_BYTES));
     const uint64_t ebox = o && o->no_element_boxes ? 0 : sat_mul(N, 6); /* element boxes (kernels/locate.h) */
     resident = sat_add(resident, ebox);
-    /* entry grids (kernels/locate.h): about 2 cells of 8 bytes per leaf (up to 3 with rounding); the
-     * occupancy grid about a bit per element (a byte counted for rounding) */
-    resident = sat_add(resident, sat_add(sat_mul(leaves, 24), N));
+    /* entry grids (kernels/locate.h): about 2 cells of 8 bytes per leaf of tets (up to 3 with rounding), 8
+     * per leaf of the other types (up to 9); the occupancy grid about a bit per element (a byte counted
+     * for rounding) */
+    const uint64_t NT = m->num_cells[CLVR_CELL_TET], tet_leaves = NT / leaf + (NT % leaf != 0),
+                   other_leaves = (N - NT) / leaf + ((N - NT) % leaf != 0);
+    resident = sat_add(resident, sat_add(sat_add(sat_mul(tet_leaves, 24), sat_mul(other_leaves, 72)), N));
     uint64_t pixels = (uint64_t)width * height;
     out->image_bytes = sat_mul(pixels, LIMITS_PIXEL_BYTES);
     out->render_bytes = sat_add(resident, out->image_bytes);

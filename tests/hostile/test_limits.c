@@ -38,11 +38,11 @@ static void test_estimate(void)
     TU_CHECK_EQ_U64(e.num_slots, 2000);
     /* sort phase 16*1000 + 4*2000 + 24*400 = 33600; split 16000 + 10*2000 = 36000 */
     TU_CHECK_EQ_U64(e.preprocess_peak_bytes, 36000);
-    /* leaves 25: 2*2000 + 25*32 + (400/16)*32 + (25/3)*node + 6*400 (element boxes) + 24*25 + 400 (entry
-     * and occupancy grids) + 76*64*32 */
+    /* leaves 25: 2*2000 + 25*32 + (400/16)*32 + (25/3)*node + 6*400 (element boxes) + 24*19 + 72*7 + 400
+     * (entry grids over 19 leaves of tets and 7 of hexes, occupancy grid) + 76*64*32 */
     TU_CHECK_EQ_U64(e.image_bytes, 76u * 64u * 32u);
     TU_CHECK_EQ_U64(e.render_bytes,
-                    4000u + 800u + 800u + 8u * sizeof(clvr_bvh_node) + 6u * 400u + 24u * 25u + 400u + 76u * 64u * 32u);
+                    4000u + 800u + 800u + 8u * sizeof(clvr_bvh_node) + 6u * 400u + 24u * 19u + 72u * 7u + 400u + 76u * 64u * 32u);
     TU_CHECK_EQ_U64(e.peak_bytes, e.render_bytes > 36000 ? e.render_bytes : 36000);
     TU_CHECK_EQ_U64(e.largest_buffer_bytes, 16u * 64u * 32u);
     TU_CHECK(strcmp(e.largest_buffer, "image accumulator") == 0);
