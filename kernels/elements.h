@@ -578,4 +578,38 @@ CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float
 #endif
 }
 
+/* Quick reject for pyramids, before Newton: 0 when p lies outside one of
+ * the four side faces' planes by more than 1e-3 of the element's extent
+ * (those faces, a base edge and the apex, are flat triangles). A plane is
+ * used only when both base vertices off it lie on the pyramid's side of it:
+ * then the whole pyramid does (a point of it is (1 - t) times a bilinear
+ * blend of the base vertices plus t times the apex, so its distance to the
+ * plane is a non-negative blend of theirs), and a point Newton accepts
+ * (CLVR_ELEMENT_EPS, 1e-5, outside the parametric domain) is within about
+ * 2e-5 of the extent: the margin is 50 times that. Where a polyhedral cell
+ * was split into pyramids around its centre (OpenFOAM's foamToVTK), a
+ * point inside it passes about 3 of their boxes, and the shared side faces
+ * tell them apart without Newton. */
+CLVR_INLINE int clvr_pyramid_sides_hold(const clvr_vec4 *vtx, float px, float py, float pz)
+{
+    const float ax = vtx[4].x, ay = vtx[4].y, az = vtx[4].z;
+    float ext = 0.0f;
+    for (int i = 0; i < 4; ++i)
+        ext = fmax(ext, fmax(fmax(fabs(vtx[i].x - ax), fabs(vtx[i].y - ay)), fabs(vtx[i].z - az)));
+    const float tol = 1e-3f * ext;
+    const float qx = px - ax, qy = py - ay, qz = pz - az;
+    for (int i = 0; i < 4; ++i) {
+        const clvr_vec4 b0 = vtx[i], b1 = vtx[(i + 1) & 3], c0 = vtx[(i + 2) & 3], c1 = vtx[(i + 3) & 3];
+        const float ux = b0.x - ax, uy = b0.y - ay, uz = b0.z - az;
+        const float vx = b1.x - ax, vy = b1.y - ay, vz = b1.z - az;
+        const float nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+        const float r0 = (c0.x - ax) * nx + (c0.y - ay) * ny + (c0.z - az) * nz;
+        const float r1 = (c1.x - ax) * nx + (c1.y - ay) * ny + (c1.z - az) * nz;
+        if (!((r0 > 0.0f && r1 > 0.0f) || (r0 < 0.0f && r1 < 0.0f))) continue; /* warped: no bound */
+        const float d = (qx * nx + qy * ny + qz * nz) * (r0 > 0.0f ? 1.0f : -1.0f);
+        if (d < 0.0f && d * d > tol * tol * (nx * nx + ny * ny + nz * nz)) return 0;
+    }
+    return 1;
+}
+
 #endif /* CLVR_ELEMENTS_H */

@@ -480,8 +480,80 @@ static void test_cell_exit(uint32_t type, float jit)
     TU_CHECK_EQ_U64(none, 0);
 }
 
+/* clvr_pyramid_sides_hold never rejects a point Newton accepts: random
+ * pyramids (from the reference one up to strongly warped and with an apex
+ * pushed aside or below the base; scaled and far from the origin too),
+ * points in and around their boxes and on their boundaries; and it does
+ * reject most points outside that pass the box test (its reason to be).
+ * Eight pyramids around a cube's centre (a split polyhedron): a point in
+ * the cube passes several of their boxes and the test leaves one. */
+static void test_pyramid_sides(void)
+{
+    uint64_t rs = 4242;
+    int wrong = 0, outside_in_box = 0, rejected = 0;
+    const float jits[5] = {0.0f, 0.05f, 0.2f, 0.45f, 0.8f}, scales[3] = {1.0f, 1e-3f, 0.5f}, offs[3] = {0.0f, 0.0f, 1000.0f};
+    for (int trial = 0; trial < 600; ++trial) {
+        clvr_vec4 v[CLVR_CELL_MAX_VERTS];
+        const int j = trial % 5, k = trial / 5 % 3;
+        make_element(CLVR_CELL_PYRAMID, jits[j], scales[k], offs[k], &rs, v);
+        for (int q = 0; q < 200; ++q) {
+            float x, y, z, s;
+            if (q % 4 == 0) { /* on the boundary: one coordinate at 0 or 1 */
+                float u, vv, w;
+                random_param(CLVR_CELL_PYRAMID, 0.0f, &rs, &u, &vv, &w);
+                float *c[3] = {&u, &vv, &w};
+                *c[q / 4 % 3] = (q / 12) % 2 ? 1.0f : 0.0f;
+                clvr_element_forward(CLVR_CELL_PYRAMID, v, u, vv, w, &x, &y, &z);
+            } else {
+                float lo[3], hi[3];
+                clvr_element_vertex_box(CLVR_CELL_PYRAMID, v, lo, hi);
+                x = lo[0] + (hi[0] - lo[0]) * (1.2f * tu_randf(&rs) - 0.1f);
+                y = lo[1] + (hi[1] - lo[1]) * (1.2f * tu_randf(&rs) - 0.1f);
+                z = lo[2] + (hi[2] - lo[2]) * (1.2f * tu_randf(&rs) - 0.1f);
+            }
+            const int in = clvr_element_sample(CLVR_CELL_PYRAMID, v, x, y, z, &s);
+            const int hold = clvr_pyramid_sides_hold(v, x, y, z);
+            if (in && !hold) {
+                if (wrong < 5) fprintf(stderr, "pyramid jit %g: (%g %g %g) inside but rejected\n", jits[j], x, y, z);
+                ++wrong;
+            }
+            if (!in && clvr_element_box_test(CLVR_CELL_PYRAMID, v, x, y, z) && jits[j] <= 0.05f) {
+                ++outside_in_box;
+                rejected += !hold;
+            }
+        }
+    }
+    TU_CHECK_EQ_U64(wrong, 0);
+    TU_CHECK(outside_in_box > 1000 && rejected > outside_in_box * 9 / 10);
+    /* a unit cube split into 6 pyramids around its centre */
+    static const int face[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    static const float cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    int multi = 0, bad_count = 0;
+    for (int q = 0; q < 2000; ++q) {
+        const float p[3] = {tu_randf(&rs), tu_randf(&rs), tu_randf(&rs)};
+        int boxes = 0, held = 0, inside = 0;
+        for (int f = 0; f < 6; ++f) {
+            clvr_vec4 v[5];
+            for (int i = 0; i < 4; ++i) {
+                v[i].x = cube[face[f][i]][0]; v[i].y = cube[face[f][i]][1]; v[i].z = cube[face[f][i]][2]; v[i].w = 0.0f;
+            }
+            v[4].x = v[4].y = v[4].z = 0.5f;
+            v[4].w = 0.0f;
+            float s;
+            boxes += clvr_element_box_test(CLVR_CELL_PYRAMID, v, p[0], p[1], p[2]);
+            held += clvr_pyramid_sides_hold(v, p[0], p[1], p[2]);
+            inside += clvr_element_sample(CLVR_CELL_PYRAMID, v, p[0], p[1], p[2], &s);
+        }
+        multi += boxes >= 3;
+        bad_count += held < inside || held > inside + 1; /* near a shared face two may hold it */
+    }
+    TU_CHECK(multi > 500);
+    TU_CHECK_EQ_U64(bad_count, 0);
+}
+
 int main(void)
 {
+    test_pyramid_sides();
     for (uint32_t t = 0; t < 4; ++t) {
         test_inside_linear(t, 0.0f, 1.0f, 0.0f);
         test_inside_linear(t, 0.12f, 0.01f, 0.0f);
