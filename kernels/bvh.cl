@@ -77,6 +77,26 @@ __kernel void clvr_locate_points(__global const float4 *points, uint n, __global
     clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
 }
 
+/* The mesh view of a kernel that takes the split arrays piece by piece
+ * under the parameter names of clvr_locate_points_split (blas, instances,
+ * leaf_size, vertices, idx16, idx32, vertices1 .. idx32_3): the top level
+ * (tlas, root), the element boxes of pieces 0 .. 3 (eb0 .. eb3, NULL for
+ * none) and the entry grids (grids, cells) vary. One initializer for the
+ * four kernels that differ only in those. */
+#define CLVR_PIECES_VIEW(tlas, root, eb0, eb1, eb2, eb3, grids, cells)                                              \
+    {(tlas),                                                                                                     \
+     blas,                                                                                                       \
+     instances,                                                                                                  \
+     vertices,                                                                                                   \
+     idx16,                                                                                                      \
+     idx32,                                                                                                      \
+     (root),                                                                                                     \
+     leaf_size,                                                                                                  \
+     (eb0),                                                                                                      \
+     {{vertices1, idx16_1, idx32_1, (eb1)}, {vertices2, idx16_2, idx32_2, (eb2)}, {vertices3, idx16_3, idx32_3, (eb3)}}, \
+     (grids),                                                                                                    \
+     (cells)}
+
 /* clvr_locate_points over all CLVR_MAX_SPLITS pieces of the split arrays
  * (vertices, idx16, idx32, ebox: piece 0; then pieces 1 .. 3 of each;
  * unused pieces a small dummy buffer). entry_grids, entry_cells: the
@@ -96,20 +116,8 @@ __kernel void clvr_locate_points_split(__global const float4 *points, uint n, __
                                        __global const uchar *ebox3, __global const clvr_entry_grid *entry_grids,
                                        __global const uint *entry_cells)
 {
-    const clvr_mesh_view m = {tlas,
-                              blas,
-                              instances,
-                              vertices,
-                              idx16,
-                              idx32,
-                              tlas_root,
-                              leaf_size,
-                              use_ebox ? ebox : NULL,
-                              {{vertices1, idx16_1, idx32_1, ebox1},
-                               {vertices2, idx16_2, idx32_2, ebox2},
-                               {vertices3, idx16_3, idx32_3, ebox3}},
-                              entry_grids,
-                              entry_cells};
+    const clvr_mesh_view m =
+        CLVR_PIECES_VIEW(tlas, tlas_root, use_ebox ? ebox : NULL, ebox1, ebox2, ebox3, entry_grids, entry_cells);
     clvr_locate_points_in(&m, points, n, hints, chain, scalars, element_ids);
 }
 
@@ -154,20 +162,7 @@ __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global co
     __global const clvr_bvh_node *n = blas + node;
     const float L[3] = {n->lo_x[slot], n->lo_y[slot], n->lo_z[slot]};
     const float H[3] = {n->hi_x[slot], n->hi_y[slot], n->hi_z[slot]};
-    const clvr_mesh_view m = {NULL,
-                              blas,
-                              instances,
-                              vertices,
-                              idx16,
-                              idx32,
-                              0u,
-                              leaf_size,
-                              NULL,
-                              {{vertices1, idx16_1, idx32_1, NULL},
-                               {vertices2, idx16_2, idx32_2, NULL},
-                               {vertices3, idx16_3, idx32_3, NULL}},
-                              NULL,
-                              NULL};
+    const clvr_mesh_view m = CLVR_PIECES_VIEW(NULL, 0u, NULL, NULL, NULL, NULL, NULL, NULL);
     __global uchar *out = inst.piece == 1u ? ebox1 : inst.piece == 2u ? ebox2 : inst.piece == 3u ? ebox3 : ebox;
     clvr_ebox_build_leaf(&m, &inst, leaf, L, H, out);
 }
@@ -194,20 +189,7 @@ __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global 
     const clvr_instance inst = instances[lo];
     if (leaf - inst.first_leaf >= inst.num_leaves) return;
     const clvr_entry_grid g = grids[1u + lo], occ = grids[0]; /* [0]: the occupancy grid */
-    const clvr_mesh_view m = {NULL,
-                              blas,
-                              instances,
-                              vertices,
-                              idx16,
-                              idx32,
-                              0u,
-                              leaf_size,
-                              NULL,
-                              {{vertices1, idx16_1, idx32_1, NULL},
-                               {vertices2, idx16_2, idx32_2, NULL},
-                               {vertices3, idx16_3, idx32_3, NULL}},
-                              NULL,
-                              NULL};
+    const clvr_mesh_view m = CLVR_PIECES_VIEW(NULL, 0u, NULL, NULL, NULL, NULL, NULL, NULL);
     const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
     uint end;
     for (uint e = clvr_leaf_elements(&m, &inst, leaf, &end); e < end; ++e) {
@@ -264,20 +246,7 @@ __kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global con
     }
     const clvr_entry_grid g = grids[1u + lo]; /* [0]: the occupancy grid */
     const clvr_instance inst = instances[lo];
-    const clvr_mesh_view m = {NULL,
-                              blas,
-                              instances,
-                              vertices,
-                              idx16,
-                              idx32,
-                              0u,
-                              leaf_size,
-                              use_ebox ? ebox : NULL,
-                              {{vertices1, idx16_1, idx32_1, ebox1},
-                               {vertices2, idx16_2, idx32_2, ebox2},
-                               {vertices3, idx16_3, idx32_3, ebox3}},
-                              NULL,
-                              NULL};
+    const clvr_mesh_view m = CLVR_PIECES_VIEW(NULL, 0u, use_ebox ? ebox : NULL, ebox1, ebox2, ebox3, NULL, NULL);
     const uint c = i - g.res[3]; /* the cell within its grid */
     __global uint *cell = cells + 2ul * i;
     const uint start = cell[0] == CLVR_BVH_NOT_FOUND ? CLVR_BVH_NOT_FOUND : clvr_entry_lca(&inst, cell[0], cell[1]);
