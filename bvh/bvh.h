@@ -87,8 +87,8 @@ typedef struct clvr_bvh_device {
                              a split mesh's (clvr_bvh_element_boxes_pieces) */
     cl_mem ebox_more[CLVR_MAX_SPLITS - 1]; /* pieces 1 .. of a split mesh's element boxes, else NULL */
     uint64_t ebox_bytes;  /* all pieces */
-    cl_mem entry_grids;   /* clvr_entry_grid per instance (kernels/locate.h), or NULL */
-    cl_mem entry_cells;   /* their cells: start node and hint leaf per cell */
+    cl_mem entry_grids;   /* the occupancy grid, then a clvr_entry_grid per instance (kernels/locate.h), or NULL */
+    cl_mem entry_cells;   /* the instances' cells (start node, hint leaf), then the occupancy bits */
     uint64_t entry_bytes; /* both */
 } clvr_bvh_device;
 

@@ -672,7 +672,8 @@ CLVR_INLINE clvr_u32 clvr_entry_hint(const clvr_mesh_view *m, const clvr_instanc
     return CLVR_BVH_NOT_FOUND;
 }
 
-/* Start node and hint leaf of p's cell in instance inst_id's entry grid. */
+/* Start node and hint word (its leaf: clvr_entry_hint_leaf) of p's cell in
+ * instance inst_id's entry grid. */
 CLVR_INLINE void clvr_entry_cell(const clvr_mesh_view *m, clvr_u32 inst_id, float px, float py, float pz,
                                  clvr_u32 *start, clvr_u32 *hint)
 {
@@ -796,17 +797,17 @@ CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float 
     for (clvr_u32 i = 1; i < nc; ++i) mixed |= m->instances[cand[i]].type != m->instances[cand[0]].type;
     clvr_u32 octant[CLVR_ENTRY_MAX_CANDIDATES];
     for (clvr_u32 i = 0; i < nc; ++i) {
-        clvr_u32 hint;
-        clvr_entry_cell(m, cand[i], px, py, pz, &start[i], &hint);
+        clvr_u32 word;
+        clvr_entry_cell(m, cand[i], px, py, pz, &start[i], &word);
+        const clvr_u32 hint = clvr_entry_hint_leaf(word);
         skip[i] = CLVR_BVH_NOT_FOUND;
         octant[i] = CLVR_BVH_NOT_FOUND;
         if (start[i] == CLVR_BVH_NOT_FOUND) continue;
         const clvr_instance inst = m->instances[cand[i]];
-        if (mixed && hint != CLVR_BVH_NOT_FOUND && (hint & CLVR_ENTRY_HINT_OCTANT)) {
-            octant[i] = hint & CLVR_BVH_MAX_PRIMS; /* after every hint from a cell's centre */
+        if (mixed && hint != CLVR_BVH_NOT_FOUND && (word & CLVR_ENTRY_HINT_OCTANT)) {
+            octant[i] = hint; /* after every hint from a cell's centre */
             continue;
         }
-        hint = clvr_entry_hint_leaf(hint);
         if (hint != CLVR_BVH_NOT_FOUND) {
             if (clvr_locate_hint_leaf(m, &inst, hint, px, py, pz, skip_elem, scalar, element_id, leaf_found,
                                       &skip[i])) {
