@@ -515,6 +515,76 @@ CLVR_INLINE int clvr_element_sample_near(clvr_u32 type, const clvr_vec4 *vtx, fl
     return clvr_element_sample_near_settled(type, vtx, px, py, pz, start, u, v, w, scalar, &settled);
 }
 
+/* Quick reject for pyramids, before Newton: 0 when p lies outside one of
+ * the four side faces' planes by more than 1e-3 of the element's extent
+ * (those faces, a base edge and the apex, are flat triangles). A plane is
+ * used only when both base vertices off it lie on the pyramid's side of it:
+ * then the whole pyramid does (a point of it is (1 - t) times a bilinear
+ * blend of the base vertices plus t times the apex, so its distance to the
+ * plane is a non-negative blend of theirs), and a point Newton accepts
+ * (CLVR_ELEMENT_EPS, 1e-5, outside the parametric domain) is within about
+ * 2e-5 of the extent: the margin is 50 times that. Where a polyhedral cell
+ * was split into pyramids around its centre (OpenFOAM's foamToVTK), a
+ * point inside it passes about 3 of their boxes, and the shared side faces
+ * tell them apart without Newton. */
+CLVR_INLINE int clvr_pyramid_sides_hold(const clvr_vec4 *vtx, float px, float py, float pz)
+{
+    const float ax = vtx[4].x, ay = vtx[4].y, az = vtx[4].z;
+    float ext = 0.0f;
+    for (int i = 0; i < 4; ++i)
+        ext = fmax(ext, fmax(fmax(fabs(vtx[i].x - ax), fabs(vtx[i].y - ay)), fabs(vtx[i].z - az)));
+    const float tol = 1e-3f * ext;
+    const float qx = px - ax, qy = py - ay, qz = pz - az;
+    for (int i = 0; i < 4; ++i) {
+        const clvr_vec4 b0 = vtx[i], b1 = vtx[(i + 1) & 3], c0 = vtx[(i + 2) & 3], c1 = vtx[(i + 3) & 3];
+        const float ux = b0.x - ax, uy = b0.y - ay, uz = b0.z - az;
+        const float vx = b1.x - ax, vy = b1.y - ay, vz = b1.z - az;
+        const float nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+        const float r0 = (c0.x - ax) * nx + (c0.y - ay) * ny + (c0.z - az) * nz;
+        const float r1 = (c1.x - ax) * nx + (c1.y - ay) * ny + (c1.z - az) * nz;
+        if (!((r0 > 0.0f && r1 > 0.0f) || (r0 < 0.0f && r1 < 0.0f))) continue; /* warped: no bound */
+        const float d = (qx * nx + qy * ny + qz * nz) * (r0 > 0.0f ? 1.0f : -1.0f);
+        if (d < 0.0f && d * d > tol * tol * (nx * nx + ny * ny + nz * nz)) return 0;
+    }
+    return 1;
+}
+
+/* The type an 8-node hex with repeated corners collapses to, in the forms
+ * FE codes write other types in (Exodus II's and Patran's degenerate
+ * HEX8): tet (a b c c d d d d), pyramid (a b c d e e e e), wedge
+ * (a b c c d e f f); CLVR_CELL_HEX for any other hex. out: that type's
+ * vertices in VTK order (untouched for CLVR_CELL_HEX). Repeated means the
+ * same position bit for bit, which a repeated vertex index gives. Newton
+ * on a collapsed hex finds the same containment and value as the type's
+ * own test (the collapsed trilinear map is a reparametrization of the
+ * tet's barycentrics, the pyramid's and the wedge's shape functions:
+ * tests/test_elements.c), but costs a solve where a tet takes a
+ * barycentric test, and a pyramid loses its side planes. */
+CLVR_INLINE clvr_u32 clvr_hex_collapsed(const clvr_vec4 *h, clvr_vec4 *out)
+{
+#define CLVR_SAME_(i, j) (h[i].x == h[j].x && h[i].y == h[j].y && h[i].z == h[j].z)
+    const int top = CLVR_SAME_(4, 5) && CLVR_SAME_(5, 6) && CLVR_SAME_(6, 7), base = CLVR_SAME_(2, 3);
+    const int wedge = base && CLVR_SAME_(6, 7) && !top;
+#undef CLVR_SAME_
+    if (!top && !wedge) return CLVR_CELL_HEX;
+    out[0] = h[0];
+    out[1] = h[1];
+    out[2] = h[2];
+    if (top && base) {
+        out[3] = h[4];
+        return CLVR_CELL_TET;
+    }
+    if (top) {
+        out[3] = h[3];
+        out[4] = h[4];
+        return CLVR_CELL_PYRAMID;
+    }
+    out[3] = h[4];
+    out[4] = h[5];
+    out[5] = h[6];
+    return CLVR_CELL_WEDGE;
+}
+
 /* Point containment and interpolation: returns 1 when (px, py, pz) lies in
  * the element (within CLVR_ELEMENT_EPS in parametric coordinates) and writes
  * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
@@ -525,6 +595,13 @@ CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float p
 {
     if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
     float u, v, w;
+    if (type == CLVR_CELL_HEX) { /* a collapsed hex takes its own type's test */
+        clvr_vec4 c[6];
+        const clvr_u32 t = clvr_hex_collapsed(vtx, c);
+        if (t == CLVR_CELL_TET) return clvr_tet_sample(c, px, py, pz, scalar);
+        if (t == CLVR_CELL_PYRAMID && !clvr_pyramid_sides_hold(c, px, py, pz)) return 0;
+        if (t != CLVR_CELL_HEX) return clvr_element_sample_near(t, c, px, py, pz, 0, &u, &v, &w, scalar);
+    }
     return clvr_element_sample_near(type, vtx, px, py, pz, 0, &u, &v, &w, scalar);
 }
 
@@ -576,40 +653,6 @@ CLVR_INLINE int clvr_element_box_test(clvr_u32 type, const clvr_vec4 *vtx, float
     return px >= lo[0] - pad && px <= hi[0] + pad && py >= lo[1] - pad && py <= hi[1] + pad && pz >= lo[2] - pad &&
            pz <= hi[2] + pad;
 #endif
-}
-
-/* Quick reject for pyramids, before Newton: 0 when p lies outside one of
- * the four side faces' planes by more than 1e-3 of the element's extent
- * (those faces, a base edge and the apex, are flat triangles). A plane is
- * used only when both base vertices off it lie on the pyramid's side of it:
- * then the whole pyramid does (a point of it is (1 - t) times a bilinear
- * blend of the base vertices plus t times the apex, so its distance to the
- * plane is a non-negative blend of theirs), and a point Newton accepts
- * (CLVR_ELEMENT_EPS, 1e-5, outside the parametric domain) is within about
- * 2e-5 of the extent: the margin is 50 times that. Where a polyhedral cell
- * was split into pyramids around its centre (OpenFOAM's foamToVTK), a
- * point inside it passes about 3 of their boxes, and the shared side faces
- * tell them apart without Newton. */
-CLVR_INLINE int clvr_pyramid_sides_hold(const clvr_vec4 *vtx, float px, float py, float pz)
-{
-    const float ax = vtx[4].x, ay = vtx[4].y, az = vtx[4].z;
-    float ext = 0.0f;
-    for (int i = 0; i < 4; ++i)
-        ext = fmax(ext, fmax(fmax(fabs(vtx[i].x - ax), fabs(vtx[i].y - ay)), fabs(vtx[i].z - az)));
-    const float tol = 1e-3f * ext;
-    const float qx = px - ax, qy = py - ay, qz = pz - az;
-    for (int i = 0; i < 4; ++i) {
-        const clvr_vec4 b0 = vtx[i], b1 = vtx[(i + 1) & 3], c0 = vtx[(i + 2) & 3], c1 = vtx[(i + 3) & 3];
-        const float ux = b0.x - ax, uy = b0.y - ay, uz = b0.z - az;
-        const float vx = b1.x - ax, vy = b1.y - ay, vz = b1.z - az;
-        const float nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-        const float r0 = (c0.x - ax) * nx + (c0.y - ay) * ny + (c0.z - az) * nz;
-        const float r1 = (c1.x - ax) * nx + (c1.y - ay) * ny + (c1.z - az) * nz;
-        if (!((r0 > 0.0f && r1 > 0.0f) || (r0 < 0.0f && r1 < 0.0f))) continue; /* warped: no bound */
-        const float d = (qx * nx + qy * ny + qz * nz) * (r0 > 0.0f ? 1.0f : -1.0f);
-        if (d < 0.0f && d * d > tol * tol * (nx * nx + ny * ny + nz * nz)) return 0;
-    }
-    return 1;
 }
 
 #endif /* CLVR_ELEMENTS_H */

@@ -551,6 +551,50 @@ static void test_pyramid_sides(void)
     TU_CHECK_EQ_U64(bad_count, 0);
 }
 
+/* A tet, pyramid or wedge written as a collapsed 8-node hex (Exodus II's
+ * degenerate HEX8) is recognised, and clvr_element_sample(HEX) answers as
+ * the type's own test, bit for bit; corners one float step apart keep a
+ * hex a hex, and real hexes are never taken for another type. */
+static void test_collapsed_hex(void)
+{
+    static const int map[3][8] = {{0, 1, 2, 2, 3, 3, 3, 3}, {0, 1, 2, 3, 4, 4, 4, 4}, {0, 1, 2, 2, 3, 4, 5, 5}};
+    uint64_t rs = 99;
+    for (uint32_t t = CLVR_CELL_TET; t <= CLVR_CELL_WEDGE; ++t) {
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        int wrong_type = 0, differ = 0, inside = 0, apart = 0;
+        for (int trial = 0; trial < 300; ++trial) {
+            clvr_vec4 v[8], h[8], c[8];
+            make_element(t, 0.15f, 2.0f, -1.0f, &rs, v);
+            for (uint32_t i = 0; i < nv; ++i) v[i].w = 10.0f * tu_randf(&rs);
+            for (int k = 0; k < 8; ++k) h[k] = v[map[t][k]];
+            if (clvr_hex_collapsed(h, c) != t || memcmp(c, v, nv * sizeof *v) != 0) ++wrong_type;
+            for (int q = 0; q < 60; ++q) {
+                const float x = 2.6f * tu_randf(&rs) - 1.3f, y = 2.6f * tu_randf(&rs) - 1.3f,
+                            z = 2.6f * tu_randf(&rs) - 1.3f;
+                float sa = 0.0f, sb = 0.0f;
+                const int a = clvr_element_sample(t, v, x, y, z, &sa), b = clvr_element_sample(CLVR_CELL_HEX, h, x, y, z, &sb);
+                inside += a;
+                if (a != b || (a && sa != sb)) ++differ;
+            }
+            /* a corner whose repetition makes the pattern, one step apart (moving
+             * a tet's corner 3 instead leaves a pyramid with a sliver base: also right) */
+            h[t == CLVR_CELL_WEDGE ? 3 : 7].x = nextafterf(h[t == CLVR_CELL_WEDGE ? 3 : 7].x, INFINITY);
+            apart += clvr_hex_collapsed(h, c) != CLVR_CELL_HEX;
+        }
+        TU_CHECK_EQ_U64(wrong_type, 0);
+        TU_CHECK_EQ_U64(differ, 0);
+        TU_CHECK_EQ_U64(apart, 0);
+        TU_CHECK(inside > 1000);
+    }
+    int taken = 0;
+    for (int trial = 0; trial < 1000; ++trial) {
+        clvr_vec4 v[8], c[8];
+        make_element(CLVR_CELL_HEX, 0.15f, 2.0f, -1.0f, &rs, v);
+        taken += clvr_hex_collapsed(v, c) != CLVR_CELL_HEX;
+    }
+    TU_CHECK_EQ_U64(taken, 0);
+}
+
 int main(void)
 {
     test_pyramid_sides();
@@ -565,6 +609,7 @@ int main(void)
     test_hex_vs_tets();
     test_nonplanar_shared_face();
     test_degenerate();
+    test_collapsed_hex();
     test_known_values();
     for (uint32_t t = CLVR_CELL_PYRAMID; t <= CLVR_CELL_HEX; ++t) {
         test_cell_exit(t, 0.0f);
