@@ -2,7 +2,8 @@
  * host with kernels/locate.h's own code (CLVR_WALK_STAT): nodes of the top
  * and bottom trees visited, instances entered, leaf clusters scanned,
  * elements that pass their quantized box, elements given the exact
- * containment test (barycentric or Newton), and how often
+ * containment test (barycentric; a pyramid's side planes, then Newton;
+ * Newton), and how often
  * a ray's hint (clvr_locate_hinted) held the next sample, how often an
  * entry grid's hint held the point (--entry off: walks from the roots), and
  * the share of queries that the occupancy grid answered (no element there). Issue #19 asks

@@ -590,18 +590,19 @@ CLVR_INLINE clvr_u32 clvr_hex_collapsed(const clvr_vec4 *h, clvr_vec4 *out)
  * the interpolated scalar (the vertices' w) to *scalar; 0 otherwise (also
  * for degenerate elements and NaN input). vtx holds the element's
  * clvr_cell_vertex_count(type) vertices in VTK order. Tets take their
- * early-out test (clvr_tet_sample); every other type inverts its map. */
+ * early-out test (clvr_tet_sample); pyramids their side planes
+ * (clvr_pyramid_sides_hold), then Newton; wedges and hexes invert their
+ * map; a collapsed hex (clvr_hex_collapsed) takes its own type's test. */
 CLVR_INLINE int clvr_element_sample(clvr_u32 type, const clvr_vec4 *vtx, float px, float py, float pz, float *scalar)
 {
-    if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
-    float u, v, w;
+    clvr_vec4 c[6];
     if (type == CLVR_CELL_HEX) { /* a collapsed hex takes its own type's test */
-        clvr_vec4 c[6];
-        const clvr_u32 t = clvr_hex_collapsed(vtx, c);
-        if (t == CLVR_CELL_TET) return clvr_tet_sample(c, px, py, pz, scalar);
-        if (t == CLVR_CELL_PYRAMID && !clvr_pyramid_sides_hold(c, px, py, pz)) return 0;
-        if (t != CLVR_CELL_HEX) return clvr_element_sample_near(t, c, px, py, pz, 0, &u, &v, &w, scalar);
+        type = clvr_hex_collapsed(vtx, c);
+        if (type != CLVR_CELL_HEX) vtx = c;
     }
+    if (type == CLVR_CELL_TET) return clvr_tet_sample(vtx, px, py, pz, scalar);
+    if (type == CLVR_CELL_PYRAMID && !clvr_pyramid_sides_hold(vtx, px, py, pz)) return 0;
+    float u, v, w;
     return clvr_element_sample_near(type, vtx, px, py, pz, 0, &u, &v, &w, scalar);
 }
 

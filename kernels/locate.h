@@ -352,7 +352,6 @@ CLVR_INLINE int clvr_locate_in_leaf(const clvr_mesh_view *m, const clvr_piece_ar
             }
             clvr_load_element_in(a, inst, e, v);
             if (!clvr_element_box_test(inst->type, v, px, py, pz)) continue;
-            if (inst->type == CLVR_CELL_PYRAMID && !clvr_pyramid_sides_hold(v, px, py, pz)) continue;
             CLVR_WALK_STAT(etest);
             if (clvr_element_sample(inst->type, v, px, py, pz, scalar)) {
                 *element_id = e;
