@@ -37,7 +37,8 @@
  * kernels/locate.h, which are empty everywhere else. One thread, so a
  * plain static struct; this program's only mutable global. */
 typedef struct walk_counts {
-    unsigned long long tnodes, bnodes, inst, leaves, ecand, etest, hint_try, hint_hit, entry_try, entry_hit, occ_clear;
+    unsigned long long tnodes, bnodes, inst, leaves, ecand, etest, hint_try, hint_hit, entry_try, entry_hit, global_try,
+        global_hit, occ_clear;
 } walk_counts;
 static walk_counts g_walk;
 #define CLVR_WALK_STAT(field) (g_walk.field++)
@@ -102,7 +103,7 @@ static clvr_status walk_build_make(clvr_cl *cl, const clvr_mesh *m, uint32_t lea
     uint32_t nwords = 0;
     if (s == CLVR_OK && entry && !(b->grids = malloc(((size_t)ninst + 1u) * sizeof *b->grids)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for entry grids");
-    if (s == CLVR_OK && entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, b->grids, &nwords, err);
+    if (s == CLVR_OK && entry) s = clvr_entry_grids_layout(b->arrays.instances, ninst, 0, b->grids, &nwords, err);
     if (s == CLVR_OK && entry && !(b->cells = malloc((size_t)nwords * sizeof *b->cells)))
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_walk: no memory for %u entry grid words", nwords);
     if (s == CLVR_OK && entry) s = clvr_entry_cells_host(&b->mv, ninst, b->grids, nwords, b->cells, err);
@@ -291,14 +292,17 @@ int main(int argc, char **argv)
                    "reference walk, 1 thread\n",
                    mesh_path, (unsigned long long)b.c.num_elements, leaf, nq, order_name, chain);
             printf("| mesh | order | leaf | found | top nodes | bottom nodes | instances | leaves | box-pass elements | "
-                   "exact tests | hint held | entry hint held | occupancy clear | q/s (host, 1 thread) | load |\n");
-            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+                   "exact tests | hint held | entry hint held | global hint held | occupancy clear | q/s (host, 1 thread) | "
+                   "load |\n");
+            printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
             const char *base = strrchr(mesh_path, '/');
-            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3f | %.3f | %.3g | %.2f |\n",
+            printf("| %s | %s | %u | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.3f | %.3f | %.3f | %.3g | "
+                   "%.2f |\n",
                    base ? base + 1 : mesh_path, order_name, leaf, found / q, g_walk.tnodes / q, g_walk.bnodes / q,
                    g_walk.inst / q, g_walk.leaves / q, g_walk.ecand / q, g_walk.etest / q,
                    g_walk.hint_try ? (double)g_walk.hint_hit / (double)g_walk.hint_try : 0.0,
-                   g_walk.entry_try ? (double)g_walk.entry_hit / (double)g_walk.entry_try : 0.0, g_walk.occ_clear / q,
+                   g_walk.entry_try ? (double)g_walk.entry_hit / (double)g_walk.entry_try : 0.0,
+                   g_walk.global_try ? (double)g_walk.global_hit / (double)g_walk.global_try : 0.0, g_walk.occ_clear / q,
                    q / t, load);
             walk_build_free(&cl, &b);
         }

@@ -141,8 +141,23 @@ static void entry_grid_fit(const float *lo, const float *hi, double want, uint32
     }
 }
 
-clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
-                                    uint32_t *num_words, clvr_error *err)
+/* 1 when the instances' global hint words fit (clvr_global_hints_fit). */
+static int global_hints_fit(const clvr_instance *instances, uint32_t num_instances)
+{
+    uint32_t most = 0;
+    for (uint32_t i = 0; i < num_instances; ++i)
+        if (instances[i].num_leaves > most) most = instances[i].num_leaves;
+    return clvr_global_hints_fit(num_instances, most);
+}
+
+/* Global hint cells of occupancy grid g at shift sh. */
+static uint64_t global_hint_cells(const clvr_entry_grid *g, uint32_t sh)
+{
+    return (uint64_t)clvr_global_hint_res(g, sh, 0) * clvr_global_hint_res(g, sh, 1) * clvr_global_hint_res(g, sh, 2);
+}
+
+clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, uint64_t max_bytes,
+                                    clvr_entry_grid *grids, uint32_t *num_words, clvr_error *err)
 {
     uint64_t total = 0, elements = 0;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -166,7 +181,21 @@ clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num
         for (int k = 0; k < 3; ++k) lo[k] = hi[k] = 0.0f; /* no element: one clear bit */
     entry_grid_fit(lo, hi, (double)CLVR_OCCUPANCY_CELLS_PER_ELEMENT * (double)(elements ? elements : 1u),
                    CLVR_OCCUPANCY_MAX_RES, &grids[0]);
-    const uint64_t words = 2u * total + clvr_occupancy_words(&grids[0]);
+    /* the occupancy bits, then the global hints at the finest shift that
+     * keeps them within CLVR_GLOBAL_HINT_MAX_CELLS and the whole array
+     * within max_bytes (none when no shift does: they only save time) */
+    const uint64_t base = 2u * total + clvr_occupancy_words(&grids[0]);
+    uint64_t hints = 0;
+    grids[0].lo[3] = 0.0f;
+    for (uint32_t sh = 0; sh <= 10u && num_instances && global_hints_fit(instances, num_instances); ++sh) {
+        const uint64_t n = global_hint_cells(&grids[0], sh);
+        if (n <= CLVR_GLOBAL_HINT_MAX_CELLS && (!max_bytes || (base + n) * sizeof(uint32_t) <= max_bytes)) {
+            grids[0].lo[3] = 1.0f + (float)sh;
+            hints = n;
+            break;
+        }
+    }
+    const uint64_t words = base + hints;
     if (words > 0xffffffffull)
         return clvr_error_set(err, CLVR_ERR_OVERFLOW,
                               "bvh: the entry grids of %u instances pass 2^32 - 1 words; use a larger --leaf-size",
@@ -207,11 +236,15 @@ static void entry_rasterize_host(const clvr_mesh_view *m, const clvr_instance *i
     }
 }
 
-clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
+clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, clvr_entry_grid *grids,
                                   uint32_t num_words, uint32_t *cells, clvr_error *err)
 {
-    const clvr_entry_grid *occ = &grids[0];
-    if (occ->res[3] % 2u || occ->res[3] > num_words || clvr_occupancy_words(occ) > num_words - occ->res[3])
+    clvr_entry_grid *occ = &grids[0];
+    const int hinted = clvr_global_hints_on(occ);
+    const uint32_t sh = hinted ? clvr_global_hints_shift(occ) : 0u;
+    const uint64_t nh = hinted ? global_hint_cells(occ, sh) : 0u;
+    if (occ->res[3] % 2u || occ->res[3] > num_words || clvr_occupancy_words(occ) > num_words - occ->res[3] ||
+        nh != num_words - clvr_global_hints_first(occ))
         return clvr_error_set(err, CLVR_ERR_INTERNAL, "bvh: the occupancy grid passes the %u words", num_words);
     const uint32_t num_cells = occ->res[3] / 2u;
     for (uint32_t c = 0; c < num_cells; ++c) {
@@ -236,6 +269,16 @@ clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instance
                                       c / g->res[0] / g->res[1]);
         }
     }
+    if (!hinted) return CLVR_OK;
+    /* hints off while they are built (clvr_global_hints_on) */
+    const float on = occ->lo[3];
+    uint32_t *hints = cells + clvr_global_hints_first(occ);
+    clvr_mesh_view mg = *m;
+    mg.entry_grids = grids;
+    mg.entry_cells = cells;
+    occ->lo[3] = 0.0f;
+    for (uint64_t c = 0; c < nh; ++c) hints[c] = clvr_global_hint(&mg, sh, (uint32_t)c);
+    occ->lo[3] = on;
     return CLVR_OK;
 }
 
@@ -286,6 +329,7 @@ clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_err
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_element_boxes", &out->element_boxes, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_entry_rasterize", &out->entry_rasterize, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_entry_finish", &out->entry_finish, err));
+    CLVR_TRY(clvr_cl_kernel(out->program, "clvr_entry_global", &out->entry_global, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_keys", &out->hull_keys, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_flags", &out->hull_flags, err));
     CLVR_TRY(clvr_cl_kernel(out->program, "clvr_hull_adjacency", &out->hull_adjacency, err));
@@ -309,6 +353,7 @@ void clvr_bvh_kernels_destroy(clvr_bvh_kernels *k)
     if (k->element_boxes) clReleaseKernel(k->element_boxes);
     if (k->entry_rasterize) clReleaseKernel(k->entry_rasterize);
     if (k->entry_finish) clReleaseKernel(k->entry_finish);
+    if (k->entry_global) clReleaseKernel(k->entry_global);
     cl_kernel hk[6] = {k->hull_keys, k->hull_flags, k->hull_faces, k->hull_rays, k->hull_gap_rays, k->hull_adjacency};
     for (int i = 0; i < 6; ++i)
         if (hk[i]) clReleaseKernel(hk[i]);
@@ -538,7 +583,9 @@ clvr_status clvr_bvh_entry_grids_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, 
     if (!eb[0]) eb[0] = vertices[0];
     if (!(grids = malloc(((size_t)num_instances + 1u) * sizeof *grids)))
         CLVR_TRY(clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bvh: no memory for %u entry grids", num_instances));
-    CLVR_TRY(clvr_entry_grids_layout(host_instances, num_instances, grids, &nwords, err));
+    CLVR_TRY(clvr_entry_grids_layout(host_instances, num_instances, cl->max_alloc_bytes, grids, &nwords, err));
+    const float hints_on = grids[0].lo[3]; /* uploaded off, switched on once they are built */
+    grids[0].lo[3] = 0.0f;
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ((size_t)num_instances + 1u) * sizeof *grids,
                             grids, "entry grids", &b->entry_grids, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)nwords * sizeof(cl_uint), NULL, "entry grid cells",
@@ -576,7 +623,31 @@ clvr_status clvr_bvh_entry_grids_pieces(clvr_cl *cl, const clvr_bvh_kernels *k, 
         if (evt) {
             CLVR_CL_CHECK(clWaitForEvents(1, &evt));
             b->build_seconds += clvr_cl_event_seconds(evt);
+            clReleaseEvent(evt);
+            evt = NULL;
         }
+    }
+    /* The global hints: a point location per hint cell through the
+     * finished entry grids, hints still off (grids[0].lo[3] 0 on the
+     * device), then switched on (clvr_entry_cells_host's order). */
+    const uint64_t hfirst = clvr_global_hints_first(&grids[0]), ncells = (uint64_t)nwords - hfirst;
+    if (ncells) {
+        const cl_uint first = (cl_uint)hfirst, n = (cl_uint)ncells, sh = (cl_uint)hints_on - 1u;
+        CLVR_TRY(CLVR_CL_ARGS(k->entry_global, err, CLVR_ARG(b->tlas), CLVR_ARG(b->blas), CLVR_ARG(instances),
+                              CLVR_ARG(b->entry_grids), CLVR_ARG(sh), CLVR_ARG(n), CLVR_ARG(first),
+                              CLVR_ARG(b->entry_cells), CLVR_ARG(ls), CLVR_ARG(use_ebox), CLVR_ARG(vertices[0]),
+                              CLVR_ARG(idx16[0]), CLVR_ARG(idx32[0]), CLVR_ARG(eb[0]), CLVR_ARG(vertices[1]),
+                              CLVR_ARG(idx16[1]), CLVR_ARG(idx32[1]), CLVR_ARG(eb[1]), CLVR_ARG(vertices[2]),
+                              CLVR_ARG(idx16[2]), CLVR_ARG(idx32[2]), CLVR_ARG(eb[2]), CLVR_ARG(vertices[3]),
+                              CLVR_ARG(idx16[3]), CLVR_ARG(idx32[3]), CLVR_ARG(eb[3])));
+        CLVR_TRY(clvr_cl_run1d(cl, k->entry_global, n, 64, &evt, err));
+        if (evt) {
+            CLVR_CL_CHECK(clWaitForEvents(1, &evt));
+            b->build_seconds += clvr_cl_event_seconds(evt);
+        }
+        grids[0].lo[3] = hints_on;
+        CLVR_CL_CHECK(clEnqueueWriteBuffer(cl->queue, b->entry_grids, CL_TRUE, 0, sizeof grids[0], &grids[0], 0, NULL,
+                                           NULL));
     }
 cleanup:
     if (evt) clReleaseEvent(evt);

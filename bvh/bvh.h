@@ -40,18 +40,24 @@ typedef struct clvr_bvh_host {
  * over all instances, grids[1 + i] instance i's grid (num_instances + 1 in
  * all); each its box, cells per unit length, cells per axis and first cell
  * (instance grids: first cell, 2 words each, in instance order from 0;
- * occupancy grid: first word, after every instance's cells). *num_words:
- * u32 words of the cell array. Fails with CLVR_ERR_OVERFLOW past 2^32 - 1
- * words. */
-clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, clvr_entry_grid *grids,
-                                    uint32_t *num_words, clvr_error *err);
+ * occupancy grid: first word, after every instance's cells; its global
+ * hints follow its bits, at the finest shift (clvr_global_hints_shift,
+ * kept as 1 + shift in grids[0].lo[3]) that keeps them within
+ * CLVR_GLOBAL_HINT_MAX_CELLS and the whole cell array within max_bytes
+ * (0: no limit), or none (lo[3] 0) when no shift does or the mesh is too
+ * large for them). *num_words: u32 words of the cell array. Fails with
+ * CLVR_ERR_OVERFLOW past 2^32 - 1 words. */
+clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num_instances, uint64_t max_bytes,
+                                    clvr_entry_grid *grids, uint32_t *num_words, clvr_error *err);
 /* Host reference of the cells (kernels/locate.h): for cell c of instance
  * i's grid, cells[2 (grids[1 + i].res[3] + c)] its start node and the next
  * word its hint leaf; from word grids[0].res[3] on the occupancy grid's
- * bits; num_words words in all, as the layout counted them. m holds host
- * arrays (blas with bvh_root set, instances, vertices, idx16, idx32,
- * leaf_size, ebox or NULL; tlas is not read). */
-clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, const clvr_entry_grid *grids,
+ * bits, then its global hints (clvr_global_hints_first) when the layout
+ * planned them (grids[0].lo[3], which is 0 while they are built and
+ * restored after); num_words words in all, as the layout counted them. m holds host arrays (tlas, blas with bvh_root set,
+ * instances, vertices, idx16, idx32, leaf_size, ebox or NULL; its entry
+ * grids and cells are not read: grids and cells stand in for them). */
+clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, clvr_entry_grid *grids,
                                   uint32_t num_words, uint32_t *cells, clvr_error *err);
 
 /* Host build: instances[i].bvh_root is filled; leaf_boxes has num_leaves
@@ -71,7 +77,7 @@ typedef struct clvr_bvh_kernels {
     cl_kernel ray_hits;
     cl_kernel ray_span; /* first entry and last exit of a tree's boxes per ray (the hull's first probe) */
     cl_kernel element_boxes;
-    cl_kernel entry_rasterize, entry_finish; /* entry grids (clvr_bvh_entry_grids_pieces) */
+    cl_kernel entry_rasterize, entry_finish, entry_global; /* entry grids (clvr_bvh_entry_grids_pieces) */
     cl_kernel hull_keys, hull_flags, hull_faces, hull_rays, hull_gap_rays, hull_adjacency; /* host/pipeline/hull.h */
 } clvr_bvh_kernels;
 clvr_status clvr_bvh_kernels_create(clvr_cl *cl, clvr_bvh_kernels *out, clvr_error *err);

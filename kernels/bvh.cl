@@ -254,6 +254,28 @@ __kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global con
     cell[1] = clvr_entry_hint(&m, &inst, &g, start, c % g.res[0], c / g.res[0] % g.res[1], c / g.res[0] / g.res[1]);
 }
 
+/* cells[first_word + i] = clvr_global_hint of hint cell i at shift sh,
+ * for i < num_cells, through the finished entry grids (their global hints
+ * off: grids[0].lo[3] is 0 until the host sets it after this kernel). */
+__kernel void clvr_entry_global(__global const clvr_bvh_node *tlas, __global const clvr_bvh_node *blas,
+                                __global const clvr_instance *instances, __global const clvr_entry_grid *grids,
+                                uint sh, uint num_cells, uint first_word, __global uint *cells, uint leaf_size,
+                                uint use_ebox,
+                                __global const float4 *vertices, __global const ushort *idx16,
+                                __global const uint *idx32, __global const uchar *ebox,
+                                __global const float4 *vertices1, __global const ushort *idx16_1,
+                                __global const uint *idx32_1, __global const uchar *ebox1,
+                                __global const float4 *vertices2, __global const ushort *idx16_2,
+                                __global const uint *idx32_2, __global const uchar *ebox2,
+                                __global const float4 *vertices3, __global const ushort *idx16_3,
+                                __global const uint *idx32_3, __global const uchar *ebox3)
+{
+    const uint i = get_global_id(0);
+    if (i >= num_cells) return;
+    const clvr_mesh_view m = CLVR_PIECES_VIEW(tlas, 0u, use_ebox ? ebox : NULL, ebox1, ebox2, ebox3, grids, cells);
+    cells[first_word + i] = clvr_global_hint(&m, sh, i);
+}
+
 /* Ray queries over a single-level tree (root 0): rays as origin (w = tmin)
  * and direction (w = tmax). Per ray: number of boxes hit, sum of
  * (primitive + 1) and sum of t1 - t0 (tests compare with brute force). */

@@ -608,6 +608,82 @@ CLVR_INLINE int clvr_occupied(const clvr_mesh_view *m, float px, float py, float
     return (int)((m->entry_cells[g->res[3] + c / 32u] >> (c % 32u)) & 1u);
 }
 
+/* ---------------------------------------------------------- global hints
+ * The entry grids are per instance, so a query first walks the top level
+ * to learn which instances' boxes hold it, then reads each one's cell. In
+ * a mesh of mixed types every type has its own curve and instance
+ * clusters, and they overlap: on the OpenFOAM igloo a found point passed
+ * the boxes of 2.5 instances and tried 1.31 hints. So each cell of the
+ * occupancy grid also names, in one word, the instance and leaf cluster
+ * where the search for its points starts (clvr_global_hint: the leaf of
+ * the element holding the cell's centre, else an octant's centre, as for
+ * an instance's hint). A query reads that word right after its occupancy
+ * bit and searches that leaf and its siblings (clvr_locate_hint_leaf)
+ * before any top-level walk; only when they miss does it take the path
+ * above. The word is instance << CLVR_GLOBAL_HINT_LEAF_BITS | the leaf's
+ * index in its instance, CLVR_BVH_NOT_FOUND for none; a mesh whose
+ * instances or leaves per instance do not fit (clvr_global_hints_fit:
+ * 65535 instances or more, about two billion elements) has none and keeps
+ * the path above.
+ *
+ * Measured on PoCL, 2-core Xeon VM (bench/results/graded/
+ * 2026-11-30-s51-global-hints.md): the hint held for 76% of the igloo's
+ * tries (host walk, random points); queries per CPU-second against the
+ * same build without hints, alternating runs: the igloo +14% random and
+ * ray-ordered (10 and 8 pairs), the blunt fin +5% and +18%, post-tets +7%
+ * (5 pairs each). A hint per 8 occupancy cells (shift 1) instead of one
+ * per cell: the igloo -3% (12 pairs), the blunt fin -13% random and -12%
+ * rays, the 1M tets -11% (5-6 pairs each); a quarter of a cell per
+ * element for the occupancy grid and hints: -7%, four: -2%. Skipping, after
+ * a miss, the leaf the hint had searched: +2% (8 pairs, noise); searching
+ * the 16 leaves under the hint's grandparent after a miss: +1% (noise).
+ * Costs: 4 bytes per occupancy cell (about 4 per element: the igloo's tree
+ * and indices 0.27 -> 0.31 of Embree's) and one point location per cell
+ * at build time (the 1M tets: 0.29 s, so the whole preprocessing 0.25-0.33
+ * -> 0.60-0.62 s, slower than Embree's 0.43-0.47 s build). */
+#define CLVR_GLOBAL_HINT_LEAF_BITS 16u
+/* At most this many global hint cells (64 MB); a larger occupancy grid
+ * (meshes of more than 2^24 elements) shares a hint among 2^3, 4^3, ...
+ * of its cells (clvr_global_hints_shift). */
+#define CLVR_GLOBAL_HINT_MAX_CELLS (1u << 24)
+
+/* 1 when a mesh of num_instances instances, none with more than max_leaves
+ * leaf clusters, can have global hints. */
+CLVR_INLINE int clvr_global_hints_fit(clvr_u32 num_instances, clvr_u32 max_leaves)
+{
+    return num_instances < (1u << (32u - CLVR_GLOBAL_HINT_LEAF_BITS)) - 1u &&
+           max_leaves <= (1u << CLVR_GLOBAL_HINT_LEAF_BITS);
+}
+
+/* 1 when occupancy grid g's cells have global hints to read: its lo[3]
+ * (otherwise unused) is 1 + clvr_global_hints_shift, 0 when there are
+ * none (they do not fit) or while they are built: clvr_locate_ex then
+ * does not read them, which keeps their build, a point location per
+ * cell, deterministic. */
+CLVR_INLINE int clvr_global_hints_on(const clvr_entry_grid *g)
+{
+    return g->lo[3] >= 1.0f;
+}
+
+/* A global hint cell spans 2^s occupancy cells per axis, s this shift. */
+CLVR_INLINE clvr_u32 clvr_global_hints_shift(const clvr_entry_grid *g)
+{
+    return (clvr_u32)g->lo[3] - 1u;
+}
+
+/* Global hint cells along axis k of occupancy grid g at shift s. */
+CLVR_INLINE clvr_u32 clvr_global_hint_res(const clvr_entry_grid *g, clvr_u32 s, int k)
+{
+    return ((g->res[k] - 1u) >> s) + 1u;
+}
+
+/* First word of occupancy grid g's global hints in the cell array: right
+ * after its bits, one word per hint cell. */
+CLVR_INLINE clvr_u64 clvr_global_hints_first(const clvr_entry_grid *g)
+{
+    return (clvr_u64)g->res[3] + clvr_occupancy_words(g);
+}
+
 /* Lowest common ancestor of leaf clusters first_hit <= last_hit of inst:
  * climbs the implicit levels (bvh_build.h, levels stored root first, node
  * i of a level the parent of nodes 4i .. 4i + 3 below) from their
@@ -863,9 +939,32 @@ CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, floa
 {
     *element_id = CLVR_BVH_NOT_FOUND;
     if (m->entry_grids) {
-        if (!clvr_occupied(m, px, py, pz)) {
+        const clvr_entry_grid og = m->entry_grids[0];
+        const clvr_u32 cx = clvr_entry_coord(px, og.lo[0], og.scale[0], og.res[0]);
+        const clvr_u32 cy = clvr_entry_coord(py, og.lo[1], og.scale[1], og.res[1]);
+        const clvr_u32 cz = clvr_entry_coord(pz, og.lo[2], og.scale[2], og.res[2]);
+        const clvr_u32 oc = (cz * og.res[1] + cy) * og.res[0] + cx;
+        if (!((m->entry_cells[og.res[3] + oc / 32u] >> (oc % 32u)) & 1u)) {
             CLVR_WALK_STAT(occ_clear);
             return 0;
+        }
+        if (clvr_global_hints_on(&og)) {
+            const clvr_u32 sh = clvr_global_hints_shift(&og);
+            const clvr_u32 hc = ((cz >> sh) * clvr_global_hint_res(&og, sh, 1) + (cy >> sh)) *
+                                    clvr_global_hint_res(&og, sh, 0) + (cx >> sh);
+            const clvr_u32 w = m->entry_cells[clvr_global_hints_first(&og) + hc];
+            const clvr_u32 gi = w >> CLVR_GLOBAL_HINT_LEAF_BITS;
+            if (w != CLVR_BVH_NOT_FOUND && gi != skip_inst) {
+                const clvr_instance inst = m->instances[gi];
+                clvr_u32 node;
+                CLVR_WALK_STAT(global_try);
+                if (clvr_locate_hint_leaf(m, &inst, inst.first_leaf + (w & ((1u << CLVR_GLOBAL_HINT_LEAF_BITS) - 1u)),
+                                          px, py, pz, skip_elem, scalar, element_id, leaf_found, &node)) {
+                    CLVR_WALK_STAT(global_hit);
+                    *inst_found = gi;
+                    return 1;
+                }
+            }
         }
         int done;
         const int found = clvr_locate_entry_pass(m, px, py, pz, hints, skip_inst, skip_elem, scalar, element_id,
@@ -904,6 +1003,37 @@ CLVR_INLINE int clvr_locate(const clvr_mesh_view *m, float px, float py, float p
     clvr_u32 inst, leaf;
     return clvr_locate_ex(m, px, py, pz, hints, CLVR_BVH_NOT_FOUND, CLVR_BVH_NOT_FOUND, scalar, element_id, &inst,
                           &leaf);
+}
+
+/* The global hint word of hint cell c of m's occupancy grid at shift sh
+ * (the global hints section above): where the centre of the occupancy
+ * cells it spans lies, else the first of their octants' centres that lies
+ * in an element (the order clvr_entry_hint takes), found by clvr_locate_ex
+ * through m's entry grids, whose global hints must be off
+ * (clvr_global_hints_on) while this runs; CLVR_BVH_NOT_FOUND when no
+ * element holds any of the nine points. */
+CLVR_INLINE clvr_u32 clvr_global_hint(const clvr_mesh_view *m, clvr_u32 sh, clvr_u32 c)
+{
+    const clvr_entry_grid g = m->entry_grids[0];
+    const clvr_u32 hx = clvr_global_hint_res(&g, sh, 0), hy = clvr_global_hint_res(&g, sh, 1);
+    const clvr_u32 cc[3] = {c % hx, c / hx % hy, c / hx / hy};
+    for (clvr_u32 o = 0; o < 9u; ++o) {
+        float p[3];
+        for (int k = 0; k < 3; ++k) {
+            /* the occupancy cells first .. first + span - 1 on this axis
+             * (fewer at the grid's end); an axis of one cell (scale 0):
+             * its low corner, a flat mesh's plane */
+            const clvr_u32 first = cc[k] << sh, span = g.res[k] - first < (1u << sh) ? g.res[k] - first : 1u << sh;
+            const float f = o == 0u ? 0.5f : ((o - 1u) >> k) & 1u ? 0.75f : 0.25f;
+            p[k] = g.scale[k] > 0.0f ? g.lo[k] + ((float)first + (float)span * f) / g.scale[k] : g.lo[k];
+        }
+        float s;
+        clvr_u32 e, inst, leaf;
+        if (clvr_locate_ex(m, p[0], p[1], p[2], CLVR_LOCATE_COHERENT, CLVR_BVH_NOT_FOUND, CLVR_BVH_NOT_FOUND, &s, &e,
+                           &inst, &leaf))
+            return inst << CLVR_GLOBAL_HINT_LEAF_BITS | (leaf - m->instances[inst].first_leaf);
+    }
+    return CLVR_BVH_NOT_FOUND;
 }
 
 /* Without entry grids (a view whose entry_grids is NULL; with them, a

@@ -96,9 +96,9 @@ static void test_entry_layout(void)
         in[i].num_elements = i == 4 ? 4000000000u : 16u * leaves[i];
     }
     uint32_t n = 12345;
-    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 0, g, &n, &err), CLVR_OK, &err);
-    TU_CHECK(n == 1 && g[0].res[0] * g[0].res[1] * g[0].res[2] == 1 && g[0].res[3] == 0);
-    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 0, 0, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(n == 1 && g[0].res[0] * g[0].res[1] * g[0].res[2] == 1 && g[0].res[3] == 0 && g[0].lo[3] == 0.0f);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, 0, g, &n, &err), CLVR_OK, &err);
     /* 1000 cells for a cube: 10 a side */
     TU_CHECK(g[1].res[0] == 10 && g[1].res[1] == 10 && g[1].res[2] == 10);
     TU_CHECK(fabsf(g[1].scale[0] - 10.0f) < 1e-5f && g[1].res[3] == 0);
@@ -129,28 +129,47 @@ static void test_entry_layout(void)
     TU_CHECK(g[0].res[0] == 69 && g[0].res[1] == 9 && g[0].res[2] == 18 && occ >= 16u * 624u);
     /* its bits after the instances' cells */
     TU_CHECK_EQ_U64(g[0].res[3], 2u * total);
-    TU_CHECK_EQ_U64(n, 2u * total + (occ + 31u) / 32u);
+    /* then a global hint per occupancy cell (shift 0: lo[3] = 1) */
+    const uint64_t base = 2u * total + (occ + 31u) / 32u;
+    TU_CHECK(g[0].lo[3] == 1.0f && clvr_global_hints_first(&g[0]) == base);
+    TU_CHECK_EQ_U64(n, base + occ);
+    /* a byte limit that leaves room for (69 / 2) (9 / 2) (18 / 2) rounded
+     * up hints: shift 1; one that leaves room for none: no hints */
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, 4u * (base + 35u * 5u * 9u), g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[0].lo[3] == 2.0f && clvr_global_hints_shift(&g[0]) == 1u && clvr_global_hint_res(&g[0], 1u, 0) == 35u);
+    TU_CHECK_EQ_U64(n, base + 35u * 5u * 9u);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, 4u * (base + 35u * 5u * 9u) - 1u, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[0].lo[3] == 3.0f && n == base + 18u * 3u * 5u);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in, 4, 4u * base, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[0].lo[3] == 0.0f && n == base && !clvr_global_hints_on(&g[0]));
     /* 4e9 cells wanted: every axis capped at 1024 (occupancy too), and the
      * sum overflows */
-    TU_CHECK_STATUS(clvr_entry_grids_layout(in + 4, 1, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(in + 4, 1, 0, g, &n, &err), CLVR_OK, &err);
     TU_CHECK(g[1].res[0] == CLVR_ENTRY_MAX_RES && g[1].res[1] == CLVR_ENTRY_MAX_RES && g[1].res[2] == CLVR_ENTRY_MAX_RES);
     TU_CHECK(g[0].res[0] == CLVR_OCCUPANCY_MAX_RES && g[0].res[1] == CLVR_OCCUPANCY_MAX_RES &&
              g[0].res[2] == CLVR_OCCUPANCY_MAX_RES);
     TU_CHECK_EQ_U64(n, (2ull << 30) + (1ull << 25));
+    TU_CHECK(g[0].lo[3] == 0.0f); /* 2e9 leaves in an instance: no global hints */
+    /* 60000 leaves: hints at shift 2, 256^3 = CLVR_GLOBAL_HINT_MAX_CELLS */
+    clvr_instance big = in[4];
+    big.num_leaves = 60000u;
+    TU_CHECK_STATUS(clvr_entry_grids_layout(&big, 1, 0, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK(g[0].lo[3] == 3.0f && clvr_global_hint_res(&g[0], 2u, 2) == 256u);
+    TU_CHECK_EQ_U64(n, 2ull * g[1].res[0] * g[1].res[1] * g[1].res[2] + (1ull << 25) + CLVR_GLOBAL_HINT_MAX_CELLS);
     /* a hex instance: CLVR_ENTRY_CELLS_PER_LEAF_NEWTON cells per leaf (125
      * leaves over the unit cube: 1000 cells, 10 a side); tets keep 2 */
     clvr_instance hx = in[0];
     hx.type = CLVR_CELL_HEX;
     hx.num_leaves = 125;
     TU_CHECK(CLVR_ENTRY_CELLS_PER_LEAF_NEWTON == 8u);
-    TU_CHECK_STATUS(clvr_entry_grids_layout(&hx, 1, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(&hx, 1, 0, g, &n, &err), CLVR_OK, &err);
     TU_CHECK(g[1].res[0] == 10 && g[1].res[1] == 10 && g[1].res[2] == 10);
     hx.type = CLVR_CELL_TET;
-    TU_CHECK_STATUS(clvr_entry_grids_layout(&hx, 1, g, &n, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(&hx, 1, 0, g, &n, &err), CLVR_OK, &err);
     TU_CHECK(g[1].res[0] == 7 && g[1].res[1] == 7 && g[1].res[2] == 7);
     clvr_instance many[5];
     for (int i = 0; i < 5; ++i) many[i] = in[4];
-    TU_CHECK_STATUS(clvr_entry_grids_layout(many, 5, g, &n, &err), CLVR_ERR_OVERFLOW, &err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(many, 5, 0, g, &n, &err), CLVR_ERR_OVERFLOW, &err);
 }
 
 static void test_device_sizes(clvr_cl *cl, const clvr_bvh_kernels *k)
@@ -560,7 +579,7 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
      * answers. */
     clvr_entry_grid *grids = malloc((c.num_instances + 1) * sizeof *grids);
     uint32_t nwords = 0, *cells = NULL;
-    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &nwords, err), CLVR_OK, err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, 0, grids, &nwords, err), CLVR_OK, err);
     const uint32_t ncells = grids[0].res[3] / 2u; /* the instances' cells; the occupancy bits follow */
     cells = malloc(((size_t)nwords + 1) * sizeof *cells);
     clvr_mesh_view mvg = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root,
@@ -643,6 +662,52 @@ static void check_locate(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_mesh
         mvg.entry_cells = NULL;
         TU_CHECK_EQ_U64(occ_bad, 0);
         TU_CHECK_EQ_U64(centre_bad, 0);
+        /* global hints (locate.h): on, after the occupancy bits; a hint
+         * names a leaf cluster of its instance, one of whose elements
+         * holds the centre of the cells it spans or one of their octants'
+         * centres; a cell without one has none of the nine points in an
+         * element (brute force, a sample of cells) */
+        {
+            const clvr_entry_grid *og = &grids[0];
+            TU_CHECK(clvr_global_hints_on(og) && clvr_global_hints_shift(og) == 0u);
+            const uint32_t sh = clvr_global_hints_shift(og);
+            const uint32_t hr[3] = {clvr_global_hint_res(og, sh, 0), clvr_global_hint_res(og, sh, 1),
+                                    clvr_global_hint_res(og, sh, 2)};
+            const uint64_t nh = (uint64_t)hr[0] * hr[1] * hr[2];
+            TU_CHECK_EQ_U64(clvr_global_hints_first(og) + nh, nwords);
+            const uint32_t *gh = cells + clvr_global_hints_first(og);
+            int ghint_bad = 0, ghints = 0, gnone = 0;
+            for (uint64_t h = 0; h < nh; ++h) {
+                const uint32_t w = gh[h], gi = w >> CLVR_GLOBAL_HINT_LEAF_BITS;
+                if (w != CLVR_BVH_NOT_FOUND && (gi >= c.num_instances ||
+                                                (w & 0xffffu) >= c.instances[gi].num_leaves)) {
+                    ++ghint_bad;
+                    continue;
+                }
+                if (h % 7u) continue; /* the sample of cells checked by brute force */
+                const uint32_t hc[3] = {(uint32_t)(h % hr[0]), (uint32_t)(h / hr[0] % hr[1]), (uint32_t)(h / hr[0] / hr[1])};
+                uint32_t e0 = 0, e1 = c.num_elements;
+                if (w != CLVR_BVH_NOT_FOUND)
+                    e0 = clvr_leaf_elements(&mvg, &c.instances[gi], c.instances[gi].first_leaf + (w & 0xffffu), &e1);
+                int held = 0;
+                for (uint32_t o = 0; o < 9u && !held; ++o) {
+                    float pt[3], sv;
+                    for (int a = 0; a < 3; ++a)
+                        pt[a] = og->scale[a] > 0.0f
+                                    ? og->lo[a] + ((float)hc[a] + (o == 0u ? 0.5f : ((o - 1u) >> a) & 1u ? 0.75f : 0.25f)) /
+                                                      og->scale[a]
+                                    : og->lo[a];
+                    for (uint32_t e = e0; e < e1 && !held; ++e) held = fx_element_sample(&c, e, pt[0], pt[1], pt[2], &sv);
+                }
+                ghint_bad += w == CLVR_BVH_NOT_FOUND ? held : !held;
+                ghints += w != CLVR_BVH_NOT_FOUND;
+                gnone += w == CLVR_BVH_NOT_FOUND;
+            }
+            if (ghint_bad) fprintf(stderr, "%s N=%u: %d global hints wrong\n", name, leaf_size, ghint_bad);
+            TU_CHECK_EQ_U64(ghint_bad, 0);
+            TU_CHECK(ghints > 0 || found == 0);
+            (void)gnone;
+        }
         TU_CHECK_EQ_U64(under_bad, 0);
         TU_CHECK_EQ_U64(hint_bad, 0);
         TU_CHECK_EQ_U64(entry_bad, 0);
@@ -933,7 +998,7 @@ static void test_many_candidates(void)
                     &err);
     clvr_entry_grid *grids = malloc((c.num_instances + 1) * sizeof *grids);
     uint32_t nwords = 0;
-    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, grids, &nwords, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_entry_grids_layout(c.instances, c.num_instances, 0, grids, &nwords, &err), CLVR_OK, &err);
     uint32_t *cells = malloc(((size_t)nwords + 1) * sizeof *cells);
     clvr_mesh_view mv = {hb.tlas, hb.blas, c.instances, c.vertices, c.idx16, c.idx32, hb.tlas_root, 1, NULL,
                          CLVR_VIEW_ONE_PIECE, NULL, NULL};

@@ -55,6 +55,25 @@ static clvr_status prepare(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, uint6
     return s;
 }
 
+/* 1 when sorted element e of the unsplit host arrays h (ninst instances)
+ * holds p, its value in *s (clvr_element_sample). */
+static int holds(const clvr_clustered_host *h, uint64_t ninst, uint32_t e, const float *p, float *s)
+{
+    uint64_t lo = 0, hi = ninst; /* the last instance whose first element is <= e */
+    while (hi - lo > 1) {
+        const uint64_t mid = (lo + hi) / 2;
+        if (h->instances[mid].first_element <= e) lo = mid;
+        else hi = mid;
+    }
+    const clvr_instance *in = &h->instances[lo];
+    if (!ninst || e - in->first_element >= in->num_elements) return 0;
+    const clvr_mesh_view mv = {NULL, NULL, h->instances, (const clvr_vec4 *)h->vertices, h->idx16, h->idx32, 0, 0,
+                               NULL, CLVR_VIEW_ONE_PIECE, NULL, NULL};
+    clvr_vec4 v[CLVR_CELL_MAX_VERTS];
+    clvr_load_element(&mv, in, e, v);
+    return clvr_element_sample(in->type, v, p[0], p[1], p[2], s);
+}
+
 static uint64_t mem_size(cl_mem b)
 {
     size_t n = 0;
@@ -290,19 +309,37 @@ static void test_pieces(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, int rend
                             CLVR_OK, &err);
             TU_CHECK_STATUS(clvr_accel_locate(cl, &ck, &ak, pts, NPTS, modes[q].hints, modes[q].chain, sk, ek, &err),
                             CLVR_OK, &err);
-            uint64_t found = 0, diff_e = 0, diff_s = 0;
+            /* The same element and value bit for bit, except where the
+             * lowered limit gave the entry cells coarser global hints
+             * (clvr_entry_grids_layout) and a search starting elsewhere
+             * found another element that also holds the point (on a face
+             * both share): both must hold it, the value must be its
+             * element's, and such points must be rare. */
+            uint64_t found = 0, diff_e = 0, diff_s = 0, shared = 0;
             for (int i = 0; i < NPTS; ++i) {
                 found += e1[i] != CLVR_BVH_NOT_FOUND;
-                diff_e += e1[i] != ek[i];
+                if (e1[i] != ek[i]) {
+                    float a = 0.0f, b = 0.0f;
+                    const int both = e1[i] != CLVR_BVH_NOT_FOUND && ek[i] != CLVR_BVH_NOT_FOUND &&
+                                     holds(&h1, c1.num_instances, e1[i], pts + 4 * i, &a) &&
+                                     holds(&h1, c1.num_instances, ek[i], pts + 4 * i, &b) &&
+                                     fabsf(b - sk[i]) <= 1e-5f * fmaxf(1.0f, fabsf(b));
+                    shared += both;
+                    diff_e += !both;
+                    continue;
+                }
                 diff_s += e1[i] != CLVR_BVH_NOT_FOUND && memcmp(&s1[i], &sk[i], sizeof(float)) != 0;
             }
-            if (diff_e || diff_s)
-                fprintf(stderr, "%u-bit, %u pieces, hints %u chain %u: %llu of %d element ids and %llu values differ\n",
+            if (diff_e || diff_s || shared)
+                fprintf(stderr,
+                        "%u-bit, %u pieces, hints %u chain %u: %llu of %d element ids wrong, %llu values differ, "
+                        "%llu points on a face found in the other element\n",
                         bits, k, modes[q].hints, modes[q].chain, (unsigned long long)diff_e, NPTS,
-                        (unsigned long long)diff_s);
+                        (unsigned long long)diff_s, (unsigned long long)shared);
             TU_CHECK(found > NPTS / 2); /* the points are mostly inside: the comparison can fail */
             TU_CHECK_EQ_U64(diff_e, 0);
             TU_CHECK_EQ_U64(diff_s, 0);
+            TU_CHECK(shared <= NPTS / 1000u);
         }
         if (render) compare_renders(cl, m, &ck, &ak, base_m, base_v);
         clvr_clustered_host_free(&hk);

@@ -484,8 +484,9 @@ typedef struct clvr_scene_stats {
     double stage_s[CLVR_STATS_MAX_STAGES]; /* device seconds per stage, then the trees ("bvh") and the
                                               boundary faces ("hull", 0 when none were built) */
     float scalar_min, scalar_max;   /* range of the scene's field */
-    uint64_t bytes_entry_grids;     /* (1.9) point location's entry grids (where a query's walk starts) and
-                                     * occupancy grid (where no element is) */
+    uint64_t bytes_entry_grids;     /* (1.9) point location's entry grids (where a query's walk starts),
+                                     * occupancy grid (where no element is) and its global hints (the
+                                     * leaf where a query starts, since session 51) */
 } clvr_scene_stats;
 CLVR_API clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg);
 /* The scene a tracer renders (borrowed: valid while the tracer lives). */
