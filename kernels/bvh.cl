@@ -221,20 +221,24 @@ __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global 
     }
 }
 
+
+/* The split arrays and element boxes of pieces 0 .. 3 as kernel
+ * parameters, under the names CLVR_PIECES_VIEW takes. */
+#define CLVR_EBOX_PIECE_PARAMS                                                                                         \
+    __global const float4 *vertices, __global const ushort *idx16, __global const uint *idx32,                       \
+        __global const uchar *ebox, __global const float4 *vertices1, __global const ushort *idx16_1,                \
+        __global const uint *idx32_1, __global const uchar *ebox1, __global const float4 *vertices2,                 \
+        __global const ushort *idx16_2, __global const uint *idx32_2, __global const uchar *ebox2,                   \
+        __global const float4 *vertices3, __global const ushort *idx16_3, __global const uint *idx32_3,              \
+        __global const uchar *ebox3
+
 /* Entry grids, second pass: one work item per cell of all instances' grids
  * (grids[1 + i].res[3]: instance i's first cell, increasing; every grid
  * has a cell) turns its (first, last) leaf pair into (start, hint) nodes. The
  * arrays come piece by piece as clvr_locate_points_split takes them. */
 __kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
                                 __global const clvr_entry_grid *grids, uint num_instances, uint num_cells,
-                                __global uint *cells, uint leaf_size, uint use_ebox, __global const float4 *vertices,
-                                __global const ushort *idx16, __global const uint *idx32, __global const uchar *ebox,
-                                __global const float4 *vertices1, __global const ushort *idx16_1,
-                                __global const uint *idx32_1, __global const uchar *ebox1,
-                                __global const float4 *vertices2, __global const ushort *idx16_2,
-                                __global const uint *idx32_2, __global const uchar *ebox2,
-                                __global const float4 *vertices3, __global const ushort *idx16_3,
-                                __global const uint *idx32_3, __global const uchar *ebox3)
+                                __global uint *cells, uint leaf_size, uint use_ebox, CLVR_EBOX_PIECE_PARAMS)
 {
     const uint i = get_global_id(0);
     if (i >= num_cells || num_instances == 0) return;
@@ -260,15 +264,7 @@ __kernel void clvr_entry_finish(__global const clvr_bvh_node *blas, __global con
 __kernel void clvr_entry_global(__global const clvr_bvh_node *tlas, __global const clvr_bvh_node *blas,
                                 __global const clvr_instance *instances, __global const clvr_entry_grid *grids,
                                 uint sh, uint num_cells, uint first_word, __global uint *cells, uint leaf_size,
-                                uint use_ebox,
-                                __global const float4 *vertices, __global const ushort *idx16,
-                                __global const uint *idx32, __global const uchar *ebox,
-                                __global const float4 *vertices1, __global const ushort *idx16_1,
-                                __global const uint *idx32_1, __global const uchar *ebox1,
-                                __global const float4 *vertices2, __global const ushort *idx16_2,
-                                __global const uint *idx32_2, __global const uchar *ebox2,
-                                __global const float4 *vertices3, __global const ushort *idx16_3,
-                                __global const uint *idx32_3, __global const uchar *ebox3)
+                                uint use_ebox, CLVR_EBOX_PIECE_PARAMS)
 {
     const uint i = get_global_id(0);
     if (i >= num_cells) return;
