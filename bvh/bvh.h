@@ -54,9 +54,10 @@ clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num
  * word its hint leaf; from word grids[0].res[3] on the occupancy grid's
  * bits, then its global hints (clvr_global_hints_first) when the layout
  * planned them (grids[0].lo[3], which is 0 while they are built and
- * restored after); num_words words in all, as the layout counted them. m holds host arrays (tlas, blas with bvh_root set,
- * instances, vertices, idx16, idx32, leaf_size, ebox or NULL; its entry
- * grids and cells are not read: grids and cells stand in for them). */
+ * restored after); num_words words in all, as the layout counted them. m
+ * holds host arrays (tlas, blas with bvh_root set, instances, vertices,
+ * idx16, idx32, leaf_size, ebox or NULL; its entry grids and cells are not
+ * read: grids and cells stand in for them). */
 clvr_status clvr_entry_cells_host(const clvr_mesh_view *m, uint32_t num_instances, clvr_entry_grid *grids,
                                   uint32_t num_words, uint32_t *cells, clvr_error *err);
 

@@ -221,7 +221,6 @@ __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global 
     }
 }
 
-
 /* The split arrays and element boxes of pieces 0 .. 3 as kernel
  * parameters, under the names CLVR_PIECES_VIEW takes. */
 #define CLVR_EBOX_PIECE_PARAMS                                                                                         \

@@ -596,16 +596,29 @@ CLVR_INLINE clvr_u32 clvr_occupancy_mask(clvr_u32 lo, clvr_u32 hi)
     return (0xffffffffu >> (31u - hi)) & (0xffffffffu << lo);
 }
 
-/* 1 when p's cell of the occupancy grid has its bit set: 0 means no
- * element holds p. */
+/* p's cell in occupancy grid g: its coordinates c[0 .. 2] and its index
+ * (returned, x fastest). */
+CLVR_INLINE clvr_u32 clvr_occupancy_cell(const clvr_entry_grid *g, float px, float py, float pz, clvr_u32 *c)
+{
+    c[0] = clvr_entry_coord(px, g->lo[0], g->scale[0], g->res[0]);
+    c[1] = clvr_entry_coord(py, g->lo[1], g->scale[1], g->res[1]);
+    c[2] = clvr_entry_coord(pz, g->lo[2], g->scale[2], g->res[2]);
+    return (c[2] * g->res[1] + c[1]) * g->res[0] + c[0];
+}
+
+/* 1 when cell oc of m's occupancy grid g has its bit set: 0 means no
+ * element holds a point there. */
+CLVR_INLINE int clvr_occupancy_bit(const clvr_mesh_view *m, const clvr_entry_grid *g, clvr_u32 oc)
+{
+    return (int)((m->entry_cells[g->res[3] + oc / 32u] >> (oc % 32u)) & 1u);
+}
+
+/* 1 when p's cell of the occupancy grid has its bit set. */
 CLVR_INLINE int clvr_occupied(const clvr_mesh_view *m, float px, float py, float pz)
 {
-    CLVR_GLOBAL const clvr_entry_grid *g = m->entry_grids;
-    const clvr_u32 cx = clvr_entry_coord(px, g->lo[0], g->scale[0], g->res[0]);
-    const clvr_u32 cy = clvr_entry_coord(py, g->lo[1], g->scale[1], g->res[1]);
-    const clvr_u32 cz = clvr_entry_coord(pz, g->lo[2], g->scale[2], g->res[2]);
-    const clvr_u32 c = (cz * g->res[1] + cy) * g->res[0] + cx;
-    return (int)((m->entry_cells[g->res[3] + c / 32u] >> (c % 32u)) & 1u);
+    const clvr_entry_grid g = m->entry_grids[0];
+    clvr_u32 c[3];
+    return clvr_occupancy_bit(m, &g, clvr_occupancy_cell(&g, px, py, pz, c));
 }
 
 /* ---------------------------------------------------------- global hints
@@ -647,6 +660,7 @@ CLVR_INLINE int clvr_occupied(const clvr_mesh_view *m, float px, float py, float
  * 0.12 + 0.08 s on the igloo (beside a CI run, so slowed, but not 2.4x);
  * 4^3-cell tiles per work-group instead of rows: 0.30 -> 0.29 s. */
 #define CLVR_GLOBAL_HINT_LEAF_BITS 16u
+#define CLVR_GLOBAL_HINT_LEAF_MASK ((1u << CLVR_GLOBAL_HINT_LEAF_BITS) - 1u)
 /* At most this many global hint cells (64 MB); a larger occupancy grid
  * (meshes of more than 2^24 elements) shares a hint among 2^3, 4^3, ...
  * of its cells (clvr_global_hints_shift). */
@@ -708,6 +722,16 @@ CLVR_INLINE clvr_u32 clvr_entry_lca(const clvr_instance *inst, clvr_u32 first_hi
     return first + a;
 }
 
+/* Coordinate on axis k of probe point o of grid cells first .. first +
+ * span - 1 on an axis (lo, scale > 0): o = 0 their centre, 1 .. 8 their
+ * octants' centres (bit k of o - 1 set: the upper half on axis k). Where
+ * a cell's hint looks for its element (clvr_entry_hint, clvr_global_hint). */
+CLVR_INLINE float clvr_entry_probe(float lo, float scale, clvr_u32 first, clvr_u32 span, clvr_u32 o, int k)
+{
+    const float f = o == 0u ? 0.5f : ((o - 1u) >> k) & 1u ? 0.75f : 0.25f;
+    return lo + ((float)first + (float)span * f) / scale;
+}
+
 /* Set in a cell's hint when it came from an octant's centre, not the
  * cell's (leaf ids stay below 2^31, CLVR_BVH_MAX_PRIMS). Among instances
  * of mixed types only the type whose element holds a cell's centre has a
@@ -741,9 +765,8 @@ CLVR_INLINE clvr_u32 clvr_entry_hint(const clvr_mesh_view *m, const clvr_instanc
     for (clvr_u32 o = 0; o < 9u; ++o) {
         float p[3];
         for (int k = 0; k < 3; ++k) /* an axis of one cell has scale 0: its centre is the box's */
-            p[k] = g->scale[k] > 0.0f
-                       ? g->lo[k] + ((float)c[k] + (o == 0u ? 0.5f : ((o - 1u) >> k) & 1u ? 0.75f : 0.25f)) / g->scale[k]
-                       : 0.5f * (inst->bounds.lo[k] + inst->bounds.hi[k]);
+            p[k] = g->scale[k] > 0.0f ? clvr_entry_probe(g->lo[k], g->scale[k], c[k], 1u, o, k)
+                                      : 0.5f * (inst->bounds.lo[k] + inst->bounds.hi[k]);
         float s;
         clvr_u32 e, leaf;
         if (clvr_locate_in_instance(m, inst, start, CLVR_BVH_NOT_FOUND, p[0], p[1], p[2], CLVR_LOCATE_COHERENT,
@@ -945,25 +968,23 @@ CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, floa
     *element_id = CLVR_BVH_NOT_FOUND;
     if (m->entry_grids) {
         const clvr_entry_grid og = m->entry_grids[0];
-        const clvr_u32 cx = clvr_entry_coord(px, og.lo[0], og.scale[0], og.res[0]);
-        const clvr_u32 cy = clvr_entry_coord(py, og.lo[1], og.scale[1], og.res[1]);
-        const clvr_u32 cz = clvr_entry_coord(pz, og.lo[2], og.scale[2], og.res[2]);
-        const clvr_u32 oc = (cz * og.res[1] + cy) * og.res[0] + cx;
-        if (!((m->entry_cells[og.res[3] + oc / 32u] >> (oc % 32u)) & 1u)) {
+        clvr_u32 c[3];
+        const clvr_u32 oc = clvr_occupancy_cell(&og, px, py, pz, c);
+        if (!clvr_occupancy_bit(m, &og, oc)) {
             CLVR_WALK_STAT(occ_clear);
             return 0;
         }
         if (clvr_global_hints_on(&og)) {
             const clvr_u32 sh = clvr_global_hints_shift(&og);
-            const clvr_u32 hc = ((cz >> sh) * clvr_global_hint_res(&og, sh, 1) + (cy >> sh)) *
-                                    clvr_global_hint_res(&og, sh, 0) + (cx >> sh);
+            const clvr_u32 hc = ((c[2] >> sh) * clvr_global_hint_res(&og, sh, 1) + (c[1] >> sh)) *
+                                    clvr_global_hint_res(&og, sh, 0) + (c[0] >> sh);
             const clvr_u32 w = m->entry_cells[clvr_global_hints_first(&og) + hc];
             const clvr_u32 gi = w >> CLVR_GLOBAL_HINT_LEAF_BITS;
             if (w != CLVR_BVH_NOT_FOUND && gi != skip_inst) {
                 const clvr_instance inst = m->instances[gi];
                 clvr_u32 node;
                 CLVR_WALK_STAT(global_try);
-                if (clvr_locate_hint_leaf(m, &inst, inst.first_leaf + (w & ((1u << CLVR_GLOBAL_HINT_LEAF_BITS) - 1u)),
+                if (clvr_locate_hint_leaf(m, &inst, inst.first_leaf + (w & CLVR_GLOBAL_HINT_LEAF_MASK),
                                           px, py, pz, skip_elem, scalar, element_id, leaf_found, &node)) {
                     CLVR_WALK_STAT(global_hit);
                     *inst_found = gi;
@@ -1029,8 +1050,7 @@ CLVR_INLINE clvr_u32 clvr_global_hint(const clvr_mesh_view *m, clvr_u32 sh, clvr
              * (fewer at the grid's end); an axis of one cell (scale 0):
              * its low corner, a flat mesh's plane */
             const clvr_u32 first = cc[k] << sh, span = g.res[k] - first < (1u << sh) ? g.res[k] - first : 1u << sh;
-            const float f = o == 0u ? 0.5f : ((o - 1u) >> k) & 1u ? 0.75f : 0.25f;
-            p[k] = g.scale[k] > 0.0f ? g.lo[k] + ((float)first + (float)span * f) / g.scale[k] : g.lo[k];
+            p[k] = g.scale[k] > 0.0f ? clvr_entry_probe(g.lo[k], g.scale[k], first, span, o, k) : g.lo[k];
         }
         float s;
         clvr_u32 e, inst, leaf;
