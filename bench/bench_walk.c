@@ -14,6 +14,7 @@
  *
  *   bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] [--queries Q] [--entry on|off]
  *   bench_walk --mesh FILE --per-instance [--order ...] [--queries Q]
+ *   bench_walk --mesh FILE --classes [--leaf N] [--order ...] [--queries Q]
  *
  * Prints one markdown row per run; queries/s is one host thread, a relative
  * figure between rows of the same machine, not clvr's device speed.
@@ -27,7 +28,17 @@
  * same part of the mesh in every build, about one instance cluster). An
  * oracle picks the best leaf size per chunk from the first pass and is
  * scored on the second, so that picking the luckiest noise is not counted
- * as a gain. Queries that find no element keep the best single size. */
+ * as a gain. Queries that find no element keep the best single size.
+ *
+ * --classes asks where the time goes by kind of query: each query is
+ * timed alone (clvr_locate_ex, one clock read before and after: the
+ * clock's own cost is in every class) and counted in one class by what
+ * its walk did: answered by the occupancy bit; found in its global hint's
+ * leaf or siblings; found after that hint missed; in an occupied cell but
+ * in no element. For the third class it also says how the element found
+ * relates to the hint: same instance under another node, another instance
+ * of the same type, another type (each type has its own curve and
+ * instance clusters), or a cell without a hint. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -220,11 +231,96 @@ static int per_instance(clvr_cl *cl, const clvr_mesh *m, const char *mesh_path, 
     return 0;
 }
 
+/* --classes (see the file's comment): one row per class. Returns 0, or 3
+ * when the bookkeeping is wrong (the smoke test's check). */
+enum { WALK_CLEAR, WALK_HINT_HELD, WALK_AFTER_MISS, WALK_EMPTY, WALK_CLASSES };
+enum { WALK_MISS_OTHER_NODE, WALK_MISS_OTHER_INSTANCE, WALK_MISS_OTHER_TYPE, WALK_MISS_NO_HINT, WALK_MISSES };
+static int walk_classes(const walk_build *b, const char *mesh_path, float (*pts)[4], uint32_t nq,
+                        const char *order_name, uint32_t leaf)
+{
+    static const char *names[WALK_CLASSES] = {"occupancy bit clear", "global hint held", "found after the hint missed",
+                                              "occupied, in no element"};
+    double t[WALK_CLASSES] = {0};
+    unsigned long long n[WALK_CLASSES] = {0}, tn[WALK_CLASSES] = {0}, bn[WALK_CLASSES] = {0}, lv[WALK_CLASSES] = {0},
+                       et[WALK_CLASSES] = {0}, miss[WALK_MISSES] = {0};
+    const clvr_mesh_view *mv = &b->mv;
+    const clvr_entry_grid og = mv->entry_grids[0];
+    const int hinted = clvr_global_hints_on(&og);
+    const double load = bench_load1();
+    for (uint32_t j = 0; j < nq; ++j) {
+        const walk_counts before = g_walk;
+        float sc;
+        uint32_t e, inst, leaf_found;
+        const double t0 = clvr_clock_monotonic_s();
+        const int found = clvr_locate_ex(mv, pts[j][0], pts[j][1], pts[j][2], CLVR_LOCATE_COHERENT, CLVR_BVH_NOT_FOUND,
+                                         CLVR_BVH_NOT_FOUND, &sc, &e, &inst, &leaf_found);
+        const double dt = clvr_clock_monotonic_s() - t0;
+        const int k = g_walk.occ_clear > before.occ_clear ? WALK_CLEAR
+                      : g_walk.global_hit > before.global_hit ? WALK_HINT_HELD
+                      : found ? WALK_AFTER_MISS
+                              : WALK_EMPTY;
+        t[k] += dt;
+        ++n[k];
+        tn[k] += g_walk.tnodes - before.tnodes;
+        bn[k] += g_walk.bnodes - before.bnodes;
+        lv[k] += g_walk.leaves - before.leaves;
+        et[k] += g_walk.etest - before.etest;
+        if (k != WALK_AFTER_MISS) continue;
+        /* the hint word of the point's cell, as clvr_locate_ex reads it */
+        uint32_t c[3], w = CLVR_BVH_NOT_FOUND;
+        clvr_occupancy_cell(&og, pts[j][0], pts[j][1], pts[j][2], c);
+        if (hinted)
+            w = mv->entry_cells[clvr_global_hints_first(&og) +
+                                clvr_global_hint_cell(&og, clvr_global_hints_shift(&og), c)];
+        if (w == CLVR_BVH_NOT_FOUND) {
+            ++miss[WALK_MISS_NO_HINT];
+            continue;
+        }
+        const uint32_t gi = w >> CLVR_GLOBAL_HINT_LEAF_BITS;
+        const int where = gi == inst ? WALK_MISS_OTHER_NODE
+                          : mv->instances[gi].type == mv->instances[inst].type ? WALK_MISS_OTHER_INSTANCE
+                                                                               : WALK_MISS_OTHER_TYPE;
+        ++miss[where];
+    }
+    double total = 0.0;
+    unsigned long long counted = 0, misses = 0;
+    for (int k = 0; k < WALK_CLASSES; ++k) {
+        total += t[k];
+        counted += n[k];
+    }
+    for (int k = 0; k < WALK_MISSES; ++k) misses += miss[k];
+    if (counted != nq || misses != n[WALK_AFTER_MISS] || !(total > 0.0)) {
+        fprintf(stderr, "bench_walk: classes bookkeeping is wrong: %llu of %u queries counted, %llu of %llu misses "
+                        "placed, total %g s\n",
+                counted, nq, misses, n[WALK_AFTER_MISS], total);
+        return 3;
+    }
+    const char *base = strrchr(mesh_path, '/');
+    printf("# bench_walk --classes: %s, %llu elements, leaf clusters of %u, %u %s queries, host reference walk, 1 "
+           "thread, each query timed (global hints %s)\n",
+           mesh_path, (unsigned long long)b->c.num_elements, leaf, nq, order_name, hinted ? "on" : "off");
+    printf("| mesh | order | class | share of queries | share of time | ns per query | top nodes | bottom nodes | "
+           "leaves | exact tests | load |\n");
+    printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int k = 0; k < WALK_CLASSES; ++k) {
+        const double q = n[k] ? (double)n[k] : 1.0;
+        printf("| %s | %s | %s | %.3f | %.3f | %.0f | %.2f | %.2f | %.2f | %.2f | %.2f |\n", base ? base + 1 : mesh_path,
+               order_name, names[k], n[k] / (double)nq, t[k] / total, 1e9 * t[k] / q, tn[k] / q, bn[k] / q, lv[k] / q,
+               et[k] / q, load);
+    }
+    const double mq = misses ? (double)misses : 1.0;
+    printf("\nfound after the hint missed (%llu): the element in the hint's instance under another node %.3f, in "
+           "another instance of the same type %.3f, of another type %.3f; no hint in the cell %.3f\n",
+           misses, miss[WALK_MISS_OTHER_NODE] / mq, miss[WALK_MISS_OTHER_INSTANCE] / mq,
+           miss[WALK_MISS_OTHER_TYPE] / mq, miss[WALK_MISS_NO_HINT] / mq);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *mesh_path = NULL, *device = NULL, *order_name = "rays";
     uint32_t leaf = 8, nq = 480000;
-    int per_inst = 0, entry = 1;
+    int per_inst = 0, entry = 1, by_class = 0;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--mesh") && i + 1 < argc) mesh_path = argv[++i];
         else if (!strcmp(argv[i], "--device") && i + 1 < argc) device = argv[++i];
@@ -232,19 +328,20 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--order") && i + 1 < argc) order_name = argv[++i];
         else if (!strcmp(argv[i], "--queries") && i + 1 < argc) nq = (uint32_t)strtoul(argv[++i], NULL, 10);
         else if (!strcmp(argv[i], "--per-instance")) per_inst = 1;
+        else if (!strcmp(argv[i], "--classes")) by_class = 1;
         else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
                  (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             entry = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr, "usage: bench_walk --mesh FILE [--device SPEC] [--leaf N] [--order rays|random|sorted] "
-                            "[--queries Q] [--per-instance] [--entry on|off]\n");
+                            "[--queries Q] [--per-instance | --classes] [--entry on|off]\n");
             return 2;
         }
     }
     const int order = bench_order_from_name(order_name);
-    if (!mesh_path || order < 0 || leaf < 1 || leaf > 128 || nq < 1) {
+    if (!mesh_path || order < 0 || leaf < 1 || leaf > 128 || nq < 1 || (by_class && (per_inst || !entry))) {
         fprintf(stderr, "bench_walk: needs --mesh FILE; --order random, sorted or rays; --leaf 1..128; "
-                        "--queries >= 1\n");
+                        "--queries >= 1; --classes with the entry grids and without --per-instance\n");
         return 2;
     }
     clvr_error err = {0};
@@ -275,6 +372,9 @@ int main(int argc, char **argv)
         if (walk_build_make(&cl, &m, leaf, entry, &b, &err) != CLVR_OK) {
             fprintf(stderr, "bench_walk: %s\n", err.msg);
             rc = 1;
+        } else if (by_class) {
+            rc = walk_classes(&b, mesh_path, pts, nq, order_name, leaf);
+            walk_build_free(&cl, &b);
         } else {
             const double load = bench_load1(), t0 = clvr_clock_monotonic_s();
             uint32_t found = 0;

@@ -696,6 +696,13 @@ CLVR_INLINE clvr_u32 clvr_global_hint_res(const clvr_entry_grid *g, clvr_u32 s, 
     return ((g->res[k] - 1u) >> s) + 1u;
 }
 
+/* Index of the global hint cell at shift s that holds occupancy cell
+ * c[0 .. 2] of grid g (x fastest). */
+CLVR_INLINE clvr_u32 clvr_global_hint_cell(const clvr_entry_grid *g, clvr_u32 s, const clvr_u32 *c)
+{
+    return ((c[2] >> s) * clvr_global_hint_res(g, s, 1) + (c[1] >> s)) * clvr_global_hint_res(g, s, 0) + (c[0] >> s);
+}
+
 /* First word of occupancy grid g's global hints in the cell array: right
  * after its bits, one word per hint cell. */
 CLVR_INLINE clvr_u64 clvr_global_hints_first(const clvr_entry_grid *g)
@@ -976,9 +983,7 @@ CLVR_INLINE int clvr_locate_ex(const clvr_mesh_view *m, float px, float py, floa
         }
         if (clvr_global_hints_on(&og)) {
             const clvr_u32 sh = clvr_global_hints_shift(&og);
-            const clvr_u32 hc = ((c[2] >> sh) * clvr_global_hint_res(&og, sh, 1) + (c[1] >> sh)) *
-                                    clvr_global_hint_res(&og, sh, 0) + (c[0] >> sh);
-            const clvr_u32 w = m->entry_cells[clvr_global_hints_first(&og) + hc];
+            const clvr_u32 w = m->entry_cells[clvr_global_hints_first(&og) + clvr_global_hint_cell(&og, sh, c)];
             const clvr_u32 gi = w >> CLVR_GLOBAL_HINT_LEAF_BITS;
             if (w != CLVR_BVH_NOT_FOUND && gi != skip_inst) {
                 const clvr_instance inst = m->instances[gi];
