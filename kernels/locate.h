@@ -648,8 +648,10 @@ CLVR_INLINE int clvr_occupied(const clvr_mesh_view *m, float px, float py, float
  * per cell: the igloo -3% (12 pairs), the blunt fin -13% random and -12%
  * rays, the 1M tets -11% (5-6 pairs each); a quarter of a cell per
  * element for the occupancy grid and hints: -7%, four: -2%. Skipping, after
- * a miss, the leaf the hint had searched: +2% (8 pairs, noise); searching
- * the 16 leaves under the hint's grandparent after a miss: +1% (noise).
+ * a miss, the leaf the hint had searched: +2% (8 pairs, noise); skipping
+ * its whole node, as clvr_locate_entry_pass now does
+ * (clvr_locate_hint_unsearched): +4-6% (session 52); searching the 16
+ * leaves under the hint's grandparent after a miss: +1% (noise).
  * Costs: 4 bytes per occupancy cell (about 4 per element: the igloo's tree
  * and indices 0.27 -> 0.31 of Embree's) and one point location per cell
  * at build time (the 1M tets: 0.29 s, so the whole preprocessing 0.25-0.33
@@ -849,25 +851,30 @@ CLVR_INLINE int clvr_locate_entered(const clvr_mesh_view *m, clvr_u32 inst_id, c
                                    element_id, leaf_found);
 }
 
-/* 1 when hint leaf `hint` of inst lies under node `searched` (the global
- * hint's node, whose leaves clvr_locate_ex has just searched for the point;
- * CLVR_BVH_NOT_FOUND for none): clvr_locate_entry_pass then neither
- * searches that node again as a hint nor enters it in a start subtree. On
- * the tet meshes nearly every miss of the global hint is in its own
- * instance, and the entry cell's hint is often in the same node: host
- * walk, random points found after a miss, exact tests 7.94 -> 6.58
- * (post-tets), 5.60 -> 4.92 (blunt fin), 3.01 -> 2.61 (igloo). PoCL
- * bench_locate, queries per CPU-second, medians of 8 alternating pairs:
- * igloo +5.1%, post-tets +4.7%, gmsh boundary layers +5.6% (random
- * points), blunt fin +3.6% (rays); a first version that did not skip an
- * octant hint or a start node under the searched node: +1.7% to +2.9% on
- * five meshes, 30 of 40 pairs faster. */
-CLVR_INLINE int clvr_entry_hint_searched(const clvr_instance *inst, clvr_u32 hint, clvr_u32 searched)
+/* clvr_locate_hint_leaf, unless hint leaf `hint` of inst lies under node
+ * `searched` (the global hint's node, whose leaves clvr_locate_ex has just
+ * searched for the point; CLVR_BVH_NOT_FOUND for none): then it returns 0
+ * with *node set, searching nothing, and clvr_locate_entry_pass does not
+ * enter that node in a start subtree either. On the tet meshes nearly
+ * every miss of the global hint is in its own instance, and the entry
+ * cell's hint is often in the same node: host walk, random points found
+ * after a miss, exact tests 7.94 -> 6.58 (post-tets), 5.60 -> 4.92 (blunt
+ * fin), 3.01 -> 2.61 (igloo). PoCL bench_locate, queries per CPU-second,
+ * medians of 8 alternating pairs: igloo +5.1%, post-tets +4.7%, gmsh
+ * boundary layers +5.6% (random points), blunt fin +3.6% (rays); a first
+ * version that did not skip an octant hint or a start node under the
+ * searched node: +1.7% to +2.9% on five meshes, 30 of 40 pairs faster. */
+CLVR_INLINE int clvr_locate_hint_unsearched(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 hint,
+                                            clvr_u32 searched, float px, float py, float pz, clvr_u32 skip_elem,
+                                            float *scalar, clvr_u32 *element_id, clvr_u32 *leaf_found,
+                                            clvr_u32 *node)
 {
-    if (searched == CLVR_BVH_NOT_FOUND) return 0;
-    clvr_u32 node, slot;
-    clvr_leaf_parent(inst, hint, &node, &slot);
-    return node == searched;
+    if (searched != CLVR_BVH_NOT_FOUND) {
+        clvr_u32 slot;
+        clvr_leaf_parent(inst, hint, node, &slot);
+        if (*node == searched) return 0;
+    }
+    return clvr_locate_hint_leaf(m, inst, hint, px, py, pz, skip_elem, scalar, element_id, leaf_found, node);
 }
 
 /* Instances whose boxes hold a point that clvr_locate_ex searches hints
@@ -886,7 +893,7 @@ CLVR_INLINE int clvr_entry_hint_searched(const clvr_instance *inst, clvr_u32 hin
  * searched the whole start subtree of the wrong types before the right
  * one's hint (hints first: +7-18% queries/s there). searched_inst,
  * searched_node: the instance and lowest-level node whose leaves the caller
- * has already searched (the global hint's; clvr_entry_hint_searched), or
+ * has already searched (the global hint's; clvr_locate_hint_unsearched), or
  * CLVR_BVH_NOT_FOUND. *done: 1 when the search was made (its result
  * returned), 0 when there were too many candidates. */
 CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float py, float pz, clvr_u32 hints,
@@ -949,10 +956,8 @@ CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float 
             continue;
         }
         if (hint != CLVR_BVH_NOT_FOUND) {
-            if (clvr_entry_hint_searched(&inst, hint, searched))
-                skip[i] = searched;
-            else if (clvr_locate_hint_leaf(m, &inst, hint, px, py, pz, skip_elem, scalar, element_id, leaf_found,
-                                           &skip[i])) {
+            if (clvr_locate_hint_unsearched(m, &inst, hint, searched, px, py, pz, skip_elem, scalar, element_id,
+                                            leaf_found, &skip[i])) {
                 *inst_found = cand[i];
                 return 1;
             }
@@ -971,10 +976,8 @@ CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float 
         if (octant[i] == CLVR_BVH_NOT_FOUND) continue;
         const clvr_instance inst = m->instances[cand[i]];
         const clvr_u32 searched = cand[i] == searched_inst ? searched_node : CLVR_BVH_NOT_FOUND;
-        if (clvr_entry_hint_searched(&inst, octant[i], searched))
-            skip[i] = searched;
-        else if (clvr_locate_hint_leaf(m, &inst, octant[i], px, py, pz, skip_elem, scalar, element_id, leaf_found,
-                                       &skip[i])) {
+        if (clvr_locate_hint_unsearched(m, &inst, octant[i], searched, px, py, pz, skip_elem, scalar, element_id,
+                                        leaf_found, &skip[i])) {
             *inst_found = cand[i];
             return 1;
         }
@@ -983,10 +986,10 @@ CLVR_INLINE int clvr_locate_entry_pass(const clvr_mesh_view *m, float px, float 
     for (clvr_u32 i = 0; i < nc; ++i) {
         if (start[i] == CLVR_BVH_NOT_FOUND) continue;
         const clvr_instance inst = m->instances[cand[i]];
+        const clvr_u32 searched = cand[i] == searched_inst ? searched_node : CLVR_BVH_NOT_FOUND;
         CLVR_WALK_STAT(inst);
-        if (clvr_locate_in_instance(m, &inst, start[i], skip[i],
-                                    cand[i] == searched_inst ? searched_node : CLVR_BVH_NOT_FOUND, px, py, pz, hints,
-                                    skip_elem, scalar, element_id, leaf_found)) {
+        if (clvr_locate_in_instance(m, &inst, start[i], skip[i], searched, px, py, pz, hints, skip_elem, scalar,
+                                    element_id, leaf_found)) {
             *inst_found = cand[i];
             return 1;
         }
