@@ -216,7 +216,8 @@ static void entry_rasterize_host(const clvr_mesh_view *m, const clvr_instance *i
     for (uint32_t e = clvr_leaf_elements(m, inst, leaf, &end); e < end; ++e) {
         float lo[3], hi[3];
         uint32_t a[3], b[3];
-        clvr_entry_element_box(&pa, inst, e, lo, hi);
+        clvr_element_slabs sl;
+        clvr_entry_element_hull(&pa, inst, e, lo, hi, &sl);
         clvr_entry_box_cells(g, lo, hi, a, b);
         for (uint32_t z = a[2]; z <= b[2]; ++z)
             for (uint32_t y = a[1]; y <= b[1]; ++y)
@@ -229,9 +230,15 @@ static void entry_rasterize_host(const clvr_mesh_view *m, const clvr_instance *i
         for (uint32_t z = a[2]; z <= b[2]; ++z)
             for (uint32_t y = a[1]; y <= b[1]; ++y) {
                 const uint32_t c0 = (z * occ->res[1] + y) * occ->res[0] + a[0], c1 = c0 + (b[0] - a[0]);
-                for (uint32_t w = c0 / 32u; w <= c1 / 32u; ++w)
-                    cells[occ->res[3] + w] |= clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u,
-                                                                  w == c1 / 32u ? c1 % 32u : 31u);
+                float blo[2], bhi[2];
+                clvr_entry_cell_span(occ, 1, y, &blo[0], &bhi[0]);
+                clvr_entry_cell_span(occ, 2, z, &blo[1], &bhi[1]);
+                for (uint32_t w = c0 / 32u; w <= c1 / 32u; ++w) {
+                    const uint32_t box = clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u,
+                                                             w == c1 / 32u ? c1 % 32u : 31u);
+                    uint32_t *word = &cells[occ->res[3] + w];
+                    *word |= clvr_occupancy_row_bits(occ, &sl, w, c0, c1, a[0], blo, bhi, box & ~*word);
+                }
             }
     }
 }

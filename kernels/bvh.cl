@@ -195,7 +195,8 @@ __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global 
     for (uint e = clvr_leaf_elements(&m, &inst, leaf, &end); e < end; ++e) {
         float L[3], H[3];
         uint a[3], b[3];
-        clvr_entry_element_box(&pa, &inst, e, L, H);
+        clvr_element_slabs sl;
+        clvr_entry_element_hull(&pa, &inst, e, L, H, &sl);
         clvr_entry_box_cells(&g, L, H, a, b);
         for (uint z = a[2]; z <= b[2]; ++z)
             for (uint y = a[1]; y <= b[1]; ++y)
@@ -212,10 +213,14 @@ __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global 
         for (uint z = a[2]; z <= b[2]; ++z)
             for (uint y = a[1]; y <= b[1]; ++y) {
                 const uint c0 = (z * occ.res[1] + y) * occ.res[0] + a[0], c1 = c0 + (b[0] - a[0]);
+                float blo[2], bhi[2];
+                clvr_entry_cell_span(&occ, 1, y, &blo[0], &bhi[0]);
+                clvr_entry_cell_span(&occ, 2, z, &blo[1], &bhi[1]);
                 for (uint w = c0 / 32u; w <= c1 / 32u; ++w) {
-                    const uint mask = clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u, w == c1 / 32u ? c1 % 32u : 31u);
+                    const uint box = clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u, w == c1 / 32u ? c1 % 32u : 31u);
                     __global uint *word = cells + occ.res[3] + w;
-                    if ((*word & mask) != mask) atomic_or(word, mask);
+                    const uint mask = clvr_occupancy_row_bits(&occ, &sl, w, c0, c1, a[0], blo, bhi, box & ~*word);
+                    if (mask) atomic_or(word, mask);
                 }
             }
     }

@@ -1049,6 +1049,25 @@ static void test_generated(clvr_cl *cl, const clvr_bvh_kernels *k)
     TU_CHECK_STATUS(fx_grid_mesh(6, FX_MIXED, 0.2f, 0.01f, 500.0f, 5, &m, &err), CLVR_OK, &err);
     check_locate(cl, k, &m, "mixed-offset", 4, 300, 0, 1500);
     clvr_mesh_free(&m);
+    /* graded by 10^4 per axis towards one corner, 100 units from the
+     * origin: the smallest elements are 1e-4 of an occupancy cell, where
+     * the occupancy grid's slab test (locate.h, element hulls) must still
+     * keep every cell they reach (its rounding margin); the queries on
+     * their vertices, edges and faces find what the full walk finds. The
+     * mixed mesh is not jittered: jitter graded this steeply makes hexes
+     * whose Newton solve ends 1e-5 apart on the host and the device */
+    for (uint32_t kind = FX_TETS; kind <= FX_MIXED; kind += FX_MIXED - FX_TETS) {
+        memset(&m, 0, sizeof m);
+        TU_CHECK_STATUS(fx_grid_mesh(7, kind, kind == FX_TETS ? 0.2f : 0.0f, 1.0f, 0.0f, 23 + kind, &m, &err), CLVR_OK,
+                        &err);
+        for (uint64_t i = 0; i < 3 * m.num_vertices; ++i) {
+            const float t = m.positions[i] / 7.0f;
+            m.positions[i] = 100.0f + 7.0f * t * t * t * t * t * t;
+        }
+        clvr_mesh_update_ranges(&m);
+        check_locate(cl, k, &m, kind == FX_TETS ? "tets-graded" : "mixed-graded", 4, 300, 0, 1500);
+        clvr_mesh_free(&m);
+    }
 }
 
 /* Inconsistent input is reported, not trusted. */
@@ -1103,10 +1122,147 @@ static void test_files(clvr_cl *cl, const clvr_bvh_kernels *k)
     }
 }
 
+/* The occupancy grid's slabs (locate.h, element hulls), on the host
+ * functions the rasterization calls. Exact: on a grid of 8^3 cells over
+ * the unit cube, the corner tet x, y, z >= 0, x + y + z <= 1 meets cell
+ * (i, j, k) iff i + j + k <= 8 (the cell's low corner on the tet's side of
+ * the slanted face); the box alone would keep all 512. Sound: random
+ * elements of every type (jittered, non-planar faces), in grids of random
+ * resolution, 1e3 units from the origin: the cell of every point
+ * clvr_element_forward gives for random parameters (interior, faces,
+ * edges, corners) keeps its bit. */
+static uint32_t occ_bits_of(const clvr_entry_grid *g, uint32_t type, const clvr_vec4 *v, uint32_t *words)
+{
+    float lo[3], hi[3];
+    clvr_element_slabs sl;
+    const float pad = clvr_element_vertex_box(type, v, lo, hi);
+    clvr_element_slabs_of(type, v, pad, &sl);
+    for (int a = 0; a < 3; ++a) {
+        lo[a] -= 2.0f * pad;
+        hi[a] += 2.0f * pad;
+    }
+    uint32_t a[3], b[3], set = 0;
+    clvr_entry_box_cells(g, lo, hi, a, b);
+    for (uint32_t z = a[2]; z <= b[2]; ++z)
+        for (uint32_t y = a[1]; y <= b[1]; ++y) {
+            const uint32_t c0 = (z * g->res[1] + y) * g->res[0] + a[0], c1 = c0 + (b[0] - a[0]);
+            float blo[2], bhi[2];
+            clvr_entry_cell_span(g, 1, y, &blo[0], &bhi[0]);
+            clvr_entry_cell_span(g, 2, z, &blo[1], &bhi[1]);
+            for (uint32_t w = c0 / 32u; w <= c1 / 32u; ++w) {
+                const uint32_t bits = clvr_occupancy_row_bits(g, &sl, w, c0, c1, a[0], blo, bhi, 0xffffffffu);
+                TU_CHECK((bits & ~clvr_occupancy_mask(w == c0 / 32u ? c0 % 32u : 0u, w == c1 / 32u ? c1 % 32u : 31u)) == 0u);
+                words[w] |= bits;
+                set += (uint32_t)__builtin_popcount(bits);
+            }
+        }
+    return set;
+}
+
+static void test_occupancy_slabs(void)
+{
+    clvr_entry_grid g;
+    memset(&g, 0, sizeof g);
+    for (int a = 0; a < 3; ++a) { /* cells 1 .. 8 of 10 over the unit cube; 0 and 9 reach out to infinity */
+        g.lo[a] = -0.125f;
+        g.scale[a] = 8.0f;
+        g.res[a] = 10u;
+    }
+    uint32_t words[4096];
+    memset(words, 0, 32 * sizeof *words);
+    const clvr_vec4 tet[4] = {{0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+    occ_bits_of(&g, CLVR_CELL_TET, tet, words);
+    int wrong = 0, inner = 0;
+    for (uint32_t c = 0; c < 1000u; ++c) {
+        const uint32_t i = c % 10u, j = c / 10u % 10u, k = c / 100u;
+        if (i < 1u || i > 8u || j < 1u || j > 8u || k < 1u || k > 8u) continue;
+        const int bit = (int)((words[c / 32u] >> (c % 32u)) & 1u);
+        inner += bit;
+        wrong += bit != (i + j + k - 3u <= 8u);
+    }
+    TU_CHECK_EQ_U64(wrong, 0);
+    TU_CHECK_EQ_U64(inner, 162u); /* of the 512 the box keeps */
+
+    uint64_t rs = 77;
+    int lost = 0;
+    uint32_t kept = 0, boxed = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const uint32_t type = (uint32_t)trial % CLVR_CELL_TYPE_COUNT;
+        /* a unit cube's corners (or a tet's, pyramid's, wedge's in it),
+         * jittered, scaled and moved; grid res 3 .. 15 over the box */
+        static const float hexc[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                         {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+        static const float tetc[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.3f, 0.2f, 1}};
+        static const float pyrc[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 0.4f, 1}};
+        static const float wedc[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+        const float(*cn)[3] = type == CLVR_CELL_TET ? tetc : type == CLVR_CELL_PYRAMID ? pyrc
+                              : type == CLVR_CELL_WEDGE ? wedc : hexc;
+        const float sc = 0.01f + 10.0f * tu_randf(&rs);
+        clvr_vec4 v[8];
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t i = 0; i < clvr_cell_vertex_count(type); ++i) {
+            float p[3];
+            for (int a = 0; a < 3; ++a) {
+                p[a] = 1000.0f + sc * (cn[i][a] + 0.3f * (tu_randf(&rs) - 0.5f));
+                lo[a] = fminf(lo[a], p[a]);
+                hi[a] = fmaxf(hi[a], p[a]);
+            }
+            v[i].x = p[0];
+            v[i].y = p[1];
+            v[i].z = p[2];
+            v[i].w = 0.0f;
+        }
+        /* the grid: over the element's box grown by up to a third, a
+         * random rotation of the axes' resolutions */
+        uint64_t cells = 1;
+        for (int a = 0; a < 3; ++a) {
+            const float ext = hi[a] - lo[a], grow = ext * 0.33f * tu_randf(&rs);
+            g.res[a] = 3u + (uint32_t)(tu_rand(&rs) % 13u);
+            g.lo[a] = lo[a] - grow;
+            g.scale[a] = (float)g.res[a] / (ext + 2.0f * grow);
+            cells *= g.res[a];
+        }
+        memset(words, 0, (size_t)((cells + 31u) / 32u) * sizeof *words);
+        kept += occ_bits_of(&g, type, v, words);
+        float blo[3], bhi[3];
+        const float pad = clvr_element_vertex_box(type, v, blo, bhi);
+        uint32_t a[3], b[3];
+        for (int k = 0; k < 3; ++k) {
+            blo[k] -= 2.0f * pad;
+            bhi[k] += 2.0f * pad;
+        }
+        clvr_entry_box_cells(&g, blo, bhi, a, b);
+        boxed += (b[0] - a[0] + 1u) * (b[1] - a[1] + 1u) * (b[2] - a[2] + 1u);
+        for (int q = 0; q < 300; ++q) {
+            float u = tu_randf(&rs), w1 = tu_randf(&rs), w2 = tu_randf(&rs);
+            if (q % 3 == 1) u = (float)(tu_rand(&rs) & 1u); /* on a face (or an edge, a corner) */
+            if (q % 3 == 2) u = w1 = (float)(tu_rand(&rs) & 1u);
+            if (type == CLVR_CELL_TET || type == CLVR_CELL_WEDGE) {
+                if (u + w1 > 1.0f) {
+                    const float t = u + w1;
+                    u /= t;
+                    w1 /= t;
+                }
+                if (type == CLVR_CELL_TET && u + w1 + w2 > 1.0f) w2 = 1.0f - u - w1;
+            }
+            float p[3];
+            clvr_element_forward(type, v, u, w1, w2, &p[0], &p[1], &p[2]);
+            uint32_t cc[3];
+            const uint32_t oc = clvr_occupancy_cell(&g, p[0], p[1], p[2], cc);
+            lost += !((words[oc / 32u] >> (oc % 32u)) & 1u);
+        }
+    }
+    TU_CHECK_EQ_U64(lost, 0);
+    /* the slabs cut something off the boxes (about a quarter here) */
+    printf("occupancy slabs: %u of %u cells of the element boxes kept\n", kept, boxed);
+    TU_CHECK(kept < boxed * 0.9);
+}
+
 int main(void)
 {
     test_arithmetic();
     test_entry_layout();
+    test_occupancy_slabs();
     test_many_candidates();
     test_bad_input();
     clvr_cl cl;
