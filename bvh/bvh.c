@@ -206,7 +206,7 @@ clvr_status clvr_entry_grids_layout(const clvr_instance *instances, uint32_t num
 }
 
 /* The elements of leaf cluster `leaf` of inst into the cells their boxes
- * meet (clvr_entry_element_box): cells holds (first, last) leaf per cell
+ * meet (clvr_entry_element_hull): cells holds (first, last) leaf per cell
  * of inst's grid g and the bits of the occupancy grid occ. */
 static void entry_rasterize_host(const clvr_mesh_view *m, const clvr_instance *inst, const clvr_entry_grid *g,
                                  const clvr_entry_grid *occ, uint32_t leaf, uint32_t *cells)

@@ -168,10 +168,11 @@ __kernel void clvr_element_boxes(__global const clvr_bvh_node *blas, __global co
 }
 
 /* Entry grids (locate.h), first pass: one work item per leaf cluster
- * marks the cells its elements' boxes meet (clvr_entry_element_box):
+ * marks the cells its elements' boxes meet (clvr_entry_element_hull):
  * atomic min / max of its id in its instance's grid (cells hold (first,
  * last) leaf pairs, filled with (NOT_FOUND, 0) before), atomic or of the
- * cells' bits in the occupancy grid (cleared before). The arrays come piece by piece as
+ * bits of the occupancy grid's cells that the box and the element's slabs
+ * both meet (cleared before). The arrays come piece by piece as
  * clvr_locate_points_split takes them. */
 __kernel void clvr_entry_rasterize(__global const clvr_bvh_node *blas, __global const clvr_instance *instances,
                                    __global const clvr_entry_grid *grids, uint num_instances, uint num_leaves,

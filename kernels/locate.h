@@ -506,7 +506,7 @@ CLVR_INLINE int clvr_locate_in_instance(const clvr_mesh_view *m, const clvr_inst
  * instance's tree:
  *  - start: the lowest common ancestor of every leaf cluster with an
  *    element whose (padded) box meets the cell (CLVR_BVH_NOT_FOUND when
- *    none does: no element there; clvr_entry_element_box). The box of an
+ *    none does: no element there; clvr_entry_element_hull). The box of an
  *    element that holds a point meets the point's cell (a coordinate's
  *    cell is one monotonic map, for points and box corners alike), so a
  *    walk from start finds what a walk from the root finds.
@@ -561,27 +561,6 @@ CLVR_INLINE void clvr_entry_box_cells(const clvr_entry_grid *g, const float *lo,
     for (int k = 0; k < 3; ++k) {
         a[k] = clvr_entry_coord(lo[k], g->lo[k], g->scale[k], g->res[k]);
         b[k] = clvr_entry_coord(hi[k], g->lo[k], g->scale[k], g->res[k]);
-    }
-}
-
-/* Element e's box (of inst, in its piece pa), padded as
- * clvr_ebox_build_leaf pads it: it holds every point the containment tests
- * accept. The entry grids' cells take elements' boxes, not their leaf
- * clusters': a leaf of 16 graded or curved-boundary cells has a box far
- * larger than its elements, and a cell that only its box meets sends every
- * point there into a search that finds nothing (OpenFOAM igloo, random
- * points, host walk: queries that miss without entering a tree 12% -> 25%
- * of all, bottom nodes per miss 4.9 -> 2.6; PoCL bench_locate +13-20%,
- * the tet meshes unchanged). */
-CLVR_INLINE void clvr_entry_element_box(const clvr_piece_arrays *pa, const clvr_instance *inst, clvr_u32 e,
-                                        float *lo, float *hi)
-{
-    clvr_vec4 v[CLVR_CELL_MAX_VERTS];
-    clvr_load_element_in(pa, inst, e, v);
-    const float pad = 2.0f * clvr_element_vertex_box(inst->type, v, lo, hi);
-    for (int k = 0; k < 3; ++k) {
-        lo[k] -= pad;
-        hi[k] += pad;
     }
 }
 
@@ -747,7 +726,17 @@ CLVR_INLINE clvr_u32 clvr_occupancy_row_bits(const clvr_entry_grid *g, const clv
     return bits;
 }
 
-/* clvr_entry_element_box, and the element's slabs (clvr_element_slabs_of). */
+/* Element e's box (of inst, in its piece pa) in lo, hi, padded as
+ * clvr_ebox_build_leaf pads it: it holds every point the containment tests
+ * accept. The entry grids' cells take elements' boxes, not their leaf
+ * clusters': a leaf of 16 graded or curved-boundary cells has a box far
+ * larger than its elements, and a cell that only its box meets sends every
+ * point there into a search that finds nothing (OpenFOAM igloo, random
+ * points, host walk: queries that miss without entering a tree 12% -> 25%
+ * of all, bottom nodes per miss 4.9 -> 2.6; PoCL bench_locate +13-20%,
+ * the tet meshes unchanged).
+ * Its slabs (clvr_element_slabs_of) in s: the occupancy grid's cells take
+ * those too (element hulls, above). */
 CLVR_INLINE void clvr_entry_element_hull(const clvr_piece_arrays *pa, const clvr_instance *inst, clvr_u32 e,
                                          float *lo, float *hi, clvr_element_slabs *s)
 {
@@ -770,7 +759,7 @@ CLVR_INLINE void clvr_entry_element_hull(const clvr_piece_arrays *pa, const clvr
  * also has one occupancy grid over the whole mesh (entry_grids[0]; the
  * instances' grids follow it), one bit per cell, about
  * CLVR_OCCUPANCY_CELLS_PER_ELEMENT cells per element (0.125 bytes per
- * element), the bit set where some element's box (clvr_entry_element_box)
+ * element), the bit set where some element's box (clvr_entry_element_hull)
  * and all its slabs (element hulls, above) meet the cell. A point whose bit is clear is in no element, for the
  * same reason as for an entry grid's start: clvr_locate_ex returns at
  * once. Host walk, random points: the bit answers 44.5% of all queries on
