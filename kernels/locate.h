@@ -578,7 +578,8 @@ CLVR_INLINE void clvr_entry_box_cells(const clvr_entry_grid *g, const float *lo,
  * margin (clvr_entry_cell_span) already covers that reach for elements
  * under about a thousand cells, so test_bvh cannot tell the two apart.
  * A triangle repeats its last vertex: (c - a) x (d - b) is then its
- * normal too.
+ * normal too; rows past a type's face count (clvr_element_slabs.faces)
+ * are never read.
  * Measured (session 53, 2-core Xeon VM, PoCL): random points whose bit is
  * clear on the igloo 44.6% -> 46.2%, those left in an occupied cell but in
  * no element 4.7% -> 3.2% (their 13.7% of a host walk's time -> 10.6%);
@@ -683,10 +684,10 @@ CLVR_INLINE void clvr_slab_terms(float n, float o, float lo, float hi, float *tl
  * from x0 at cell c0; the row's y and z spans blo_yz .. bhi_yz, from
  * clvr_entry_cell_span) whose box meets every slab of s, among the bits of
  * todo (the others are not tested: the rasterization passes those not set
- * yet, since an element's cells are mostly set by its neighbours). A cell is ruled
- * out only by more than 8 ulps of the sum's terms (its rounding): a cell
- * far larger than the element (1e3 times its size) could otherwise lose
- * it. The y and z terms are summed once per row, the x term per cell. */
+ * yet, since an element's cells are mostly set by its neighbours). A cell
+ * is ruled out only by more than 8 ulps of the sum's terms (its rounding):
+ * a cell far larger than the element (1e3 times its size) could otherwise
+ * lose it. The y and z terms are summed once per row, the x term per cell. */
 CLVR_INLINE clvr_u32 clvr_occupancy_row_bits(const clvr_entry_grid *g, const clvr_element_slabs *s, clvr_u32 w,
                                              clvr_u32 c0, clvr_u32 c1, clvr_u32 x0, const float *blo_yz,
                                              const float *bhi_yz, clvr_u32 todo)
@@ -714,7 +715,7 @@ CLVR_INLINE clvr_u32 clvr_occupancy_row_bits(const clvr_entry_grid *g, const clv
         float xl, xh;
         clvr_entry_cell_span(g, 0, x0 + (c - c0), &xl, &xh);
         int meets = 1;
-        for (clvr_u32 f = 0; f < s->faces; ++f) {
+        for (clvr_u32 f = 0; meets && f < s->faces; ++f) {
             float tl, th;
             clvr_slab_terms(s->n[f][0], s->o[0], xl, xh, &tl, &th);
             if (mn[f] + tl > s->hi[f] + tol * (an[f] + fabs(tl)) ||
@@ -726,7 +727,7 @@ CLVR_INLINE clvr_u32 clvr_occupancy_row_bits(const clvr_entry_grid *g, const clv
     return bits;
 }
 
-/* Element e's box (of inst, in its piece pa) in lo, hi, padded as
+/* The box of an element of the given type with vertices v in lo, hi, padded as
  * clvr_ebox_build_leaf pads it: it holds every point the containment tests
  * accept. The entry grids' cells take elements' boxes, not their leaf
  * clusters': a leaf of 16 graded or curved-boundary cells has a box far
@@ -736,18 +737,24 @@ CLVR_INLINE clvr_u32 clvr_occupancy_row_bits(const clvr_entry_grid *g, const clv
  * of all, bottom nodes per miss 4.9 -> 2.6; PoCL bench_locate +13-20%,
  * the tet meshes unchanged).
  * Its slabs (clvr_element_slabs_of) in s: the occupancy grid's cells take
- * those too (element hulls, above). */
+ * those too (element hulls, above). Also test_bvh's reference. */
+CLVR_INLINE void clvr_element_hull(clvr_u32 type, const clvr_vec4 *v, float *lo, float *hi, clvr_element_slabs *s)
+{
+    const float pad = clvr_element_vertex_box(type, v, lo, hi);
+    for (int k = 0; k < 3; ++k) {
+        lo[k] -= 2.0f * pad;
+        hi[k] += 2.0f * pad;
+    }
+    clvr_element_slabs_of(type, v, pad, s);
+}
+
+/* clvr_element_hull of element e of inst (in its piece pa). */
 CLVR_INLINE void clvr_entry_element_hull(const clvr_piece_arrays *pa, const clvr_instance *inst, clvr_u32 e,
                                          float *lo, float *hi, clvr_element_slabs *s)
 {
     clvr_vec4 v[CLVR_CELL_MAX_VERTS];
     clvr_load_element_in(pa, inst, e, v);
-    const float pad = clvr_element_vertex_box(inst->type, v, lo, hi);
-    for (int k = 0; k < 3; ++k) {
-        lo[k] -= 2.0f * pad;
-        hi[k] += 2.0f * pad;
-    }
-    clvr_element_slabs_of(inst->type, v, pad, s);
+    clvr_element_hull(inst->type, v, lo, hi, s);
 }
 
 /* ------------------------------------------------------------ occupancy
@@ -759,10 +766,10 @@ CLVR_INLINE void clvr_entry_element_hull(const clvr_piece_arrays *pa, const clvr
  * also has one occupancy grid over the whole mesh (entry_grids[0]; the
  * instances' grids follow it), one bit per cell, about
  * CLVR_OCCUPANCY_CELLS_PER_ELEMENT cells per element (0.125 bytes per
- * element), the bit set where some element's box (clvr_entry_element_hull)
- * and all its slabs (element hulls, above) meet the cell. A point whose bit is clear is in no element, for the
- * same reason as for an entry grid's start: clvr_locate_ex returns at
- * once. Host walk, random points: the bit answers 44.5% of all queries on
+ * element), the bit set where some element's box and all its slabs
+ * (clvr_entry_element_hull; element hulls, above) meet the cell. A point
+ * whose bit is clear is in no element, for the same reason as for an entry
+ * grid's start: clvr_locate_ex returns at once. Host walk, random points: the bit answers 44.5% of all queries on
  * the igloo (the entry grids alone let 25% miss without a tree), 9.7% on
  * the blunt fin, 18.4% on post-tets. 8 cells per element answered 46%,
  * 10.5% and 19%, and made the 1M tets' whole preprocessing 0.88 s instead

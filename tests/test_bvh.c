@@ -1123,10 +1123,12 @@ static void test_files(clvr_cl *cl, const clvr_bvh_kernels *k)
 }
 
 /* The occupancy grid's slabs (locate.h, element hulls), on the host
- * functions the rasterization calls. Exact: on a grid of 8^3 cells over
- * the unit cube, the corner tet x, y, z >= 0, x + y + z <= 1 meets cell
- * (i, j, k) iff i + j + k <= 8 (the cell's low corner on the tet's side of
- * the slanted face); the box alone would keep all 512. Sound: random
+ * functions the rasterization calls. Exact: on a grid of 10^3 cells whose
+ * inner 8^3 cover the unit cube (the outer ones reach to infinity), the
+ * corner tet x, y, z >= 0, x + y + z <= 1 meets inner cell (i, j, k),
+ * i, j, k in 1 .. 8, iff (i - 1) + (j - 1) + (k - 1) <= 8 (the cell's low
+ * corner on the tet's side of the slanted face): 162 of the 512 its box
+ * keeps. Sound: random
  * elements of every type (jittered, non-planar faces), in grids of random
  * resolution, 1e3 units from the origin: the cell of every point
  * clvr_element_forward gives for random parameters (interior, faces,
@@ -1135,12 +1137,7 @@ static uint32_t occ_bits_of(const clvr_entry_grid *g, uint32_t type, const clvr_
 {
     float lo[3], hi[3];
     clvr_element_slabs sl;
-    const float pad = clvr_element_vertex_box(type, v, lo, hi);
-    clvr_element_slabs_of(type, v, pad, &sl);
-    for (int a = 0; a < 3; ++a) {
-        lo[a] -= 2.0f * pad;
-        hi[a] += 2.0f * pad;
-    }
+    clvr_element_hull(type, v, lo, hi, &sl);
     uint32_t a[3], b[3], set = 0;
     clvr_entry_box_cells(g, lo, hi, a, b);
     for (uint32_t z = a[2]; z <= b[2]; ++z)
@@ -1225,12 +1222,9 @@ static void test_occupancy_slabs(void)
         memset(words, 0, (size_t)((cells + 31u) / 32u) * sizeof *words);
         kept += occ_bits_of(&g, type, v, words);
         float blo[3], bhi[3];
-        const float pad = clvr_element_vertex_box(type, v, blo, bhi);
+        clvr_element_slabs sl;
         uint32_t a[3], b[3];
-        for (int k = 0; k < 3; ++k) {
-            blo[k] -= 2.0f * pad;
-            bhi[k] += 2.0f * pad;
-        }
+        clvr_element_hull(type, v, blo, bhi, &sl);
         clvr_entry_box_cells(&g, blo, bhi, a, b);
         boxed += (b[0] - a[0] + 1u) * (b[1] - a[1] + 1u) * (b[2] - a[2] + 1u);
         for (int q = 0; q < 300; ++q) {
