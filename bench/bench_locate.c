@@ -13,13 +13,16 @@
  *
  *   bench_locate [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
  *                [--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent]
- *                [--ebox on|off] [--entry on|off]
+ *                [--ebox on|off] [--entry on|off] [--one-curve on|off]
  *
  * --ebox: quantized element boxes (kernels/locate.h), on by default as in
  * the renderer; off measures the leaf scan without them.
  * --entry: entry grids (kernels/locate.h), on by default as in the
  * renderer; off starts every walk at its instance's root. Their bytes count
  * in the BVH's bytes per element.
+ * --one-curve: a mesh of several cell types sorted along one curve, every
+ * cell a collapsed hex (clvr_preprocess_options.one_curve); default off, as
+ * in the renderer.
  * --hint: the query hint passed to the kernel (CLVR_LOCATE_*, clvr_shared.h);
  * default coherent (the faster on every order, clvr_shared.h).
  */
@@ -47,6 +50,7 @@ static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 static int g_entry = 1;    /* entry grids (--entry on|off, kernels/locate.h) */
+static int g_one_curve = 0; /* mixed meshes on one curve as collapsed hexes (--one-curve on|off, preprocess.h) */
 static cl_uint g_hints = CLVR_LOCATE_INCOHERENT; /* query hint of the kernel (--order, --hint) */
 static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples) */
 #define NRUNS 5
@@ -66,6 +70,7 @@ static clvr_status run_one(clvr_cl *cl, const clvr_bvh_kernels *k, const clvr_me
     clvr_preprocess_options o;
     clvr_preprocess_options_default(&o);
     o.leaf_size = leaf;
+    o.one_curve = g_one_curve;
     CLVR_TRY(clvr_preprocess(cl, m, &o, &c, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)(nq ? nq : 1) * sizeof *pts, pts,
                             "points", &dpts, err));
@@ -160,10 +165,13 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
                  (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             g_entry = !strcmp(argv[++i], "on");
+        else if (!strcmp(argv[i], "--one-curve") && i + 1 < argc &&
+                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_one_curve = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off] [--entry on|off]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off] [--entry on|off] [--one-curve on|off]\n",
                     argv[0]);
             return 2;
         }

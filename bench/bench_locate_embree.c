@@ -27,6 +27,9 @@
  *                       in bench_locate; their bytes count in clvr's tree bytes)
  *                       [--entry on|off]  (entry grids, kernels/locate.h; default on as in the
  *                       renderer; their bytes count in clvr's tree bytes)
+ *                       [--one-curve on|off]  (clvr: a mesh of several cell types on one curve, every
+ *                       cell a collapsed hex, clvr_preprocess_options.one_curve; default off as in the
+ *                       renderer; Embree gets the mesh's own cells either way)
  *
  * Last line: `point_queries_vs_embree: RATIO` (clvr queries/s over Embree's;
  * "n/a" without Embree). Built without Embree (CLVR_HAVE_EMBREE unset) it
@@ -59,6 +62,7 @@
 
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 static int g_entry = 1;    /* entry grids (--entry on|off, kernels/locate.h) */
+static int g_one_curve = 0; /* mixed meshes on one curve as collapsed hexes (--one-curve on|off, preprocess.h) */
 static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples, bench_points.h) */
 
 typedef struct result {
@@ -89,6 +93,7 @@ static clvr_status run_clvr(clvr_cl *cl, const clvr_mesh *m, uint32_t leaf, floa
     clvr_preprocess_options o;
     clvr_preprocess_options_default(&o);
     o.leaf_size = leaf;
+    o.one_curve = g_one_curve;
     CLVR_TRY(clvr_bvh_kernels_create(cl, &k, err));
     /* build_s: wall seconds from the mesh in host memory to a structure the
      * queries can run on (upload, every preprocessing stage: the sort, the
@@ -522,11 +527,14 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--entry") && i + 1 < argc &&
                  (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             g_entry = !strcmp(argv[++i], "on");
+        else if (!strcmp(argv[i], "--one-curve") && i + 1 < argc &&
+                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
+            g_one_curve = !strcmp(argv[++i], "on");
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
                     "[--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L] [--dump FILE] "
-                    "[--hint coherent|incoherent] [--ebox on|off] [--entry on|off]\n",
+                    "[--hint coherent|incoherent] [--ebox on|off] [--entry on|off] [--one-curve on|off]\n",
                     argv[0]);
             return 2;
         }

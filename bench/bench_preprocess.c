@@ -329,7 +329,7 @@ static int run_case(bench_ctx *bc, const char *name, const clvr_mesh *m)
         clvr_clustered_release(cl, &keep);
         return 1;
     }
-    clvr_pp_ref_keys(m->positions, idx, &L, &b, 0, keys, vals);
+    clvr_pp_ref_keys(m->positions, idx, &L, &b, 0, 0, keys, vals);
     double t_radix = 1e30, t_memcpy = 1e30, t_radix_cold = 1e30;
     for (int r = 0; r < repeat; ++r) {
         memcpy(k2, keys, N * 8);

@@ -47,6 +47,28 @@ __kernel void clvr_pp_gather(__global const uint *order, __global const uint *id
     }
 }
 
+/* One curve (clvr_preprocess_options.one_curve): idx_hex[8 i .. 8 i + 7] =
+ * input element order[i] as its collapsed hex (clvr_hex_collapse_ids),
+ * whatever its type; L is the input's type layout. The sort put every type
+ * on one curve (one key type), so sorted element i may be of any type.
+ * Tiled as clvr_pp_gather. */
+__kernel void clvr_pp_gather_collapse(__global const uint *order, __global const uint *idx_in,
+                                      __global uint *idx_hex, uint n, ulong chunk, uint ntiles, clvr_type_layout L)
+{
+    uint tile = (uint)get_global_id(0);
+    if (tile >= ntiles) return;
+    ulong b = (ulong)tile * chunk, e = min((ulong)n, b + chunk);
+    for (ulong i = b; i < e; ++i) {
+        const uint g = order[i], t = clvr_pp_type_of(g, L.first[1], L.first[2], L.first[3]);
+        const uint nv = clvr_cell_vertex_count(t);
+        __global const uint *src = idx_in + L.slot[t] + (ulong)(g - L.first[t]) * nv;
+        uint v[CLVR_CELL_MAX_VERTS], h[8];
+        for (uint k = 0; k < nv; ++k) v[k] = src[k];
+        clvr_hex_collapse_ids(t, v, h);
+        for (uint k = 0; k < 8u; ++k) idx_hex[8u * i + k] = h[k];
+    }
+}
+
 /* Sampling cluster c: cb1..cb3 are the first cluster ids of pyramids,
  * wedges, hexes; L the element layout, en = element count. */
 __kernel void clvr_pp_sampling(__global const float *pos, __global const float *scal, __global const uint *idx_sorted,

@@ -98,6 +98,29 @@ CLVR_INLINE clvr_u32 clvr_cell_vertex_count(clvr_u32 type)
 #undef CLVR_CELL_NV_
 }
 
+/* The inverse of clvr_hex_collapsed (kernels/elements.h) on vertex ids: h[0..7] = the 8-node hex
+ * that reads back as the element v (vertex ids in VTK order,
+ * clvr_cell_vertex_count(type) of them): tet a b c c d d d d, pyramid
+ * a b c d e e e e, wedge a b c c d e f f, a hex itself. Preprocessing with
+ * one curve (clvr_preprocess_options.one_curve) stores every cell of a mixed
+ * mesh this way, so that one Hilbert curve, one fixed stride and one
+ * instance type hold them all. */
+CLVR_INLINE void clvr_hex_collapse_ids(clvr_u32 type, const clvr_u32 *v, clvr_u32 *h)
+{
+    if (type == CLVR_CELL_TET) {
+        h[0] = v[0]; h[1] = v[1]; h[2] = h[3] = v[2];
+        h[4] = h[5] = h[6] = h[7] = v[3];
+    } else if (type == CLVR_CELL_PYRAMID) {
+        h[0] = v[0]; h[1] = v[1]; h[2] = v[2]; h[3] = v[3];
+        h[4] = h[5] = h[6] = h[7] = v[4];
+    } else if (type == CLVR_CELL_WEDGE) {
+        h[0] = v[0]; h[1] = v[1]; h[2] = h[3] = v[2];
+        h[4] = v[3]; h[5] = v[4]; h[6] = h[7] = v[5];
+    } else {
+        for (int k = 0; k < 8; ++k) h[k] = v[k];
+    }
+}
+
 /* Where each type's elements and index slots start in the concatenated
  * type lists (elements of type t: global ids first[t] .. first[t + 1] - 1,
  * the last type ending at the element count; their indices from slot[t],

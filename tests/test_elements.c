@@ -673,21 +673,25 @@ static void test_pyramid_sides(void)
 }
 
 /* A tet, pyramid or wedge written as a collapsed 8-node hex (Exodus II's
- * degenerate HEX8) is recognised, and clvr_element_sample(HEX) answers as
- * the type's own test, bit for bit; corners one float step apart keep a
- * hex a hex, and real hexes are never taken for another type. */
+ * degenerate HEX8, and preprocessing's one curve: clvr_hex_collapse_ids) is
+ * recognised, and clvr_element_sample(HEX) answers as the type's own test,
+ * bit for bit; corners one float step apart keep a hex a hex, and real
+ * hexes are never taken for another type. */
 static void test_collapsed_hex(void)
 {
-    static const int map[3][8] = {{0, 1, 2, 2, 3, 3, 3, 3}, {0, 1, 2, 3, 4, 4, 4, 4}, {0, 1, 2, 2, 3, 4, 5, 5}};
+    static const uint32_t map[3][8] = {{0, 1, 2, 2, 3, 3, 3, 3}, {0, 1, 2, 3, 4, 4, 4, 4}, {0, 1, 2, 2, 3, 4, 5, 5}};
     uint64_t rs = 99;
     for (uint32_t t = CLVR_CELL_TET; t <= CLVR_CELL_WEDGE; ++t) {
-        const uint32_t nv = clvr_cell_vertex_count(t);
+        const uint32_t nv = clvr_cell_vertex_count(t), ids[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+        uint32_t hm[8];
+        clvr_hex_collapse_ids(t, ids, hm); /* the forms above, which clvr_hex_collapsed reads back */
+        TU_CHECK(memcmp(hm, map[t], sizeof hm) == 0);
         int wrong_type = 0, differ = 0, inside = 0, apart = 0;
         for (int trial = 0; trial < 300; ++trial) {
             clvr_vec4 v[8], h[8], c[8];
             make_element(t, 0.15f, 2.0f, -1.0f, &rs, v);
             for (uint32_t i = 0; i < nv; ++i) v[i].w = 10.0f * tu_randf(&rs);
-            for (int k = 0; k < 8; ++k) h[k] = v[map[t][k]];
+            for (int k = 0; k < 8; ++k) h[k] = v[hm[k]];
             if (clvr_hex_collapsed(h, c) != t || memcmp(c, v, nv * sizeof *v) != 0) ++wrong_type;
             for (int q = 0; q < 60; ++q) {
                 const float x = 2.6f * tu_randf(&rs) - 1.3f, y = 2.6f * tu_randf(&rs) - 1.3f,

@@ -229,7 +229,10 @@ static void check_clustered(const char *name, const clvr_mesh *m, const clvr_clu
     TU_CHECK_EQ_U64(e, N);
     TU_CHECK_EQ_U64(fv, c->num_vertices);
     TU_CHECK_EQ_U64(fl, c->num_leaves);
-    if (c->index_bits == 16) TU_CHECK_EQ_U64(c->bytes_indices_after * 2, c->bytes_indices_before);
+    uint64_t slots = 0; /* of m: the hex view's with one curve */
+    for (uint32_t t = 0; t < 4; ++t) slots += m->num_cells[t] * clvr_cell_vertex_count(t);
+    if (c->index_bits == 16 && c->bytes_indices_before) /* 0: a reference result, no stats */
+        TU_CHECK_EQ_U64(c->bytes_indices_after * 2, slots * 4);
 
     /* order is a permutation; sorted elements equal their originals, vertex by vertex */
     if (h->order) {
@@ -383,6 +386,26 @@ static void check_locality(const clvr_mesh *m, const clvr_clustered *c, const cl
     TU_CHECK(curve / (double)c->num_leaves * 20 < input / (double)nl);
 }
 
+/* m with every cell written as its collapsed hex (clvr_hex_collapse_ids),
+ * in m's element order: what preprocessing with one curve must hold. */
+static clvr_status hex_view(const clvr_mesh *m, clvr_mesh *out, clvr_error *err)
+{
+    const uint64_t n = clvr_mesh_num_elements(m), hexes[4] = {0, 0, 0, n};
+    clvr_status s = clvr_mesh_alloc(out, m->num_vertices, hexes, err);
+    if (s != CLVR_OK) return s;
+    memcpy(out->positions, m->positions, m->num_vertices * 12);
+    memcpy(out->scalars, m->scalars, m->num_vertices * 4);
+    out->scalar_min = m->scalar_min;
+    out->scalar_max = m->scalar_max;
+    memcpy(out->bounds_lo, m->bounds_lo, sizeof out->bounds_lo);
+    memcpy(out->bounds_hi, m->bounds_hi, sizeof out->bounds_hi);
+    uint64_t g = 0;
+    for (uint32_t t = 0; t < 4; ++t)
+        for (uint64_t i = 0; i < m->num_cells[t]; ++i, ++g)
+            clvr_hex_collapse_ids(t, m->indices[t] + i * clvr_cell_vertex_count(t), out->indices[3] + 8 * g);
+    return CLVR_OK;
+}
+
 /* Runs device and reference with these options and checks everything. */
 static void run_case(clvr_cl *cl, const char *name, const clvr_mesh *m, const clvr_preprocess_options *o, int ref,
                      int multiset)
@@ -408,7 +431,24 @@ static void run_case(clvr_cl *cl, const char *name, const clvr_mesh *m, const cl
         if (!same) fprintf(stderr, "%s: device and reference differ\n", name);
         TU_CHECK(same);
     }
-    check_clustered(name, m, &c, &h, multiset);
+    uint64_t slots = 0;
+    int types = 0;
+    for (uint32_t t = 0; t < 4; ++t) {
+        slots += m->num_cells[t] * clvr_cell_vertex_count(t);
+        types += m->num_cells[t] > 0;
+    }
+    TU_CHECK_EQ_U64(c.bytes_indices_before, slots * 4);
+    if (o && o->one_curve && types > 1) {
+        /* one curve: the same clustered mesh as the hex view's, whatever the types */
+        clvr_mesh mh = {0};
+        TU_CHECK_STATUS(hex_view(m, &mh, &err), CLVR_OK, &err);
+        TU_CHECK_EQ_U64(c.num_cells[3], c.num_elements);
+        check_clustered(name, &mh, &c, &h, multiset);
+        clvr_mesh_free(&mh);
+    } else {
+        for (uint32_t t = 0; t < 4; ++t) TU_CHECK_EQ_U64(c.num_cells[t], m->num_cells[t]);
+        check_clustered(name, m, &c, &h, multiset);
+    }
     if (o && o->leaf_size == 16 && !o->morton && strstr(name, "shuffled")) check_locality(m, &c, &h);
     clvr_clustered_host_free(&h);
     clvr_clustered_host_free(&rh);
@@ -440,6 +480,14 @@ static void run_all_options(clvr_cl *cl, const char *name, const clvr_mesh *m, i
     /* tight limits: many small instances */
     clvr_preprocess_options_default(&o);
     o.keep_order = 1;
+    o.max_instance_elements = 37;
+    run_case(cl, name, m, &o, 1, 0);
+    /* one curve, with leaves of 16 and of 5, and tight limits */
+    clvr_preprocess_options_default(&o);
+    o.keep_order = 1;
+    o.one_curve = 1;
+    run_case(cl, name, m, &o, 1, multiset);
+    o.leaf_size = 5;
     o.max_instance_elements = 37;
     run_case(cl, name, m, &o, 1, 0);
 }

@@ -42,17 +42,24 @@
 /* Preprocesses m in PARTS partitions with the allocation limit lowered to
  * `limit` (0: the device's) and builds its trees; the limit stays lowered
  * (the caller's renders run under it too) until the caller restores it. */
-static clvr_status prepare(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, uint64_t limit, clvr_clustered *c,
-                           clvr_accel *a, clvr_error *err)
+static clvr_status prepare_curve(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, uint64_t limit, int one_curve,
+                                 clvr_clustered *c, clvr_accel *a, clvr_error *err)
 {
     clvr_preprocess_options o;
     clvr_preprocess_options_default(&o);
     o.index_bits = bits;
+    o.one_curve = one_curve;
     clvr_mesh mm = *m; /* not consumed: a shallow copy is enough */
     cl->max_alloc_bytes = limit ? limit : cl->device_max_alloc_bytes;
     clvr_status s = clvr_preprocess_partitioned(cl, &mm, &o, PARTS, 0, 0, c, NULL, err);
     if (s == CLVR_OK) s = clvr_accel_build(cl, c, a, err);
     return s;
+}
+
+static clvr_status prepare(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, uint64_t limit, clvr_clustered *c,
+                           clvr_accel *a, clvr_error *err)
+{
+    return prepare_curve(cl, m, bits, limit, 0, c, a, err);
 }
 
 /* 1 when sorted element e of the unsplit host arrays h (ninst instances)
@@ -374,6 +381,72 @@ static void test_pieces(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, int rend
 }
 
 /* 5. The device check from counts. */
+/* 5. One curve (clvr_preprocess_options.one_curve), in PARTS partitions:
+ * every clustered cell of the mixed mesh a collapsed hex, fewer instances
+ * (each holds every type of its region), the same point location as one
+ * curve per type (the same points found, the same values: bit for bit where
+ * the same element holds the point, its collapsed hex taking the type's own
+ * test; within rounding where a point on a face both share was found in
+ * the other one) and renders with the same distribution. */
+static void test_one_curve(clvr_cl *cl, const clvr_mesh *m)
+{
+    float *base_m[NM] = {NULL}, *base_v[NM] = {NULL};
+    clvr_error err = {0};
+    clvr_clustered c1 = {0}, c2 = {0};
+    clvr_accel a1 = {0}, a2 = {0};
+    TU_CHECK_STATUS(prepare_curve(cl, m, 16, 0, 0, &c1, &a1, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(prepare_curve(cl, m, 16, 0, 1, &c2, &a2, &err), CLVR_OK, &err);
+    if (!c1.instances || !c2.instances) return;
+    TU_CHECK_EQ_U64(c2.num_cells[CLVR_CELL_HEX], c2.num_elements);
+    TU_CHECK(c1.num_cells[CLVR_CELL_HEX] < c1.num_elements); /* the mesh is mixed: the test can fail */
+    uint64_t hexes = 0;
+    for (uint64_t i = 0; i < c2.num_instances; ++i) hexes += c2.host_instances[i].type == CLVR_CELL_HEX;
+    TU_CHECK_EQ_U64(hexes, c2.num_instances);
+    printf("one curve: %llu instances (one curve per type: %llu)\n", (unsigned long long)c2.num_instances,
+           (unsigned long long)c1.num_instances);
+    TU_CHECK(c2.num_instances < c1.num_instances);
+    enum { NPTS = 20000 };
+    float *pts = malloc(NPTS * 4 * sizeof(float)), *s1 = malloc(NPTS * 4), *s2 = malloc(NPTS * 4);
+    uint32_t *e1 = malloc(NPTS * 4), *e2 = malloc(NPTS * 4);
+    uint64_t rng = 0x0ce0c0u;
+    for (int i = 0; i < NPTS; ++i) {
+        for (int k = 0; k < 3; ++k)
+            pts[4 * i + k] = m->bounds_lo[k] + tu_randf(&rng) * (m->bounds_hi[k] - m->bounds_lo[k]);
+        pts[4 * i + 3] = 0.0f;
+    }
+    TU_CHECK_STATUS(clvr_accel_locate(cl, &c1, &a1, pts, NPTS, CLVR_LOCATE_COHERENT, 1, s1, e1, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_accel_locate(cl, &c2, &a2, pts, NPTS, CLVR_LOCATE_COHERENT, 1, s2, e2, &err), CLVR_OK, &err);
+    uint64_t found = 0, diff_found = 0, same = 0, close = 0, far = 0;
+    float worst = 0.0f;
+    for (int i = 0; i < NPTS; ++i) {
+        const int f1 = e1[i] != CLVR_BVH_NOT_FOUND, f2 = e2[i] != CLVR_BVH_NOT_FOUND;
+        found += f1;
+        diff_found += f1 != f2;
+        if (!f1 || !f2) continue;
+        const float d = fabsf(s1[i] - s2[i]);
+        worst = fmaxf(worst, d);
+        if (memcmp(&s1[i], &s2[i], sizeof(float)) == 0) ++same;
+        else if (d <= 1e-5f * fmaxf(1.0f, fabsf(s1[i]))) ++close;
+        else ++far;
+    }
+    printf("one curve: %llu of %d points found, %llu found by one side only; values: %llu identical, %llu within "
+           "1e-5, %llu further (largest difference %g)\n",
+           (unsigned long long)found, NPTS, (unsigned long long)diff_found, (unsigned long long)same,
+           (unsigned long long)close, (unsigned long long)far, (double)worst);
+    TU_CHECK(found > NPTS / 2);
+    TU_CHECK_EQ_U64(diff_found, 0);
+    TU_CHECK_EQ_U64(far, 0);
+    TU_CHECK(same > found * 9 / 10);
+    compare_renders(cl, m, &c1, &a1, base_m, base_v);
+    compare_renders(cl, m, &c2, &a2, base_m, base_v);
+    for (int mi = 0; mi < NM; ++mi) { free(base_m[mi]); free(base_v[mi]); }
+    free(pts); free(s1); free(s2); free(e1); free(e2);
+    clvr_accel_release(cl, &a1);
+    clvr_accel_release(cl, &a2);
+    clvr_clustered_release(cl, &c1);
+    clvr_clustered_release(cl, &c2);
+}
+
 static void test_check(void)
 {
     clvr_error err = {0};
@@ -424,6 +497,11 @@ int main(void)
            (unsigned long long)clvr_mesh_num_elements(&m), PARTS, (unsigned long long)lim16[2],
            (unsigned long long)lim16[3], (unsigned long long)lim16[4], (unsigned long long)lim32[2],
            (unsigned long long)lim32[3], (unsigned long long)lim32[4]);
+    clvr_mesh_free(&m);
+    /* smaller: the point is the types on one curve, not the pieces */
+    TU_CHECK_STATUS(fx_grid_mesh(40, FX_MIXED, 0.0f, 1.0f, 0.0f, 7, &m, &err), CLVR_OK, &err);
+    clvr_mesh_update_ranges(&m);
+    test_one_curve(&cl, &m);
     clvr_mesh_free(&m);
     clvr_cl_destroy(&cl);
     return tu_finish("test_split");

@@ -698,7 +698,9 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
     out->morton = opt.morton;
     out->num_elements = N;
     out->num_partitions = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) out->num_cells[t] = m->num_cells[t];
+    /* Summed over the partitions: with one curve (preprocess.h) a partition
+     * of several types holds collapsed hexes, one of a single type its own. */
+    memset(out->num_cells, 0, sizeof out->num_cells);
     for (int k = 0; k < 3; ++k) {
         out->bounds.lo[k] = m->bounds_lo[k];
         out->bounds.hi[k] = m->bounds_hi[k];
@@ -739,6 +741,7 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         t0 = clvr_clock_monotonic_s();
         for (int st = 0; st < CLVR_PP_STAGE_PARTITION; ++st) out->stage_s[st] += pc.stage_s[st];
         out->build_s += pc.build_s;
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) out->num_cells[t] += pc.num_cells[t];
         if (!first_done) {
             for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) out->first_cell[t] = pc.first_cell[t];
             first_done = 1;

@@ -163,6 +163,7 @@ clvr_status clvr_pp_create(clvr_cl *cl, clvr_pp *pp, clvr_error *err)
         {&pp->scan_apply, "clvr_pp_scan_apply"},     {&pp->select_scatter, "clvr_pp_select_scatter"},
         {&pp->radix_andor, "clvr_pp_radix_andor"},   {&pp->radix_hist, "clvr_pp_radix_hist"},
         {&pp->radix_scatter, "clvr_pp_radix_scatter"}, {&pp->gather, "clvr_pp_gather"},
+        {&pp->gather_collapse, "clvr_pp_gather_collapse"},
         {&pp->sampling, "clvr_pp_sampling"},         {&pp->leaf_boxes, "clvr_pp_leaf_boxes"},
         {&pp->instance_bounds, "clvr_pp_instance_bounds"}, {&pp->split, "clvr_pp_split"},
         {&pp->rec_flags, "clvr_pp_rec_flags"},       {&pp->inst_counts, "clvr_pp_inst_counts"},
@@ -180,7 +181,7 @@ void clvr_pp_destroy(clvr_pp *pp)
     if (!pp) return;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
         if (pp->keys_type[t]) { clReleaseKernel(pp->keys_type[t]); pp->keys_type[t] = NULL; }
-    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply, &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather,
+    cl_kernel *ks[] = {&pp->bounds_tiles, &pp->scan_reduce, &pp->scan_sums, &pp->scan_apply, &pp->select_scatter, &pp->radix_andor, &pp->radix_hist, &pp->radix_scatter, &pp->gather, &pp->gather_collapse,
                        &pp->sampling, &pp->leaf_boxes, &pp->instance_bounds, &pp->split, &pp->rec_flags,
                        &pp->inst_counts, &pp->inst_write, &pp->vertices, &pp->radix_buckets, &pp->iota};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; ++i)
@@ -238,19 +239,19 @@ cleanup:
 }
 
 clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layout *l, const clvr_box *b,
-                         int morton, cl_mem keys, cl_mem vals, double *sec, clvr_error *err)
+                         int morton, int one_curve, cl_mem keys, cl_mem vals, double *sec, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     cl_float gx = b->lo[0], gy = b->lo[1], gz = b->lo[2], scale = clvr_pp_scale(b);
     cl_int mo = morton, with_vals = vals != NULL;
     for (cl_uint t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        cl_uint count = (cl_uint)l->count[t], first = (cl_uint)l->first[t];
+        cl_uint count = (cl_uint)l->count[t], first = (cl_uint)l->first[t], kt = one_curve ? CLVR_CELL_HEX : t;
         if (count == 0) continue;
         cl_ulong slot0 = l->slot[t];
         cl_kernel k = pp->keys_type[t];
         cl_mem vbuf = with_vals ? vals : keys; /* a valid buffer either way; unused without values */
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(pos), CLVR_ARG(idx), CLVR_ARG(slot0), CLVR_ARG(count), CLVR_ARG(first),
-                              CLVR_ARG(gx), CLVR_ARG(gy), CLVR_ARG(gz), CLVR_ARG(scale), CLVR_ARG(mo), CLVR_ARG(t),
+                              CLVR_ARG(gx), CLVR_ARG(gy), CLVR_ARG(gz), CLVR_ARG(scale), CLVR_ARG(mo), CLVR_ARG(kt),
                               CLVR_ARG(keys), CLVR_ARG(vbuf), CLVR_ARG(with_vals)));
         CLVR_TRY(clvr_pp_launch(pp, k, (count + 1u) / 2u, 64, sec, err)); /* two elements per work-item */
     }
@@ -635,7 +636,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     clvr_status s = CLVR_OK;
     clvr_pp pp = {0};
     clvr_preprocess_options opt;
-    clvr_pp_layout L;
+    clvr_pp_layout L, LS;
     clvr_pp_split_plan plan;
     cl_mem pos = NULL, scal = NULL, idx_in = NULL, vmap = NULL, keys = NULL, vals = NULL, keys_tmp = NULL, vals_tmp = NULL,
            idx_sorted = NULL, tk = NULL, segbuf = NULL, recs = NULL, rec_counts = NULL, flags = NULL, sel = NULL,
@@ -656,6 +657,17 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         goto cleanup;
     }
     const int bits32 = opt.index_bits == 32;
+    int types_used = 0, only_type = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
+        if (L.count[t]) { ++types_used; only_type = (int)t; }
+    /* LS: the layout from the gather on. With one curve, every element is
+     * a collapsed hex (8 index slots). */
+    const int one_curve = opt.one_curve && types_used > 1;
+    LS = L;
+    if (one_curve) {
+        const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, L.num_elements};
+        clvr_pp_layout_make(&LS, hexes);
+    }
     out->leaf_size = opt.leaf_size;
     out->no_element_boxes = opt.no_element_boxes;
     out->sampling_size = opt.sampling_size;
@@ -663,15 +675,15 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     out->morton = opt.morton;
     out->num_elements = L.num_elements;
     out->num_partitions = 1;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = L.count[t]; out->first_cell[t] = L.first[t]; }
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = LS.count[t]; out->first_cell[t] = LS.first[t]; }
 
     double tb = wall_now();
     CLVR_TRY(clvr_pp_create(cl, &pp, err));
     out->build_s = wall_now() - tb;
-    clvr_pp_split_plan_make(&plan, &L, &opt, cl->compute_units, m->num_vertices);
+    clvr_pp_split_plan_make(&plan, &LS, &opt, cl->compute_units, m->num_vertices);
 
     /* --- upload */
-    const uint64_t V = m->num_vertices, N = L.num_elements, S = L.num_slots;
+    const uint64_t V = m->num_vertices, N = L.num_elements, S_in = L.num_slots, S = LS.num_slots;
     /* On a CPU device the kernels can read the mesh where it lies: buffers
      * made with CL_MEM_USE_HOST_PTR are the host arrays themselves (PoCL
      * maps them without a copy), which saves the write of every byte and the
@@ -681,9 +693,6 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
      * as the kernels read the types' lists concatenated. Other devices get
      * copies. */
     const int zero_copy = (cl->device_type & CL_DEVICE_TYPE_CPU) != 0;
-    int types_used = 0, only_type = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
-        if (L.count[t]) { ++types_used; only_type = (int)t; }
     const int borrow_idx = zero_copy && types_used == 1;
     {
         const cl_mem_flags ro = CL_MEM_READ_ONLY | (zero_copy ? CL_MEM_USE_HOST_PTR : 0);
@@ -691,9 +700,9 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         CLVR_TRY(clvr_cl_buffer(cl, ro, V * 12, zero_copy ? (void *)m->positions : NULL, "vertex positions", &pos, err));
         CLVR_TRY(clvr_cl_buffer(cl, ro, V * 4, zero_copy ? (void *)m->scalars : NULL, "vertex scalars", &scal, err));
         if (borrow_idx)
-            CLVR_TRY(clvr_cl_buffer(cl, ro, S * 4, (void *)m->indices[only_type], "element indices", &idx_in, err));
+            CLVR_TRY(clvr_cl_buffer(cl, ro, S_in * 4, (void *)m->indices[only_type], "element indices", &idx_in, err));
         else
-            CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_IDX_IN, S * 4, "element indices", &idx_in, err));
+            CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_IDX_IN, S_in * 4, "element indices", &idx_in, err));
         if (zero_copy) st[CLVR_PP_STAGE_UPLOAD] += wall_now() - tu;
     }
     {
@@ -718,8 +727,8 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS, N * 8, "sort keys", &keys, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS, N * 4, "sort values", &vals, err));
     /* The values (element ids) are made by the sort's first pass. */
-    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, keys, NULL,
-                          &st[CLVR_PP_STAGE_KEYS], err));
+    CLVR_TRY(clvr_pp_keys(&pp, pos, idx_in, &L, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, one_curve, keys,
+                          NULL, &st[CLVR_PP_STAGE_KEYS], err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_KEYS_TMP, N * 8, "sort keys (scratch)", &keys_tmp, err));
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VALS_TMP, N * 4, "sort values (scratch)", &vals_tmp, err));
     {
@@ -728,7 +737,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
          * the keys) unless it falls back to plain LSD. */
         uint64_t type_and = ~0ull, type_or = 0; /* every type id, not only 2 bits */
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
-            if (L.count[t]) { type_and &= t; type_or |= t; }
+            if (LS.count[t]) { type_and &= t; type_or |= t; }
         const uint64_t hint = ((type_and ^ type_or) << 48) | ((1ull << 48) - 1);
         CLVR_TRY(clvr_pp_sort(&pp, &keys, &vals, &keys_tmp, &vals_tmp, N, 1, hint, &st[CLVR_PP_STAGE_SORT], err));
     }
@@ -738,15 +747,16 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
 
     /* --- gather in curve order */
     cl_uint n32 = (cl_uint)N;
-    clvr_type_layout tl;
-    clvr_pp_type_layout(&L, &tl);
+    clvr_type_layout tl, tl_in;
+    clvr_pp_type_layout(&L, &tl_in);
+    clvr_pp_type_layout(&LS, &tl);
     CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_IDX_SORTED, S * 4, "sorted element indices", &idx_sorted, err));
     {
-        cl_kernel k = pp.gather;
+        cl_kernel k = one_curve ? pp.gather_collapse : pp.gather;
         cl_uint tiles = clvr_pp_tiles(&pp, N);
         cl_ulong chunk = (N + tiles - 1) / tiles;
         CLVR_TRY(CLVR_CL_ARGS(k, err, CLVR_ARG(vals), CLVR_ARG(idx_in), CLVR_ARG(idx_sorted), CLVR_ARG(n32),
-                              CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(tl)));
+                              CLVR_ARG(chunk), CLVR_ARG(tiles), CLVR_ARG(tl_in)));
         CLVR_TRY(clvr_pp_launch(&pp, k, tiles, 1, &st[CLVR_PP_STAGE_GATHER], err));
     }
     if (opt.keep_order) {
@@ -760,7 +770,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         uint64_t cfirst[CLVR_CELL_TYPE_COUNT], nc = 0;
         for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
             cfirst[t] = nc;
-            nc += (L.count[t] + opt.sampling_size - 1) / opt.sampling_size;
+            nc += (LS.count[t] + opt.sampling_size - 1) / opt.sampling_size;
         }
         out->num_sampling = nc;
         CLVR_TRY(ws_take(cl, ws, CLVR_PP_WS_OUT_SAMPLING, nc * sizeof(clvr_sampling_cluster), "sampling clusters",
@@ -776,9 +786,10 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
 
     /* --- greedy instance split with local re-indexing. The scratch vertex
      * map takes idx_in's place (same size; idx_in is not read any more),
-     * or a buffer of its own when idx_in is the borrowed mesh array. */
-    if (borrow_idx) {
-        clvr_cl_release(cl, &idx_in);
+     * or a buffer of its own when idx_in is the borrowed mesh array or
+     * (one curve) smaller than the collapsed hexes' slots. */
+    if (borrow_idx || S_in < S) {
+        ws_drop(cl, ws, &idx_in);
         CLVR_TRY(ws_get(cl, ws, CLVR_PP_WS_VMAP, S * 4, "scratch vertex map", &vmap, err));
     } else {
         vmap = idx_in;
@@ -805,7 +816,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
                 uint64_t b = (uint64_t)g * plan.seg_len[t], e = b + plan.seg_len[t];
                 d->s[0] = t;
                 d->s[1] = (cl_uint)b;
-                d->s[2] = (cl_uint)(e < L.count[t] ? e : L.count[t]);
+                d->s[2] = (cl_uint)(e < LS.count[t] ? e : LS.count[t]);
                 d->s[3] = 0;
             }
         CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, plan.total_segments * sizeof *segs, segs,

@@ -25,7 +25,7 @@ void clvr_pp_ref_bounds(const float *pos, const float *scal, uint64_t n, clvr_bo
 }
 
 void clvr_pp_ref_keys(const float *pos, const uint32_t *idx, const clvr_pp_layout *l, const clvr_box *b, int morton,
-                      uint64_t *keys, uint32_t *vals)
+                      int one_curve, uint64_t *keys, uint32_t *vals)
 {
     const float scale = clvr_pp_scale(b);
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
@@ -33,9 +33,19 @@ void clvr_pp_ref_keys(const float *pos, const uint32_t *idx, const clvr_pp_layou
         for (uint64_t e = 0; e < l->count[t]; ++e) {
             float lo[3], hi[3];
             clvr_pp_element_box(pos, idx + l->slot[t] + e * vpe, vpe, lo, hi);
-            keys[l->first[t] + e] = clvr_pp_element_key(t, lo, hi, b->lo, scale, morton);
+            keys[l->first[t] + e] = clvr_pp_element_key(one_curve ? CLVR_CELL_HEX : t, lo, hi, b->lo, scale, morton);
             vals[l->first[t] + e] = (uint32_t)(l->first[t] + e);
         }
+    }
+}
+
+void clvr_pp_ref_gather_collapse(const uint32_t *order, const uint32_t *idx_in, const clvr_pp_layout *l,
+                                 uint64_t n, uint32_t *idx_hex)
+{
+    for (uint64_t i = 0; i < n; ++i) {
+        const uint32_t g = order[i], t = clvr_pp_type_of(g, l->first[1], l->first[2], l->first[3]);
+        const uint32_t nv = clvr_cell_vertex_count(t);
+        clvr_hex_collapse_ids(t, idx_in + l->slot[t] + (uint64_t)(g - l->first[t]) * nv, idx_hex + 8 * i);
     }
 }
 
@@ -92,7 +102,7 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
 {
     clvr_status s = CLVR_OK;
     clvr_preprocess_options opt;
-    clvr_pp_layout L;
+    clvr_pp_layout L, LI;
     clvr_pp_split_plan plan;
     uint32_t *idx_in = NULL, *idx_sorted = NULL, *vmap = NULL, *order = NULL;
     uint64_t *keys = NULL, *tk = NULL, *vsrc = NULL;
@@ -100,9 +110,18 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     memset(out, 0, sizeof *out);
     memset(h, 0, sizeof *h);
     CLVR_TRY(clvr_pp_options_resolve(o, &opt, err));
-    clvr_pp_layout_make(&L, m->num_cells);
+    /* LI: the input's layout; L: the sorted one (all hexes with one curve, clvr_preprocess's LS). */
+    clvr_pp_layout_make(&LI, m->num_cells);
+    int types_used = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) types_used += LI.count[t] > 0;
+    const int one_curve = opt.one_curve && types_used > 1;
+    L = LI;
+    if (one_curve) {
+        const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, LI.num_elements};
+        clvr_pp_layout_make(&L, hexes);
+    }
     clvr_pp_split_plan_make(&plan, &L, &opt, compute_units, m->num_vertices);
-    const uint64_t N = L.num_elements, S = L.num_slots, V = m->num_vertices;
+    const uint64_t N = L.num_elements, S = L.num_slots, S_in = LI.num_slots, V = m->num_vertices;
     const int bits32 = opt.index_bits == 32;
     out->leaf_size = opt.leaf_size;
     out->sampling_size = opt.sampling_size;
@@ -111,23 +130,25 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     out->num_elements = N;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = L.count[t]; out->first_cell[t] = L.first[t]; }
 
-    idx_in = malloc((S ? S : 1) * 4);
+    idx_in = malloc((S_in ? S_in : 1) * 4);
     idx_sorted = malloc((S ? S : 1) * 4);
     vmap = malloc((S ? S : 1) * 4);
     order = malloc((N ? N : 1) * 4);
     keys = malloc((N ? N : 1) * 8);
     if (!idx_in || !idx_sorted || !vmap || !order || !keys) goto oom;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t)
-        if (L.count[t]) memcpy(idx_in + L.slot[t], m->indices[t], L.count[t] * clvr_cell_vertex_count(t) * 4);
+        if (LI.count[t]) memcpy(idx_in + LI.slot[t], m->indices[t], LI.count[t] * clvr_cell_vertex_count(t) * 4);
 
     clvr_pp_ref_bounds(m->positions, m->scalars, V, &out->bounds);
     out->scalar_min = out->bounds.lo[3];
     out->scalar_max = out->bounds.hi[3];
-    clvr_pp_ref_keys(m->positions, idx_in, &L, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, keys, order);
+    clvr_pp_ref_keys(m->positions, idx_in, &LI, clvr_pp_quantize_box(&opt, &out->bounds), opt.morton, one_curve, keys,
+                     order);
     if (clvr_pp_ref_sort(keys, order, N)) goto oom;
 
     /* gather */
-    for (uint64_t i = 0; i < N; ++i) {
+    if (one_curve) clvr_pp_ref_gather_collapse(order, idx_in, &LI, N, idx_sorted);
+    for (uint64_t i = 0; i < N && !one_curve; ++i) {
         uint32_t t = clvr_pp_type_of(i, L.first[1], L.first[2], L.first[3]);
         uint32_t vpe = clvr_cell_vertex_count(t);
         memcpy(idx_sorted + L.slot[t] + (i - L.first[t]) * vpe, idx_in + L.slot[t] + (order[i] - L.first[t]) * vpe,

@@ -19,7 +19,7 @@ typedef struct clvr_pp {
     clvr_cl *cl;
     cl_program prog;
     cl_kernel bounds_tiles, keys_type[CLVR_CELL_TYPE_COUNT], scan_reduce, scan_sums, scan_apply, select_scatter, radix_andor,
-        radix_hist, radix_scatter, gather, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
+        radix_hist, radix_scatter, gather, gather_collapse, sampling, leaf_boxes, instance_bounds, split, rec_flags, inst_counts,
         inst_write, vertices, radix_buckets, iota;
     uint32_t max_tiles;       /* tiles per tiled launch: a few per compute unit */
     uint64_t sort_hybrid_min; /* sorts of at least this many items go hybrid (top digit, then buckets
@@ -51,9 +51,12 @@ void clvr_pp_type_layout(const clvr_pp_layout *l, clvr_type_layout *out);
 /* The quantization scale of clvr_pp_quantize for a box. */
 float clvr_pp_scale(const clvr_box *b);
 /* keys[g], vals[g] = sort key and g for every element g; vals may be NULL
- * (not written: clvr_pp_sort can make them, iota_vals). */
+ * (not written: clvr_pp_sort can make them, iota_vals). The key is the
+ * element's type << 48 | its curve key, so that the sort keeps the types'
+ * lists apart; one_curve: CLVR_CELL_HEX << 48 for every type, so that it
+ * merges them into one curve (clvr_preprocess_options.one_curve). */
 clvr_status clvr_pp_keys(clvr_pp *pp, cl_mem pos, cl_mem idx, const clvr_pp_layout *l, const clvr_box *b,
-                         int morton, cl_mem keys, cl_mem vals, double *sec, clvr_error *err);
+                         int morton, int one_curve, cl_mem keys, cl_mem vals, double *sec, clvr_error *err);
 /* Runs k over n items (local size `local`), adding its device time to
  * *sec (NULL: not timed). */
 clvr_status clvr_pp_launch(clvr_pp *pp, cl_kernel k, uint64_t n, size_t local, double *sec, clvr_error *err);
@@ -78,7 +81,11 @@ clvr_status clvr_pp_sort(clvr_pp *pp, cl_mem *keys, cl_mem *vals, cl_mem *keys_t
  * Plain C, same contracts on host arrays (host/pipeline/preprocess_ref.c). */
 void clvr_pp_ref_bounds(const float *pos, const float *scal, uint64_t n, clvr_box *out);
 void clvr_pp_ref_keys(const float *pos, const uint32_t *idx, const clvr_pp_layout *l, const clvr_box *b,
-                      int morton, uint64_t *keys, uint32_t *vals);
+                      int morton, int one_curve, uint64_t *keys, uint32_t *vals);
+/* clvr_pp_gather_collapse: idx_hex[8 i ..] = input element order[i] (l: the
+ * input's layout) as its collapsed hex. */
+void clvr_pp_ref_gather_collapse(const uint32_t *order, const uint32_t *idx_in, const clvr_pp_layout *l,
+                                 uint64_t n, uint32_t *idx_hex);
 uint32_t clvr_pp_ref_scan(const uint32_t *in, uint32_t *out, uint64_t n);
 uint32_t clvr_pp_ref_select(const uint32_t *flags, const uint32_t *values, uint32_t *out, uint64_t n);
 /* Stable LSD radix sort, single thread; returns nonzero when out of memory. */
