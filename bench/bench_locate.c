@@ -13,7 +13,7 @@
  *
  *   bench_locate [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed]
  *                [--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent]
- *                [--ebox on|off] [--entry on|off] [--one-curve on|off]
+ *                [--ebox on|off] [--entry on|off] [--one-curve auto|on|off]
  *
  * --ebox: quantized element boxes (kernels/locate.h), on by default as in
  * the renderer; off measures the leaf scan without them.
@@ -21,7 +21,7 @@
  * renderer; off starts every walk at its instance's root. Their bytes count
  * in the BVH's bytes per element.
  * --one-curve: a mesh of several cell types sorted along one curve, every
- * cell a collapsed hex (clvr_preprocess_options.one_curve); default off, as
+ * cell a collapsed hex (clvr_preprocess_options.one_curve); default auto, as
  * in the renderer.
  * --hint: the query hint passed to the kernel (CLVR_LOCATE_*, clvr_shared.h);
  * default coherent (the faster on every order, clvr_shared.h).
@@ -50,7 +50,7 @@ static size_t g_local = 64; /* work-group size of the query kernel (--local) */
 static uint32_t g_leaf = 0; /* only this leaf size (--leaf), 0: all */
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 static int g_entry = 1;    /* entry grids (--entry on|off, kernels/locate.h) */
-static int g_one_curve = 0; /* mixed meshes on one curve as collapsed hexes (--one-curve on|off, preprocess.h) */
+static int g_one_curve = CLVR_ONE_CURVE_AUTO; /* mixed meshes on one curve (--one-curve auto|on|off, preprocess.h) */
 static cl_uint g_hints = CLVR_LOCATE_INCOHERENT; /* query hint of the kernel (--order, --hint) */
 static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples) */
 #define NRUNS 5
@@ -166,12 +166,15 @@ int main(int argc, char **argv)
                  (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             g_entry = !strcmp(argv[++i], "on");
         else if (!strcmp(argv[i], "--one-curve") && i + 1 < argc &&
-                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
-            g_one_curve = !strcmp(argv[++i], "on");
+                 (!strcmp(argv[i + 1], "auto") || !strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off"))) {
+            ++i;
+            g_one_curve = !strcmp(argv[i], "on") ? CLVR_ONE_CURVE_ON : !strcmp(argv[i], "off") ? CLVR_ONE_CURVE_OFF
+                                                                                             : CLVR_ONE_CURVE_AUTO;
+        }
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
-                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off] [--entry on|off] [--one-curve on|off]\n",
+                    "[--queries Q] [--leaf N] [--order random|sorted|rays] [--local L] [--hint coherent|incoherent] [--ebox on|off] [--entry on|off] [--one-curve auto|on|off]\n",
                     argv[0]);
             return 2;
         }

@@ -27,9 +27,9 @@
  *                       in bench_locate; their bytes count in clvr's tree bytes)
  *                       [--entry on|off]  (entry grids, kernels/locate.h; default on as in the
  *                       renderer; their bytes count in clvr's tree bytes)
- *                       [--one-curve on|off]  (clvr: a mesh of several cell types on one curve, every
- *                       cell a collapsed hex, clvr_preprocess_options.one_curve; default off as in the
- *                       renderer; Embree gets the mesh's own cells either way)
+ *                       [--one-curve auto|on|off]  (clvr: a mesh of several cell types on one curve, every
+ *                       cell a collapsed hex, clvr_preprocess_options.one_curve; default auto as in
+ *                       the renderer; Embree gets the mesh's own cells either way)
  *
  * Last line: `point_queries_vs_embree: RATIO` (clvr queries/s over Embree's;
  * "n/a" without Embree). Built without Embree (CLVR_HAVE_EMBREE unset) it
@@ -62,7 +62,7 @@
 
 static cl_uint g_ebox = 1; /* quantized element boxes (--ebox on|off) */
 static int g_entry = 1;    /* entry grids (--entry on|off, kernels/locate.h) */
-static int g_one_curve = 0; /* mixed meshes on one curve as collapsed hexes (--one-curve on|off, preprocess.h) */
+static int g_one_curve = CLVR_ONE_CURVE_AUTO; /* mixed meshes on one curve (--one-curve auto|on|off, preprocess.h) */
 static cl_uint g_chain = 1; /* points per work item with one ray's hint (--order rays: a ray's samples, bench_points.h) */
 
 typedef struct result {
@@ -528,13 +528,16 @@ int main(int argc, char **argv)
                  (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
             g_entry = !strcmp(argv[++i], "on");
         else if (!strcmp(argv[i], "--one-curve") && i + 1 < argc &&
-                 (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off")))
-            g_one_curve = !strcmp(argv[++i], "on");
+                 (!strcmp(argv[i + 1], "auto") || !strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off"))) {
+            ++i;
+            g_one_curve = !strcmp(argv[i], "on") ? CLVR_ONE_CURVE_ON : !strcmp(argv[i], "off") ? CLVR_ONE_CURVE_OFF
+                                                                                             : CLVR_ONE_CURVE_AUTO;
+        }
         else {
             fprintf(stderr,
                     "usage: %s [--device SPEC] [--json FILE] [--cubes N | --mesh FILE.bin] [--kind tets|hexes|mixed] "
                     "[--queries Q] [--leaf N] [--order random|sorted|rays] [--threads T] [--local L] [--dump FILE] "
-                    "[--hint coherent|incoherent] [--ebox on|off] [--entry on|off] [--one-curve on|off]\n",
+                    "[--hint coherent|incoherent] [--ebox on|off] [--entry on|off] [--one-curve auto|on|off]\n",
                     argv[0]);
             return 2;
         }

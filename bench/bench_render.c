@@ -137,6 +137,9 @@ static void scene_release(clvr_cl *cl, scene_gpu *g)
     memset(g, 0, sizeof *g);
 }
 
+/* clvr_preprocess_options.one_curve of every scene (--one-curve auto|on|off; auto, the default, as clvr's) */
+static int g_one_curve = CLVR_ONE_CURVE_AUTO;
+
 /* Loads path ("default": the built-in scene), preprocesses and builds the
  * trees, and bakes clvr's default transfer function over the data range. */
 static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scene_gpu *g, clvr_error *err)
@@ -155,6 +158,7 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scen
     memcpy(g->hi, m.bounds_hi, sizeof g->hi);
     clvr_preprocess_options po;
     clvr_preprocess_options_default(&po);
+    po.one_curve = g_one_curve;
     double t0 = clvr_clock_monotonic_s();
     s = clvr_preprocess(cl, &m, &po, &g->clustered, err);
     if (s == CLVR_OK) s = clvr_accel_build(cl, &g->clustered, &g->accel, err);
@@ -909,6 +913,7 @@ static int usage(void)
             "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
             "                    [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]\n"
             "                    [--estimator auto|walk|urm|delta] [--urm-steps N] [--urm-kappa K] [--adaptive T]\n"
+            "                    [--one-curve auto|on|off]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent]\n"
             "                    [--estimators auto,walk,urm,delta[:steps[:kappa[:light-res]]]]\n"
@@ -956,6 +961,13 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--no-shadows")) { shadows = 0; shadow_hi = 0; }
         else if (!strcmp(a, "--only-shadows")) shadow_lo = 1;
         else if (!strcmp(a, "--no-hull")) no_hull = 1;
+        else if (!strcmp(a, "--one-curve") && v) {
+            const char *ov = argv[++i];
+            if (!strcmp(ov, "auto")) g_one_curve = CLVR_ONE_CURVE_AUTO;
+            else if (!strcmp(ov, "on")) g_one_curve = CLVR_ONE_CURVE_ON;
+            else if (!strcmp(ov, "off")) g_one_curve = CLVR_ONE_CURVE_OFF;
+            else return usage();
+        }
         else if (!strcmp(a, "--denoise")) denoise = 1;
         else if (!strcmp(a, "--no-pixel-cv")) no_cv = 1;
         else if (!strcmp(a, "--adaptive") && v) {

@@ -381,14 +381,15 @@ __kernel void clvr_hull_flags(__global const clvr_instance *instances, uint num_
     if (i >= num_slots) return;
     const ulong key = keys[i];
     const int prev = i > 0u && keys[i - 1u] == key, next = i + 1u < num_slots && keys[i + 1u] == key;
-    if (!prev && !next) {
+    /* (the key of slots with no face takes the general path, which loads the face) */
+    if (!prev && !next && key != CLVR_HULL_NO_FACE_KEY) {
         flags[slots[i]] = 1u;
         return;
     }
     const int prev2 = prev && i > 1u && keys[i - 2u] == key, next2 = next && i + 2u < num_slots && keys[i + 2u] == key;
     if (prev && !next && !prev2) return; /* the second of a pair: the first decides both */
     const clvr_mesh_view m = CLVR_HULL_VIEW(instances);
-    if (!prev && next && !next2) {
+    if (!prev && next && !next2 && key != CLVR_HULL_NO_FACE_KEY) {
         clvr_hull_face a, b;
         clvr_hull_slot_load(&m, instances, face_first, num_instances, slots[i], &a);
         clvr_hull_slot_load(&m, instances, face_first, num_instances, slots[i + 1u], &b);

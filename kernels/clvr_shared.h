@@ -98,13 +98,13 @@ CLVR_INLINE clvr_u32 clvr_cell_vertex_count(clvr_u32 type)
 #undef CLVR_CELL_NV_
 }
 
-/* The inverse of clvr_hex_collapsed (kernels/elements.h) on vertex ids: h[0..7] = the 8-node hex
- * that reads back as the element v (vertex ids in VTK order,
- * clvr_cell_vertex_count(type) of them): tet a b c c d d d d, pyramid
- * a b c d e e e e, wedge a b c c d e f f, a hex itself. Preprocessing with
- * one curve (clvr_preprocess_options.one_curve) stores every cell of a mixed
- * mesh this way, so that one Hilbert curve, one fixed stride and one
- * instance type hold them all. */
+/* The inverse of clvr_hex_collapsed (kernels/elements.h) on vertex ids:
+ * h[0..7] = the 8-node hex that reads back as the element v (vertex ids in
+ * VTK order, clvr_cell_vertex_count(type) of them): tet a b c c d d d d,
+ * pyramid a b c d e e e e, wedge a b c c d e f f, a hex itself.
+ * Preprocessing with one curve (clvr_preprocess_options.one_curve) stores
+ * every cell of a mixed mesh this way, so that one Hilbert curve, one fixed
+ * stride and one instance type hold them all. */
 CLVR_INLINE void clvr_hex_collapse_ids(clvr_u32 type, const clvr_u32 *v, clvr_u32 *h)
 {
     if (type == CLVR_CELL_TET) {
@@ -148,6 +148,12 @@ CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
  *   quantization grid: the mesh bounds, or a box the caller gives so that
  *   partitions of one mesh share it), so every cluster holds one element
  *   type and elements are addressed with a fixed stride, no per-element tag.
+ *   Or, with one curve (host/pipeline/preprocess.h, one_curve; the default
+ *   for most meshes of mixed types), every cell is sorted along one curve
+ *   and stored as a hex, a tet, pyramid or wedge as its collapsed hex
+ *   (clvr_hex_collapse_ids): the clusters are hexes and hold every type of
+ *   their region, and readers that need a cell's own type take it from its
+ *   repeated corners (kernels/locate.h clvr_load_cell_in).
  * - Global sorted element ids are the concatenation of the four sorted
  *   lists: tets [0, T), pyramids [T, T+P), wedges, hexes.
  * - Instance clusters are consecutive runs of one type's sorted elements

@@ -84,13 +84,21 @@ CLVR_INLINE int clvr_hull_before(const float *p, const float *q)
  * in canonical order: out->p[k][0..2], k < corners; a triangle repeats its
  * last corner in slot 3; p[0][3] = the corner count, p[1][3] = the side of
  * the face the element lies on (+1, -1; 0: degenerate), the other w 0.
- * Returns the corner count. */
+ * Returns the corner count. The element is taken as the cell it is
+ * (clvr_load_cell_in): a collapsed hex has its own type's faces in its
+ * first slots, and its slots past them hold no face (0 corners, all zero:
+ * never a boundary face, never anyone's twin). */
 CLVR_INLINE clvr_u32 clvr_hull_face_load(const clvr_mesh_view *m, const clvr_instance *inst, clvr_u32 e, clvr_u32 f,
                                          clvr_hull_face *out)
 {
     clvr_vec4 v[CLVR_CELL_MAX_VERTS];
-    clvr_load_element(m, inst, e, v);
-    const clvr_u32 code = clvr_hull_face_code(inst->type, f);
+    const clvr_piece_arrays pa = clvr_view_piece(m, inst);
+    const clvr_u32 type = clvr_load_cell_in(&pa, inst, e, v);
+    if (f >= clvr_hull_face_count(type)) {
+        for (int k = 0; k < 4; ++k) out->p[k][0] = out->p[k][1] = out->p[k][2] = out->p[k][3] = 0.0f;
+        return 0u;
+    }
+    const clvr_u32 code = clvr_hull_face_code(type, f);
     const clvr_u32 n = (code >> 12) == 0xFu ? 3u : 4u;
     /* Newell's normal of the face in the element's own (cyclic) order, and
      * the face's centre. */
@@ -131,7 +139,7 @@ CLVR_INLINE clvr_u32 clvr_hull_face_load(const clvr_mesh_view *m, const clvr_ins
     const float cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
     const float agree = N[0] * cx + N[1] * cy + N[2] * cz;
     float E[3] = {0.0f, 0.0f, 0.0f};
-    const clvr_u32 nv = clvr_cell_vertex_count(inst->type);
+    const clvr_u32 nv = clvr_cell_vertex_count(type);
     for (clvr_u32 k = 0; k < nv; ++k) {
         E[0] += v[k].x;
         E[1] += v[k].y;
@@ -145,6 +153,11 @@ CLVR_INLINE clvr_u32 clvr_hull_face_load(const clvr_mesh_view *m, const clvr_ins
     return n;
 }
 
+/* The key of a slot that holds no face (clvr_hull_face_load): the largest,
+ * so such slots sort last. A real face may share it (then the run of equal
+ * keys is searched, which never pairs a face with no face). */
+#define CLVR_HULL_NO_FACE_KEY 0xffffffffull
+
 /* 32-bit hash of a canonical face's corners (the same face from either
  * side, the same key), in the low half of a 64-bit key: the sort then runs
  * over 4 digits instead of 8 (the hull's build on post-tets: sort 0.076 ->
@@ -153,6 +166,7 @@ CLVR_INLINE clvr_u32 clvr_hull_face_load(const clvr_mesh_view *m, const clvr_ins
  * corners exactly. */
 CLVR_INLINE clvr_u64 clvr_hull_face_key(const clvr_hull_face *h)
 {
+    if (h->p[0][3] == 0.0f) return CLVR_HULL_NO_FACE_KEY;
     clvr_u64 x = 0x9E3779B97F4A7C15ull ^ clvr_hull_bits(h->p[0][3]);
     for (int k = 0; k < 4; ++k)
         for (int c = 0; c < 3; ++c) {
@@ -221,6 +235,7 @@ CLVR_INLINE clvr_u32 clvr_hull_twin(const clvr_mesh_view *m, CLVR_GLOBAL const c
     clvr_hull_face h, o;
     clvr_u32 ii, e, f;
     clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
+    if (h.p[0][3] == 0.0f) return CLVR_BVH_NOT_FOUND; /* a slot with no face */
     clvr_u32 j = i;
     for (; j > 0u && i - j < CLVR_HULL_RUN && keys[j - 1u] == key; --j) {
         clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j - 1u], &o);
@@ -250,6 +265,9 @@ CLVR_INLINE clvr_u32 clvr_hull_boundary(const clvr_mesh_view *m, CLVR_GLOBAL con
                                         clvr_u32 num_slots, CLVR_GLOBAL const clvr_u64 *keys,
                                         CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i)
 {
+    clvr_hull_face h;
+    clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
+    if (h.p[0][3] == 0.0f) return 0u; /* a slot with no face */
     return clvr_hull_twin(m, instances, face_first, num_instances, num_slots, keys, slots, i) == CLVR_BVH_NOT_FOUND;
 }
 

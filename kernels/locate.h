@@ -120,6 +120,25 @@ CLVR_INLINE void clvr_load_element(const clvr_mesh_view *m, const clvr_instance 
     clvr_load_element_in(&a, inst, e, v);
 }
 
+/* Element e of inst as the cell it is: returns its type and loads its
+ * vertices into v (VTK order). That is inst's type, except for a hex with
+ * repeated corners (the tets, pyramids and wedges of a mesh preprocessed
+ * on one curve, clvr_preprocess_options.one_curve, or a file's degenerate
+ * HEX8), which is the type it collapses to, v then holding that type's
+ * vertices (clvr_hex_collapsed). The renderer's walk and the hull take
+ * cells this way, so that such a cell has its own type's faces, exits and
+ * linear spans. */
+CLVR_INLINE clvr_u32 clvr_load_cell_in(const clvr_piece_arrays *a, const clvr_instance *inst, clvr_u32 e,
+                                       clvr_vec4 *v)
+{
+    clvr_load_element_in(a, inst, e, v);
+    if (inst->type != CLVR_CELL_HEX) return inst->type;
+    clvr_vec4 c[6];
+    const clvr_u32 t = clvr_hex_collapsed(v, c);
+    for (clvr_u32 k = 0; t != CLVR_CELL_HEX && k < clvr_cell_vertex_count(t); ++k) v[k] = c[k];
+    return t;
+}
+
 /* Loads tet e's 4 vertices (one 8-byte index load on the device for
  * 16-bit instances). */
 CLVR_INLINE void clvr_load_tet(const clvr_piece_arrays *a, const clvr_instance *inst, clvr_u32 e, clvr_vec4 *v)
@@ -1087,8 +1106,8 @@ CLVR_INLINE int clvr_locate_hint_unsearched(const clvr_mesh_view *m, const clvr_
  * searches them one by one); when they are of more than one type, every
  * one's hint first (those from a cell's centre before those from an
  * octant's, CLVR_ENTRY_HINT_OCTANT), then the rest of every one's start
- * subtree. Each
- * element type has its own instance clusters (one curve per type), and
+ * subtree. Where
+ * each element type has its own instance clusters (one curve per type),
  * they overlap: on the OpenFOAM igloo (328k mixed cells) a found point's
  * box test passes 2.5 instances, and searching them one after another
  * searched the whole start subtree of the wrong types before the right

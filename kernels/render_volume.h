@@ -178,32 +178,45 @@ inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, f
         const clvr_instance inst = m.instances[h->inst];
         const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
         clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
-        clvr_load_element_in(&pa, &inst, sp->elem, vtx);
-        const float dt = t - sp->t_pt;
-        float u = sp->pu + sp->du * dt, vv = sp->pv + sp->dv * dt, w = sp->pw + sp->dw * dt;
-        int settled = 1;
-        /* Hexes get their own inlined copy of the solve, the cell type a
-         * constant: the shape functions' switch and the loops over the
-         * vertices fold (Newton, its shape functions and its 3x3 solve are
-         * forced inline; PoCL left them calls). 256^2 urm frames
-         * (interleaved runs): notch_stress's hexes 21.3 -> 20.3 ms, the
-         * combustor as hexes 109.8 -> 105.7 ms; mixed and AMR-like scenes
-         * within 1%; a cold kernel build 5.4 -> 5.7 s. */
-        if (clvr_element_box_test(inst.type, vtx, p.x, p.y, p.z) &&
-            (inst.type == CLVR_CELL_HEX
-                 ? clvr_element_sample_near_settled(CLVR_CELL_HEX, vtx, p.x, p.y, p.z, !isnan(u), &u, &vv, &w, &s,
-                                                    &settled)
-                 : clvr_element_sample_near_settled(inst.type, vtx, p.x, p.y, p.z, !isnan(u), &u, &vv, &w, &s,
-                                                    &settled))) {
-            if (!isnan(sp->pu) && dt != 0.0f) {
-                const float inv = 1.0f / dt;
-                sp->du = (u - sp->pu) * inv; sp->dv = (vv - sp->pv) * inv; sp->dw = (w - sp->pw) * inv;
+        /* a collapsed hex as the cell it is (its Newton starts from its own coordinates) */
+        const uint type = clvr_load_cell_in(&pa, &inst, sp->elem, vtx);
+        if (type == CLVR_CELL_TET) {
+            /* A tet as a collapsed hex (one curve): its span starts here,
+             * at the first point after the lookup that found it (a tet of
+             * a tet instance gets it at the lookup; decoding there would
+             * cost every hex mesh a load per lookup). */
+            if (clvr_tet_sample(vtx, p.x, p.y, p.z, &s)) {
+                *sp = clvr_tet_span(vtx, org, dir, t, s);
+                return clvr_volume_tf(v, s);
             }
-            sp->pu = u; sp->pv = vv; sp->pw = w;
-            sp->t_pt = t;
-            return clvr_volume_tf(v, s);
+            skip = sp->elem; /* outside, exactly */
+        } else {
+            const float dt = t - sp->t_pt;
+            float u = sp->pu + sp->du * dt, vv = sp->pv + sp->dv * dt, w = sp->pw + sp->dw * dt;
+            int settled = 1;
+            /* Hexes get their own inlined copy of the solve, the cell type a
+             * constant: the shape functions' switch and the loops over the
+             * vertices fold (Newton, its shape functions and its 3x3 solve are
+             * forced inline; PoCL left them calls). 256^2 urm frames
+             * (interleaved runs): notch_stress's hexes 21.3 -> 20.3 ms, the
+             * combustor as hexes 109.8 -> 105.7 ms; mixed and AMR-like scenes
+             * within 1%; a cold kernel build 5.4 -> 5.7 s. */
+            if (clvr_element_box_test(type, vtx, p.x, p.y, p.z) &&
+                (type == CLVR_CELL_HEX
+                     ? clvr_element_sample_near_settled(CLVR_CELL_HEX, vtx, p.x, p.y, p.z, !isnan(u), &u, &vv, &w, &s,
+                                                        &settled)
+                     : clvr_element_sample_near_settled(type, vtx, p.x, p.y, p.z, !isnan(u), &u, &vv, &w, &s,
+                                                        &settled))) {
+                if (!isnan(sp->pu) && dt != 0.0f) {
+                    const float inv = 1.0f / dt;
+                    sp->du = (u - sp->pu) * inv; sp->dv = (vv - sp->pv) * inv; sp->dw = (w - sp->pw) * inv;
+                }
+                sp->pu = u; sp->pv = vv; sp->pw = w;
+                sp->t_pt = t;
+                return clvr_volume_tf(v, s);
+            }
+            if (settled) skip = sp->elem;
         }
-        if (settled) skip = sp->elem;
     }
     clvr_u32 e;
     if (!clvr_locate_hinted_skip(&m, p.x, p.y, p.z, h, skip, &s, &e)) {
@@ -211,15 +224,15 @@ inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, f
         return (float4)(0.0f);
     }
     const clvr_instance inst = m.instances[h->inst];
+    const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
     if (inst.type == CLVR_CELL_TET) {
-        const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
         clvr_vec4 vtx[4];
         clvr_load_tet(&pa, &inst, e, vtx);
         *sp = clvr_tet_span(vtx, org, dir, t, s);
-    } else {
-        *sp = clvr_span_none();
-        sp->elem = e;
+        return clvr_volume_tf(v, s);
     }
+    *sp = clvr_span_none();
+    sp->elem = e;
     return clvr_volume_tf(v, s);
 }
 
@@ -1279,6 +1292,7 @@ typedef struct clvr_walk {
     clvr_instance inst;
     clvr_piece_arrays pa;
     uint e;
+    uint type; /* e's own type (clvr_walk_load: a collapsed hex's, the type it collapses to) */
     uint from; /* the cell it came from across a face, or CLVR_BVH_NOT_FOUND */
     int skip;  /* e's face the ray came in by (not a tet): -1 none, -2 the one toward from (not looked up yet) */
     float t;
@@ -1308,13 +1322,24 @@ inline void clvr_walk_goto(const clvr_volume *v, const clvr_mesh_view *m, clvr_w
     w->skip = -2;
 }
 
+/* Loads the walk's cell into vtx (its own type's vertices) and sets
+ * w->type (clvr_load_cell_in); returns it. */
+inline uint clvr_walk_load(clvr_walk *w, clvr_vec4 *vtx)
+{
+    if (w->inst.type == CLVR_CELL_TET) {
+        clvr_load_tet(&w->pa, &w->inst, w->e, vtx);
+        w->type = CLVR_CELL_TET;
+    } else w->type = clvr_load_cell_in(&w->pa, &w->inst, w->e, vtx);
+    return w->type;
+}
+
 /* Where the ray org + t dir, inside cell w->e (not a tet) just after t,
  * leaves it (clvr_cell_exit, skipping the face it came in by): the face,
  * -1 when none was found. */
 inline int clvr_walk_cell_exit(const clvr_volume *v, clvr_walk *w, const clvr_vec4 *vtx, float3 org, float3 dir, float t,
                                float *tx, float *sx)
 {
-    const uint nf = clvr_hull_face_count(w->inst.type), base = clvr_walk_slots(v, w->h.inst, &w->inst, w->e);
+    const uint nf = clvr_hull_face_count(w->type), base = clvr_walk_slots(v, w->h.inst, &w->inst, w->e);
     if (w->skip == -2) {
         w->skip = -1;
         for (uint k = 0; k < nf; ++k)
@@ -1324,7 +1349,7 @@ inline int clvr_walk_cell_exit(const clvr_volume *v, clvr_walk *w, const clvr_ve
             }
     }
     const float o[3] = {org.x, org.y, org.z}, d[3] = {dir.x, dir.y, dir.z};
-    return clvr_cell_exit(w->inst.type, vtx, o, d, t, w->skip, tx, sx);
+    return clvr_cell_exit(w->type, vtx, o, d, t, w->skip, tx, sx);
 }
 
 /* Enters the mesh after t_from: a lookup at t_probe (a little past the
@@ -1343,7 +1368,6 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
     float s;
     if (!clvr_locate_hinted(m, q.x, q.y, q.z, &w->h, &s, &w->e)) return 0;
     w->inst = m->instances[w->h.inst];
-    if (w->inst.type != CLVR_CELL_TET && !v->f->walk_cells) return -1;
     w->pa = clvr_view_piece(m, &w->inst);
     w->from = CLVR_BVH_NOT_FOUND;
     w->skip = -1;
@@ -1352,9 +1376,10 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
         clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
         float dt;
         uint slot;
-        if (w->inst.type == CLVR_CELL_TET) {
+        /* (also after each step back: into a cell the walk does not take, urm takes the ray from t_from) */
+        if (clvr_walk_load(w, vtx) != CLVR_CELL_TET && !v->f->walk_cells) return -1;
+        if (w->type == CLVR_CELL_TET) {
             float l[4], g[4];
-            clvr_load_tet(&w->pa, &w->inst, w->e, vtx);
             if (!clvr_tet_bary(vtx, org, dir, t, l, g)) return -1;
             /* The face the ray entered by: where the reversed ray leaves. */
             for (int k = 0; k < 4; ++k) g[k] = -g[k];
@@ -1364,7 +1389,6 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
             w->s = NAN;
         } else {
             float tx;
-            clvr_load_element_in(&w->pa, &w->inst, w->e, vtx);
             const int fx = clvr_walk_cell_exit(v, w, vtx, org, -dir, -t, &tx, &w->s);
             if (fx < 0) return -1;
             dt = tx + t;
@@ -1376,9 +1400,6 @@ inline int clvr_walk_enter(const clvr_volume *v, const clvr_mesh_view *m, float3
         const uint nb = v->adj[slot];
         if (nb == CLVR_BVH_NOT_FOUND) break;
         clvr_walk_goto(v, m, w, nb);
-        /* Back into a cell the walk does not take: urm takes the ray
-         * from t_from. */
-        if (w->inst.type != CLVR_CELL_TET && !v->f->walk_cells) return -1;
     }
     /* At t_from, not on a face: no scalar; the face behind stays skipped
      * (a hair behind t_from, it would be found again as the exit). */
@@ -1711,10 +1732,9 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
         float tb, sb;
         uint slot;
         int moved;
-        if (w.inst.type == CLVR_CELL_TET) {
-            clvr_vec4 vtx[4];
+        clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
+        if (clvr_walk_load(&w, vtx) == CLVR_CELL_TET) {
             float l[4], g[4];
-            clvr_load_tet(&w.pa, &w.inst, w.e, vtx);
             if (!clvr_tet_bary(vtx, org, dir, w.t, l, g)) return 0;
             float dt;
             const int kx = clvr_tet_exit(l, g, &dt);
@@ -1744,8 +1764,6 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
             }
         } else {
             if (!f->walk_cells) return 0; /* urm finishes the ray from w.t */
-            clvr_vec4 vtx[CLVR_CELL_MAX_VERTS];
-            clvr_load_element_in(&w.pa, &w.inst, w.e, vtx);
             float tx, sx;
             const int fx = clvr_walk_cell_exit(v, &w, vtx, org, dir, w.t, &tx, &sx);
             moved = fx >= 0 && tx > w.t;
@@ -1758,7 +1776,7 @@ inline int clvr_walk_ray(const clvr_volume *v, float3 org, float3 dir, float t0,
             sb = fx >= 0 && tx > t1 ? sa + (sx - sa) * ((t1 - w.t) / (tx - w.t)) : sx;
             if (moved) {
                 ++*samples;
-                clvr_walk_cell(v, vtx, w.inst.type, org, dir, w.t, sa, sb, tb - w.t, u, rng, acc, T, &L, samples,
+                clvr_walk_cell(v, vtx, w.type, org, dir, w.t, sa, sb, tb - w.t, u, rng, acc, T, &L, samples,
                                nulls);
             }
             sig_a = NAN;

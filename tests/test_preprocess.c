@@ -432,13 +432,11 @@ static void run_case(clvr_cl *cl, const char *name, const clvr_mesh *m, const cl
         TU_CHECK(same);
     }
     uint64_t slots = 0;
-    int types = 0;
-    for (uint32_t t = 0; t < 4; ++t) {
-        slots += m->num_cells[t] * clvr_cell_vertex_count(t);
-        types += m->num_cells[t] > 0;
-    }
+    for (uint32_t t = 0; t < 4; ++t) slots += m->num_cells[t] * clvr_cell_vertex_count(t);
+    clvr_preprocess_options defaults;
+    clvr_preprocess_options_default(&defaults);
     TU_CHECK_EQ_U64(c.bytes_indices_before, slots * 4);
-    if (o && o->one_curve && types > 1) {
+    if (clvr_pp_one_curve(o ? o : &defaults, m->num_cells)) {
         /* one curve: the same clustered mesh as the hex view's, whatever the types */
         clvr_mesh mh = {0};
         TU_CHECK_STATUS(hex_view(m, &mh, &err), CLVR_OK, &err);
@@ -464,32 +462,75 @@ static void run_all_options(clvr_cl *cl, const char *name, const clvr_mesh *m, i
     for (size_t i = 0; i < sizeof leaves / sizeof leaves[0]; ++i) {
         clvr_preprocess_options_default(&o);
         o.keep_order = 1;
+        o.one_curve = CLVR_ONE_CURVE_OFF; /* one curve per type; one curve below */
         o.leaf_size = leaves[i];
         run_case(cl, name, m, &o, 1, multiset && i == 0);
     }
     clvr_preprocess_options_default(&o);
     o.keep_order = 1;
+    o.one_curve = CLVR_ONE_CURVE_OFF;
     o.morton = 1;
     o.sampling_size = 7;
     run_case(cl, name, m, &o, 1, 0);
     clvr_preprocess_options_default(&o);
     o.keep_order = 1;
+    o.one_curve = CLVR_ONE_CURVE_OFF;
     o.index_bits = 32;
     o.max_instance_elements = 1000;
     run_case(cl, name, m, &o, 1, 0);
     /* tight limits: many small instances */
     clvr_preprocess_options_default(&o);
     o.keep_order = 1;
+    o.one_curve = CLVR_ONE_CURVE_OFF;
     o.max_instance_elements = 37;
     run_case(cl, name, m, &o, 1, 0);
-    /* one curve, with leaves of 16 and of 5, and tight limits */
+    /* one curve (whatever the types' slots), with leaves of 16 and of 5, 32-bit
+     * indices, and tight limits; and the default (auto) */
     clvr_preprocess_options_default(&o);
     o.keep_order = 1;
-    o.one_curve = 1;
+    o.one_curve = CLVR_ONE_CURVE_ON;
     run_case(cl, name, m, &o, 1, multiset);
     o.leaf_size = 5;
     o.max_instance_elements = 37;
     run_case(cl, name, m, &o, 1, 0);
+    o.leaf_size = 16;
+    o.index_bits = 32;
+    o.max_instance_elements = 1000;
+    run_case(cl, name, m, &o, 1, 0);
+    clvr_preprocess_options_default(&o);
+    o.keep_order = 1;
+    run_case(cl, name, m, &o, 1, 0);
+}
+
+/* clvr_pp_one_curve: auto puts two or more types on one curve while the
+ * collapsed hexes take at most 1.5x the types' own index slots; on and off
+ * force it; one type never needs it; bad values are refused. */
+static void test_one_curve_rule(void)
+{
+    clvr_preprocess_options o;
+    clvr_preprocess_options_default(&o);
+    TU_CHECK_EQ_U64(o.one_curve, CLVR_ONE_CURVE_AUTO);
+    const uint64_t igloo[4] = {60436, 157582, 916, 109470}; /* the OpenFOAM igloo: 1.37x */
+    const uint64_t tets_wedges[4] = {900, 0, 100, 0};       /* boundary-layer prisms and tets: 1.90x */
+    const uint64_t edge[4] = {1, 0, 0, 1};                  /* 16 slots against 12: 1.33x */
+    const uint64_t edge2[4] = {1, 1, 0, 0};                 /* 16 against 9: 1.78x */
+    const uint64_t tets[4] = {1000, 0, 0, 0}, none[4] = {0, 0, 0, 0};
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, igloo), 1);
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, tets_wedges), 0);
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, edge), 1);
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, edge2), 0);
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, tets), 0);
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, none), 0);
+    o.one_curve = CLVR_ONE_CURVE_ON;
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, tets_wedges), 1);
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, tets), 0);
+    o.one_curve = CLVR_ONE_CURVE_OFF;
+    TU_CHECK_EQ_U64(clvr_pp_one_curve(&o, igloo), 0);
+    clvr_preprocess_options r;
+    clvr_error err = {0};
+    o.one_curve = 7;
+    TU_CHECK_STATUS(clvr_pp_options_resolve(&o, &r, &err), CLVR_ERR_USAGE, &err);
+    TU_CHECK(strstr(err.msg, "one_curve") != NULL);
 }
 
 /* A caller-given quantization box (partitions of one mesh sharing one
@@ -735,6 +776,7 @@ int main(int argc, char **argv)
         return tu_finish("test_preprocess --big");
     }
     test_split_segments();
+    test_one_curve_rule();
     test_errors(&cl);
     test_workspace(&cl);
     test_quantize_box(&cl);

@@ -59,7 +59,7 @@ static clvr_status prepare_curve(clvr_cl *cl, const clvr_mesh *m, uint32_t bits,
 static clvr_status prepare(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, uint64_t limit, clvr_clustered *c,
                            clvr_accel *a, clvr_error *err)
 {
-    return prepare_curve(cl, m, bits, limit, 0, c, a, err);
+    return prepare_curve(cl, m, bits, limit, CLVR_ONE_CURVE_OFF, c, a, err); /* the types' curves: more instances to cut between */
 }
 
 /* 1 when sorted element e of the unsplit host arrays h (ninst instances)
@@ -154,12 +154,13 @@ static uint8_t *read_ebox(clvr_cl *cl, const clvr_clustered *c, const clvr_accel
 
 /* Mean and variance per pixel and channel over n frames of c (dda or
  * bins, shadows on). */
-static int render_moments(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a, uint32_t method,
-                          uint32_t W, uint32_t H, uint32_t n, float **mean, float **var)
+static int render_moments_est(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a, uint32_t method,
+                              uint32_t estimator, uint32_t W, uint32_t H, uint32_t n, float **mean, float **var)
 {
     clvr_error err = {0};
     clvr_render_settings set;
     clvr_render_settings_default(&set);
+    if (estimator != CLVR_ESTIMATOR_COUNT) set.estimator = estimator;
     set.width = W;
     set.height = H;
     set.method = method;
@@ -168,6 +169,12 @@ static int render_moments(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, cl
     clvr_status s = fx_render_moments(cl, m, c, a, &set, n, mean, var, &err);
     if (s != CLVR_OK) fprintf(stderr, "render, %u pieces: %s\n", c->num_pieces, err.msg);
     return s != CLVR_OK;
+}
+
+static int render_moments(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a, uint32_t method,
+                          uint32_t W, uint32_t H, uint32_t n, float **mean, float **var)
+{
+    return render_moments_est(cl, m, c, a, method, CLVR_ESTIMATOR_COUNT, W, H, n, mean, var);
 }
 
 /* 4. Renders of c (dda and bins, shadows on) against the unsplit one's
@@ -394,8 +401,8 @@ static void test_one_curve(clvr_cl *cl, const clvr_mesh *m)
     clvr_error err = {0};
     clvr_clustered c1 = {0}, c2 = {0};
     clvr_accel a1 = {0}, a2 = {0};
-    TU_CHECK_STATUS(prepare_curve(cl, m, 16, 0, 0, &c1, &a1, &err), CLVR_OK, &err);
-    TU_CHECK_STATUS(prepare_curve(cl, m, 16, 0, 1, &c2, &a2, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(prepare_curve(cl, m, 16, 0, CLVR_ONE_CURVE_OFF, &c1, &a1, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(prepare_curve(cl, m, 16, 0, CLVR_ONE_CURVE_ON, &c2, &a2, &err), CLVR_OK, &err);
     if (!c1.instances || !c2.instances) return;
     TU_CHECK_EQ_U64(c2.num_cells[CLVR_CELL_HEX], c2.num_elements);
     TU_CHECK(c1.num_cells[CLVR_CELL_HEX] < c1.num_elements); /* the mesh is mixed: the test can fail */
@@ -440,6 +447,32 @@ static void test_one_curve(clvr_cl *cl, const clvr_mesh *m)
     compare_renders(cl, m, &c1, &a1, base_m, base_v);
     compare_renders(cl, m, &c2, &a2, base_m, base_v);
     for (int mi = 0; mi < NM; ++mi) { free(base_m[mi]); free(base_v[mi]); }
+    /* The hull takes a collapsed hex as the cell it is: the same boundary
+     * faces (a collapsed tet's extra slots hold none), and the walk crosses
+     * the same shared faces, through every cell type (walk) and through tets
+     * with urm elsewhere (auto), to the same image. */
+    clvr_hull hl1 = {0}, hl2 = {0};
+    TU_CHECK_STATUS(clvr_hull_build(cl, &a1.kernels, &c1, a1.sampling_nodes, CLVR_HULL_ON, &hl1, &err), CLVR_OK, &err);
+    TU_CHECK_STATUS(clvr_hull_build(cl, &a2.kernels, &c2, a2.sampling_nodes, CLVR_HULL_ON, &hl2, &err), CLVR_OK, &err);
+    printf("one curve: %u boundary faces (one curve per type: %u)\n", hl2.num_faces, hl1.num_faces);
+    TU_CHECK_EQ_U64(hl2.num_faces, hl1.num_faces);
+    TU_CHECK(hl1.num_faces > 0);
+    clvr_hull_release(cl, &hl1);
+    clvr_hull_release(cl, &hl2);
+    const uint32_t ests[2] = {CLVR_ESTIMATOR_WALK, CLVR_ESTIMATOR_AUTO};
+    for (int k = 0; k < 2; ++k) {
+        float *m1 = NULL, *v1 = NULL, *mk = NULL, *vk = NULL;
+        TU_CHECK(!render_moments_est(cl, m, &c1, &a1, CLVR_RENDER_DDA, ests[k], RW, RH, RN, &m1, &v1));
+        TU_CHECK(!render_moments_est(cl, m, &c2, &a2, CLVR_RENDER_DDA, ests[k], RW, RH, RN, &mk, &vk));
+        if (!m1 || !mk) continue;
+        const fx_moments_diff r = fx_compare_moments(m1, v1, mk, vk, RW, RH, RN, K_SIGMA);
+        printf("one curve, dda %s with shadows: %zu pixels and %zu blocks beyond %.0f sigma, largest block |z| %.2f\n",
+               k ? "auto" : "walk", r.pixels, r.blocks, K_SIGMA, r.worst_block_z);
+        TU_CHECK_EQ_U64(r.pixels, 0);
+        TU_CHECK_EQ_U64(r.blocks, 0);
+        TU_CHECK_EQ_U64(r.channels, 0);
+        free(m1); free(v1); free(mk); free(vk);
+    }
     free(pts); free(s1); free(s2); free(e1); free(e2);
     clvr_accel_release(cl, &a1);
     clvr_accel_release(cl, &a2);

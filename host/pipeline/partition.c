@@ -683,6 +683,9 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
     }
     out->stage_s[CLVR_PP_STAGE_PARTITION] += plan.seconds;
     opt.quantize_box = &plan.box;
+    /* One curve or not, decided once for the whole mesh: every partition
+     * then stores its cells alike (a partition of one type stays as it is). */
+    opt.one_curve = clvr_pp_one_curve(&opt, m->num_cells) ? CLVR_ONE_CURVE_ON : CLVR_ONE_CURVE_OFF;
     vmap = malloc((m->num_vertices ? m->num_vertices : 1) * sizeof *vmap);
     if (!vmap) {
         s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "partitioned preprocessing: out of memory for the %.3f GB vertex map",
@@ -741,7 +744,10 @@ clvr_status clvr_preprocess_partitioned(clvr_cl *cl, clvr_mesh *m, const clvr_pr
         t0 = clvr_clock_monotonic_s();
         for (int st = 0; st < CLVR_PP_STAGE_PARTITION; ++st) out->stage_s[st] += pc.stage_s[st];
         out->build_s += pc.build_s;
-        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) out->num_cells[t] += pc.num_cells[t];
+        for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+            out->num_cells[t] += pc.num_cells[t];
+            out->collapsed[t] += pc.collapsed[t];
+        }
         if (!first_done) {
             for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) out->first_cell[t] = pc.first_cell[t];
             first_done = 1;

@@ -40,6 +40,10 @@ clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_prep
         return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: sampling_size must be at least 1 (default 16)");
     if (out->index_bits != 16 && out->index_bits != 32)
         return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: index_bits is %u; use 16 or 32", out->index_bits);
+    if (out->one_curve != CLVR_ONE_CURVE_AUTO && out->one_curve != CLVR_ONE_CURVE_ON &&
+        out->one_curve != CLVR_ONE_CURVE_OFF)
+        return clvr_error_set(err, CLVR_ERR_USAGE, "preprocess: one_curve is %d; use CLVR_ONE_CURVE_AUTO, _ON or _OFF",
+                              out->one_curve);
     if (out->max_instance_elements == 0) out->max_instance_elements = out->index_bits == 16 ? 1u << 20 : 1u << 16;
     for (int k = 0; out->quantize_box && k < 3; ++k)
         if (!(isfinite(out->quantize_box->lo[k]) && isfinite(out->quantize_box->hi[k]) &&
@@ -48,6 +52,22 @@ clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_prep
                                   "preprocess: quantize_box axis %d is [%g, %g]; give finite bounds with lo <= hi", k,
                                   (double)out->quantize_box->lo[k], (double)out->quantize_box->hi[k]);
     return CLVR_OK;
+}
+
+int clvr_pp_one_curve(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT])
+{
+    uint64_t n = 0, slots = 0;
+    int types = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        n += num_cells[t];
+        slots += num_cells[t] * clvr_cell_vertex_count(t);
+        types += num_cells[t] > 0;
+    }
+    if (types < 2 || o->one_curve == CLVR_ONE_CURVE_OFF) return 0;
+    /* Auto: the collapsed hexes' 8 slots per cell against the types' own,
+     * at most 1.5x (the igloo's 1.37x: its tree and indices 33.0 against
+     * 34.6 bytes per element, fewer instances making up the extra slots). */
+    return o->one_curve == CLVR_ONE_CURVE_ON || 16 * n <= 3 * slots;
 }
 
 const clvr_box *clvr_pp_quantize_box(const clvr_preprocess_options *o, const clvr_box *mesh_bounds)
@@ -662,7 +682,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         if (L.count[t]) { ++types_used; only_type = (int)t; }
     /* LS: the layout from the gather on. With one curve, every element is
      * a collapsed hex (8 index slots). */
-    const int one_curve = opt.one_curve && types_used > 1;
+    const int one_curve = clvr_pp_one_curve(&opt, L.count);
     LS = L;
     if (one_curve) {
         const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, L.num_elements};
@@ -676,6 +696,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
     out->num_elements = L.num_elements;
     out->num_partitions = 1;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = LS.count[t]; out->first_cell[t] = LS.first[t]; }
+    for (uint32_t t = 0; one_curve && t < CLVR_CELL_HEX; ++t) out->collapsed[t] = L.count[t];
 
     double tb = wall_now();
     CLVR_TRY(clvr_pp_create(cl, &pp, err));

@@ -112,9 +112,7 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     CLVR_TRY(clvr_pp_options_resolve(o, &opt, err));
     /* LI: the input's layout; L: the sorted one (all hexes with one curve, clvr_preprocess's LS). */
     clvr_pp_layout_make(&LI, m->num_cells);
-    int types_used = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) types_used += LI.count[t] > 0;
-    const int one_curve = opt.one_curve && types_used > 1;
+    const int one_curve = clvr_pp_one_curve(&opt, LI.count);
     L = LI;
     if (one_curve) {
         const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, LI.num_elements};
@@ -129,6 +127,7 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     out->morton = opt.morton;
     out->num_elements = N;
     for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) { out->num_cells[t] = L.count[t]; out->first_cell[t] = L.first[t]; }
+    for (uint32_t t = 0; one_curve && t < CLVR_CELL_HEX; ++t) out->collapsed[t] = LI.count[t];
 
     idx_in = malloc((S_in ? S_in : 1) * 4);
     idx_sorted = malloc((S ? S : 1) * 4);

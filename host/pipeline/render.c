@@ -328,7 +328,8 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
          * urm on the notch's coarse hexes and later on finer CFD hexes:
          * bench/results/render-converge/2026-11-30-s44-cell-walk.md), so
          * a mesh without tets renders with urm then. */
-        int tets = 0, others = 0;
+        /* (one curve: tets as collapsed hexes are walked as tets, kernels/render_volume.h clvr_walk_load) */
+        int tets = m->collapsed[CLVR_CELL_TET] > 0, others = 0;
         for (uint64_t i = 0; i < m->num_instances; ++i) {
             tets |= m->host_instances[i].type == CLVR_CELL_TET;
             others |= m->host_instances[i].type != CLVR_CELL_TET;
