@@ -49,6 +49,10 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     out->num_elements = N;
     out->num_slots = S;
     out->num_vertices = V;
+    /* the clustered mesh's slots: 8 per cell on one curve (preprocess.h) */
+    clvr_preprocess_options defaults;
+    clvr_preprocess_options_default(&defaults);
+    const uint64_t SS = clvr_pp_sorted_slots(o ? o : &defaults, m->num_cells);
 
     /* Preprocessing (host/pipeline/preprocess.c), two moments that are certain:
      * during the sort, positions + scalars (16 V), the element indices (4 S)
@@ -59,16 +63,16 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
      * partition's: its share of the elements, slots and (at most) vertices. */
     const uint64_t PN = part_elements && part_elements < N ? part_elements : N;
     const double f = N ? (double)PN / (double)N : 1.0;
-    const uint64_t PS = (uint64_t)((double)S * f), PV = (uint64_t)((double)V * f);
+    const uint64_t PS = (uint64_t)((double)S * f), PV = (uint64_t)((double)V * f), PSS = (uint64_t)((double)SS * f);
     uint64_t sort_phase = sat_add(sat_add(sat_mul(PV, 16), sat_mul(PS, 4)), sat_mul(PN, 24));
-    uint64_t split_phase = sat_add(sat_mul(PV, 16), sat_mul(PS, bits == 32 ? 12 : 10));
+    uint64_t split_phase = sat_add(sat_mul(PV, 16), sat_mul(PSS, bits == 32 ? 12 : 10));
     out->preprocess_peak_bytes = max_u64(sort_phase, split_phase);
 
     /* Rendering: local indices, leaf boxes, sampling clusters, BVH nodes and
      * the image; the clustered vertices (>= one float4 per referenced
      * vertex) are left out because unreferenced vertices are not copied. */
     uint64_t leaves = N / leaf + (N % leaf != 0);
-    uint64_t resident = sat_mul(S, bits == 32 ? 4 : 2);
+    uint64_t resident = sat_mul(SS, bits == 32 ? 4 : 2);
     resident = sat_add(resident, sat_mul(leaves, sizeof(clvr_box)));
     resident = sat_add(resident, sat_mul(N / sampling, sizeof(clvr_sampling_cluster)));
     resident = sat_add(resident, sat_mul(leaves / 3, LIMITS_BVH_NODE_BYTES));
@@ -90,11 +94,12 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
      * preprocessed in partitions (host/pipeline/partition.c), so then they
      * are no candidates; their largest total is split_bytes. */
     const int parted = PN < N;
-    const uint64_t idx_bytes = sat_mul(S, bits == 32 ? 4 : 2);
+    const uint64_t idx_bytes = sat_mul(SS, bits == 32 ? 4 : 2);
     const char *idx_name = bits == 32 ? "32-bit indices" : "16-bit indices";
     struct { uint64_t bytes; const char *name; int per_partition, split; } cand[] = {
         {sat_mul(PV, 12), "vertex positions", 1, 0},
         {sat_mul(PS, 4), "element indices", 1, 0},
+        {sat_mul(PSS, 4), "sorted element indices", 1, 0}, /* more than the input's on one curve */
         {sat_mul(PN, 8), "sort keys", 1, 0},
         /* (not the clustered vertices: unreferenced vertices are not copied,
          * so 16 V is no lower bound) */
@@ -302,7 +307,10 @@ void clvr_limits_host_estimate_layout(uint64_t num_vertices, const uint64_t num_
      * partitions: vertices 1.10 x 16 V, leaves + BVH + sampling 6.67 bytes
      * per element, 15.84 GB in all against 15.99 estimated (6 bytes and
      * 16 V, the earlier figures, gave 14.95). */
-    out->result_bytes = sat_add(sat_add(sat_mul(V, 16) / 10 * 11, sat_mul(S, 2)), sat_mul(N, 7));
+    clvr_preprocess_options defaults; /* the clustered indices at the default options (one curve: 8 per cell) */
+    clvr_preprocess_options_default(&defaults);
+    const uint64_t SS = clvr_pp_sorted_slots(&defaults, num_cells);
+    out->result_bytes = sat_add(sat_add(sat_mul(V, 16) / 10 * 11, sat_mul(SS, 2)), sat_mul(N, 7));
     /* and the point-location element boxes, CLVR_EBOX_BYTES (6) per element */
     if (lay->element_boxes != CLVR_EBOX_OFF) out->result_bytes = sat_add(out->result_bytes, sat_mul(N, 6));
     /* One partition's preprocessing: its share of the mesh as a sub-mesh,
@@ -310,7 +318,7 @@ void clvr_limits_host_estimate_layout(uint64_t num_vertices, const uint64_t num_
      * its result before the append. */
     uint64_t pe = part_elements && part_elements < N ? part_elements : N;
     double f = N ? (double)pe / (double)N : 0.0;
-    double scratch = f * (double)(sat_mul(V, 16) + sat_mul(S, 4)) * 2.0 + (double)pe * 24.0 + f * (double)S * 8.0;
+    double scratch = f * (double)(sat_mul(V, 16) + sat_mul(S, 4)) * 2.0 + (double)pe * 24.0 + f * (double)SS * 8.0;
     /* Partitioned runs also keep 2 bytes per element (the plan) and a vertex
      * map; a mapped mesh's order list (4 per element) is freed as the
      * partitions are gathered, so it counts against the result below. */

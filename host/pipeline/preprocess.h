@@ -65,6 +65,13 @@ typedef struct clvr_preprocess_options {
 
 /* Fills the defaults above. */
 void clvr_preprocess_options_default(clvr_preprocess_options *o);
+/* 1 when o puts a mesh of these cell counts on one curve (one_curve): on,
+ * or auto with two or more types whose collapsed hexes take at most 1.5x
+ * their own index slots. */
+int clvr_pp_one_curve(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT]);
+/* Index slots of the clustered mesh: 8 per cell on one curve, else the
+ * cells' own (the device and host memory estimates, limits_check.h). */
+uint64_t clvr_pp_sorted_slots(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT]);
 
 /* Names of the timed stages, in the order of clvr_clustered.stage_s. */
 enum {

@@ -114,10 +114,6 @@ typedef struct clvr_pp_split_plan {
 uint64_t clvr_pp_segment_floor(uint32_t compute_units);
 void clvr_pp_split_plan_make(clvr_pp_split_plan *p, const clvr_pp_layout *l, const clvr_preprocess_options *o,
                              uint32_t compute_units, uint64_t num_vertices);
-/* 1 when o (resolved) puts a mesh of these cell counts on one curve
- * (clvr_preprocess_options.one_curve): on, or auto with two or more types
- * whose collapsed hexes take at most 1.5x their own index slots. */
-int clvr_pp_one_curve(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT]);
 /* Resolved options (defaults applied, checked): CLVR_ERR_USAGE when invalid. */
 clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_preprocess_options *out,
                                     clvr_error *err);
