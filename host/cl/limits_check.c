@@ -50,8 +50,7 @@ void clvr_limits_estimate_parts(const clvr_mesh *m, const clvr_preprocess_option
     out->num_slots = S;
     out->num_vertices = V;
     /* the clustered mesh's slots: 8 per cell on one curve (preprocess.h) */
-    clvr_preprocess_options defaults;
-    clvr_preprocess_options_default(&defaults);
+    const clvr_preprocess_options defaults = {0}; /* one_curve 0: auto, the default */
     const uint64_t SS = clvr_pp_sorted_slots(o ? o : &defaults, m->num_cells);
 
     /* Preprocessing (host/pipeline/preprocess.c), two moments that are certain:
@@ -307,8 +306,7 @@ void clvr_limits_host_estimate_layout(uint64_t num_vertices, const uint64_t num_
      * partitions: vertices 1.10 x 16 V, leaves + BVH + sampling 6.67 bytes
      * per element, 15.84 GB in all against 15.99 estimated (6 bytes and
      * 16 V, the earlier figures, gave 14.95). */
-    clvr_preprocess_options defaults; /* the clustered indices at the default options (one curve: 8 per cell) */
-    clvr_preprocess_options_default(&defaults);
+    const clvr_preprocess_options defaults = {0}; /* the clustered indices at the default (auto) one curve */
     const uint64_t SS = clvr_pp_sorted_slots(&defaults, num_cells);
     out->result_bytes = sat_add(sat_add(sat_mul(V, 16) / 10 * 11, sat_mul(SS, 2)), sat_mul(N, 7));
     /* and the point-location element boxes, CLVR_EBOX_BYTES (6) per element */

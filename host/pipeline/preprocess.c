@@ -54,32 +54,6 @@ clvr_status clvr_pp_options_resolve(const clvr_preprocess_options *in, clvr_prep
     return CLVR_OK;
 }
 
-int clvr_pp_one_curve(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT])
-{
-    uint64_t n = 0, slots = 0;
-    int types = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        n += num_cells[t];
-        slots += num_cells[t] * clvr_cell_vertex_count(t);
-        types += num_cells[t] > 0;
-    }
-    if (types < 2 || o->one_curve == CLVR_ONE_CURVE_OFF) return 0;
-    /* Auto: the collapsed hexes' 8 slots per cell against the types' own,
-     * at most 1.5x (the igloo's 1.37x: its tree and indices 33.0 against
-     * 34.6 bytes per element, fewer instances making up the extra slots). */
-    return o->one_curve == CLVR_ONE_CURVE_ON || 16 * n <= 3 * slots;
-}
-
-uint64_t clvr_pp_sorted_slots(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT])
-{
-    uint64_t n = 0, slots = 0;
-    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
-        n += num_cells[t];
-        slots += num_cells[t] * clvr_cell_vertex_count(t);
-    }
-    return clvr_pp_one_curve(o, num_cells) ? 8 * n : slots;
-}
-
 const clvr_box *clvr_pp_quantize_box(const clvr_preprocess_options *o, const clvr_box *mesh_bounds)
 {
     return o->quantize_box ? o->quantize_box : mesh_bounds;

@@ -67,11 +67,36 @@ typedef struct clvr_preprocess_options {
 void clvr_preprocess_options_default(clvr_preprocess_options *o);
 /* 1 when o puts a mesh of these cell counts on one curve (one_curve): on,
  * or auto with two or more types whose collapsed hexes take at most 1.5x
- * their own index slots. */
-int clvr_pp_one_curve(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT]);
+ * their own index slots. Inline, as is clvr_pp_sorted_slots: the memory
+ * estimates (limits_check.c) use them in builds without the pipeline. */
+static inline int clvr_pp_one_curve(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT])
+{
+    uint64_t n = 0, slots = 0;
+    int types = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        n += num_cells[t];
+        slots += num_cells[t] * clvr_cell_vertex_count(t);
+        types += num_cells[t] > 0;
+    }
+    if (types < 2 || o->one_curve == CLVR_ONE_CURVE_OFF) return 0;
+    /* Auto: the collapsed hexes' 8 slots per cell against the types' own,
+     * at most 1.5x (the igloo's 1.37x: its tree and indices 33.0 against
+     * 34.6 bytes per element, fewer instances making up the extra slots). */
+    return o->one_curve == CLVR_ONE_CURVE_ON || 16 * n <= 3 * slots;
+}
+
 /* Index slots of the clustered mesh: 8 per cell on one curve, else the
  * cells' own (the device and host memory estimates, limits_check.h). */
-uint64_t clvr_pp_sorted_slots(const clvr_preprocess_options *o, const uint64_t num_cells[CLVR_CELL_TYPE_COUNT]);
+static inline uint64_t clvr_pp_sorted_slots(const clvr_preprocess_options *o,
+                                            const uint64_t num_cells[CLVR_CELL_TYPE_COUNT])
+{
+    uint64_t n = 0, slots = 0;
+    for (uint32_t t = 0; t < CLVR_CELL_TYPE_COUNT; ++t) {
+        n += num_cells[t];
+        slots += num_cells[t] * clvr_cell_vertex_count(t);
+    }
+    return clvr_pp_one_curve(o, num_cells) ? 8 * n : slots;
+}
 
 /* Names of the timed stages, in the order of clvr_clustered.stage_s. */
 enum {
