@@ -223,35 +223,46 @@ CLVR_INLINE void clvr_hull_slot_load(const clvr_mesh_view *m, CLVR_GLOBAL const 
     clvr_hull_face_load(m, &inst, e, f, h);
 }
 
-/* The sorted element id of the element on the other side of the face at
- * sorted position i (clvr_hull_opposite), or CLVR_BVH_NOT_FOUND: a boundary
- * face, or a run of equal keys too long to search (always safe: the walk
- * that reads this falls back to a lookup). */
-CLVR_INLINE clvr_u32 clvr_hull_twin(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
-                                    CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances, clvr_u32 num_slots,
-                                    CLVR_GLOBAL const clvr_u64 *keys, CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i)
+/* clvr_hull_twin of the face at sorted position i, already loaded in *h
+ * (clvr_hull_slot_load of slots[i]). */
+CLVR_INLINE clvr_u32 clvr_hull_twin_of(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
+                                       CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances,
+                                       clvr_u32 num_slots, CLVR_GLOBAL const clvr_u64 *keys,
+                                       CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i, const clvr_hull_face *h)
 {
     const clvr_u64 key = keys[i];
-    clvr_hull_face h, o;
+    clvr_hull_face o;
     clvr_u32 ii, e, f;
-    clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
-    if (h.p[0][3] == 0.0f) return CLVR_BVH_NOT_FOUND; /* a slot with no face */
+    if (h->p[0][3] == 0.0f) return CLVR_BVH_NOT_FOUND; /* a slot with no face */
     clvr_u32 j = i;
     for (; j > 0u && i - j < CLVR_HULL_RUN && keys[j - 1u] == key; --j) {
         clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j - 1u], &o);
-        if (clvr_hull_opposite(&h, &o)) {
+        if (clvr_hull_opposite(h, &o)) {
             clvr_hull_slot_face(instances, face_first, num_instances, slots[j - 1u], &ii, &e, &f);
             return e;
         }
     }
     for (j = i + 1u; j < num_slots && j - i <= CLVR_HULL_RUN && keys[j] == key; ++j) {
         clvr_hull_slot_load(m, instances, face_first, num_instances, slots[j], &o);
-        if (clvr_hull_opposite(&h, &o)) {
+        if (clvr_hull_opposite(h, &o)) {
             clvr_hull_slot_face(instances, face_first, num_instances, slots[j], &ii, &e, &f);
             return e;
         }
     }
     return CLVR_BVH_NOT_FOUND;
+}
+
+/* The sorted element id of the element on the other side of the face at
+ * sorted position i (clvr_hull_opposite), or CLVR_BVH_NOT_FOUND: a boundary
+ * face, a slot with no face, or a run of equal keys too long to search
+ * (always safe: the walk that reads this falls back to a lookup). */
+CLVR_INLINE clvr_u32 clvr_hull_twin(const clvr_mesh_view *m, CLVR_GLOBAL const clvr_instance *instances,
+                                    CLVR_GLOBAL const clvr_u32 *face_first, clvr_u32 num_instances, clvr_u32 num_slots,
+                                    CLVR_GLOBAL const clvr_u64 *keys, CLVR_GLOBAL const clvr_u32 *slots, clvr_u32 i)
+{
+    clvr_hull_face h;
+    clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
+    return clvr_hull_twin_of(m, instances, face_first, num_instances, num_slots, keys, slots, i, &h);
 }
 
 /* 1 when the face at sorted position i (keys, slots: (key, slot) pairs
@@ -268,7 +279,8 @@ CLVR_INLINE clvr_u32 clvr_hull_boundary(const clvr_mesh_view *m, CLVR_GLOBAL con
     clvr_hull_face h;
     clvr_hull_slot_load(m, instances, face_first, num_instances, slots[i], &h);
     if (h.p[0][3] == 0.0f) return 0u; /* a slot with no face */
-    return clvr_hull_twin(m, instances, face_first, num_instances, num_slots, keys, slots, i) == CLVR_BVH_NOT_FOUND;
+    return clvr_hull_twin_of(m, instances, face_first, num_instances, num_slots, keys, slots, i, &h) ==
+           CLVR_BVH_NOT_FOUND;
 }
 
 /* The face in slot `slot` and its box (8 floats: lo xyz 0, hi xyz 0). */

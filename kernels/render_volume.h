@@ -224,8 +224,8 @@ inline float4 clvr_volume_at_ray(const clvr_volume *v, float3 org, float3 dir, f
         return (float4)(0.0f);
     }
     const clvr_instance inst = m.instances[h->inst];
-    const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
     if (inst.type == CLVR_CELL_TET) {
+        const clvr_piece_arrays pa = clvr_view_piece(&m, &inst);
         clvr_vec4 vtx[4];
         clvr_load_tet(&pa, &inst, e, vtx);
         *sp = clvr_tet_span(vtx, org, dir, t, s);

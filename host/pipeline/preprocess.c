@@ -81,6 +81,15 @@ void clvr_pp_layout_make(clvr_pp_layout *l, const uint64_t count[CLVR_CELL_TYPE_
     l->num_slots = s;
 }
 
+int clvr_pp_sorted_layout(const clvr_preprocess_options *o, const clvr_pp_layout *in, clvr_pp_layout *out)
+{
+    *out = *in;
+    if (!clvr_pp_one_curve(o, in->count)) return 0;
+    const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, in->num_elements};
+    clvr_pp_layout_make(out, hexes);
+    return 1;
+}
+
 void clvr_pp_type_layout(const clvr_pp_layout *l, clvr_type_layout *out)
 {
     memset(out, 0, sizeof *out);
@@ -666,12 +675,7 @@ clvr_status clvr_preprocess_ws(clvr_cl *cl, const clvr_mesh *m, const clvr_prepr
         if (L.count[t]) { ++types_used; only_type = (int)t; }
     /* LS: the layout from the gather on. With one curve, every element is
      * a collapsed hex (8 index slots). */
-    const int one_curve = clvr_pp_one_curve(&opt, L.count);
-    LS = L;
-    if (one_curve) {
-        const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, L.num_elements};
-        clvr_pp_layout_make(&LS, hexes);
-    }
+    const int one_curve = clvr_pp_sorted_layout(&opt, &L, &LS);
     out->leaf_size = opt.leaf_size;
     out->no_element_boxes = opt.no_element_boxes;
     out->sampling_size = opt.sampling_size;

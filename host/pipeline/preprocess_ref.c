@@ -112,12 +112,7 @@ clvr_status clvr_pp_ref_preprocess(const clvr_mesh *m, const clvr_preprocess_opt
     CLVR_TRY(clvr_pp_options_resolve(o, &opt, err));
     /* LI: the input's layout; L: the sorted one (all hexes with one curve, clvr_preprocess's LS). */
     clvr_pp_layout_make(&LI, m->num_cells);
-    const int one_curve = clvr_pp_one_curve(&opt, LI.count);
-    L = LI;
-    if (one_curve) {
-        const uint64_t hexes[CLVR_CELL_TYPE_COUNT] = {0, 0, 0, LI.num_elements};
-        clvr_pp_layout_make(&L, hexes);
-    }
+    const int one_curve = clvr_pp_sorted_layout(&opt, &LI, &L);
     clvr_pp_split_plan_make(&plan, &L, &opt, compute_units, m->num_vertices);
     const uint64_t N = L.num_elements, S = L.num_slots, S_in = LI.num_slots, V = m->num_vertices;
     const int bits32 = opt.index_bits == 32;

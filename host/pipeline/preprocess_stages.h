@@ -46,6 +46,9 @@ typedef struct clvr_pp_layout {
     uint64_t num_elements, num_slots;
 } clvr_pp_layout;
 void clvr_pp_layout_make(clvr_pp_layout *l, const uint64_t count[CLVR_CELL_TYPE_COUNT]);
+/* out = the layout of the clustered mesh from the gather on: in itself, or
+ * with one curve (clvr_pp_one_curve) every element a hex; returns 1 then. */
+int clvr_pp_sorted_layout(const clvr_preprocess_options *o, const clvr_pp_layout *in, clvr_pp_layout *out);
 /* The part of l the element kernels take (by value): first ids and slots. */
 void clvr_pp_type_layout(const clvr_pp_layout *l, clvr_type_layout *out);
 /* The quantization scale of clvr_pp_quantize for a box. */
