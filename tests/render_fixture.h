@@ -22,10 +22,12 @@
  * over m's scalar range, and a camera from eye to target (60 degrees, y up)
  * or, with eye NULL, the automatic camera on m's bounds. *mean and *var
  * receive set->width x set->height x 4 floats (allocated even on failure;
- * the caller frees them). */
-static inline clvr_status fx_render_moments_at(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a,
-                                               const clvr_render_settings *set, const float *eye, const float *target,
-                                               float density, uint32_t n, float **mean, float **var, clvr_error *err)
+ * the caller frees them); *counters (may be NULL) the renderer's counters
+ * after the n frames. */
+static inline clvr_status fx_render_moments_counted(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c,
+                                                    clvr_accel *a, const clvr_render_settings *set, const float *eye,
+                                                    const float *target, float density, uint32_t n, float **mean,
+                                                    float **var, clvr_render_counters *counters, clvr_error *err)
 {
     const size_t np = (size_t)set->width * set->height * 4;
     *mean = calloc(np, sizeof(float));
@@ -55,6 +57,7 @@ static inline clvr_status fx_render_moments_at(clvr_cl *cl, const clvr_mesh *m, 
     if (s == CLVR_OK) s = clvr_renderer_set_camera(r, &cam, err);
     for (uint32_t i = 0; i < n && s == CLVR_OK; ++i) s = clvr_renderer_frame(r, err);
     if (s == CLVR_OK) s = clvr_renderer_read_moments(r, *mean, *var, err);
+    if (s == CLVR_OK && counters) s = clvr_renderer_read(r, NULL, counters, err);
     if (s == CLVR_OK)
         for (size_t i = 0; i < np; ++i) {
             const double mu = (*mean)[i] / n, v = (*var)[i] / n - mu * mu;
@@ -65,6 +68,14 @@ static inline clvr_status fx_render_moments_at(clvr_cl *cl, const clvr_mesh *m, 
     clvr_tf_free(&tf);
     clvr_renderer_destroy(r);
     return s;
+}
+
+/* fx_render_moments_counted without the counters. */
+static inline clvr_status fx_render_moments_at(clvr_cl *cl, const clvr_mesh *m, clvr_clustered *c, clvr_accel *a,
+                                               const clvr_render_settings *set, const float *eye, const float *target,
+                                               float density, uint32_t n, float **mean, float **var, clvr_error *err)
+{
+    return fx_render_moments_counted(cl, m, c, a, set, eye, target, density, n, mean, var, NULL, err);
 }
 
 /* The same at density 2 with the automatic camera. */
