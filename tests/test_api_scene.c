@@ -21,6 +21,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <stddef.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -202,6 +203,23 @@ static void test_scene(clvr_context *ctx, const grid *g)
      * element (at most 8, rounding cells up) */
     CHECK(st.bytes_entry_grids >= (st.instances + 1) * 48 + st.instances * 8 + 4 &&
           st.bytes_entry_grids <= (st.instances + 1) * 48 + st.leaves * 72 + st.instances * 8 * 64 + st.elements + 4);
+    /* A program built against 1.8's header (no bytes_entry_grids) gets the
+     * members it knows and nothing past its struct; one smaller than the
+     * 1.1 struct is refused. */
+    {
+        const size_t old_size = offsetof(clvr_scene_stats, bytes_entry_grids);
+        clvr_scene_stats old;
+        memset(&old, 0xab, sizeof old);
+        old.size = (uint32_t)old_size;
+        OK(clvr_scene_get_stats(sc, &old, &msg));
+        uint64_t past;
+        memcpy(&past, (const char *)&old + old_size, sizeof past);
+        CHECK(old.size == old_size && old.elements == st.elements && old.leaves == st.leaves &&
+              old.scalar_max == st.scalar_max && !strcmp(old.stage_name[old.num_stages - 1], "hull"));
+        CHECK(past == 0xababababababababull);
+        old.size = (uint32_t)old_size - 4u;
+        CHECK_FAILS(clvr_scene_get_stats(sc, &old, &msg), CLVR_RESULT_ERR_USAGE, "size");
+    }
 
     /* Two tracers on one scene. */
     clvr_tracer *t1 = NULL, *t2 = NULL;
@@ -255,6 +273,16 @@ static void test_scene(clvr_context *ctx, const grid *g)
     rs.size = sizeof rs;
     OK(clvr_tracer_get_render_stats(t1, &rs, &msg));
     CHECK(rs.frames == SPP && rs.rays >= (uint64_t)W * H * SPP && rs.width == W && !strcmp(rs.method, def.method));
+    {   /* built against 1.5's header: no estimator member */
+        clvr_render_stats old;
+        memset(&old, 0xab, sizeof old);
+        old.size = (uint32_t)offsetof(clvr_render_stats, estimator);
+        OK(clvr_tracer_get_render_stats(t1, &old, &msg));
+        CHECK(old.frames == rs.frames && old.rays == rs.rays && !strcmp(old.method, rs.method));
+        CHECK((unsigned char)old.estimator[0] == 0xab && rs.estimator[0] != (char)0xab);
+        old.size = 8;
+        CHECK_FAILS(clvr_tracer_get_render_stats(t1, &old, &msg), CLVR_RESULT_ERR_USAGE, "size");
+    }
     OK(clvr_tracer_set_size(t1, 16, 8, &msg));
     OK(clvr_tracer_render(t1, 1, &msg));
     static float small[16 * 8 * 4];

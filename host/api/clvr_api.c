@@ -101,34 +101,45 @@ static clvr_result finish(clvr_status s, const clvr_error *err, clvr_message *ms
 
 #define NULL_ARG(fn, arg) clvr_error_set(&e, CLVR_ERR_USAGE, "%s: %s is NULL", fn, arg)
 
-/* Reads a versioned struct: the caller's size must cover this version's. */
-#define VERSIONED_IN(fn, p, type, local)                                                                              \
+/* Reads a versioned struct: the caller's size must cover the 1.1 struct
+ * (min_size); members it lacks (a caller built against an older header)
+ * keep this version's defaults, and bytes past this version's struct are
+ * not read. None of the input structs has grown since 1.1 yet, so their
+ * callers pass sizeof: a member appended later passes the offset of its
+ * first new member instead, as versioned_out's callers do. */
+#define VERSIONED_IN_SINCE(fn, p, type, local, min_size)                                                              \
     do {                                                                                                              \
         clvr_##type##_init(&(local));                                                                                 \
         if (p) {                                                                                                      \
-            if ((p)->size < sizeof(local))                                                                            \
+            if ((p)->size < (min_size))                                                                               \
                 return finish(clvr_error_set(&e, CLVR_ERR_USAGE,                                                      \
                                              "%s: " #type ".size is %u; set it to sizeof(clvr_" #type ") (%zu), "   \
                                              "e.g. with clvr_" #type "_init",                                        \
                                              fn, (unsigned)(p)->size, sizeof(local)),                                 \
                               &e, msg);                                                                               \
-            memcpy(&(local), (p), sizeof(local));                                                                     \
+            memcpy(&(local), (p), (p)->size < sizeof(local) ? (p)->size : sizeof(local));                             \
+            (local).size = (uint32_t)sizeof(local);                                                                   \
         }                                                                                                             \
     } while (0)
+#define VERSIONED_IN(fn, p, type, local) VERSIONED_IN_SINCE(fn, p, type, local, sizeof(local))
 
-/* Writes a versioned struct out. These are the 1.1 structs, the smallest
- * accepted: when a later version appends members, a caller's 1.1-sized
- * struct must still be filled up to its size (compare with the 1.1 size
- * then, not with sizeof). */
+/* Writes a versioned struct out: local (this version's, local_size bytes)
+ * into out, whose size member says how much the caller has. A caller built
+ * against an older header has a smaller struct: it gets the members it
+ * knows, as long as it has at least the 1.1 struct (min_size: the offset of
+ * the first member appended since, or local_size when none was). Before
+ * session 55 this asked for this version's full size, so a program built
+ * against 1.5 got ERR_USAGE from 1.6's clvr_tracer_get_render_stats and one
+ * built against 1.8 from 1.9's clvr_scene_get_stats. */
 static clvr_status versioned_out(const char *fn, const char *type, void *out, const void *local, size_t local_size,
-                                 clvr_error *e)
+                                 size_t min_size, clvr_error *e)
 {
     uint32_t size;
     memcpy(&size, out, sizeof size);
-    if (size < local_size)
+    if (size < min_size)
         return clvr_error_set(e, CLVR_ERR_USAGE, "%s: %s.size is %u; set it to sizeof(%s) (%zu)", fn, type,
                               (unsigned)size, type, local_size);
-    memcpy(out, local, local_size);
+    memcpy(out, local, size < local_size ? size : local_size);
     memcpy(out, &size, sizeof size);
     return CLVR_OK;
 }
@@ -1606,7 +1617,7 @@ clvr_result clvr_dataset_get_info(const clvr_dataset *ds, clvr_dataset_info *inf
     d.cell_flat = ds->loaded.cell_flat;
     d.current_is_cell = ds->loaded.num_fields && ds->loaded.fields[ds->loaded.scalar_field].association ==
                                                      CLVR_FIELD_CELL;
-    return finish(versioned_out(fn, "clvr_dataset_info", info, &d, sizeof d, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_dataset_info", info, &d, sizeof d, sizeof d, &e), &e, msg);
 }
 
 clvr_result clvr_dataset_get_field(const clvr_dataset *ds, uint32_t i, clvr_dataset_field *out, clvr_message *msg)
@@ -1621,7 +1632,7 @@ clvr_result clvr_dataset_get_field(const clvr_dataset *ds, uint32_t i, clvr_data
                       &e, msg);
     clvr_dataset_field f;
     table_field(ds, i, &f);
-    return finish(versioned_out(fn, "clvr_dataset_field", out, &f, sizeof f, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_dataset_field", out, &f, sizeof f, sizeof f, &e), &e, msg);
 }
 
 clvr_result clvr_dataset_get_array(const clvr_dataset *ds, const char *name, const void **data, int *borrowed,
@@ -1826,7 +1837,8 @@ clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, cl
     d.stage_s[d.num_stages++] = a->two_level.build_seconds;
     snprintf(d.stage_name[d.num_stages], sizeof d.stage_name[0], "hull");
     d.stage_s[d.num_stages++] = a->hull.build_s;
-    return finish(versioned_out(fn, "clvr_scene_stats", out, &d, sizeof d, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_scene_stats", out, &d, sizeof d,
+                                    offsetof(clvr_scene_stats, bytes_entry_grids), &e), &e, msg);
 }
 
 /* --- API 1.1: settings, size, statistics, camera ---------------------------- */
@@ -1839,7 +1851,7 @@ clvr_result clvr_tracer_get_settings(const clvr_tracer *tr, clvr_tracer_settings
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
     clvr_tracer_settings d;
     settings_from_render(&tr->rs, tr->shadows, &d);
-    return finish(versioned_out(fn, "clvr_tracer_settings", out, &d, sizeof d, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_tracer_settings", out, &d, sizeof d, sizeof d, &e), &e, msg);
 }
 
 clvr_result clvr_tracer_set_settings(clvr_tracer *tr, const clvr_tracer_settings *s, clvr_message *msg)
@@ -1989,7 +2001,8 @@ clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out
     d.height = tr->rs.height;
     snprintf(d.method, sizeof d.method, "%s", clvr_render_method_name(tr->rs.method));
     snprintf(d.estimator, sizeof d.estimator, "%s", clvr_render_estimator_name(clvr_renderer_estimator(tr->renderer)));
-    return finish(versioned_out(fn, "clvr_render_stats", out, &d, sizeof d, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_render_stats", out, &d, sizeof d,
+                                    offsetof(clvr_render_stats, estimator), &e), &e, msg);
 }
 
 clvr_result clvr_tracer_get_view(const clvr_tracer *tr, float eye[3], float target[3], float up[3], float *fovy_deg,
@@ -2048,7 +2061,7 @@ clvr_result clvr_tracer_get_tf(const clvr_tracer *tr, clvr_tf_info *out, clvr_me
     d.auto_density = tr->auto_density;
     d.table_size = tr->table_n;
     d.extinction_scale = tr->ext_scale;
-    return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, sizeof d, &e), &e, msg);
 }
 
 clvr_result clvr_tracer_get_tf_table(const clvr_tracer *tr, float *rgba, size_t count, clvr_message *msg)
@@ -2206,7 +2219,7 @@ clvr_result clvr_transfer_get_info(const clvr_transfer *tf, clvr_tf_info *out, c
     d.auto_density = tf->auto_density;
     d.table_size = clvr_tf_table_size(&tf->tf);
     d.extinction_scale = clvr_tf_extinction_scale(&tf->tf);
-    return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, &e), &e, msg);
+    return finish(versioned_out(fn, "clvr_tf_info", out, &d, sizeof d, sizeof d, &e), &e, msg);
 }
 
 clvr_result clvr_tracer_set_transfer(clvr_tracer *tr, const clvr_transfer *tf, clvr_message *msg)
