@@ -182,7 +182,17 @@ static void test_scene(clvr_context *ctx, const grid *g)
     ps.size = 4;
     CHECK_FAILS(clvr_scene_create(ctx, ds, NULL, &ps, &sc, &msg), CLVR_RESULT_ERR_USAGE, "size");
     ps.size = sizeof ps;
+    ps.one_curve = 3;
+    CHECK_FAILS(clvr_scene_create(ctx, ds, NULL, &ps, &sc, &msg), CLVR_RESULT_ERR_USAGE, "one_curve");
+    /* A program built against 1.9's header has no one_curve: whatever lies
+     * past its struct is not read, and it gets auto. */
+    ps.size = (uint32_t)offsetof(clvr_preprocess_settings, one_curve);
     ps.sampling_size = 4;
+    OK(clvr_scene_create(ctx, ds, NULL, &ps, &sc, &msg));
+    clvr_scene_destroy(sc);
+    sc = NULL;
+    ps.size = sizeof ps;
+    ps.one_curve = CLVR_ONE_CURVE_ON;
     OK(clvr_scene_create(ctx, ds, NULL, &ps, &sc, &msg));
     clvr_dataset_destroy(ds); /* the scene holds it */
     clvr_scene_stats st;
@@ -198,6 +208,13 @@ static void test_scene(clvr_context *ctx, const grid *g)
     CHECK(st.preprocess_s > 0 && st.num_stages >= 2 && !strcmp(st.stage_name[st.num_stages - 2], "bvh") &&
           !strcmp(st.stage_name[st.num_stages - 1], "hull"));
     CHECK(st.bytes_points_after > 0 && st.bytes_bvh > 0 && st.device_bytes > 0);
+    /* hexes only: nothing to collapse, whatever one_curve says */
+    CHECK(st.collapsed_cells[0] == 0 && st.collapsed_cells[1] == 0 && st.collapsed_cells[2] == 0 &&
+          st.collapsed_cells[3] == 0);
+    uint32_t oc = 9;
+    OK(clvr_setting_index("one_curve", "off", &oc, &msg));
+    CHECK(oc == CLVR_ONE_CURVE_OFF && !strcmp(clvr_setting_name("one_curve", CLVR_ONE_CURVE_AUTO), "auto") &&
+          !clvr_setting_name("one_curve", 3));
     /* entry grids: at least a cell per instance, 8 bytes each, and about 2 cells per leaf of tets, 8 per
      * leaf of other types (at most 9); the occupancy grid: a header and a word at least, about a bit per
      * element (at most 8, rounding cells up) */

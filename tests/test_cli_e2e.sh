@@ -98,6 +98,26 @@ assert pa["render"]["pilot_walk_cells"] == -1 and pa["render"]["pilot_s"] == 0, 
 assert na["bytes"].get("adjacency", 0) > 0, na["bytes"]
 PYEOF
 
+# --one-curve: notch_stress's hexes and wedges go on one curve by default
+# (auto: the wedges' 8 slots cost at most 1.5x), its wedges stored as hexes,
+# and --stats-json counts them; off keeps a curve per type (more instances,
+# none collapsed); a wrong value is a usage error naming the choices.
+for oc in auto on off; do
+  expect 0 "" -- "$CLVR" --device "$DEV" --size 16x16 --spp 1 --quiet --one-curve $oc -o "$tmp/notch-$oc.png" \
+    --stats-json "$tmp/notch-$oc.json" "$DATA/vtk/notch_stress.vtk"
+done
+$PY - "$tmp/notch-auto.json" "$tmp/notch-on.json" "$tmp/notch-off.json" <<'PYEOF' && ok || bad "--one-curve: collapsed wedges and instances in --stats-json"
+import json, sys
+a, on, off = (json.load(open(p))["clusters"] for p in sys.argv[1:])
+cells = json.load(open(sys.argv[1]))["cells"]
+assert cells["wedges"] > 0 and cells["hexes"] > 0, cells
+for c in (a, on):
+    assert c["collapsed"] == {"tets": 0, "pyramids": 0, "wedges": cells["wedges"]}, c
+assert off["collapsed"] == {"tets": 0, "pyramids": 0, "wedges": 0}, off
+assert off["instances"] > on["instances"], (off["instances"], on["instances"])
+PYEOF
+expect 2 "--one-curve expects on, off or auto" -- "$CLVR" --one-curve sometimes
+
 # --info on every natively read test file.
 for f in "$DATA"/vtk/*.vtk "$DATA"/umesh/*.umesh; do
   expect 0 "" -- "$CLVR" --info "$f"

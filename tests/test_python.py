@@ -397,6 +397,20 @@ def test_scene_settings(ctx):
     r1.set_settings(clip_lo=(0, 0, 0), clip_hi=(0.5, 0.5, 0.5))
     check(r1.settings["clip_box"] and r1.settings["clip_hi"] == (0.5, 0.5, 0.5), "clip box set")
     raises(lambda: clvr.Scene(m, device=ctx, leaf_size=0), clvr.InputError, "leaf_size", "leaf_size 0")
+    # one_curve (API 1.10): a hex and a tet on one curve, the tet stored as a
+    # collapsed hex (auto: 16 index slots instead of 12, under 1.5x), or a
+    # curve each.
+    hp = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1], [0, 0, 2]],
+                  np.float32)
+    mixed = clvr.Mesh.from_arrays(hp, {"hexahedron": np.arange(8, dtype=np.uint32).reshape(1, 8),
+                                       "tetra": np.array([[4, 5, 7, 8]], np.uint32)},
+                                  {"f": np.arange(9, dtype=np.float32)})
+    by = {oc: clvr.Scene(mixed, device=ctx, one_curve=oc).stats for oc in ("auto", "on", "off")}
+    check(by["auto"]["collapsed_cells"] == (1, 0, 0, 0) and by["on"]["collapsed_cells"] == (1, 0, 0, 0)
+          and by["off"]["collapsed_cells"] == (0, 0, 0, 0), "one_curve: collapsed cells %r" % by)
+    check(by["on"]["instances"] == 1 and by["off"]["instances"] == 2, "one_curve: instances %r" % by)
+    raises(lambda: clvr.Scene(mixed, device=ctx, one_curve="sometimes"), clvr.InputError, "sometimes",
+           "one_curve sometimes")
     # Whole-number settings go through one check: no bools, nothing a
     # ctypes field would wrap silently (seed is 64-bit, the others 32).
     raises(lambda: clvr.Scene(m, device=ctx, leaf_size=True), clvr.InputError, "leaf_size", "leaf_size True")
@@ -442,7 +456,7 @@ def test_scene_settings(ctx):
 # clvr.h's comment on clvr_setting_name: each setting's names in index order.
 SETTING_NAMES = {"method": ["march", "track", "bins", "dda"], "estimator": ["delta", "urm", "walk", "auto"],
                  "sampler": ["independent", "ld"], "tonemap": ["none", "aces", "filmic"],
-                 "element_boxes": ["auto", "on", "off"]}
+                 "element_boxes": ["auto", "on", "off"], "one_curve": ["auto", "on", "off"]}
 
 
 def _write_box_vtk(path, lo, hi, fields):

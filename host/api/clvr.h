@@ -48,7 +48,7 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 9
+#define CLVR_API_VERSION_MINOR 10
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
@@ -59,7 +59,15 @@ extern "C" {
  * resolved to), 1007 is 1.7 (adaptive sampling: clvr_tracer_set_adaptive), 1008
  * is 1.8 (auto's pilot on meshes with cells other than tets, and its
  * statistics "pilot_s", "pilot_pixels", "pilot_walk_cells"), 1009 is 1.9
- * (clvr_scene_stats.bytes_entry_grids). */
+ * (clvr_scene_stats.bytes_entry_grids), 1010 is 1.10 (mixed cells on one
+ * curve: clvr_preprocess_settings.one_curve, clvr_scene_stats.collapsed_cells,
+ * setting name "one_curve").
+ *
+ * Versioned structs (a first member `size`, set with their _init function or
+ * to sizeof) grow only at their end. The library reads and fills a struct
+ * down to its 1.1 size: a program built against an older 1.x header keeps
+ * working, the members its header lacks taking their defaults (since 1.10;
+ * before, the getters of a struct that had grown refused older sizes). */
 #define CLVR_API_VERSION (CLVR_API_VERSION_MAJOR * 1000 + CLVR_API_VERSION_MINOR)
 
 #if defined(CLVR_API_BUILD) && defined(__GNUC__)
@@ -428,10 +436,18 @@ typedef struct clvr_preprocess_settings {
     int element_boxes;       /* point location's quantized element boxes (6 bytes per element, about twice
                                 the lookup speed): CLVR_ELEMENT_BOXES_AUTO (default: on unless the host memory
                                 check finds the run fits only without them), _ON, _OFF */
+    int one_curve;           /* (1.10) a mesh of two or more cell types on one Hilbert curve, every cell
+                                stored as a hex with repeated corners (clusters then hold every type of their
+                                region; faster point location on mixed meshes, up to 8 indices per cell):
+                                CLVR_ONE_CURVE_AUTO (default: when that costs at most 1.5x the index slots
+                                of one curve per type), _ON, _OFF (one curve per type) */
 } clvr_preprocess_settings;
 #define CLVR_ELEMENT_BOXES_AUTO 0
 #define CLVR_ELEMENT_BOXES_ON 1
 #define CLVR_ELEMENT_BOXES_OFF 2
+#define CLVR_ONE_CURVE_AUTO 0
+#define CLVR_ONE_CURVE_ON 1
+#define CLVR_ONE_CURVE_OFF 2
 CLVR_API void clvr_preprocess_settings_init(clvr_preprocess_settings *s);
 
 /* Preprocesses ds's field `field` (NULL: the current one; a file's other
@@ -487,6 +503,8 @@ typedef struct clvr_scene_stats {
     uint64_t bytes_entry_grids;     /* (1.9) point location's entry grids (where a query's walk starts),
                                      * occupancy grid (where no element is) and its global hints (the
                                      * leaf where a query starts, since session 51) */
+    uint64_t collapsed_cells[4];    /* (1.10) tets, pyramids, wedges stored as hexes with repeated corners
+                                     * (one curve; [3] is 0), all 0 on one curve per type */
 } clvr_scene_stats;
 CLVR_API clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, clvr_message *msg);
 /* The scene a tracer renders (borrowed: valid while the tracer lives). */
@@ -643,7 +661,8 @@ CLVR_API void clvr_process_memory(uint64_t *resident, uint64_t *peak);
 /* The names a setting takes, by index: setting "method" (march, track,
  * bins, dda), "estimator" (delta, urm, walk and auto since 1.5), "sampler" (independent, ld),
  * "tonemap" (none, aces, filmic), "element_boxes" (auto, on, off: index =
- * CLVR_ELEMENT_BOXES_*) or, since 1.3, "pixel_filter" (box, point). Static string; NULL for an index past the end or an
+ * CLVR_ELEMENT_BOXES_*), since 1.3, "pixel_filter" (box, point), or, since 1.10, "one_curve" (auto, on,
+ * off: index = CLVR_ONE_CURVE_*). Static string; NULL for an index past the end or an
  * unknown setting. Indices are stable within a major version (new names
  * are appended), so a program may keep a setting as its index. */
 CLVR_API const char *clvr_setting_name(const char *setting, uint32_t index);

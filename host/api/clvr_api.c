@@ -973,6 +973,11 @@ static clvr_status check_preprocess(const char *fn, const clvr_preprocess_settin
         return clvr_error_set(e, CLVR_ERR_USAGE, "%s: element_boxes is %d; use CLVR_ELEMENT_BOXES_AUTO, _ON or _OFF",
                               fn, ps->element_boxes);
     po->no_element_boxes = ps->element_boxes == CLVR_EBOX_OFF;
+    if (ps->one_curve != CLVR_ONE_CURVE_AUTO && ps->one_curve != CLVR_ONE_CURVE_ON &&
+        ps->one_curve != CLVR_ONE_CURVE_OFF)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: one_curve is %d; use CLVR_ONE_CURVE_AUTO, _ON or _OFF", fn,
+                              ps->one_curve);
+    po->one_curve = ps->one_curve;
     return CLVR_OK;
 }
 
@@ -1078,7 +1083,7 @@ clvr_result clvr_scene_create(clvr_context *ctx, clvr_dataset *ds, const char *f
     if (!ds) return finish(NULL_ARG(fn, "ds"), &e, msg);
     if (!out) return finish(NULL_ARG(fn, "out"), &e, msg);
     clvr_preprocess_settings ps;
-    VERSIONED_IN(fn, s, preprocess_settings, ps);
+    VERSIONED_IN_SINCE(fn, s, preprocess_settings, ps, offsetof(clvr_preprocess_settings, one_curve));
     return finish(scene_create(ctx, ds, field, &ps, NULL, out, &e), &e, msg);
 }
 
@@ -1772,7 +1777,7 @@ clvr_result clvr_context_warm_up_with(clvr_context *ctx, const clvr_preprocess_s
     static const char fn[] = "clvr_context_warm_up_with";
     if (!ctx) return finish(NULL_ARG(fn, "ctx"), &e, msg);
     clvr_preprocess_settings ps;
-    VERSIONED_IN(fn, s, preprocess_settings, ps);
+    VERSIONED_IN_SINCE(fn, s, preprocess_settings, ps, offsetof(clvr_preprocess_settings, one_curve));
     clvr_preprocess_options po;
     clvr_status st = check_preprocess(fn, &ps, &po, &e);
     if (st == CLVR_OK) st = warm_up(ctx, &po, &e);
@@ -1819,6 +1824,7 @@ clvr_result clvr_scene_get_stats(const clvr_scene *sc, clvr_scene_stats *out, cl
     d.bytes_bvh = clvr_accel_bvh_bytes(a);
     d.bytes_element_boxes = a->two_level.ebox_bytes;
     d.bytes_entry_grids = a->two_level.entry_bytes;
+    for (int t = 0; t < 4; ++t) d.collapsed_cells[t] = c->collapsed[t];
     /* Table 1's "pre" column: the same packed 4-wide tree with one element
      * per leaf, i.e. over num_elements primitives. */
     d.bytes_bvh_one_per_leaf =
@@ -2432,12 +2438,14 @@ _Static_assert(CLVR_PIXEL_BOX == 0 && CLVR_PIXEL_POINT == 1, "pixel filter names
 _Static_assert(CLVR_TONEMAP_NONE == 0 && CLVR_TONEMAP_ACES == 1 && CLVR_TONEMAP_FILMIC == 2, "tone curves out of order");
 _Static_assert(CLVR_ELEMENT_BOXES_AUTO == CLVR_EBOX_AUTO && CLVR_ELEMENT_BOXES_ON == CLVR_EBOX_ON &&
                    CLVR_ELEMENT_BOXES_OFF == CLVR_EBOX_OFF, "element box modes drifted");
+_Static_assert(CLVR_ONE_CURVE_AUTO == 0 && CLVR_ONE_CURVE_ON == 1 && CLVR_ONE_CURVE_OFF == 2,
+               "one_curve names out of order");
 _Static_assert(CLVR_MAX_CLIP == CLVR_MAX_CLIP_PLANES, "clip plane limits differ");
 
 const char *clvr_setting_name(const char *setting, uint32_t index)
 {
     static const char *samplers[] = {"independent", "ld"};
-    static const char *boxes[] = {"auto", "on", "off"};
+    static const char *boxes[] = {"auto", "on", "off"}; /* also one_curve's */
     static const char *filters[] = {"box", "point"}; /* CLVR_PIXEL_* */
     if (!setting) return NULL;
     if (!strcmp(setting, "method")) return index < CLVR_RENDER_COUNT ? clvr_render_method_name(index) : NULL;
@@ -2446,6 +2454,7 @@ const char *clvr_setting_name(const char *setting, uint32_t index)
     if (!strcmp(setting, "sampler")) return index < 2 ? samplers[index] : NULL;
     if (!strcmp(setting, "tonemap")) return index < CLVR_TONEMAP_COUNT ? clvr_tonemap_name((clvr_tonemap)index) : NULL;
     if (!strcmp(setting, "element_boxes")) return index < 3 ? boxes[index] : NULL;
+    if (!strcmp(setting, "one_curve")) return index < 3 ? boxes[index] : NULL;
     if (!strcmp(setting, "pixel_filter")) return index < 2 ? filters[index] : NULL;
     return NULL;
 }

@@ -106,6 +106,11 @@ void clvr_cli_print_help(FILE *out)
         "  --element-boxes on|off|auto  quantized element boxes for point location (6 bytes per\n"
         "                         element; faster). auto (default): on unless the mesh fits in\n"
         "                         memory only without them (a notice says so)\n"
+        "  --one-curve on|off|auto  cells of several types on one Hilbert curve, each stored as a\n"
+        "                         hex with repeated corners (faster point location, up to 8\n"
+        "                         indices per cell), or one curve per type. auto (default): one\n"
+        "                         curve when that costs at most 1.5x the index slots (--stats\n"
+        "                         counts the collapsed cells)\n"
         "\n"
         "Scene:\n"
         "  --camera px,py,pz,lx,ly,lz,ux,uy,uz   eye position, look-at point, up vector\n"
@@ -393,6 +398,12 @@ clvr_result clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_message 
             uint32_t b;
             if (v) s = parse_named(a, "element_boxes", v, "on, off or auto", &b, msg);
             if (v && s == CLVR_RESULT_OK) o->element_boxes = (int)b;
+        }
+        else if (!strcmp(a, "--one-curve")) {
+            const char *v = NEXT();
+            uint32_t b;
+            if (v) s = parse_named(a, "one_curve", v, "on, off or auto", &b, msg);
+            if (v && s == CLVR_RESULT_OK) o->one_curve = (int)b;
         }
         else if (!strcmp(a, "--partitions")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 0, 65535u, &o->partitions, msg); }
         else if (!strcmp(a, "--camera")) { const char *v = NEXT(); if (v) { s = parse_floats(a, v, 9, o->camera, msg); o->camera_set = 1; } }

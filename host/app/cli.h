@@ -47,6 +47,7 @@ typedef struct clvr_options {
     uint32_t sampling_size;      /* --sampling-size N: elements per sampling cluster, 0: default */
     uint32_t partitions;         /* --partitions K: preprocessing partitions, 0: automatic */
     int element_boxes;           /* --element-boxes: CLVR_ELEMENT_BOXES_AUTO (default), _ON, _OFF */
+    int one_curve;               /* --one-curve: CLVR_ONE_CURVE_AUTO (default), _ON, _OFF */
     /* scene */
     int camera_set;
     float camera[9];             /* --camera px,py,pz,lx,ly,lz,ux,uy,uz */

@@ -211,6 +211,7 @@ int main(int argc, char **argv)
      * element lists back partition by partition (partition.h). */
     pps.consume = 1;
     pps.element_boxes = boxes;
+    pps.one_curve = o.one_curve;
     /* Kernel compilation, timed apart from clustering: the programs'
      * builds, and PoCL's code generation at a kernel's first launch, which a
      * preprocessing of a 64-cube mesh of every type triggers (2.0 s of the

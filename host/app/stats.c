@@ -44,6 +44,7 @@ void clvr_stats_from_scene(clvr_stats *s, const clvr_scene_stats *c)
     s->bytes_sampling = c->bytes_sampling;
     s->num_instances = c->instances;
     s->num_instances16 = c->instances16;
+    for (int t = 0; t < 4; ++t) s->collapsed[t] = c->collapsed_cells[t];
     s->num_leaves = c->leaves;
     s->num_sampling = c->sampling_clusters;
     s->leaf_size = c->leaf_size;
@@ -94,6 +95,15 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 (unsigned long long)s->num_instances, (unsigned long long)s->num_instances16,
                 (unsigned long long)s->num_leaves, s->leaf_size, (unsigned long long)s->num_sampling,
                 s->sampling_size);
+        int types = 0;
+        for (int t = 0; t < 4; ++t) types += s->cells[t] > 0;
+        if (s->collapsed[0] + s->collapsed[1] + s->collapsed[2] > 0)
+            fprintf(out, "cell types on one curve: %llu tets, %llu pyramids and %llu wedges stored as hexes with "
+                         "repeated corners (--one-curve)\n",
+                    (unsigned long long)s->collapsed[0], (unsigned long long)s->collapsed[1],
+                    (unsigned long long)s->collapsed[2]);
+        else if (types > 1)
+            fprintf(out, "cell types: one curve per type (--one-curve)\n");
         fprintf(out, "\n| preprocessing stage | seconds | elements/s |\n|---|---:|---:|\n");
         for (int i = 0; i < s->num_stages; ++i)
             fprintf(out, "| %s | %.4f | %.3g |\n", s->stage_name[i], s->stage_s[i],
@@ -203,9 +213,12 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
     for (size_t i = 0; i < nb; ++i) jnum(f, "    ", b[i].k, b[i].v, i + 1 < nb);
     fprintf(f, "  },\n");
     fprintf(f, "  \"clusters\": {\"instances\": %llu, \"instances16\": %llu, \"leaves\": %llu, \"leaf_size\": %u, "
-               "\"sampling\": %llu, \"sampling_size\": %u},\n",
+               "\"sampling\": %llu, \"sampling_size\": %u, \"collapsed\": {\"tets\": %llu, \"pyramids\": %llu, "
+               "\"wedges\": %llu}},\n",
             (unsigned long long)s->num_instances, (unsigned long long)s->num_instances16,
-            (unsigned long long)s->num_leaves, s->leaf_size, (unsigned long long)s->num_sampling, s->sampling_size);
+            (unsigned long long)s->num_leaves, s->leaf_size, (unsigned long long)s->num_sampling, s->sampling_size,
+            (unsigned long long)s->collapsed[0], (unsigned long long)s->collapsed[1],
+            (unsigned long long)s->collapsed[2]);
     fprintf(f, "  \"time\": {\n");
     jnum(f, "    ", "load_s", s->load_s, 1);
     for (int i = 0; i < s->num_stages; ++i) {

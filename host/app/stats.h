@@ -35,6 +35,8 @@ typedef struct clvr_stats {
     uint32_t partitions;            /* preprocessing partitions (partition.h) */
     /* clusters */
     uint64_t num_instances, num_instances16, num_leaves, num_sampling;
+    uint64_t collapsed[4];          /* tets, pyramids, wedges stored as hexes on one curve (all 0: one curve
+                                       per type, or a mesh of one type) */
     uint32_t leaf_size, sampling_size;
     /* times, seconds */
     double preprocess_s;            /* wall time: upload + clustering + BVH, kernel compilation excluded */

@@ -451,6 +451,7 @@ static int run(mpi_run *m, const clvr_options *o)
         ps.name = o->mesh_path ? o->mesh_path : "(built-in default scene)";
         if (o->leaf_size) ps.leaf_size = o->leaf_size;
         if (o->sampling_size) ps.sampling_size = o->sampling_size;
+        ps.one_curve = o->one_curve;
         /* As many partitions per rank as one process would cut the whole
          * mesh into (partition.h's default size), so that each rank's are
          * 1/N the size and its preprocessing peak is 1/N of one process's:

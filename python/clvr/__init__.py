@@ -109,7 +109,7 @@ class _DatasetField(ctypes.Structure):
 class _PreprocessSettings(ctypes.Structure):
     _fields_ = [("size", _U32), ("leaf_size", _U32), ("sampling_size", _U32), ("partitions", _U32),
                 ("consume", ctypes.c_int), ("name", _S), ("width", _U32), ("height", _U32),
-                ("element_boxes", ctypes.c_int)]
+                ("element_boxes", ctypes.c_int), ("one_curve", ctypes.c_int)]
 
 
 class _SceneStats(ctypes.Structure):
@@ -120,7 +120,7 @@ class _SceneStats(ctypes.Structure):
                 ("bytes_bvh", _U64), ("bytes_bvh_one_per_leaf", _U64), ("bytes_sampling", _U64),
                 ("bytes_element_boxes", _U64), ("device_bytes", _U64), ("preprocess_s", ctypes.c_double),
                 ("num_stages", _U32), ("stage_name", (ctypes.c_char * 16) * 16), ("stage_s", ctypes.c_double * 16),
-                ("scalar_min", _F), ("scalar_max", _F), ("bytes_entry_grids", _U64)]
+                ("scalar_min", _F), ("scalar_max", _F), ("bytes_entry_grids", _U64), ("collapsed_cells", _U64 * 4)]
 
 
 class _TracerSettings(ctypes.Structure):
@@ -646,17 +646,25 @@ class Scene(_Handle):
     field: the scalar (None: the mesh's current one; a file's other field
     by name is read now); leaf_size, sampling_size: elements per leaf and
     per sampling cluster (the paper's 16); partitions: preprocess in that
-    many pieces to bound peak memory (0: automatic)."""
+    many pieces to bound peak memory (0: automatic); one_curve: "auto"
+    (default), "on" or "off": a mesh of several cell types on one Hilbert
+    curve, every cell stored as a hex with repeated corners (stats'
+    collapsed_cells counts them: tets, pyramids, wedges, 0), or one curve
+    per type; auto takes one curve when it costs at most 1.5x the index
+    slots."""
 
-    def __init__(self, mesh, device="pocl", field=None, leaf_size=16, sampling_size=16, partitions=0):
+    def __init__(self, mesh, device="pocl", field=None, leaf_size=16, sampling_size=16, partitions=0,
+                 one_curve="auto"):
         if not isinstance(mesh, Mesh):
             raise InputError("mesh must be a clvr.Mesh (Mesh.from_arrays, from_meshio, from_vtk, load)")
         for what, v in (("leaf_size", leaf_size), ("sampling_size", sampling_size), ("partitions", partitions)):
             _count(what, v)
         self.context = device if isinstance(device, Context) else Context(device)
         self.mesh = mesh
+        oc = _U32()
+        _call(_lib.clvr_setting_index, b"one_curve", _text("one_curve", one_curve), ctypes.byref(oc))
         ps = _PreprocessSettings(ctypes.sizeof(_PreprocessSettings), int(leaf_size), int(sampling_size),
-                                 int(partitions), 0, None, 0, 0)
+                                 int(partitions), 0, None, 0, 0, 0, int(oc.value))
         self._h = _P()
         _call(_lib.clvr_scene_create, self.context._h, mesh._h, _b(field), ctypes.byref(ps), ctypes.byref(self._h))
 
@@ -670,7 +678,8 @@ class Scene(_Handle):
         st.size = ctypes.sizeof(_SceneStats)
         _call(_lib.clvr_scene_get_stats, self._h, ctypes.byref(st))
         out = {k: getattr(st, k) for k, _ in _SceneStats._fields_
-               if k not in ("size", "lo", "hi", "num_stages", "stage_name", "stage_s")}
+               if k not in ("size", "lo", "hi", "num_stages", "stage_name", "stage_s", "collapsed_cells")}
+        out["collapsed_cells"] = tuple(st.collapsed_cells)
         out["bounds"] = (tuple(st.lo), tuple(st.hi))
         out["stages"] = {st.stage_name[i].value.decode(): st.stage_s[i] for i in range(st.num_stages)}
         return out
@@ -980,7 +989,7 @@ def setting_name(setting, index):
     """The name at index in a setting's table ("method": march, track,
     bins, dda; "estimator": delta, urm, walk, auto; "sampler": independent, ld;
     "tonemap": none, aces, filmic; "element_boxes": auto, on, off;
-    "pixel_filter": box, point), or None
+    "pixel_filter": box, point; "one_curve": auto, on, off), or None
     past the end or for an unknown setting. Indices are stable within a
     major version (new names are appended)."""
     n = _lib.clvr_setting_name(_text("setting", setting), _count("index", index))
