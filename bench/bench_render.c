@@ -77,6 +77,7 @@
 #include "render.h"
 #include "scene.h"
 #include "tf.h"
+#include "tf_auto.h"
 
 #define MAX_MESHES 16
 #define MAX_CONFIGS 8
@@ -140,8 +141,55 @@ static void scene_release(clvr_cl *cl, scene_gpu *g)
 /* clvr_preprocess_options.one_curve of every scene (--one-curve auto|on|off; auto, the default, as clvr's) */
 static int g_one_curve = CLVR_ONE_CURVE_AUTO;
 
+/* --like FILE: every scene takes FILE's scalar range (its transfer
+ * function), box (the extent the density is scaled by, the camera's framing
+ * and the pixels counted as inside) instead of its own, so a graded mesh's
+ * uniform twin is rendered at the same optical depth from the same camera
+ * (bench/graded.sh). A twin sampled from a solver's mesh (tools/graded_twin.py)
+ * covers a little less of the box and misses the field's thinnest extremes. */
+typedef struct like_ref {
+    int set;
+    float lo[3], hi[3], scalar_min, scalar_max;
+    float auto_density; /* --density auto: FILE's (clvr_tf_auto_density) */
+} like_ref;
+static like_ref g_like;
+
+/* --density auto (clvr's default): the factor that gives m's median visible
+ * camera ray optical depth CLVR_TF_AUTO_DEPTH under the default ramp over
+ * [smin, smax] and box lo..hi (clvr_tf_auto_density). */
+static clvr_status auto_density_of(const clvr_mesh *m, float smin, float smax, const float *lo, const float *hi,
+                                   float *out, clvr_error *err)
+{
+    clvr_tf tf;
+    memset(&tf, 0, sizeof tf);
+    clvr_status s = clvr_tf_from_options(&tf, NULL, NULL, 0, 0.0f, 0.0f, 1.0f, smin, smax, err);
+    if (s == CLVR_OK) {
+        clvr_tf_set_extent(&tf, lo, hi);
+        s = clvr_tf_auto_density(m, &tf, out, err);
+    }
+    clvr_tf_free(&tf);
+    return s;
+}
+
+static clvr_status like_load(const char *path, like_ref *out, clvr_error *err)
+{
+    clvr_mesh m = {0};
+    clvr_load_options lo = {0};
+    clvr_status s = clvr_mesh_load(path, &lo, &m, err);
+    if (s != CLVR_OK) return s;
+    memcpy(out->lo, m.bounds_lo, sizeof out->lo);
+    memcpy(out->hi, m.bounds_hi, sizeof out->hi);
+    out->scalar_min = m.scalar_min;
+    out->scalar_max = m.scalar_max;
+    s = auto_density_of(&m, m.scalar_min, m.scalar_max, m.bounds_lo, m.bounds_hi, &out->auto_density, err);
+    out->set = s == CLVR_OK;
+    clvr_mesh_free(&m);
+    return s;
+}
+
 /* Loads path ("default": the built-in scene), preprocesses and builds the
- * trees, and bakes clvr's default transfer function over the data range. */
+ * trees, and bakes clvr's default transfer function over the data range
+ * (or --like's). */
 static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scene_gpu *g, clvr_error *err)
 {
     clvr_status s;
@@ -154,8 +202,8 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scen
     }
     if (s != CLVR_OK) return s;
     g->elements = clvr_mesh_num_elements(&m);
-    memcpy(g->lo, m.bounds_lo, sizeof g->lo);
-    memcpy(g->hi, m.bounds_hi, sizeof g->hi);
+    memcpy(g->lo, g_like.set ? g_like.lo : m.bounds_lo, sizeof g->lo);
+    memcpy(g->hi, g_like.set ? g_like.hi : m.bounds_hi, sizeof g->hi);
     clvr_preprocess_options po;
     clvr_preprocess_options_default(&po);
     po.one_curve = g_one_curve;
@@ -171,10 +219,17 @@ static clvr_status scene_load(clvr_cl *cl, const char *path, float density, scen
                 hl->build_s, (double)hl->empty_fraction, (double)hl->box_fraction,
                 hl->kept ? "kept" : hl->boxes_only ? "not built: little empty space in the box" : "dropped: little empty space in the box");
     }
+    if (s == CLVR_OK && !(density > 0.0f)) { /* auto */
+        if (g_like.set) density = g_like.auto_density;
+        else s = auto_density_of(&m, m.scalar_min, m.scalar_max, g->lo, g->hi, &density, err);
+        if (s == CLVR_OK) fprintf(stderr, "bench_render: %s: density auto = %g\n", path, (double)density);
+    }
     if (s == CLVR_OK)
-        s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, density, m.scalar_min, m.scalar_max, err);
+        s = clvr_tf_from_options(&g->tf, NULL, NULL, 0, 0.0f, 0.0f, density,
+                                 g_like.set ? g_like.scalar_min : m.scalar_min,
+                                 g_like.set ? g_like.scalar_max : m.scalar_max, err);
     if (s == CLVR_OK) {
-        clvr_tf_set_extent(&g->tf, m.bounds_lo, m.bounds_hi);
+        clvr_tf_set_extent(&g->tf, g->lo, g->hi);
         g->table_n = clvr_tf_table_size(&g->tf);
         g->table = malloc((size_t)g->table_n * 4 * sizeof(float));
         if (!g->table) s = clvr_error_set(err, CLVR_ERR_NO_MEMORY, "bench_render: out of memory for the tf table");
@@ -910,15 +965,18 @@ static int usage(void)
 {
     fprintf(stderr,
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
-            "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]\n"
+            "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D|auto] [--quick]\n"
             "                    [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]\n"
             "                    [--estimator auto|walk|urm|delta] [--urm-steps N] [--urm-kappa K] [--adaptive T]\n"
-            "                    [--one-curve auto|on|off]\n"
+            "                    [--one-curve auto|on|off] [--like FILE]\n"
             "       bench_render --converge [--mesh FILE] [--size WxH] [--method dda] [--ref-spp R] [--target F]\n"
             "                    [--max-spp M] [--sampler ld|independent]\n"
             "                    [--estimators auto,walk,urm,delta[:steps[:kappa[:light-res]]]]\n"
             "                    [--ref-estimator urm|delta] [--density D] [--urm-steps N] [--urm-kappa K] [--json FILE]\n"
-            "                    [--denoise] [--no-pixel-cv] [--adaptive T] [--repeats K]\n");
+            "                    [--denoise] [--no-pixel-cv] [--adaptive T] [--repeats K] [--like FILE]\n"
+            "  --like FILE: every mesh rendered with FILE's scalar range, box and camera (a uniform twin\n"
+            "               at the graded mesh's optical depth); --density auto: clvr's automatic\n"
+            "               density (of FILE with --like), else 1 (the default)\n");
     return 2;
 }
 
@@ -957,10 +1015,22 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--methods") && v) methods = argv[++i];
         else if (!strcmp(a, "--macrocells") && v) macro = argv[++i];
         else if (!strcmp(a, "--budget") && v) budget = atof(argv[++i]);
-        else if (!strcmp(a, "--density") && v) density = (float)atof(argv[++i]);
+        else if (!strcmp(a, "--density") && v) { /* auto: 0 */
+            const char *dv = argv[++i];
+            density = !strcmp(dv, "auto") ? 0.0f : (float)atof(dv);
+            if (!(density >= 0.0f) || (density == 0.0f && strcmp(dv, "auto"))) return usage();
+        }
         else if (!strcmp(a, "--no-shadows")) { shadows = 0; shadow_hi = 0; }
         else if (!strcmp(a, "--only-shadows")) shadow_lo = 1;
         else if (!strcmp(a, "--no-hull")) no_hull = 1;
+        else if (!strcmp(a, "--like") && v) {
+            clvr_error lerr = {0};
+            const char *lp = argv[++i];
+            if (like_load(lp, &g_like, &lerr) != CLVR_OK) {
+                fprintf(stderr, "bench_render: --like %s: %s\n", lp, lerr.msg);
+                return 1;
+            }
+        }
         else if (!strcmp(a, "--one-curve") && v) {
             const char *ov = argv[++i];
             if (!strcmp(ov, "auto")) g_one_curve = CLVR_ONE_CURVE_AUTO;

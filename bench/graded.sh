@@ -11,8 +11,9 @@
 #      machine disagree by up to 2.6x)
 #   3. the paper's Table 2 shape (bench_locate, leaf N = 1..32, random points)
 #   4. rendering: build/bench_render samples/ray, null collisions/ray, Mrays/s
-#      (track and dda; urm and delta estimators), then bench_render --converge time
-#      to 2 % relative RMSE (delta and urm, shadows off and on)
+#      (track and dda; auto, urm and delta estimators), then bench_render --converge
+#      time to 2 % relative RMSE (delta and urm, shadows off and on); each twin with
+#      its graded mesh's transfer function, camera and automatic density (--like)
 # Writes bench/results/graded/<date>-<device>.md (every tool's own table plus a
 # summary against #19's goals) and .json (all raw JSON merged).
 #
@@ -58,19 +59,24 @@ cmake --build "$BUILD" -j2 --target bench_locate bench_locate_embree bench_rende
 # graded mesh -> its uniform twin (same box, same scalar, about the same count)
 declare -A TWIN=([gmsh-point]=gmsh-point-uniform [gmsh-layers]=gmsh-layers-uniform)
 GRADED=(gmsh-point gmsh-layers)
-[ -f "$DIR/of-igloo-tets.bin" ] && GRADED+=(of-igloo-tets)
-if [ -f "$DIR/of-igloo-tets.bin" ]; then
-  # No same-field twin exists for the OpenFOAM case: a nearly uniform Delaunay mesh
-  # (clvr-gen cellvar) of the same element count stands in (other optical depth).
-  n=$(/usr/bin/python3 -c "import struct,sys; h=open(sys.argv[1],'rb').read(56); print(struct.unpack('<Q',h[24:32])[0])" "$DIR/of-igloo-tets.bin")
-  [ -f "$DIR/cellvar-igloo.bin" ] || nice "$BUILD/clvr-gen" cellvar "$DIR/cellvar-igloo.bin" --elements "$n" --quiet
-  TWIN[of-igloo-tets]=cellvar-igloo
-fi
-# Real meshes without a twin: the PLOT3D grids cut into tets and the OpenFOAM igloo as
-# its own mixed cells (the hardest case for point location: since session 49 it has
-# been measured by hand, now its goal row is in the summary with the others).
+# The OpenFOAM igloo, cut into tets and as its own mixed cells (the hardest case for
+# point location), each beside a lattice of as many tets or hexes over its domain with
+# its field T probed at their corners (tools/graded_twin.py; until session 57 the tets'
+# twin was clvr-gen cellvar, another field and so another optical depth).
+for m in of-igloo-tets of-igloo; do
+  kind=hexes
+  [ $m = of-igloo-tets ] && kind=tets
+  if [ -f "$DIR/$m.bin" ] && [ -f "$DIR/of-igloo-twin-$kind.bin" ]; then
+    GRADED+=("$m")
+    TWIN[$m]=of-igloo-twin-$kind
+  fi
+done
+# Real meshes without a twin: the PLOT3D grids cut into tets (and the igloo when its
+# twins could not be built).
 REAL=(post-tets)
-for m in bluntfin-tets comb-tets of-igloo; do [ -f "$DIR/$m.bin" ] && REAL+=("$m"); done
+for m in bluntfin-tets comb-tets of-igloo-tets of-igloo; do
+  [ -f "$DIR/$m.bin" ] && [ -z "${TWIN[$m]:-}" ] && REAL+=("$m")
+done
 LOCATE=()
 for g in "${GRADED[@]}"; do LOCATE+=("$g" "${TWIN[$g]}"); done
 LOCATE+=("${REAL[@]}")
@@ -135,27 +141,35 @@ if ! skip table2; then
   done
 fi
 
+# Rendering compares each graded mesh with its twin under one transfer function: the
+# graded mesh's scalar range, box and camera, at clvr's automatic density for it
+# (bench_render --like GRADED --density auto: the median visible camera ray at optical
+# depth 0.75). Before session 57 each mesh had its own range and density 1, at which the
+# igloo was nearly transparent (0.02 samples per ray).
 if ! skip render; then
-  args=()
-  for g in "${GRADED[@]}"; do args+=(--mesh "$DIR/$g.bin" --mesh "$DIR/${TWIN[$g]}.bin"); done
-  # urm (the renderer's default: a fixed number of steps per ray, so samples/ray hardly
-  # depend on the mesh) and delta tracking (samples and null collisions follow the majorants).
-  for est in urm delta; do
-    say "bench_render --estimator $est"
-    { echo "## Rendering (bench_render $SIZE, --estimator $est, track and dda)"; echo
-      nice "$BUILD/bench_render" "${args[@]}" --estimator "$est" --size "$SIZE" --frames 3 --warmup 1 \
-        --methods track,dda --json "$RAW/render-$est.json" 2>&1 || echo "bench_render FAILED"; echo; } >>"$MD"
+  # auto (the renderer's default: the walk through cells, or urm where the pilot
+  # finds it faster), urm (a fixed number of steps per ray, so samples/ray hardly depend
+  # on the mesh) and delta tracking (samples and null collisions follow the majorants).
+  for est in auto urm delta; do
+    echo "## Rendering (bench_render $SIZE, --estimator $est, track and dda, --like the graded mesh, --density auto)" >>"$MD"
+    echo >>"$MD"
+    for g in "${GRADED[@]}"; do
+      say "bench_render --estimator $est $g"
+      { nice "$BUILD/bench_render" --mesh "$DIR/$g.bin" --mesh "$DIR/${TWIN[$g]}.bin" --like "$DIR/$g.bin" \
+          --density auto --estimator "$est" --size "$SIZE" --frames 3 --warmup 1 --methods track,dda \
+          --json "$RAW/render-$est-$g.json" 2>&1 | grep -v '^bench_render: hull' || echo "bench_render FAILED"; echo; } >>"$MD"
+    done
   done
 fi
 
 if ! skip converge; then
-  echo "## Time to 2 % relative RMSE (bench_render --converge, 256x256, dda, reference 32 spp)" >>"$MD"
+  echo "## Time to 2 % relative RMSE (bench_render --converge, 256x256, dda, reference 32 spp, --like the graded mesh, --density auto)" >>"$MD"
   echo >>"$MD"
   for g in "${GRADED[@]}"; do
     for m in "$g" "${TWIN[$g]}"; do
       say "converge $m"
-      { nice "$BUILD/bench_render" --converge --mesh "$DIR/$m.bin" --size 256x256 --method dda --ref-spp 32 --max-spp 48 \
-          --json "$RAW/converge-$m.json" 2>&1 || echo "converge $m FAILED"; echo; } >>"$MD"
+      { nice "$BUILD/bench_render" --converge --mesh "$DIR/$m.bin" --like "$DIR/$g.bin" --density auto --size 256x256 \
+          --method dda --ref-spp 32 --max-spp 48 --json "$RAW/converge-$m.json" 2>&1 || echo "converge $m FAILED"; echo; } >>"$MD"
     done
   done
 fi

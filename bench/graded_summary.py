@@ -43,8 +43,10 @@ def main():
     for p in sorted(glob.glob(os.path.join(raw, "render*.json"))):
         d = load(p)
         if d:
-            # render-EST.json; a plain render.json (older runs) is urm, the renderer's default
-            merged["render"][base(p)[len("render-"):] or "urm"] = d
+            # render-EST[-MESH].json (one run per pair since session 57); a plain
+            # render.json (older runs) is urm, the renderer's default then
+            est = base(p)[len("render-"):].split("-", 1)[0] or "urm"
+            merged["render"].setdefault(est, {"rows": []})["rows"] += d.get("rows", [])
     for p in sorted(glob.glob(os.path.join(raw, "converge-*.json"))):
         d = load(p)
         if d:

@@ -285,8 +285,14 @@ d = json.load(open(sys.argv[1]))
 assert d["time.kernel_build_s"] > 0.3 and d["time"]["kernel_build_s"] == d["time.kernel_build_s"], d["time"]
 assert d["time.preprocess_s"] < d["time.kernel_build_s"], d["time"]
 PYEOF
-expect 0 "" -- env POCL_CACHE_DIR="$tmp/kernel-cache" CUDA_CACHE_PATH="$tmp/kernel-cache" "$CLVR" "${S[@]}" --size 16x16 --spp 1 -o "$tmp/first.png"
-grep -q "compiling kernels" "$tmp/err" && bad "a warm cache still says compiling kernels" || ok
+# A warm load that takes over CLVR_BUILD_NOTICE_S (0.4 s) still says so: on a loaded
+# machine (two ASan tests and mpirun's ranks on 2 cores) it can. One more run tells
+# load from a cache that is not used, which says it every time.
+for try in 1 2; do
+  expect 0 "" -- env POCL_CACHE_DIR="$tmp/kernel-cache" CUDA_CACHE_PATH="$tmp/kernel-cache" "$CLVR" "${S[@]}" --size 16x16 --spp 1 -o "$tmp/first.png"
+  grep -q "compiling kernels" "$tmp/err" || break
+done
+grep -q "compiling kernels" "$tmp/err" && bad "a warm cache still says compiling kernels (twice)" || ok
 
 echo "test_cli_e2e: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -27,6 +27,11 @@
 #                             buoyantBoussinesqSimpleFoam, foamToVTK -poly-decomp, then
 #                             tools/clvr-convert with scalar T: mixed cells, and split
 #                             into tets (--tets) for the Embree/VTK comparisons
+#   of-igloo-twin-tets.bin / of-igloo-twin-hexes.bin
+#                             their uniform twins (tools/graded_twin.py): a lattice of
+#                             cubes over the igloo's box, kept where the solver's mesh
+#                             is, as Kuhn tets (as many as of-igloo-tets) or hexes (as
+#                             many as of-igloo's cells), T probed from foamToVTK's output
 #   bluntfin-tets.bin, comb-tets.bin, post-tets.bin
 #                             the PLOT3D grids in tests/data (curvilinear, graded to
 #                             their walls), cut into tets
@@ -141,6 +146,23 @@ if [ $OPENFOAM -eq 1 ]; then
     nice "$CONVERT" --quiet --scalar T "$VTK" "$DIR/of-igloo.bin"
     nice "$CONVERT" --quiet --tets --scalar T "$VTK" "$DIR/of-igloo-tets.bin"
   fi
+  # Uniform twins of the igloo (tools/graded_twin.py): cubes over its box, kept where
+  # the solver's mesh is, T probed at their corners; as many tets as of-igloo-tets and
+  # as many hexes as of-igloo's cells.
+  VTK=$(find "$DIR/of-igloo/VTK" -maxdepth 1 -type f \( -name '*.vtk' -o -name '*.vtu' \) 2>/dev/null | sort | tail -n 1)
+  for kind in tets hexes; do
+    src=$DIR/of-igloo.bin
+    [ $kind = tets ] && src=$DIR/of-igloo-tets.bin
+    if have "$DIR/of-igloo-twin-$kind.bin" || [ ! -s "$src" ]; then continue; fi
+    [ -n "$VTK" ] || die "of-igloo-twin-$kind: foamToVTK's output is missing from $DIR/of-igloo/VTK (--force rebuilds the case)"
+    # header: counts of tets, pyramids, wedges and hexes at bytes 24-55 (docs/bin-format.md)
+    n=$(/usr/bin/python3 -c "import struct,sys; h=open(sys.argv[1],'rb').read(56); print(sum(struct.unpack('<4Q',h[24:56])))" "$src")
+    say "of-igloo-twin-$kind: tools/graded_twin.py, about $n cells"
+    nice /usr/bin/python3 "$ROOT/tools/graded_twin.py" "$VTK" "$DIR/of-igloo-twin-$kind.vtu" --elements "$n" \
+      --cells $kind --scalar T >&2
+    nice "$CONVERT" --quiet --scalar T "$DIR/of-igloo-twin-$kind.vtu" "$DIR/of-igloo-twin-$kind.bin"
+    rm -f "$DIR/of-igloo-twin-$kind.vtu"
+  done
 fi
 say "meshes in $DIR:"
 ls -l "$DIR"/*.bin >&2
