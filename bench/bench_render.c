@@ -21,7 +21,7 @@
  * (see the comment at converge_one for the definitions).
  *
  *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
- *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D] [--quick]
+ *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D|auto] [--quick]
  *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise] [--no-pixel-cv]
@@ -149,6 +149,7 @@ static int g_one_curve = CLVR_ONE_CURVE_AUTO;
  * covers a little less of the box and misses the field's thinnest extremes. */
 typedef struct like_ref {
     int set;
+    const char *path; /* FILE (argv's) */
     float lo[3], hi[3], scalar_min, scalar_max;
     float auto_density; /* --density auto: FILE's (clvr_tf_auto_density) */
 } like_ref;
@@ -171,6 +172,15 @@ static clvr_status auto_density_of(const clvr_mesh *m, float smin, float smax, c
     return s;
 }
 
+/* The header's density: "auto" (resolved per mesh on stderr, "density auto =")
+ * or the factor, and --like's file when given. */
+static const char *density_text(float density, const char *like, char *buf, size_t cap)
+{
+    int n = density > 0.0f ? snprintf(buf, cap, "%g", (double)density) : snprintf(buf, cap, "auto");
+    if (like && n >= 0 && (size_t)n < cap) snprintf(buf + n, cap - (size_t)n, ", like %s", like);
+    return buf;
+}
+
 static clvr_status like_load(const char *path, like_ref *out, clvr_error *err)
 {
     clvr_mesh m = {0};
@@ -183,6 +193,7 @@ static clvr_status like_load(const char *path, like_ref *out, clvr_error *err)
     out->scalar_max = m.scalar_max;
     s = auto_density_of(&m, m.scalar_min, m.scalar_max, m.bounds_lo, m.bounds_hi, &out->auto_density, err);
     out->set = s == CLVR_OK;
+    out->path = path;
     clvr_mesh_free(&m);
     return s;
 }
@@ -745,9 +756,11 @@ static int run_converge(clvr_cl *cl, const char *mesh, const config *base, const
     clvr_camera cam;
     clvr_denoiser *dn = NULL;
     int rc = 1;
-    printf("# bench_render --converge: %s, %s, %ux%u, density %g, reference %u spp (%s, independent frames), "
+    char dtext[512];
+    printf("# bench_render --converge: %s, %s, %ux%u, density %s, reference %u spp (%s, independent frames), "
            "measured runs: %s sampler, target %.3g relative RMSE, %s pixel filter\n", base_name(mesh),
-           clvr_render_method_name(base->method), w, h, (double)density, ref_spp,
+           clvr_render_method_name(base->method), w, h,
+           density_text(density, g_like.set ? g_like.path : NULL, dtext, sizeof dtext), ref_spp,
            clvr_render_estimator_name(base->estimator), base->sampler == CLVR_SAMPLER_LD ? "ld" : "independent",
            target, base->pixel_filter == CLVR_PIXEL_POINT ? "point" : "box");
     printf("# device: %s | %s | %s | driver %s\n\n", cl->device_name, cl->platform_name, cl->device_version,
@@ -1139,9 +1152,11 @@ int main(int argc, char **argv)
         return rc;
     }
 
+    char dtext[512];
     printf("# bench_render: %ux%u, 1 spp per frame, %u warm-up + median of %u frames (fewer past %g s), shadows %s, "
-           "default transfer function, density %g%s\n",
-           w, h, warmup, frames, budget, shadows ? "on (march: off)" : "off", density, quick ? " (quick)" : "");
+           "default transfer function, density %s%s\n",
+           w, h, warmup, frames, budget, shadows ? "on (march: off)" : "off",
+           density_text(density, g_like.set ? g_like.path : NULL, dtext, sizeof dtext), quick ? " (quick)" : "");
     printf("# device: %s | %s | %s | driver %s | %u compute units\n\n", cl.device_name, cl.platform_name,
            cl.device_version, cl.driver_version, cl.compute_units);
     printf("| mesh | elements | method | shadows | fps | Mrays/s | ms/frame (min-max) | frames | rays/frame | samples/ray | "
