@@ -3,7 +3,8 @@
  * shadow rays) for every integrator: alpha-composited ray marching (no
  * shadows, as in the paper), delta tracking with one global majorant, and
  * the adaptive methods (majorant bins along the ray; macrocell grid with
- * 3D-DDA at two grid sizes); plus samples (point locations) and null
+ * 3D-DDA, --macrocells: the automatic grid and two grid sizes by default,
+ * each entry R or auto; the automatic grid's choice is printed); plus samples (point locations) and null
  * collisions per ray. The pipeline is clvr's own (load, Quick Clusters
  * preprocessing, two-level BVH, renderer), with clvr's default transfer
  * function over the mesh's scalar range and its automatic camera framing.
@@ -21,7 +22,7 @@
  * (see the comment at converge_one for the definitions).
  *
  *   bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]
- *                [--methods LIST] [--macrocells A,B] [--no-shadows] [--budget S] [--density D|auto] [--quick]
+ *                [--methods LIST] [--macrocells auto,A,B] [--no-shadows] [--budget S] [--density D|auto] [--quick]
  *                [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]
  *   bench_render --converge [--mesh FILE] [--size WxH] [--method NAME] [--ref-spp R] [--target F]
  *                [--max-spp M] [--sampler ld|independent] [--json FILE] [--denoise] [--no-pixel-cv]
@@ -292,6 +293,13 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
             fprintf(stderr, "bench_render: face adjacency for walk: %.1f MB (%.1f bytes per element), built in %.3f s "
                     "device\n", (double)bytes / 1e6, g->elements ? (double)bytes / (double)g->elements : 0.0, build_s);
         g->adjacency_told = *skipped || bytes;
+    }
+    if (s == CLVR_OK && c->method == CLVR_RENDER_DDA && !c->macrocells) {
+        double fine, coarse;
+        const uint32_t res = clvr_renderer_macrocells(*out, &fine, &coarse);
+        fprintf(stderr, "bench_render: macrocells auto: %u^3 (mean majorant %.4g over %u^3 cells, %.4g over %u^3: "
+                "ratio %.3f, the fine grid below %.2f)\n", res, fine, CLVR_MACROCELLS_FINE, coarse,
+                CLVR_MACROCELLS_FINE / CLVR_DDA_BLOCK, coarse > 0 ? fine / coarse : 0.0, (double)CLVR_MACROCELLS_GAIN);
     }
     if (s != CLVR_OK) {
         clvr_renderer_destroy(*out);
@@ -978,7 +986,7 @@ static int usage(void)
 {
     fprintf(stderr,
             "usage: bench_render [--device SPEC] [--json FILE] [--mesh FILE ...] [--size WxH] [--frames N] [--warmup W]\n"
-            "                    [--methods march,track,bins,dda] [--macrocells A,B] [--no-shadows] [--budget S] [--density D|auto] [--quick]\n"
+            "                    [--methods march,track,bins,dda] [--macrocells auto,A,B] [--no-shadows] [--budget S] [--density D|auto] [--quick]\n"
             "                    [--sampler ld|independent] [--no-hull] [--pixel-filter box|point]\n"
             "                    [--estimator auto|walk|urm|delta] [--urm-steps N] [--urm-kappa K] [--adaptive T]\n"
             "                    [--one-curve auto|on|off] [--like FILE]\n"
@@ -996,7 +1004,7 @@ static int usage(void)
 int main(int argc, char **argv)
 {
     const char *device = NULL, *json = NULL, *meshes[MAX_MESHES];
-    const char *methods = "march,track,bins,dda", *macro = "32,128";
+    const char *methods = "march,track,bins,dda", *macro = NULL;
     uint32_t sampler = CLVR_SAMPLER_LD, pixel_filter = CLVR_PIXEL_BOX;
     uint32_t nmesh = 0, w = 1024, h = 1024, frames = 5, warmup = 2, ref_spp = 256, max_spp = 1024, repeats = 3;
     uint32_t conv_method = CLVR_RENDER_DDA;
@@ -1119,13 +1127,14 @@ int main(int argc, char **argv)
             if (!parse_method(tok, &m)) return usage();
             if (m == CLVR_RENDER_DDA) {
                 char mb[128];
-                snprintf(mb, sizeof mb, "%s", macro);
+                snprintf(mb, sizeof mb, "%s", macro ? macro : "auto,32,128");
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
+                    config c = {m, strcmp(t, "auto") ? (uint32_t)atoi(t) : 0, shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
                                 pixel_filter, 0, no_cv, adaptive};
-                    if (c.macrocells < 1 || c.macrocells > 1024) return usage();
-                    snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
+                    if (strcmp(t, "auto") && (c.macrocells < 1 || c.macrocells > 1024)) return usage();
+                    if (c.macrocells) snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
+                    else snprintf(c.label, sizeof c.label, "dda auto");
                     cfg[ncfg++] = c;
                 }
             } else if (ncfg < MAX_CONFIGS) {
@@ -1144,7 +1153,7 @@ int main(int argc, char **argv)
         return 77; /* no OpenCL device: ctest counts the smoke test as skipped */
     }
     if (converge) {
-        const config base = {conv_method, (uint32_t)atoi(macro), 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
+        const config base = {conv_method, macro && strcmp(macro, "auto") ? (uint32_t)atoi(macro) : 0, 1, "", sampler, ref_estimator, urm_steps, urm_kappa, 0,
                              no_hull, pixel_filter, denoise, no_cv, adaptive};
         int rc = run_converge(&cl, meshes[0], &base, conv_est, nconv_est, shadow_lo, shadow_hi, size_set ? w : 512, size_set ? h : 512,
                               ref_spp, max_spp, target, density, repeats, json);

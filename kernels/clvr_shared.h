@@ -649,6 +649,24 @@ CLVR_STATIC_ASSERT(sizeof(clvr_hull_face) == 64, "clvr_hull_face layout");
 #define CLVR_DDA_DESCEND 0.1f
 #endif
 
+/* dda with macrocells 0 (automatic, the default): the elements are
+ * rasterized into a CLVR_MACROCELLS_FINE^3 grid; for each transfer function
+ * the mean majorant of its cells is compared with the mean of its blocks'
+ * (a grid CLVR_DDA_BLOCK times coarser whose cells bound theirs), and the
+ * fine grid is used where its mean is below CLVR_MACROCELLS_GAIN times the
+ * coarse one's, else the coarse grid. A finer grid is not free: more cell
+ * steps, and urm, which spends its points by the majorant, converged more
+ * slowly with tighter ones (built-in scene, mean ratio 0.72: 2.8 -> 3.9 spp
+ * to 2% at 128^3, shadows off; the walk did not move), and the igloo's
+ * twin of even cells (ratio 0.66) rendered as fast either way. The mixed
+ * OpenFOAM igloo (ratio 0.33), whose thin hot layers a coarse grid smears
+ * over large cells, gains (issue #19). Measured in
+ * bench/results/graded/2026-12-02-s58-macrocells.md. */
+#define CLVR_MACROCELLS_FINE 128u
+#ifndef CLVR_MACROCELLS_GAIN
+#define CLVR_MACROCELLS_GAIN 0.5f
+#endif
+
 /* Most clip planes of a frame (--clip). */
 #define CLVR_MAX_CLIP_PLANES 6u
 

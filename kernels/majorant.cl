@@ -118,15 +118,25 @@ __kernel void clvr_grid_majorants(__global const uint *grid, uint cells, __globa
 
 /* Coarse level of the grid: the largest majorant of each block's cells
  * (CLVR_DDA_BLOCK^3, fewer at the far faces when the block count does not
- * divide r). rc = ceil(r / CLVR_DDA_BLOCK) blocks per axis. */
-__kernel void clvr_grid_blocks(__global const float *cells, uint r, __global float *blocks, uint rc)
+ * divide r), and their sum (for the automatic grid's choice, see
+ * host/pipeline/majorant.h). rc = ceil(r / CLVR_DDA_BLOCK) blocks per axis.
+ * Run on the blocks again it makes the level above: with r = 128 and
+ * blocks of 4, the blocks of the 128^3 grid are a 32^3 grid whose cells
+ * bound theirs. */
+__kernel void clvr_grid_blocks(__global const float *cells, uint r, __global float *blocks, __global float *sums,
+                               uint rc)
 {
     uint i = get_global_id(0);
     if (i >= rc * rc * rc) return;
     const uint bx = i % rc, by = (i / rc) % rc, bz = i / (rc * rc), B = (uint)CLVR_DDA_BLOCK;
-    float m = 0.0f;
+    float m = 0.0f, sum = 0.0f;
     for (uint z = bz * B; z < min(bz * B + B, r); ++z)
         for (uint y = by * B; y < min(by * B + B, r); ++y)
-            for (uint x = bx * B; x < min(bx * B + B, r); ++x) m = fmax(m, cells[clvr_grid_index((int)x, (int)y, (int)z, (int)r)]);
+            for (uint x = bx * B; x < min(bx * B + B, r); ++x) {
+                const float c = cells[clvr_grid_index((int)x, (int)y, (int)z, (int)r)];
+                m = fmax(m, c);
+                sum += c;
+            }
     blocks[i] = m;
+    sums[i] = sum;
 }

@@ -266,6 +266,10 @@ static void test_scene(clvr_context *ctx, const grid *g)
     s1.bins = 33;
     CHECK_FAILS(clvr_tracer_set_settings(t2, &s1, &msg), CLVR_RESULT_ERR_USAGE, "bins");
     s1.bins = s0.bins;
+    CHECK(def.macrocells == 0); /* the automatic grid (1.11) */
+    s1.macrocells = 1025;
+    CHECK_FAILS(clvr_tracer_set_settings(t2, &s1, &msg), CLVR_RESULT_ERR_USAGE, "macrocells");
+    s1.macrocells = s0.macrocells;
     snprintf(s1.method, sizeof s1.method, "magic");
     CHECK_FAILS(clvr_tracer_set_settings(t2, &s1, &msg), CLVR_RESULT_ERR_USAGE, "magic");
     s1.size = 8;
@@ -290,6 +294,15 @@ static void test_scene(clvr_context *ctx, const grid *g)
     rs.size = sizeof rs;
     OK(clvr_tracer_get_render_stats(t1, &rs, &msg));
     CHECK(rs.frames == SPP && rs.rays >= (uint64_t)W * H * SPP && rs.width == W && !strcmp(rs.method, def.method));
+    /* dda's grid in use: the automatic grid's choice, 128 or its blocks' 32 */
+    CHECK(!strcmp(rs.method, "dda") && (rs.macrocells == 128 || rs.macrocells == 32));
+    {   /* built against 1.10's header: no macrocells member */
+        clvr_render_stats old;
+        memset(&old, 0xab, sizeof old);
+        old.size = (uint32_t)offsetof(clvr_render_stats, macrocells);
+        OK(clvr_tracer_get_render_stats(t1, &old, &msg));
+        CHECK(!strcmp(old.estimator, rs.estimator) && old.macrocells == 0xabababab);
+    }
     {   /* built against 1.5's header: no estimator member */
         clvr_render_stats old;
         memset(&old, 0xab, sizeof old);

@@ -71,6 +71,11 @@ int main(void)
     TU_CHECK(o.leaf_size == 8 && o.macrocells == 32 && o.fovy == 30.0f && o.density == 2.5f);
     TU_CHECK(!o.density_auto && !o.opacity_ramp); /* --density D: that density, not the automatic one */
     TU_CHECK(o.light_dir[2] == 1.0f && o.background[0] == 1.0f);
+    TU_CHECK_STATUS(PARSE(&o, &err, "--macrocells", "auto"), CLVR_OK, &err);
+    TU_CHECK(o.macrocells == 0); /* the automatic grid */
+    TU_CHECK_STATUS(PARSE(&o, &err, "m.bin"), CLVR_OK, &err);
+    TU_CHECK(o.macrocells == 0); /* the default */
+    TU_CHECK_STATUS(PARSE(&o, &err, "--macrocells", "0"), CLVR_ERR_USAGE, &err);
 
     /* The transfer function's defaults (issue 17): automatic opacity and
      * density; the old linear ramp by name. */

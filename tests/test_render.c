@@ -369,7 +369,9 @@ static void test_homogeneous(clvr_cl *cl)
     /* Cases: each method; then the low-discrepancy sampler; then dda on a
      * fine grid in a thin medium, where every block's optical depth is
      * below CLVR_DDA_DESCEND (tracked as one segment per block) and, with
-     * sigma 1, where blocks are partly tracked whole and partly walked. */
+     * sigma 1, where blocks are partly tracked whole and partly walked;
+     * then the automatic grid (0), which takes the coarse grid of the
+     * fine one's blocks in a constant medium. */
     const struct {
         uint32_t method, sampler, macrocells;
         float sigma;
@@ -377,7 +379,7 @@ static void test_homogeneous(clvr_cl *cl)
         {CLVR_RENDER_TRACK, CLVR_SAMPLER_INDEPENDENT, 7, 1.5f}, {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 7, 1.5f},
         {CLVR_RENDER_BINS, CLVR_SAMPLER_INDEPENDENT, 7, 1.5f},  {CLVR_RENDER_TRACK, CLVR_SAMPLER_LD, 7, 1.5f},
         {CLVR_RENDER_DDA, CLVR_SAMPLER_LD, 7, 1.5f},            {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 0.4f},
-        {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 1.0f},
+        {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 32, 1.0f},  {CLVR_RENDER_DDA, CLVR_SAMPLER_INDEPENDENT, 0, 1.5f},
     };
     /* Every case with each estimator: the analytic answer holds for all. */
     const size_t ncases = sizeof cases / sizeof cases[0];
@@ -1297,6 +1299,104 @@ static void test_majorants(clvr_cl *cl)
     fixture_close(&fx);
 }
 
+/* Two small tets at opposite corners of the unit box, scalar 1 at the
+ * origin's and 0 at the far one's: a mesh of mostly empty space. */
+static int corner_tets(clvr_mesh *m)
+{
+    clvr_error err = {0};
+    const uint64_t counts[CLVR_CELL_TYPE_COUNT] = {2, 0, 0, 0};
+    if (clvr_mesh_alloc(m, 8, counts, &err) != CLVR_OK) { ++tu_fail_; return 1; }
+    const float h = 0.01f, p[8][3] = {{0, 0, 0}, {h, 0, 0}, {0, h, 0}, {0, 0, h},
+                                      {1, 1, 1}, {1 - h, 1, 1}, {1, 1 - h, 1}, {1, 1, 1 - h}};
+    for (int i = 0; i < 8; ++i) {
+        memcpy(m->positions + 3 * i, p[i], sizeof p[i]);
+        m->scalars[i] = i < 4 ? 1.0f : 0.0f;
+        m->indices[CLVR_CELL_TET][i] = (uint32_t)i;
+    }
+    clvr_mesh_update_ranges(m);
+    return 0;
+}
+
+/* ---- 4b. the automatic macrocell grid (settings.macrocells 0, see
+ * CLVR_MACROCELLS_FINE): the coarse grid it may choose is the fine grid's
+ * blocks (each cell the largest of its fine cells), the means it reports are
+ * the two grids' means, and the choice follows CLVR_MACROCELLS_GAIN. A box
+ * of cells in a constant medium keeps the coarse grid; a dense speck in
+ * empty space gets the fine one. */
+static void test_macrocells_auto(clvr_cl *cl)
+{
+    clvr_error err = {0};
+    const uint32_t F = CLVR_MACROCELLS_FINE, B = CLVR_DDA_BLOCK, C = F / B;
+    const size_t nf = (size_t)F * F * F, nc = (size_t)C * C * C;
+    float *fine = malloc(nf * sizeof(float)), *cells = malloc(nf * sizeof(float)), *blocks = malloc(nc * sizeof(float)),
+          *pool = malloc(nc * sizeof(float));
+    for (int k = 0; k < 2 && fine && cells && blocks && pool; ++k) {
+        clvr_mesh m;
+        if (k == 0 ? make_box(9, CLVR_SCENE_MIX_MIXED, CLVR_SCENE_FIELD_BLOBS, &m) : corner_tets(&m)) break;
+        fixture fx;
+        if (fixture_open(&fx, cl, &m, 8, 8)) break;
+        enum { N = 64 };
+        float table[4 * N];
+        for (int i = 0; i < N; ++i) {
+            table[4 * i] = table[4 * i + 1] = table[4 * i + 2] = 1.0f;
+            table[4 * i + 3] = k == 0 ? 2.0f : i == N - 1 ? 30.0f : 0.0f;
+        }
+        set_table(&fx, table, N, fx.mesh.scalar_min, fx.mesh.scalar_max);
+        /* the fine grid itself, then the automatic grid's choice */
+        fx.set.macrocells = F;
+        TU_CHECK_STATUS(clvr_renderer_set_settings(fx.r, &fx.set, &err), CLVR_OK, &err);
+        TU_CHECK_EQ_U64(clvr_renderer_macrocells(fx.r, NULL, NULL), F);
+        float gm;
+        TU_CHECK_STATUS(clvr_renderer_read_majorants(fx.r, NULL, fine, NULL, &gm, &err), CLVR_OK, &err);
+        fx.set.macrocells = 0;
+        TU_CHECK_STATUS(clvr_renderer_set_settings(fx.r, &fx.set, &err), CLVR_OK, &err);
+        double fm, cm;
+        const uint32_t res = clvr_renderer_macrocells(fx.r, &fm, &cm);
+        TU_CHECK_STATUS(clvr_renderer_read_majorants(fx.r, NULL, cells, blocks, &gm, &err), CLVR_OK, &err);
+        double sf = 0.0, sc = 0.0;
+        for (size_t i = 0; i < nf; ++i) sf += fine[i];
+        for (uint32_t z = 0; z < C; ++z)
+            for (uint32_t y = 0; y < C; ++y)
+                for (uint32_t x = 0; x < C; ++x) {
+                    float mx = 0.0f;
+                    for (uint32_t dz = 0; dz < B; ++dz)
+                        for (uint32_t dy = 0; dy < B; ++dy)
+                            for (uint32_t dx = 0; dx < B; ++dx) {
+                                const float v = fine[((size_t)(z * B + dz) * F + y * B + dy) * F + x * B + dx];
+                                mx = v > mx ? v : mx;
+                            }
+                    pool[((size_t)z * C + y) * C + x] = mx;
+                    sc += mx;
+                }
+        sf /= (double)nf;
+        sc /= (double)nc;
+        if (!(fabs(fm - sf) <= 1e-5 * sf + 1e-12) || !(fabs(cm - sc) <= 1e-5 * sc + 1e-12)) {
+            fprintf(stderr, "macrocells auto: reported means %g / %g, the grids' %g / %g\n", fm, cm, sf, sc);
+            ++tu_fail_;
+        }
+        /* the rule, and the branch this case is made for */
+        TU_CHECK_EQ_U64(res, sf < (double)CLVR_MACROCELLS_GAIN * sc ? F : C);
+        TU_CHECK_EQ_U64(res, k == 0 ? C : F);
+        fprintf(stderr, "macrocells auto, %s: %u^3 (mean majorant %.4g over %u^3, %.4g over %u^3)\n",
+                k == 0 ? "constant medium" : "dense speck", res, sf, F, sc, C);
+        /* the grid in use is the fine grid or its blocks, value for value */
+        size_t diff = 0;
+        if (res == C) {
+            for (size_t i = 0; i < nc; ++i) diff += cells[i] != pool[i];
+        } else {
+            for (size_t i = 0; i < nf; ++i) diff += cells[i] != fine[i];
+            for (size_t i = 0; i < nc; ++i) diff += blocks[i] != pool[i];
+        }
+        TU_CHECK_EQ_U64(diff, 0);
+        fixture_close(&fx);
+    }
+    TU_CHECK(fine && cells && blocks && pool);
+    free(fine);
+    free(cells);
+    free(blocks);
+    free(pool);
+}
+
 /* ---- 5. reproducibility */
 static void test_seeds(clvr_cl *cl)
 {
@@ -1806,6 +1906,7 @@ int main(void)
     test_light_grid(&cl);
     test_clip(&cl);
     test_majorants(&cl);
+    test_macrocells_auto(&cl);
     test_seeds(&cl);
     test_live_pixels(&cl);
     {

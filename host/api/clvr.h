@@ -48,7 +48,7 @@ extern "C" {
 #endif
 
 #define CLVR_API_VERSION_MAJOR 1
-#define CLVR_API_VERSION_MINOR 10
+#define CLVR_API_VERSION_MINOR 11
 /* major * 1000 + minor: 1000 is 1.0, 1001 is 1.1 (scenes, settings,
  * statistics and dataset information as versioned structs, multi-field
  * files), 1002 is 1.2 (name tables, framing a box, time series, a transfer
@@ -61,7 +61,9 @@ extern "C" {
  * statistics "pilot_s", "pilot_pixels", "pilot_walk_cells"), 1009 is 1.9
  * (clvr_scene_stats.bytes_entry_grids), 1010 is 1.10 (mixed cells on one
  * curve: clvr_preprocess_settings.one_curve, clvr_scene_stats.collapsed_cells,
- * setting name "one_curve").
+ * setting name "one_curve"), 1011 is 1.11 (the automatic macrocell grid:
+ * clvr_tracer_settings.macrocells 0, the default, and
+ * clvr_render_stats.macrocells).
  *
  * Versioned structs (a first member `size`, set with their _init function or
  * to sizeof) grow only at their end. The library reads and fills a struct
@@ -522,7 +524,8 @@ struct clvr_tracer_settings {
     uint32_t urm_steps;       /* urm: minimum quadrature points per ray, >= 1 */
     float step;               /* march step in world units; 0: automatic */
     uint32_t bins, segments;  /* bins method: bins <= 32, segments >= 1 */
-    uint32_t macrocells;      /* dda: grid cells per axis, >= 1 */
+    uint32_t macrocells;      /* dda: grid cells per axis, 1..1024; 0 (since 1.11, the default):
+                                 automatic, 128 or 32 per transfer function (README "Rendering") */
     float light_dir[3];       /* toward the light, not all 0 */
     float light_intensity, ambient;
     int shadows;
@@ -551,6 +554,8 @@ typedef struct clvr_render_stats {
     char estimator[16]; /* since 1.6: what the frames render with ("delta", "urm", "walk"): "auto" resolved,
                          * and "urm" where the walk cannot run (under "auto" a mesh without tets, no
                          * room for its face adjacency, an MPI run) */
+    uint32_t macrocells; /* (1.11) dda: cells per axis of the macrocell grid in use (the automatic grid's
+                          * choice); 0 for the other methods */
 } clvr_render_stats;
 CLVR_API clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out, clvr_message *msg);
 

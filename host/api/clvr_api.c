@@ -1134,7 +1134,9 @@ static clvr_status settings_to_render(const char *fn, const clvr_tracer_settings
     if (s->bins < 1 || s->bins > CLVR_RENDER_MAX_BINS || s->segments < 1)
         return clvr_error_set(e, CLVR_ERR_USAGE, "%s: bins %u and segments %u; use 1 to %u bins and >= 1 segments",
                               fn, s->bins, s->segments, CLVR_RENDER_MAX_BINS);
-    if (s->macrocells < 1) return clvr_error_set(e, CLVR_ERR_USAGE, "%s: macrocells is 0; use >= 1", fn);
+    if (s->macrocells > 1024)
+        return clvr_error_set(e, CLVR_ERR_USAGE, "%s: macrocells is %u; use 1 to 1024, or 0 for automatic", fn,
+                              s->macrocells);
     if (!finite3(s->light_dir) || (s->light_dir[0] == 0 && s->light_dir[1] == 0 && s->light_dir[2] == 0))
         return clvr_error_set(e, CLVR_ERR_USAGE, "%s: light_dir must be 3 finite numbers, not all 0", fn);
     if (!(s->light_intensity >= 0) || !isfinite(s->light_intensity) || !(s->ambient >= 0) || !isfinite(s->ambient))
@@ -2007,6 +2009,7 @@ clvr_result clvr_tracer_get_render_stats(clvr_tracer *tr, clvr_render_stats *out
     d.height = tr->rs.height;
     snprintf(d.method, sizeof d.method, "%s", clvr_render_method_name(tr->rs.method));
     snprintf(d.estimator, sizeof d.estimator, "%s", clvr_render_estimator_name(clvr_renderer_estimator(tr->renderer)));
+    d.macrocells = tr->rs.method == CLVR_RENDER_DDA ? clvr_renderer_macrocells(tr->renderer, NULL, NULL) : 0;
     return finish(versioned_out(fn, "clvr_render_stats", out, &d, sizeof d,
                                     offsetof(clvr_render_stats, estimator), &e), &e, msg);
 }

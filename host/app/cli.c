@@ -94,7 +94,8 @@ void clvr_cli_print_help(FILE *out)
         "  --step S               march step in world units (default: diagonal / 512)\n"
         "  --bins N               bins per ray segment for --method bins, 1..32 (default 32)\n"
         "  --segments M           ray segments for --method bins (default 4)\n"
-        "  --macrocells R         R^3 macrocell grid for --method dda (default 32)\n"
+        "  --macrocells R|auto    R^3 macrocell grid for --method dda (default auto: 128^3 where its\n"
+        "                         majorants average under half of 32^3's, else 32^3)\n"
         "  --leaf-size N          elements per leaf cluster: 1, 4, 8, 16, 32 (default 16)\n"
         "  --sampling-size N      elements per adaptive sampling cluster (default 16)\n"
         "  --clip NX,NY,NZ,D      remove the medium where NX*x + NY*y + NZ*z > D (keeps the side the\n"
@@ -358,7 +359,11 @@ clvr_result clvr_cli_parse(int argc, char **argv, clvr_options *o, clvr_message 
         else if (!strcmp(a, "--step")) { const char *v = NEXT(); if (v) s = parse_float(a, v, 1e-9f, 1e30f, &o->step, msg); }
         else if (!strcmp(a, "--bins")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 32, &o->bins, msg); }
         else if (!strcmp(a, "--segments")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->segments, msg); }
-        else if (!strcmp(a, "--macrocells")) { const char *v = NEXT(); if (v) s = parse_u32(a, v, 1, 1024, &o->macrocells, msg); }
+        else if (!strcmp(a, "--macrocells")) {
+            const char *v = NEXT();
+            if (v && !strcmp(v, "auto")) o->macrocells = 0;
+            else if (v) s = parse_u32(a, v, 1, 1024, &o->macrocells, msg);
+        }
         else if (!strcmp(a, "--shadows")) {
             const char *v = NEXT();
             if (v) {

@@ -19,6 +19,7 @@ void clvr_stats_from_render(clvr_stats *s, const clvr_render_stats *rc)
 {
     snprintf(s->method, sizeof s->method, "%s", rc->method);
     snprintf(s->estimator, sizeof s->estimator, "%s", rc->estimator);
+    s->macrocells = rc->macrocells;
     s->width = rc->width;
     s->height = rc->height;
     s->frames = rc->frames;
@@ -119,9 +120,11 @@ void clvr_stats_print(FILE *out, const clvr_stats *s)
                 s->bytes_resident ? (double)s->bytes_peak_rss / (double)s->bytes_resident : 0.0);
     }
     if (s->have_render) {
-        fprintf(out, "\nrender: %s, %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
+        char grid[32] = "";
+        if (s->macrocells) snprintf(grid, sizeof grid, " (%u^3 macrocells)", s->macrocells);
+        fprintf(out, "\nrender: %s%s, %s, %ux%u, %llu frames, %.4f s/frame (device), %.3f Mrays/s, %.2f samples/ray, "
                      "%.2f null collisions/ray\n",
-                s->method, s->estimator, s->width, s->height, (unsigned long long)s->frames,
+                s->method, grid, s->estimator, s->width, s->height, (unsigned long long)s->frames,
                 s->frame_s, s->rays_per_s / 1e6, s->samples_per_ray, s->null_collisions_per_ray);
         /* The two device passes that s/frame does not show by itself: the
          * light grid is inside its sum (once per transfer function), the
@@ -188,6 +191,7 @@ clvr_result clvr_stats_write_json(const char *path, const clvr_stats *s, clvr_me
         {"samples_per_ray", s->samples_per_ray},
         {"null_collisions_per_ray", s->null_collisions_per_ray},
         {"frame_s", s->frame_s},
+        {"macrocells", (double)s->macrocells},
         {"frames", (double)s->frames},
         {"rays", (double)s->rays},
         {"width", (double)s->width},

@@ -47,6 +47,7 @@ typedef struct clvr_stats {
     /* render */
     char method[16];
     char estimator[16]; /* what the frames rendered with (auto resolved) */
+    uint32_t macrocells; /* dda: cells per axis of the macrocell grid in use (the automatic choice); else 0 */
     uint32_t width, height;
     uint64_t frames, rays, samples, null_collisions;
     double frame_s, rays_per_s, samples_per_ray, null_collisions_per_ray, render_wall_s;

@@ -372,7 +372,10 @@ static void print_command_line(viewer *v)
     if (v->ts.step != dts.step) appendf(line, cap, " --step %.9g", (double)v->ts.step);
     if (v->ts.bins != dts.bins) appendf(line, cap, " --bins %u", v->ts.bins);
     if (v->ts.segments != dts.segments) appendf(line, cap, " --segments %u", v->ts.segments);
-    if (v->ts.macrocells != dts.macrocells) appendf(line, cap, " --macrocells %u", v->ts.macrocells);
+    if (v->ts.macrocells != dts.macrocells) {
+        if (v->ts.macrocells) appendf(line, cap, " --macrocells %u", v->ts.macrocells);
+        else appendf(line, cap, " --macrocells auto");
+    }
     if (o->leaf_size != d.leaf_size) appendf(line, cap, " --leaf-size %u", o->leaf_size);
     if (o->sampling_size != d.sampling_size) appendf(line, cap, " --sampling-size %u", o->sampling_size);
     appendf(line, cap, " --camera %.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", (double)v->eye[0], (double)v->eye[1],

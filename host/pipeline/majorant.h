@@ -21,12 +21,13 @@
 typedef struct clvr_majorants clvr_majorants;
 
 /* The device arrays the render kernel reads (CLVR_VOLUME_ARRAYS'
- * cluster_majorants, grid and blocks). Valid until the next
- * clvr_majorants_build_grid that rebuilds, or clvr_majorants_destroy. */
+ * cluster_majorants, grid and blocks): the grid the last
+ * clvr_majorants_set_tf chose. Valid until the next clvr_majorants_build_grid
+ * that rebuilds, or clvr_majorants_destroy. */
 typedef struct clvr_majorant_arrays {
     cl_mem clusters; /* float [mesh->num_sampling] */
-    cl_mem cells;    /* float [grid_res^3], index clvr_grid_index */
-    cl_mem blocks;   /* float [clvr_majorant_blocks(grid_res)^3] */
+    cl_mem cells;    /* float [res^3], index clvr_grid_index (res: clvr_majorants_grid) */
+    cl_mem blocks;   /* float [clvr_majorant_blocks(res)^3] */
 } clvr_majorant_arrays;
 
 /* Blocks per axis of a grid of res cells per axis: ceil(res / CLVR_DDA_BLOCK). */
@@ -52,15 +53,26 @@ clvr_status clvr_majorants_build_grid(clvr_majorants *m, const clvr_frame *f, cl
  * and returns the largest cluster majorant (the global majorant of track;
  * 0 for a mesh without clusters) in *global_majorant. Call after
  * clvr_majorants_build_grid, and again whenever the transfer function or
- * the grid changes. */
-clvr_status clvr_majorants_set_tf(clvr_majorants *m, cl_mem tf, cl_mem frame, float *global_majorant,
+ * the grid changes. choose (the automatic grid, see CLVR_MACROCELLS_FINE;
+ * a resolution that is a multiple of CLVR_DDA_BLOCK): the frames get the
+ * rasterized grid or, where its cells' mean majorant is not below
+ * CLVR_MACROCELLS_GAIN times its blocks', the grid of its blocks
+ * (clvr_majorants_grid tells which). */
+clvr_status clvr_majorants_set_tf(clvr_majorants *m, cl_mem tf, cl_mem frame, int choose, float *global_majorant,
                                   clvr_error *err);
+
+/* Cells per axis of the grid the frames read (clvr_majorants_arrays; the
+ * frame's grid_res must say the same), and the mean majorant of the
+ * rasterized grid's cells and of its blocks' at the last choice (0 and 0
+ * when set_tf did not choose). */
+uint32_t clvr_majorants_grid(const clvr_majorants *m, double *fine_mean, double *coarse_mean);
 
 clvr_majorant_arrays clvr_majorants_arrays(const clvr_majorants *m);
 
 /* Copies the majorants of every sampling cluster (mesh->num_sampling),
- * macrocell (grid_res^3) and block (clvr_majorant_blocks(grid_res)^3) to the
- * host; any may be NULL. */
+ * macrocell and block of the grid the frames read (res^3 and
+ * clvr_majorant_blocks(res)^3, res from clvr_majorants_grid) to the host;
+ * any may be NULL. */
 clvr_status clvr_majorants_read(clvr_majorants *m, float *clusters, float *cells, float *blocks, clvr_error *err);
 
 #endif

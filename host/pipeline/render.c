@@ -24,6 +24,8 @@ struct clvr_renderer {
     const clvr_accel *bvh;
     clvr_render_settings set;
     clvr_frame frame;
+    int maj_chose;                /* the majorants were last set with the automatic grid's choice */
+    int fine_skipped;             /* the automatic grid's fine level did not fit: its coarse grid alone */
     clvr_camera cam;
     clvr_majorants *maj;       /* cluster majorants and the macrocell grid */
     cl_program prog_render;
@@ -119,10 +121,11 @@ void clvr_render_settings_default(clvr_render_settings *s)
     s->hull = 1;
     s->bins = 32;
     s->segments = 4;
-    /* 32^3: measured best or near-best with 16-element sampling clusters on
-     * the default scene, amr-1M and post at densities 1 and 8 (finer grids
-     * save samples but cost more cell steps; bench/results/render). */
-    s->macrocells = 32;
+    /* Automatic: 128^3 where its majorants are tighter than 32^3's by a
+     * margin, else 32^3 (CLVR_MACROCELLS_FINE). 32^3 was measured best or
+     * near-best on the default scene, amr-1M and post at densities 1 and 8
+     * (bench/results/render), 128^3 on graded meshes (issue #19). */
+    s->macrocells = 0;
     s->light_dir[0] = 1.0f;
     s->light_dir[1] = 2.0f;
     s->light_dir[2] = 1.5f;
@@ -148,18 +151,47 @@ cleanup:
     return s;
 }
 
+/* The grid the elements are rasterized into: the settings' macrocells, or
+ * for the automatic grid (0) the fine one it chooses from (its coarse one
+ * where the fine one did not fit the device). */
+static uint32_t grid_raster_res(const clvr_renderer *r, const clvr_render_settings *set)
+{
+    if (set->macrocells) return set->macrocells;
+    return r->fine_skipped ? CLVR_MACROCELLS_FINE / CLVR_DDA_BLOCK : CLVR_MACROCELLS_FINE;
+}
+
 /* Brings the majorants up to date with the frame (host/pipeline/majorant.h):
- * the macrocell grid for its resolution and domain, then, once there is a
- * transfer function, every majorant when it changed (tf_changed) or the grid
- * was rebuilt. Keeps frame.global_majorant. */
+ * the macrocell grid for the settings' resolution and the frame's domain,
+ * then, once there is a transfer function, every majorant when it changed
+ * (tf_changed), the grid was rebuilt or the automatic grid was switched on
+ * or off. Keeps frame.global_majorant and sets frame.grid_res to the grid
+ * in use. */
 static clvr_status update_majorants(clvr_renderer *r, int tf_changed, clvr_error *err)
 {
     clvr_status s = CLVR_OK;
     int rebuilt = 0;
+    r->frame.grid_res = grid_raster_res(r, &r->set); /* what the rasterizing kernel reads */
     CLVR_TRY(upload_frame(r, err));
-    CLVR_TRY(clvr_majorants_build_grid(r->maj, &r->frame, r->frame_buf, &rebuilt, err));
-    if (r->tf_n && (tf_changed || rebuilt))
-        CLVR_TRY(clvr_majorants_set_tf(r->maj, r->tf_buf, r->frame_buf, &r->frame.global_majorant, err));
+    s = clvr_majorants_build_grid(r->maj, &r->frame, r->frame_buf, &rebuilt, err);
+    if (!r->set.macrocells && !r->fine_skipped && (s == CLVR_ERR_DEVICE_MEMORY || s == CLVR_ERR_OVERFLOW)) {
+        /* The automatic grid's fine level (25 MB at 128^3, 17 MB of it in
+         * one buffer) does not fit this device: its coarse grid, which it
+         * would choose on most meshes anyway (clvr_renderer_macrocells
+         * says 32, its means 0). */
+        r->fine_skipped = 1;
+        *err = (clvr_error){0};
+        r->frame.grid_res = grid_raster_res(r, &r->set);
+        CLVR_TRY(upload_frame(r, err));
+        s = clvr_majorants_build_grid(r->maj, &r->frame, r->frame_buf, &rebuilt, err);
+    }
+    if (s != CLVR_OK) goto cleanup;
+    const int choose = !r->set.macrocells && !r->fine_skipped;
+    if (r->tf_n && (tf_changed || rebuilt || choose != r->maj_chose)) {
+        CLVR_TRY(clvr_majorants_set_tf(r->maj, r->tf_buf, r->frame_buf, choose, &r->frame.global_majorant, err));
+        r->maj_chose = choose;
+    }
+    r->frame.grid_res = clvr_majorants_grid(r->maj, NULL, NULL);
+    CLVR_TRY(upload_frame(r, err));
 cleanup:
     return s;
 }
@@ -268,19 +300,18 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     if (set->method >= CLVR_RENDER_COUNT || set->estimator >= CLVR_ESTIMATOR_COUNT || set->sampler > CLVR_SAMPLER_LD ||
         set->pixel_filter > CLVR_PIXEL_POINT ||
         set->width == 0 || set->height == 0 || set->bins == 0 || set->bins > CLVR_RENDER_MAX_BINS ||
-        set->segments == 0 || set->macrocells == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
+        set->segments == 0 || set->urm_steps == 0 || !(set->urm_kappa > 0.0f) ||
         set->light_res > CLVR_URM_LIGHT_RES)
         return clvr_error_set(err, CLVR_ERR_USAGE, "invalid render settings (method %u, estimator %u, sampler %u, "
-                              "pixel filter %u, %ux%u, %u bins, %u segments, %u macrocells, urm steps %u, kappa %g, "
+                              "pixel filter %u, %ux%u, %u bins, %u segments, urm steps %u, kappa %g, "
                               "light grid %u: 0..%u)", set->method,
                               set->estimator, set->sampler, set->pixel_filter, set->width, set->height, set->bins,
-                              set->segments,
-                              set->macrocells, set->urm_steps, (double)set->urm_kappa, set->light_res,
+                              set->segments, set->urm_steps, (double)set->urm_kappa, set->light_res,
                               CLVR_URM_LIGHT_RES);
     if (!(set->adaptive >= 0.0f) || !isfinite(set->adaptive))
         return clvr_error_set(err, CLVR_ERR_USAGE, "adaptive sampling threshold %g: expected 0 (off) or a finite "
                               "number > 0 (default %g)", (double)set->adaptive, (double)CLVR_ADAPTIVE_DEFAULT);
-    uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells;
+    uint64_t cells = (uint64_t)set->macrocells * set->macrocells * set->macrocells; /* 0: automatic */
     if (cells > (1ull << 31))
         return clvr_error_set(err, CLVR_ERR_USAGE, "--macrocells %u gives %llu cells; use at most 1290",
                               set->macrocells, (unsigned long long)cells);
@@ -372,7 +403,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->guides = set->guides ? 1u : 0u;
     f->bins = set->bins;
     f->segments = set->segments;
-    f->grid_res = set->macrocells;
+    f->grid_res = grid_raster_res(r, set); /* update_majorants sets the grid in use */
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
     {
@@ -394,7 +425,7 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
         memcpy(k.light_dir, f->light_dir, sizeof f->light_dir);
         k.urm_kappa = f->urm_kappa;
         k.u[0] = f->urm_steps; k.u[1] = f->seed_lo; k.u[2] = f->seed_hi; k.u[3] = f->method;
-        k.u[4] = f->grid_res; k.u[5] = f->bins; k.u[6] = f->segments; k.u[7] = f->light_res;
+        k.u[4] = set->macrocells; k.u[5] = f->bins; k.u[6] = f->segments; k.u[7] = f->light_res;
         memcpy(k.planes, f->clip_planes, sizeof k.planes);
         if (memcmp(&k, &r->light_key, sizeof k) != 0) r->light_valid = 0;
         r->light_key = k;
@@ -1087,6 +1118,11 @@ int clvr_renderer_pick(const clvr_renderer *r, clvr_render_pick *pick)
 {
     if (pick) *pick = r->pick;
     return r->pick_ran;
+}
+
+uint32_t clvr_renderer_macrocells(const clvr_renderer *r, double *fine_mean, double *coarse_mean)
+{
+    return clvr_majorants_grid(r->maj, fine_mean, coarse_mean);
 }
 
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,

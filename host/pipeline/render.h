@@ -61,7 +61,9 @@ typedef struct clvr_render_settings {
     int hull;
     float step;                /* march step; <= 0: mesh diagonal / 512 */
     uint32_t bins, segments;   /* bins method (bins <= CLVR_RENDER_MAX_BINS) */
-    uint32_t macrocells;       /* dda method: grid resolution per axis */
+    uint32_t macrocells;       /* dda method: grid resolution per axis; 0 (default): automatic,
+                                  CLVR_MACROCELLS_FINE or a grid CLVR_DDA_BLOCK times coarser,
+                                  chosen per transfer function (clvr_renderer_macrocells) */
     float light_dir[3];        /* toward the light; normalised here */
     float light_intensity;
     float ambient;
@@ -221,9 +223,6 @@ clvr_status clvr_renderer_read_guides(clvr_renderer *r, float *guide, clvr_error
  * only. An error before such a frame. */
 clvr_status clvr_renderer_read_light(clvr_renderer *r, float *out, uint32_t *res, clvr_error *err);
 
-/* The majorant of every sampling cluster / macrocell / macrocell block
- * (ceil(macrocells / CLVR_DDA_BLOCK)^3, see clvr_shared.h) (tests); any may
- * be NULL. */
 /* The walk's face adjacency (built at the first settings that ask for
  * walk): device bytes kept and the device seconds of its build, 0 and 0
  * when none; *skipped: why walk renders as urm on this mesh ("" when it
@@ -234,6 +233,16 @@ void clvr_renderer_adjacency(const clvr_renderer *r, uint64_t *bytes, double *bu
  * cannot run). */
 uint32_t clvr_renderer_estimator(const clvr_renderer *r);
 
+/* Cells per axis of the macrocell grid the frames read (the settings'
+ * macrocells, or what the automatic grid chose), and the automatic grid's
+ * mean majorants of its fine cells and of its blocks at its last choice (0
+ * and 0 with macrocells set). */
+uint32_t clvr_renderer_macrocells(const clvr_renderer *r, double *fine_mean, double *coarse_mean);
+
+/* The majorant of every sampling cluster / macrocell / macrocell block of
+ * the grid in use (clvr_renderer_macrocells per axis, and
+ * ceil(that / CLVR_DDA_BLOCK) blocks per axis, see clvr_shared.h) (tests);
+ * any may be NULL. */
 clvr_status clvr_renderer_read_majorants(clvr_renderer *r, float *clusters, float *cells, float *blocks,
                                          float *global_majorant, clvr_error *err);
 
