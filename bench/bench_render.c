@@ -128,6 +128,7 @@ typedef struct scene_gpu {
     uint64_t elements;
     double preprocess_s;
     int adjacency_told; /* the walk's adjacency reported once */
+    int grid_told;      /* the automatic macrocell grid's choice reported once */
 } scene_gpu;
 
 static void scene_release(clvr_cl *cl, scene_gpu *g)
@@ -294,7 +295,8 @@ static clvr_status renderer_for(clvr_cl *cl, scene_gpu *g, const config *c, uint
                     "device\n", (double)bytes / 1e6, g->elements ? (double)bytes / (double)g->elements : 0.0, build_s);
         g->adjacency_told = *skipped || bytes;
     }
-    if (s == CLVR_OK && c->method == CLVR_RENDER_DDA && !c->macrocells) {
+    if (s == CLVR_OK && c->method == CLVR_RENDER_DDA && !c->macrocells && !g->grid_told) {
+        g->grid_told = 1; /* once per mesh: the choice follows the mesh and transfer function alone */
         double fine, coarse;
         const uint32_t res = clvr_renderer_macrocells(*out, &fine, &coarse);
         fprintf(stderr, "bench_render: macrocells auto: %u^3 (mean majorant %.4g over %u^3 cells, %.4g over %u^3: "
