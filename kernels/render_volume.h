@@ -338,22 +338,31 @@ inline int clvr_volume_hull_crossings(const clvr_volume *v, float3 org, float3 d
  * A candidate gap lies wholly inside or outside the mesh; one lookup at its
  * middle tells which (a point within the element tolerance of a face counts
  * inside: the gap is then kept, which costs points, never bias). */
+/* The candidates glo/ghi (n of them, clvr_volume_hull_crossings) that lie
+ * outside the mesh, cut to [a, b], into *g; candidates shorter than
+ * `shortest` are kept as medium without a lookup (CLVR_GAP_MIN). */
+inline void clvr_volume_outside_gaps(const clvr_volume *v, float3 org, float3 dir, float a, float b, float shortest,
+                                     const float *glo, const float *ghi, int n, clvr_gaps *g)
+{
+    g->n = 0;
+    for (int i = 0; i < n; ++i) {
+        const float lo = fmax(glo[i], a), hi = fmin(ghi[i], b);
+        if (!(hi - lo > shortest)) continue;
+        const float3 p = org + dir * (0.5f * (glo[i] + ghi[i]));
+        float sc;
+        if (clvr_locate_point(clvr_volume_view(v), p.x, p.y, p.z, &sc)) continue;
+        g->lo[g->n] = lo;
+        g->hi[g->n++] = hi;
+    }
+}
+
 inline int clvr_volume_hull_gaps(const clvr_volume *v, float3 org, float3 dir, float *t0, float *t1, clvr_gaps *g)
 {
     g->n = 0;
     float glo[CLVR_HULL_MAX_HITS], ghi[CLVR_HULL_MAX_HITS];
     int n;
     if (!clvr_volume_hull_crossings(v, org, dir, t0, t1, glo, ghi, &n)) return 0;
-    const float shortest = CLVR_GAP_MIN * (*t1 - *t0);
-    for (int i = 0; i < n; ++i) {
-        const float a = fmax(glo[i], *t0), b = fmin(ghi[i], *t1);
-        if (!(b - a > shortest)) continue;
-        const float3 p = org + dir * (0.5f * (glo[i] + ghi[i]));
-        float sc;
-        if (clvr_locate_point(clvr_volume_view(v), p.x, p.y, p.z, &sc)) continue;
-        g->lo[g->n] = a;
-        g->hi[g->n++] = b;
-    }
+    clvr_volume_outside_gaps(v, org, dir, *t0, *t1, CLVR_GAP_MIN * (*t1 - *t0), glo, ghi, n, g);
     return 1;
 }
 
@@ -1908,7 +1917,12 @@ inline float4 clvr_render_track(const clvr_volume *v, float3 org, float3 dir, fl
              * replaces the walk's in proportion to its weight). */
             clvr_urm e;
             clvr_gaps g;
-            g.n = 0;
+            /* The stretches past ts that lie outside the mesh, skipped as
+             * plain urm skips them: without them urm spent its points in a
+             * mesh's holes (the OpenFOAM igloo's igloo and fridges), and the
+             * tet walk + urm took 2.5x plain urm's frames to 2% there
+             * (bench/results/graded/2026-12-02-s58-macrocells.md). */
+            clvr_volume_outside_gaps(v, org, dir, ts, t1, CLVR_GAP_MIN * (t1 - t0), glo, ghi, ng, &g);
             /* Its minimum points in proportion to what is left of the ray:
              * a ray that leaves the mesh just before the hull's padded end
              * would otherwise spend all of them on lookups that miss. */

@@ -617,13 +617,22 @@ static clvr_status moments(clvr_cl *cl, fx_mesh *x, const clvr_render_settings *
 /* Renders x with the hull and without (urm and delta, shadows on; walk
  * without shadows, where it crosses the tets: with the hull it re-enters
  * past the stretches outside the mesh, without it hands the ray to urm at
- * the first boundary) and compares them per pixel and per 4x4 block. */
+ * the first boundary; auto on a mesh of tets and other cells, shadows on,
+ * whose tet walk hands the ray to urm at its first other cell, with the
+ * hull's gaps past that point where it has them) and compares them per
+ * pixel and per 4x4 block. */
 static void renders_agree(clvr_cl *cl, fx_mesh *x, const char *name, const float *eye, const float *target,
                           float density)
 {
     enum { W = 32, H = 32, FRAMES = 96 };
-    static const uint32_t est[3] = {CLVR_ESTIMATOR_URM, CLVR_ESTIMATOR_DELTA, CLVR_ESTIMATOR_WALK};
-    for (int ei = 0; ei < 3; ++ei) {
+    static const uint32_t est[4] = {CLVR_ESTIMATOR_URM, CLVR_ESTIMATOR_DELTA, CLVR_ESTIMATOR_WALK,
+                                    CLVR_ESTIMATOR_AUTO};
+    /* auto only where it differs from the rows above: a mesh of tets and
+     * other cells (elsewhere it is the walk, or the pilot's pick of urm or
+     * the walk, both checked already). */
+    const int mixed = x->m.num_cells[CLVR_CELL_TET] > 0 &&
+                      x->m.num_cells[CLVR_CELL_PYRAMID] + x->m.num_cells[CLVR_CELL_WEDGE] + x->m.num_cells[CLVR_CELL_HEX] > 0;
+    for (int ei = 0; ei < 3 + mixed; ++ei) {
         clvr_error err = {0};
         float *m[2] = {0}, *v[2] = {0};
         for (int hull = 0; hull < 2; ++hull) {
