@@ -1132,9 +1132,10 @@ int main(int argc, char **argv)
                 snprintf(mb, sizeof mb, "%s", macro ? macro : "auto,32,128");
                 for (char *save = NULL, *t = strtok_r(mb, ",", &save); t && ncfg < MAX_CONFIGS;
                      t = strtok_r(NULL, ",", &save)) {
-                    config c = {m, strcmp(t, "auto") ? (uint32_t)atoi(t) : 0, shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
+                    const int automatic = !strcmp(t, "auto");
+                    config c = {m, automatic ? 0 : (uint32_t)atoi(t), shadows, "", sampler, estimator, urm_steps, urm_kappa, 0, no_hull,
                                 pixel_filter, 0, no_cv, adaptive};
-                    if (strcmp(t, "auto") && (c.macrocells < 1 || c.macrocells > 1024)) return usage();
+                    if (!automatic && (c.macrocells < 1 || c.macrocells > 1024)) return usage();
                     if (c.macrocells) snprintf(c.label, sizeof c.label, "dda %u^3", c.macrocells);
                     else snprintf(c.label, sizeof c.label, "dda auto");
                     cfg[ncfg++] = c;

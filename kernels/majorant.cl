@@ -118,8 +118,8 @@ __kernel void clvr_grid_majorants(__global const uint *grid, uint cells, __globa
 
 /* Coarse level of the grid: the largest majorant of each block's cells
  * (CLVR_DDA_BLOCK^3, fewer at the far faces when the block count does not
- * divide r), and their sum (for the automatic grid's choice, see
- * host/pipeline/majorant.h). rc = ceil(r / CLVR_DDA_BLOCK) blocks per axis.
+ * divide r), and, where sums is not NULL, their sum (for the automatic
+ * grid's choice, see host/pipeline/majorant.h). rc = ceil(r / CLVR_DDA_BLOCK) blocks per axis.
  * Run on the blocks again it makes the level above: with r = 128 and
  * blocks of 4, the blocks of the 128^3 grid are a 32^3 grid whose cells
  * bound theirs. */
@@ -138,5 +138,5 @@ __kernel void clvr_grid_blocks(__global const float *cells, uint r, __global flo
                 sum += c;
             }
     blocks[i] = m;
-    sums[i] = sum;
+    if (sums) sums[i] = sum;
 }

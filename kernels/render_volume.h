@@ -332,15 +332,12 @@ inline int clvr_volume_hull_crossings(const clvr_volume *v, float3 org, float3 d
     return 1;
 }
 
-/* clvr_volume_hull_clip for a camera ray, with the gaps that lie outside
- * the mesh in *g (none without a hull, or past CLVR_HULL_MAX_HITS crossings);
- * clvr_volume_clip_gaps: the clip box and planes first, as clvr_volume_clip.
- * A candidate gap lies wholly inside or outside the mesh; one lookup at its
- * middle tells which (a point within the element tolerance of a face counts
- * inside: the gap is then kept, which costs points, never bias). */
 /* The candidates glo/ghi (n of them, clvr_volume_hull_crossings) that lie
  * outside the mesh, cut to [a, b], into *g; candidates shorter than
- * `shortest` are kept as medium without a lookup (CLVR_GAP_MIN). */
+ * `shortest` are kept as medium without a lookup (CLVR_GAP_MIN). A
+ * candidate gap lies wholly inside or outside the mesh; one lookup at its
+ * middle tells which (a point within the element tolerance of a face counts
+ * inside: the gap is then kept, which costs points, never bias). */
 inline void clvr_volume_outside_gaps(const clvr_volume *v, float3 org, float3 dir, float a, float b, float shortest,
                                      const float *glo, const float *ghi, int n, clvr_gaps *g)
 {
@@ -356,6 +353,9 @@ inline void clvr_volume_outside_gaps(const clvr_volume *v, float3 org, float3 di
     }
 }
 
+/* clvr_volume_hull_clip for a camera ray, with the gaps that lie outside
+ * the mesh in *g (none without a hull, or past CLVR_HULL_MAX_HITS crossings);
+ * clvr_volume_clip_gaps: the clip box and planes first, as clvr_volume_clip. */
 inline int clvr_volume_hull_gaps(const clvr_volume *v, float3 org, float3 dir, float *t0, float *t1, clvr_gaps *g)
 {
     g->n = 0;

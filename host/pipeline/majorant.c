@@ -12,7 +12,7 @@ struct clvr_majorants {
     cl_mem grid_range;           /* ordered (min, max) per cell, see kernels/majorant.cl */
     cl_mem grid_maj, block_maj;  /* float per cell, per block */
     cl_mem block_sum;            /* float per block: sum of its cells' majorants */
-    cl_mem block2_maj, block2_sum; /* the blocks of the blocks (the coarse grid's blocks) */
+    cl_mem block2_maj;           /* the blocks of the blocks (the coarse grid's blocks) */
     uint32_t grid_res;           /* resolution of the grid buffers (0: no grid) */
     uint32_t use_res;            /* the grid the frames read: grid_res, or its blocks' */
     double fine_mean, coarse_mean; /* the last choice's means (0, 0 when none was made) */
@@ -51,7 +51,6 @@ static void release_grid(clvr_majorants *m)
     clvr_cl_release(m->cl, &m->block_maj);
     clvr_cl_release(m->cl, &m->block_sum);
     clvr_cl_release(m->cl, &m->block2_maj);
-    clvr_cl_release(m->cl, &m->block2_sum);
     m->grid_res = m->use_res = 0;
     m->fine_mean = m->coarse_mean = 0.0;
 }
@@ -92,8 +91,6 @@ clvr_status clvr_majorants_build_grid(clvr_majorants *m, const clvr_frame *f, cl
                             "macrocell block sums", &m->block_sum, err));
     CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)(rc2 * rc2 * rc2) * sizeof(cl_float), NULL,
                             "coarse macrocell block majorants", &m->block2_maj, err));
-    CLVR_TRY(clvr_cl_buffer(cl, CL_MEM_READ_WRITE, (size_t)(rc2 * rc2 * rc2) * sizeof(cl_float), NULL,
-                            "coarse macrocell block sums", &m->block2_sum, err));
     CLVR_TRY(CLVR_CL_ARGS(m->k_grid_clear, err, CLVR_ARG(m->grid_range), CLVR_ARG(ncells)));
     CLVR_TRY(clvr_cl_run1d(cl, m->k_grid_clear, cells, 64, NULL, err));
     /* Per element, not per sampling cluster: tighter cells (majorant.cl). */
@@ -116,7 +113,6 @@ cleanup:
     if (s != CLVR_OK) release_grid(m);
     return s;
 }
-
 
 clvr_status clvr_majorants_set_tf(clvr_majorants *m, cl_mem tf, cl_mem frame, int choose, float *global_majorant,
                                   clvr_error *err)
@@ -158,8 +154,9 @@ clvr_status clvr_majorants_set_tf(clvr_majorants *m, cl_mem tf, cl_mem frame, in
         m->coarse_mean = coarse / (double)nb;
         if (!(m->fine_mean < (double)CLVR_MACROCELLS_GAIN * m->coarse_mean)) {
             /* The coarse grid: its cells are the blocks, its blocks theirs. */
+            const cl_mem no_sums = NULL;
             CLVR_TRY(CLVR_CL_ARGS(m->k_grid_blocks, err, CLVR_ARG(m->block_maj), CLVR_ARG(rc), CLVR_ARG(m->block2_maj),
-                                  CLVR_ARG(m->block2_sum), CLVR_ARG(rc2)));
+                                  CLVR_ARG(no_sums), CLVR_ARG(rc2)));
             CLVR_TRY(clvr_cl_run1d(cl, m->k_grid_blocks, (size_t)rc2 * rc2 * rc2, 64, NULL, err));
             m->use_res = rc;
         }

@@ -403,7 +403,6 @@ clvr_status clvr_renderer_set_settings(clvr_renderer *r, const clvr_render_setti
     f->guides = set->guides ? 1u : 0u;
     f->bins = set->bins;
     f->segments = set->segments;
-    f->grid_res = grid_raster_res(r, set); /* update_majorants sets the grid in use */
     f->leaf_size = m->leaf_size;
     f->tlas_root = r->bvh->tlas_root;
     {
