@@ -142,8 +142,8 @@ CLVR_STATIC_ASSERT(sizeof(clvr_box) == 32, "clvr_box layout");
 
 /* ---------------------------------------------------------------- clustered mesh
  * The contract between preprocessing (which writes it), bvh/ (which builds
- * trees over it) and the renderer (which reads it). Decisions (README, "How
- * it works"):
+ * trees over it) and the renderer (which reads it). Decisions (docs/how-it-works.md,
+ * "Decisions, measured where it mattered"):
  * - Each element type is sorted along its own Hilbert curve (same
  *   quantization grid: the mesh bounds, or a box the caller gives so that
  *   partitions of one mesh share it), so every cluster holds one element

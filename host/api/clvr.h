@@ -525,7 +525,7 @@ struct clvr_tracer_settings {
     float step;               /* march step in world units; 0: automatic */
     uint32_t bins, segments;  /* bins method: bins <= 32, segments >= 1 */
     uint32_t macrocells;      /* dda: grid cells per axis, 1..1024; 0 (since 1.11, the default):
-                                 automatic, 128 or 32 per transfer function (README "Rendering") */
+                                 automatic, 128 or 32 per transfer function (docs/rendering.md) */
     float light_dir[3];       /* toward the light, not all 0 */
     float light_intensity, ambient;
     int shadows;

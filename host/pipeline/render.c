@@ -103,7 +103,7 @@ void clvr_render_settings_default(clvr_render_settings *s)
 {
     memset(s, 0, sizeof *s);
     s->method = CLVR_RENDER_DDA;
-    /* auto: walk (clvr_estimator_auto, README "Rendering"); a mesh without
+    /* auto: walk (clvr_estimator_auto, docs/rendering.md); a mesh without
      * tets renders with urm. */
     s->estimator = CLVR_ESTIMATOR_AUTO;
     s->urm_steps = CLVR_URM_DEFAULT_STEPS;
