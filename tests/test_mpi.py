@@ -37,7 +37,7 @@ image accumulated so far, whole, with a message and a non-zero status. A generat
 distributed loader with the default automatic transfer function.
 
 Environment: CLVR_BUILD_DIR (clvr, clvr-gen), CLVR_MPIEXEC (mpirun),
-CLVR_TEST_MPI_BRIEF=1 (set by the sanitizer build, CMakeLists.txt): skips the
+CLVR_TEST_BRIEF=1 (set by the sanitizer build, CMakeLists.txt): skips the
 runs that repeat code paths already covered, which the plain build runs: -n 1,
 one of -n 2 and -n 3 per shadow setting (2 with shadows, 3 without), the third
 rank count where two are tested, two of the four method runs (bins -n 2 with
@@ -71,7 +71,7 @@ R_MAX = 2.0
 # 47 and 206.
 R_MAX_G1 = 3.0
 TIMEOUT = 300
-BRIEF = os.environ.get("CLVR_TEST_MPI_BRIEF") == "1"
+BRIEF = os.environ.get("CLVR_TEST_BRIEF") == "1"
 
 check = Checks()
 

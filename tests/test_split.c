@@ -286,11 +286,11 @@ static void test_pieces(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, int rend
         pts[4 * i + 3] = 0.0f;
     }
     uint8_t *ebox1 = read_ebox(cl, &c1, &a1);
-    /* CLVR_TEST_SPLIT_BRIEF (the sanitizer build, CMakeLists.txt): 4 pieces
+    /* CLVR_TEST_BRIEF (the sanitizer build, CMakeLists.txt): 4 pieces
      * only, the most and the same code as 2 and 3, which the plain build
      * checks; with all three the whole test took 280 s under ASan of a
      * 31-minute CI run. */
-    const int brief = getenv("CLVR_TEST_SPLIT_BRIEF") != NULL;
+    const int brief = getenv("CLVR_TEST_BRIEF") != NULL;
     for (uint32_t k = brief ? 4 : 2; k <= 4; ++k) {
         clvr_clustered ck = {0};
         clvr_accel ak = {0};
