@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Proves `cmake --install` (issue 17): into a temporary prefix it puts clvr,
 # clvr-gen and clvr-convert in bin/, clvr.1 (made from clvr --help, so it names
-# every option the help names) in share/man/man1, README and docs in
+# every option the help names) in share/man/man1, README and docs/ in
 # share/doc/clvr; the installed clvr runs from there (--help, --version, and a
 # tiny render where an OpenCL device exists), away from the source tree.
 # The fallback page maker (tools/man_from_help.cmake, for machines without
@@ -28,9 +28,16 @@ P=$tmp/p
 for f in bin/clvr bin/clvr-gen bin/clvr-convert; do
   [ -x "$P/$f" ] && ok || bad "$f missing or not executable"
 done
-for f in share/man/man1/clvr.1 share/doc/clvr/README.md share/doc/clvr/bin-format.md \
-  share/doc/clvr/transfer-function.md share/doc/clvr/troubleshooting.md share/doc/clvr/viewer.md; do
+for f in share/man/man1/clvr.1 share/doc/clvr/README.md share/doc/clvr/docs/bin-format.md \
+  share/doc/clvr/docs/transfer-function.md share/doc/clvr/docs/troubleshooting.md share/doc/clvr/docs/viewer.md; do
   [ -s "$P/$f" ] && ok || bad "$f missing or empty"
+done
+# Every link of the installed README into docs/ (pages, images, examples)
+# resolves there: docs/ is installed beside it as in the source tree.
+links=$(grep -oE '\]\(docs/[^)#]*' "$P/share/doc/clvr/README.md" | sed 's/^](//' | sort -u)
+[ -n "$links" ] && ok || bad "no docs/ links found in the installed README"
+for l in $links; do
+  [ -s "$P/share/doc/clvr/$l" ] && ok || bad "installed README links to $l, which is not installed"
 done
 man1=$P/share/man/man1/clvr.1
 cd "$tmp" || exit 1
