@@ -20,7 +20,9 @@
 # Usage: bench/graded.sh [--dir DIR] [--build DIR] [--queries Q] [--size WxH] [--skip LIST]
 #   --dir      meshes (default /tmp/clvr-graded; built there when missing)
 #   --build    build directory (default build)
-#   --queries  point queries per locate run (default 300000: the machine is shared, 2 cores)
+#   --queries  point queries per locate run (default 1000000: at 300k a run of clvr at 1e7
+#              queries/s lasts 30 ms, and session 61 saw clvr's rate move 8.4-10.5e6 between
+#              such runs against 0.98-1.12e7 at 1M)
 #   --size     bench_render frame size (default 256x256; --converge is 256x256, --ref-spp 32, --max-spp 48)
 #   --repeats  bench_locate_embree repeats per graded mesh and order (default 3)
 #   --skip     comma list of stats,locate,repeats,table2,render,converge
@@ -31,7 +33,7 @@ set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 DIR=/tmp/clvr-graded
 BUILD=$ROOT/build
-QUERIES=300000
+QUERIES=1000000
 SIZE=256x256
 SKIP=
 TAG=
