@@ -90,9 +90,12 @@ mkdir -p "$OUT"
 BASE=$OUT/$(date -u +%F)-$SLUG$TAG
 RAW=$(mktemp -d /tmp/clvr-graded-results-XXXXXX)
 MD=$RAW/body.md
+CPU=$("$ROOT/bench/host-cpu.sh")
 : >"$MD"
 {
   echo "# bench/graded.sh, $(date -u +%FT%TZ), commit $(git -C "$ROOT" rev-parse --short HEAD)$(git -C "$ROOT" diff --quiet || echo -dirty), $(nproc) cores, load at start $(cut -d' ' -f1-3 /proc/loadavg)"
+  echo
+  echo "CPU: $CPU."
   echo
   echo "Meshes from tools/make-graded-meshes.sh in $DIR. Load = 1-minute load average (shared machine)."
   echo
@@ -179,7 +182,7 @@ fi
 say "summary"
 pairs=()
 for g in "${GRADED[@]}"; do pairs+=("$g=${TWIN[$g]}"); done
-/usr/bin/python3 "$ROOT/bench/graded_summary.py" "$RAW" "$BASE.json" "${pairs[@]}" >"$RAW/summary.md"
+CLVR_BENCH_CPU=$CPU /usr/bin/python3 "$ROOT/bench/graded_summary.py" "$RAW" "$BASE.json" "${pairs[@]}" >"$RAW/summary.md"
 cat "$RAW/head.md" "$RAW/summary.md" "$MD" >"$BASE.md"
 rm -rf "$RAW"
 say "wrote $BASE.md and $BASE.json"

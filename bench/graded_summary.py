@@ -1,11 +1,12 @@
 #!/usr/bin/python3
 """graded_summary.py: bench/graded.sh's summary against issue #19's goals.
 
-usage: graded_summary.py RAWDIR OUT.json GRADED=UNIFORM ...
+usage: [CLVR_BENCH_CPU=LINE] graded_summary.py RAWDIR OUT.json GRADED=UNIFORM ...
 
 Reads the JSON files graded.sh left in RAWDIR (stats.json, locate-MESH-ORDER.json, rep-MESH-ORDER-R.json,
 table2-MESH.json, render-EST.json, converge-MESH.json), merges them into OUT.json (the
-converge runs without their per-spp points and transfer-function tables) and prints
+converge runs without their per-spp points and transfer-function tables; "cpu": the
+machine, bench/host-cpu.sh's line, from CLVR_BENCH_CPU) and prints
 Markdown: point location vs Embree (goal >= 1.5x, tree + indices <= 1/3 of Embree's),
 best leaf size per mesh, and graded over uniform rendering ratios (goal <= 2x).
 """
@@ -30,8 +31,8 @@ def base(path):
 
 def main():
     raw, out, pairs = sys.argv[1], sys.argv[2], [p.split("=", 1) for p in sys.argv[3:]]
-    merged = {"stats": load(os.path.join(raw, "stats.json")), "locate": {}, "table2": {}, "render": None,
-              "converge": {}, "pairs": pairs}
+    merged = {"cpu": os.environ.get("CLVR_BENCH_CPU", ""), "stats": load(os.path.join(raw, "stats.json")),
+              "locate": {}, "table2": {}, "render": None, "converge": {}, "pairs": pairs}
     for p in sorted(glob.glob(os.path.join(raw, "locate-*.json"))):
         merged["locate"][base(p)[len("locate-"):]] = load(p)
     for p in sorted(glob.glob(os.path.join(raw, "table2-*.json"))):

@@ -102,7 +102,7 @@ if [ "$COMMIT" != unknown ] && ! git -C "$ROOT" diff --quiet HEAD 2>/dev/null; t
 fi
 DATE=$(date -u +%Y-%m-%d)
 STAMP=$(date -u +%Y-%m-%dT%H:%M:%SZ)
-HOST_CPU=$(awk -F': ' '/^model name/ { print $2; exit }' /proc/cpuinfo 2>/dev/null || true)
+HOST_CPU=$("$ROOT/bench/host-cpu.sh")
 mkdir -p "$OUT"
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
