@@ -1917,7 +1917,7 @@ int main(void)
      * agreement on the mixed box only. The two meshes below run the same host
      * code, which the plain build checks on all three; they took 29 s of the
      * test's 76 (plain build, session 60); under ASan 117 -> 80 s. */
-    const int brief = getenv("CLVR_TEST_BRIEF") != NULL;
+    const int brief = tu_brief();
     if (!brief) {
         clvr_mesh m;
         if (!coarse_box(CLVR_SCENE_MIX_HEX, &m)) methods_agree(&cl, &m, "coarse jittered hexes", 256);

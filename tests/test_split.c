@@ -290,7 +290,7 @@ static void test_pieces(clvr_cl *cl, const clvr_mesh *m, uint32_t bits, int rend
      * only, the most and the same code as 2 and 3, which the plain build
      * checks; with all three the whole test took 280 s under ASan of a
      * 31-minute CI run. */
-    const int brief = getenv("CLVR_TEST_BRIEF") != NULL;
+    const int brief = tu_brief();
     for (uint32_t k = brief ? 4 : 2; k <= 4; ++k) {
         clvr_clustered ck = {0};
         clvr_accel ak = {0};

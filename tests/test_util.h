@@ -73,6 +73,15 @@ static inline const char *tu_data_dir(void)
     return d ? d : CLVR_SOURCE_DIR "/tests/data";
 }
 
+/* 1 under CLVR_TEST_BRIEF=1, which the sanitizer build sets (CMakeLists.txt):
+ * leave out the runs the plain build's run already covers. The Python tests
+ * read it the same way (== "1"). */
+static inline int tu_brief(void)
+{
+    const char *b = getenv("CLVR_TEST_BRIEF");
+    return b && strcmp(b, "1") == 0;
+}
+
 /* splitmix64: deterministic random numbers for test inputs. */
 static inline uint64_t tu_rand(uint64_t *state)
 {
